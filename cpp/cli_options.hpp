@@ -1,0 +1,33 @@
+// sim_loop's flags: the chapter's, spelled and defaulted as there, plus
+// --model, --record-every, --help and --version.
+#pragma once
+
+#include <filesystem>
+#include <stdexcept>
+#include <string>
+
+#include "simloop/run.hpp"
+
+namespace simloop::cli {
+
+struct Options {
+  RunConfig run;
+  std::filesystem::path out = "outputs/ch0.1-sim-loop";
+  std::string model_path;  // empty: the embedded pusher scene
+  bool rerun = true;       // accepted for the chapter's command lines; sim_loop records nothing
+  bool help = false;
+  bool version = false;
+};
+
+// A bad command line. The message is one line naming the flag and the value.
+class UsageError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Parses argv (argv[0] is skipped). Accepts "--flag value" and "--flag=value".
+[[nodiscard]] Options parse(int argc, const char* const* argv);
+
+[[nodiscard]] std::string help_text();
+
+}  // namespace simloop::cli

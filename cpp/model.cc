@@ -1,0 +1,159 @@
+#include "simloop/model.hpp"
+
+#include <cerrno>
+#include <cstddef>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+#include "mujoco_guard.hpp"
+#include "simloop/errors.hpp"
+
+namespace simloop {
+namespace {
+
+
+constexpr std::string_view kPusherSceneXml = R"(<mujoco model="pusher_scene">
+  <compiler autolimits="true"/>
+  <worldbody>
+    <light pos="0 0 3" dir="0 0 -1"/>
+    <geom name="floor" type="plane" size="2 2 0.1" rgba="0.85 0.85 0.85 1"/>
+    <body name="box" pos="0.4 0 0.05">
+      <freejoint/>
+      <geom name="box_geom" type="box" size="0.05 0.05 0.05" mass="0.5" rgba="0.85 0.3 0.25 1"/>
+    </body>
+    <body name="pusher" pos="0 0 0.05">
+      <joint name="pusher_slide" type="slide" axis="1 0 0" damping="4"/>
+      <geom name="pusher_geom" type="box" size="0.04 0.12 0.05" mass="1.0" rgba="0.25 0.45 0.85 1"/>
+    </body>
+  </worldbody>
+  <actuator>
+    <motor name="push_motor" joint="pusher_slide" gear="10" ctrlrange="-1 1"/>
+  </actuator>
+</mujoco>
+)";
+
+struct ModelDeleter {
+  void operator()(const mjModel* m) const noexcept { mj_deleteModel(const_cast<mjModel*>(m)); }
+};
+
+// Finds what the loop needs; throws InvalidArgument naming what is missing.
+SceneLayout resolve_layout(const mjModel* m, std::string_view source) {
+  const std::string where(source);
+  SceneLayout at;
+  at.box_body = mj_name2id(m, mjOBJ_BODY, "box");
+  if (at.box_body < 0) {
+    throw InvalidArgument(where + ": the model has no body named \"box\"");
+  }
+  if (m->body_jntnum[at.box_body] != 1 || m->jnt_type[m->body_jntadr[at.box_body]] != mjJNT_FREE) {
+    throw InvalidArgument(where + ": body \"box\" must have exactly one joint, a free joint");
+  }
+  const int box_joint = m->body_jntadr[at.box_body];
+  at.box_qposadr = m->jnt_qposadr[box_joint];
+  at.box_dofadr = m->jnt_dofadr[box_joint];
+
+  if (m->nu < 1) {
+    throw InvalidArgument(where + ": the model has no actuator (the loop writes ctrl[0])");
+  }
+  if (m->actuator_trntype[0] != mjTRN_JOINT) {
+    throw InvalidArgument(where + ": actuator 0 must drive a joint (the pusher)");
+  }
+  at.pusher_joint = m->actuator_trnid[0];
+  const int type = m->jnt_type[at.pusher_joint];
+  if (type != mjJNT_SLIDE && type != mjJNT_HINGE) {
+    throw InvalidArgument(where + ": actuator 0 must drive a slide or hinge joint (its position is pusher_x)");
+  }
+  at.pusher_body = m->jnt_bodyid[at.pusher_joint];
+  at.pusher_qposadr = m->jnt_qposadr[at.pusher_joint];
+  at.pusher_dofadr = m->jnt_dofadr[at.pusher_joint];
+  return at;
+}
+
+// mj_loadXML reads from a file name; text in memory goes through a one-file
+// virtual file system. The VFS is 2 MB of fixed arrays, so it lives on the heap.
+mjModel* load_xml(const char* filename, const mjVFS* vfs, std::string_view source) {
+  char error[1024] = "";
+  mjModel* m = nullptr;
+  detail::mujoco_call([&] { m = mj_loadXML(filename, vfs, error, sizeof error); });
+  if (m == nullptr) {
+    throw MujocoError(std::string(source) + ": " + (error[0] ? error : "MuJoCo could not load the model"));
+  }
+  return m;
+}
+
+}  // namespace
+
+Model Model::adopt(mjModel* raw, std::string_view source) {
+  std::shared_ptr<const mjModel> owned(raw, ModelDeleter{});
+  const SceneLayout layout = resolve_layout(raw, source);
+  return Model(std::move(owned), layout);
+}
+
+std::string_view pusher_scene_xml() noexcept { return kPusherSceneXml; }
+
+Model Model::pusher_scene() { return from_xml_string(kPusherSceneXml, "pusher scene"); }
+
+Model Model::from_xml_string(std::string_view xml, std::string_view source) {
+  detail::install_mujoco_handlers();
+  struct VfsDeleter {
+    void operator()(mjVFS* v) const noexcept {
+      mj_deleteVFS(v);
+      delete v;
+    }
+  };
+  std::unique_ptr<mjVFS, VfsDeleter> vfs(new mjVFS);
+  mj_defaultVFS(vfs.get());
+  constexpr const char* kName = "model.xml";
+  int status = 0;
+  detail::mujoco_call([&] { status = mj_makeEmptyFileVFS(vfs.get(), kName, static_cast<int>(xml.size())); });
+  if (status != 0) {
+    throw Error(std::string(source) + ": could not hold the XML in MuJoCo's virtual file system");
+  }
+  std::memcpy(vfs->filedata[vfs->nfile - 1], xml.data(), xml.size());
+  mjModel* raw = load_xml(kName, vfs.get(), source);
+  return adopt(raw, source);
+}
+
+Model Model::from_file(const std::string& path) {
+  detail::install_mujoco_handlers();
+  // MuJoCo's own message for a missing file is vague; check first.
+  std::ifstream probe(path);
+  if (!probe) {
+    throw IoError(path + ": cannot open (" + std::strerror(errno) + ")");
+  }
+  mjModel* raw = load_xml(path.c_str(), nullptr, path);
+  return adopt(raw, path);
+}
+
+Model Model::with_timestep(double timestep) const {
+  if (!(std::isfinite(timestep) && timestep > 0.0)) {
+    std::ostringstream msg;
+    msg << "timestep must be a positive, finite number of seconds, got " << timestep;
+    throw InvalidArgument(msg.str());
+  }
+  mjModel* copy = nullptr;
+  const mjModel* src = model_.get();
+  detail::mujoco_call([&] { copy = mj_copyModel(nullptr, src); });
+  copy->opt.timestep = timestep;
+  return Model(std::shared_ptr<const mjModel>(copy, ModelDeleter{}), layout_);
+}
+
+Data::Data(const Model& model) {
+  const mjModel* m = model.get();
+  mjData* d = nullptr;
+  detail::mujoco_call([&] { d = mj_makeData(m); });
+  data_.reset(d);
+  std::memcpy(sizes_.data(), &m->nq, sizeof sizes_);
+}
+
+bool Data::fits(const Model& model) const noexcept {
+  return std::memcmp(sizes_.data(), &model.get()->nq, sizeof sizes_) == 0;
+}
+
+std::string mujoco_version() {
+  const int v = mj_version();  // 222 for 2.2.2
+  return "MuJoCo " + std::to_string(v / 100) + "." + std::to_string(v / 10 % 10) + "." + std::to_string(v % 10);
+}
+
+}  // namespace simloop

@@ -1,0 +1,61 @@
+#include "mujoco_guard.hpp"
+
+#include <csetjmp>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <mutex>
+
+#include <mujoco/mujoco.h>
+
+namespace simloop::detail {
+namespace {
+
+// Per thread: where to jump on a MuJoCo error, and the message it carried.
+thread_local std::jmp_buf* t_error_target = nullptr;
+thread_local char t_error_message[1024] = "";
+
+extern "C" void on_mujoco_error(const char* message) {
+  std::snprintf(t_error_message, sizeof t_error_message, "%s", message ? message : "");
+  if (t_error_target != nullptr) {
+    std::longjmp(*t_error_target, 1);
+  }
+  // A MuJoCo call outside call_catching_mujoco_error is a simloop bug. MuJoCo
+  // cannot continue after an error, so stop loudly instead of returning into
+  // it -- but never write MUJOCO_LOG.TXT or wait for Enter.
+  std::fprintf(stderr, "simloop: MuJoCo error outside a guarded call: %s\n", t_error_message);
+  std::abort();
+}
+
+extern "C" void on_mujoco_warning(const char* /*message*/) {
+  // Stepping warnings are read back from mjData::warning (counts, first step,
+  // info) by the run loop; nothing is printed or logged here.
+}
+
+}  // namespace
+
+void install_mujoco_handlers() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    mju_user_error = on_mujoco_error;
+    mju_user_warning = on_mujoco_warning;
+  });
+}
+
+bool call_catching_mujoco_error(void (*fn)(void*), void* context) noexcept {
+  install_mujoco_handlers();
+  std::jmp_buf target;
+  std::jmp_buf* const enclosing = t_error_target;
+  if (setjmp(target) != 0) {
+    t_error_target = enclosing;
+    return false;
+  }
+  t_error_target = &target;
+  fn(context);
+  t_error_target = enclosing;
+  return true;
+}
+
+const char* last_mujoco_error() noexcept { return t_error_message; }
+
+}  // namespace simloop::detail

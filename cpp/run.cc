@@ -1,0 +1,185 @@
+#include "simloop/run.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <sstream>
+
+#include "mujoco_guard.hpp"
+#include "simloop/errors.hpp"
+#include "simloop/number_format.hpp"
+
+namespace simloop {
+namespace {
+
+// Trajectories beyond this are refused up front rather than left to the
+// allocator (4 GiB: 24 million rows of the 22 columns).
+constexpr std::int64_t kMaxTrajectoryValues = std::int64_t{1} << 29;
+
+// MuJoCo 2.2's texts for its warnings (mju_warningText), rebuilt here because
+// that function writes a shared static buffer and batches step in threads.
+std::string warning_message(int warning, int info) {
+  static constexpr const char* kFormats[mjNWARNING] = {
+      "Inertia matrix is too close to singular at DOF %d. Check model.",
+      "Pre-allocated contact buffer is full. Increase nconmax above %d.",
+      "Pre-allocated constraint buffer is full. Increase njmax above %d.",
+      "Pre-allocated visual geom buffer is full. Increase maxgeom above %d.",
+      "Nan, Inf or huge value in QPOS at DOF %d. The simulation is unstable.",
+      "Nan, Inf or huge value in QVEL at DOF %d. The simulation is unstable.",
+      "Nan, Inf or huge value in QACC at DOF %d. The simulation is unstable.",
+      "Nan, Inf or huge value in CTRL at ACTUATOR %d. The simulation is unstable."};
+  char text[160];
+  std::snprintf(text, sizeof text, kFormats[warning], info);
+  return text;
+}
+
+constexpr const char* kWarningNames[mjNWARNING] = {
+    "mjWARN_INERTIA", "mjWARN_CONTACTFULL", "mjWARN_CNSTRFULL", "mjWARN_VGEOMFULL",
+    "mjWARN_BADQPOS", "mjWARN_BADQVEL", "mjWARN_BADQACC", "mjWARN_BADCTRL"};
+
+// Counts MuJoCo's warnings step by step. MuJoCo's own counters are not
+// enough: a bad acceleration makes it reset mjData, counters included. So
+// after each step we move the counts into our totals and zero them.
+class WarningCounter {
+ public:
+  void after_step(mjData* d, std::int64_t step) noexcept {
+    for (int i = 0; i < mjNWARNING; ++i) {
+      mjWarningStat& stat = d->warning[i];
+      if (stat.number == 0) continue;
+      if (count_[i] == 0) first_step_[i] = step;
+      count_[i] += stat.number;
+      last_info_[i] = stat.lastinfo;
+      stat.number = 0;
+    }
+  }
+  [[nodiscard]] std::vector<Warning> warnings() const {
+    std::vector<Warning> out;
+    for (int i = 0; i < mjNWARNING; ++i) {
+      if (count_[i] == 0) continue;
+      out.push_back({kWarningNames[i], count_[i], first_step_[i], warning_message(i, last_info_[i])});
+    }
+    return out;
+  }
+
+ private:
+  int count_[mjNWARNING] = {};
+  int last_info_[mjNWARNING] = {};
+  std::int64_t first_step_[mjNWARNING] = {};
+};
+
+// Writes trajectory row `row`: the state now, and the inputs just written
+// (or NaN for the final row, which has no step after it).
+void record_row(Trajectory& traj, std::int64_t row, std::int64_t step, const mjData* d,
+                const SceneLayout& at, bool with_inputs) {
+  const auto put = [&](int column, double value) { traj.mutable_column(column)[row] = value; };
+  const double* box_q = d->qpos + at.box_qposadr;
+  const double* box_v = d->qvel + at.box_dofadr;
+  const double* shove = d->xfrc_applied + 6 * at.box_body;
+  constexpr double kNone = std::numeric_limits<double>::quiet_NaN();
+  put(Trajectory::kStep, static_cast<double>(step));
+  put(Trajectory::kTime, d->time);
+  put(Trajectory::kCtrl, with_inputs ? d->ctrl[0] : kNone);
+  for (int i = 0; i < 3; ++i) put(Trajectory::kShoveX + i, with_inputs ? shove[i] : kNone);
+  for (int i = 0; i < 7; ++i) put(Trajectory::kBoxX + i, box_q[i]);
+  for (int i = 0; i < 6; ++i) put(Trajectory::kBoxVx + i, box_v[i]);
+  put(Trajectory::kPusherX, d->qpos[at.pusher_qposadr]);
+  put(Trajectory::kPusherVx, d->qvel[at.pusher_dofadr]);
+  put(Trajectory::kNcon, d->ncon);
+}
+
+}  // namespace
+
+void validate(const RunConfig& config) {
+  std::ostringstream msg;
+  if (!(std::isfinite(config.timestep) && config.timestep > 0.0)) {
+    msg << "timestep must be a positive, finite number of seconds, got " << python_float_repr(config.timestep);
+  } else if (config.num_steps() < 1) {
+    msg << "steps must be at least 1, got " << config.num_steps();
+  } else if (config.record_every < 1) {
+    msg << "record_every must be at least 1, got " << config.record_every;
+  } else if (Trajectory::rows_for(config.num_steps(), config.record_every) >
+             kMaxTrajectoryValues / Trajectory::kNumColumns) {
+    msg << "steps " << config.num_steps() << " with record_every " << config.record_every
+        << " would record more than " << kMaxTrajectoryValues / Trajectory::kNumColumns
+        << " trajectory rows; raise record_every";
+  } else {
+    return;
+  }
+  throw InvalidArgument(msg.str());
+}
+
+RunResult run(const Model& model, const RunConfig& config) {
+  validate(config);
+  Data workspace(model);
+  return run(model, config, workspace);
+}
+
+RunResult run(const Model& model_in, const RunConfig& config, Data& workspace) {
+  validate(config);
+  const Model model = model_in.timestep() == config.timestep ? model_in : model_in.with_timestep(config.timestep);
+  if (!workspace.fits(model)) {
+    throw InvalidArgument("workspace Data was made for a model of another size");
+  }
+  const mjModel* m = model.get();
+  mjData* d = workspace.get();
+  const SceneLayout& at = model.layout();
+  const std::int64_t steps = config.num_steps();
+  const std::int64_t every = config.record_every;
+
+  RunResult result;
+  result.config = config;
+  result.timestep = m->opt.timestep;
+  result.shove = draw_shove(config.seed, steps);
+  const Shove& shove = result.shove;
+  Trajectory traj(Trajectory::rows_for(steps, every));
+  WarningCounter warnings;
+  double box_pos_at_push[3] = {};
+
+  // mj_forward fills in the derived state (poses, contacts) without advancing
+  // time, so row 0 is the true rest pose at t = 0.
+  detail::mujoco_call([&] {
+    mj_resetData(m, d);
+    mj_forward(m, d);
+  });
+  double* box_force = d->xfrc_applied + 6 * at.box_body;
+  std::int64_t row = 0;
+  for (std::int64_t step = 0; step < steps; ++step) {
+    const bool in_shove = config.perturb && shove.acts_at(step);
+    if (step == shove.start_step) {
+      // A copy, as the chapter takes: xpos is overwritten by the next step.
+      for (int i = 0; i < 3; ++i) box_pos_at_push[i] = d->xpos[3 * at.box_body + i];
+    }
+    // The rhythm: write intent, write interference, step.
+    d->ctrl[0] = 1.0;  // full throttle on the slide motor
+    box_force[0] = 0.0;
+    box_force[1] = in_shove ? shove.force_y() : 0.0;  // write 0 explicitly: xfrc_applied persists
+    box_force[2] = 0.0;
+    if (step % every == 0) record_row(traj, row++, step, d, at, true);
+    detail::mujoco_call([&] { mj_step(m, d); });
+    warnings.after_step(d, step);
+  }
+  record_row(traj, row, steps, d, at, false);
+
+  // Inspect, as the chapter does: the box's free joint owns qpos[adr..adr+3)
+  // (position) and qvel[adr..adr+3) (linear velocity).
+  const double* box_q = d->qpos + at.box_qposadr;
+  const double* box_v = d->qvel + at.box_dofadr;
+  const double speed = std::sqrt(box_v[0] * box_v[0] + box_v[1] * box_v[1] + box_v[2] * box_v[2]);
+  const double drift = std::fabs(box_q[1] - box_pos_at_push[1]);
+  Metrics& metrics = result.metrics;
+  metrics.steps = steps;
+  metrics.seed = config.seed;
+  metrics.perturb = config.perturb;
+  for (int i = 0; i < 3; ++i) metrics.box_final_pos[i] = round6(box_q[i]);
+  metrics.box_final_speed = round6(speed);
+  metrics.pusher_final_x = round6(d->qpos[at.pusher_qposadr]);
+  metrics.lateral_drift = round6(drift);
+  metrics.shove_moved_box = drift > 0.01;
+
+  result.trajectory = std::move(traj);
+  result.warnings = warnings.warnings();
+  result.sim_time = d->time;
+  return result;
+}
+
+}  // namespace simloop

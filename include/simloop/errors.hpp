@@ -1,0 +1,37 @@
+// The library's errors. It never prints and never exits: every failure is
+// one of these, thrown to the caller (the command turns them into a message
+// and an exit code, the Python module into an exception).
+#pragma once
+
+#include <stdexcept>
+#include <string>
+
+namespace simloop {
+
+// Base of everything simloop throws.
+class Error : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// An argument or input that cannot be used: a bad timestep, step count,
+// model file that lacks what the loop needs. The message names the input.
+class InvalidArgument : public Error {
+ public:
+  using Error::Error;
+};
+
+// MuJoCo itself reported an error (XML parse or compile error, or an error
+// raised while stepping). The message is MuJoCo's own text.
+class MujocoError : public Error {
+ public:
+  using Error::Error;
+};
+
+// Reading or writing a file failed; the message names the path.
+class IoError : public Error {
+ public:
+  using Error::Error;
+};
+
+}  // namespace simloop

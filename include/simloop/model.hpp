@@ -1,0 +1,90 @@
+// mjModel and mjData, the chapter's two objects, as owning C++ types.
+//
+// Model is the compiled world: compiled once, then read-only, and shared by
+// any number of Data objects (copies of a Model share one mjModel). Data is
+// one simulation's state. Keeping them apart is what lets a batch drive many
+// independent datas from one compiled model.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <memory>
+#include <string>
+#include <string_view>
+
+#include <mujoco/mujoco.h>
+
+namespace simloop {
+
+// The chapter's scene: a floor, a free red box, a blue pusher on a slide
+// joint along x driven by one motor. Identical to the chapter's XML except for
+// <compiler autolimits="true"/>, without which MuJoCo 2.2 rejects the
+// motor's ctrlrange (current MuJoCo defaults to it, so it loads on both).
+[[nodiscard]] std::string_view pusher_scene_xml() noexcept;
+
+// Where the loop finds the things it reads and writes, resolved once by name.
+struct SceneLayout {
+  int box_body = -1;       // body named "box"
+  int box_qposadr = -1;    // its free joint: qpos[adr..adr+7) = xyz + wxyz quaternion
+  int box_dofadr = -1;     // qvel[adr..adr+6) = linear velocity (world) + angular (local)
+  int pusher_joint = -1;   // the slide/hinge joint that actuator 0 drives
+  int pusher_body = -1;    // the body that joint moves
+  int pusher_qposadr = -1;
+  int pusher_dofadr = -1;
+};
+
+class Model {
+ public:
+  // The embedded chapter scene.
+  [[nodiscard]] static Model pusher_scene();
+  // Any MJCF text; it must have a body "box" on a free joint and an actuator
+  // 0 that drives a slide or hinge joint. `source` names it in errors.
+  [[nodiscard]] static Model from_xml_string(std::string_view xml,
+                                             std::string_view source = "<string>");
+  // An MJCF file on disk (includes and meshes resolve relative to it).
+  [[nodiscard]] static Model from_file(const std::string& path);
+
+  // A copy with opt.timestep set (the model is frozen while stepping; between
+  // runs it is ours to edit, as the chapter says). Throws InvalidArgument
+  // unless timestep is finite and positive.
+  [[nodiscard]] Model with_timestep(double timestep) const;
+
+  [[nodiscard]] const mjModel* get() const noexcept { return model_.get(); }
+  [[nodiscard]] double timestep() const noexcept { return model_->opt.timestep; }
+  [[nodiscard]] const SceneLayout& layout() const noexcept { return layout_; }
+
+ private:
+  // Takes ownership of a freshly loaded model and resolves its layout.
+  static Model adopt(mjModel* raw, std::string_view source);
+  Model(std::shared_ptr<const mjModel> model, SceneLayout layout)
+      : model_(std::move(model)), layout_(layout) {}
+  std::shared_ptr<const mjModel> model_;
+  SceneLayout layout_;
+};
+
+// One simulation's state, sized for a model. A Data may be reused for any
+// Model of the same structure (for example the same scene at another
+// timestep): runs reset it first.
+class Data {
+ public:
+  explicit Data(const Model& model);
+  [[nodiscard]] mjData* get() noexcept { return data_.get(); }
+  [[nodiscard]] const mjData* get() const noexcept { return data_.get(); }
+  // True if this data was made for a model of the same sizes as `model`
+  // (every size field of mjModel, nq through nbuffer, is equal).
+  [[nodiscard]] bool fits(const Model& model) const noexcept;
+
+ private:
+  struct Deleter {
+    void operator()(mjData* d) const noexcept { mj_deleteData(d); }
+  };
+  std::unique_ptr<mjData, Deleter> data_;
+  // mjModel's leading block of int sizes, nq through nbuffer.
+  static constexpr std::size_t kSizeFields = (offsetof(mjModel, nbuffer) - offsetof(mjModel, nq)) / sizeof(int) + 1;
+  std::array<int, kSizeFields> sizes_{};
+};
+
+// "MuJoCo 2.2.2": the version of the library we are linked against.
+[[nodiscard]] std::string mujoco_version();
+
+}  // namespace simloop

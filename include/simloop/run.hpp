@@ -1,0 +1,125 @@
+// The chapter's run: load, step, shove mid-run, read out what happened.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "simloop/model.hpp"
+#include "simloop/shove.hpp"
+
+namespace simloop {
+
+// --smoke: a short, fixed run so CI can compare two runs byte for byte.
+inline constexpr std::int64_t kSmokeSteps = 300;
+
+struct RunConfig {
+  std::uint64_t seed = 0;          // seeds the shove, and nothing else
+  std::int64_t steps = 2000;       // ignored when smoke is set
+  double timestep = 0.002;         // written into (a copy of) the model
+  bool perturb = true;             // false: no shove (the baseline)
+  bool smoke = false;              // fixed kSmokeSteps steps
+  std::int64_t record_every = 1;   // trajectory row every K steps (+ the final state)
+
+  [[nodiscard]] std::int64_t num_steps() const noexcept { return smoke ? kSmokeSteps : steps; }
+};
+
+// Throws InvalidArgument naming the field and value: timestep not finite and
+// positive, steps < 1, record_every < 1, or a trajectory too large to hold.
+void validate(const RunConfig& config);
+
+// metrics.json: the chapter's keys, floats already rounded to 6 decimals.
+struct Metrics {
+  std::int64_t steps = 0;
+  std::uint64_t seed = 0;
+  bool perturb = true;
+  std::array<double, 3> box_final_pos{};
+  double box_final_speed = 0.0;
+  double pusher_final_x = 0.0;
+  double lateral_drift = 0.0;   // |final y - y when the shove started|
+  bool shove_moved_box = false; // unrounded lateral_drift > 0.01 m
+};
+
+// A warning MuJoCo raised while stepping (mjData::warning). After some of
+// them, a bad acceleration for one, MuJoCo resets the state and goes on, so
+// a run that raised one did not simulate what its numbers seem to say.
+struct Warning {
+  std::string name;             // "mjWARN_BADQACC"
+  int count = 0;                // how many times it was raised in the run
+  std::int64_t first_step = 0;  // the step during which it was first raised
+  std::string message;          // MuJoCo's text for it, with the last info
+};
+
+// The run's recorded states, one row per recorded step, column-major so each
+// column is one contiguous array. Row k holds the state at the start of its
+// step and the inputs written for that step; the final row (step == steps)
+// has no inputs after it, so its input columns hold NaN.
+class Trajectory {
+ public:
+  enum Column : int {
+    kStep, kTime, kCtrl, kShoveX, kShoveY, kShoveZ,
+    kBoxX, kBoxY, kBoxZ, kBoxQw, kBoxQx, kBoxQy, kBoxQz,
+    kBoxVx, kBoxVy, kBoxVz, kBoxWx, kBoxWy, kBoxWz,
+    kPusherX, kPusherVx, kNcon,
+    kNumColumns
+  };
+  static constexpr std::array<std::string_view, kNumColumns> kColumnNames = {
+      "step", "time", "ctrl", "shove_x", "shove_y", "shove_z",
+      "box_x", "box_y", "box_z", "box_qw", "box_qx", "box_qy", "box_qz",
+      "box_vx", "box_vy", "box_vz", "box_wx", "box_wy", "box_wz",
+      "pusher_x", "pusher_vx", "ncon"};
+  // Columns whose values are whole numbers (written without a decimal point).
+  [[nodiscard]] static constexpr bool is_integer_column(int column) noexcept {
+    return column == kStep || column == kNcon;
+  }
+  // Columns that hold the inputs written for a step (empty in the final row).
+  [[nodiscard]] static constexpr bool is_input_column(int column) noexcept {
+    return column >= kCtrl && column <= kShoveZ;
+  }
+  // Rows a run of `steps` steps records: every K-th step, then the final state.
+  [[nodiscard]] static std::int64_t rows_for(std::int64_t steps, std::int64_t record_every) noexcept {
+    return (steps + record_every - 1) / record_every + 1;
+  }
+
+  Trajectory() = default;
+  explicit Trajectory(std::int64_t rows) : rows_(rows), values_(static_cast<size_t>(rows) * kNumColumns) {}
+
+  [[nodiscard]] std::int64_t rows() const noexcept { return rows_; }
+  [[nodiscard]] double at(std::int64_t row, int column) const noexcept {
+    return values_[static_cast<size_t>(column * rows_ + row)];
+  }
+  // The column's `rows()` values, contiguous.
+  [[nodiscard]] const double* column(int column) const noexcept {
+    return values_.data() + static_cast<size_t>(column) * static_cast<size_t>(rows_);
+  }
+  [[nodiscard]] double* mutable_column(int column) noexcept {
+    return values_.data() + static_cast<size_t>(column) * static_cast<size_t>(rows_);
+  }
+
+ private:
+  std::int64_t rows_ = 0;
+  std::vector<double> values_;
+};
+
+struct RunResult {
+  RunConfig config;
+  Metrics metrics;
+  Shove shove;             // the shove drawn for this run (applied only if perturb)
+  Trajectory trajectory;
+  std::vector<Warning> warnings;
+  double timestep = 0.0;   // the model's timestep during the run
+  double sim_time = 0.0;   // mjData::time at the end
+};
+
+// Runs the chapter's loop on `model` (a copy of it with config.timestep when
+// that differs from the model's) in a fresh mjData.
+[[nodiscard]] RunResult run(const Model& model, const RunConfig& config);
+
+// The same, reusing `workspace` (reset first), which must fit the model:
+// batches keep one Data per worker. The result does not depend on what the
+// workspace held before.
+[[nodiscard]] RunResult run(const Model& model, const RunConfig& config, Data& workspace);
+
+}  // namespace simloop

@@ -1,0 +1,156 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <string>
+
+#include "simloop/errors.hpp"
+#include "simloop/model.hpp"
+#include "simloop/run.hpp"
+#include "test_util.hpp"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string scene_with(const std::string& from, const std::string& to) {
+  std::string xml(simloop::pusher_scene_xml());
+  const auto at = xml.find(from);
+  if (at == std::string::npos) std::abort();
+  return xml.replace(at, from.size(), to);
+}
+
+template <class Exception, class F>
+std::string message_of(F&& f) {
+  try {
+    f();
+  } catch (const Exception& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "no exception thrown";
+  return {};
+}
+
+TEST(Model, ChapterSceneLoadsWithTheChaptersLayout) {
+  const simloop::Model model = simloop::Model::pusher_scene();
+  const mjModel* m = model.get();
+  EXPECT_EQ(m->nq, 8);  // box free joint 7 + pusher slide 1: "eight numbers"
+  EXPECT_EQ(m->nv, 7);
+  EXPECT_EQ(m->nu, 1);
+  const simloop::SceneLayout& at = model.layout();
+  EXPECT_EQ(at.box_qposadr, 0);
+  EXPECT_EQ(at.box_dofadr, 0);
+  EXPECT_EQ(at.pusher_qposadr, 7);
+  EXPECT_EQ(at.pusher_dofadr, 6);
+  EXPECT_EQ(at.pusher_body, mj_name2id(m, mjOBJ_BODY, "pusher"));
+  EXPECT_EQ(m->actuator_gear[0], 10.0);
+  EXPECT_EQ(m->actuator_ctrllimited[0], 1);  // autolimits turned ctrlrange on
+  EXPECT_EQ(model.timestep(), 0.002);        // MuJoCo's default, as in the chapter
+}
+
+TEST(Model, WithTimestepCopiesAndLeavesTheOriginal) {
+  const simloop::Model model = simloop::Model::pusher_scene();
+  const simloop::Model coarse = model.with_timestep(0.05);
+  EXPECT_EQ(coarse.timestep(), 0.05);
+  EXPECT_EQ(model.timestep(), 0.002);
+  EXPECT_NE(coarse.get(), model.get());
+  for (double bad : {0.0, -0.002, std::nan(""), std::numeric_limits<double>::infinity()}) {
+    const std::string msg = message_of<simloop::InvalidArgument>([&] { (void)model.with_timestep(bad); });
+    EXPECT_NE(msg.find("timestep"), std::string::npos) << msg;
+  }
+}
+
+TEST(Model, DataFitsModelsOfTheSameStructureOnly) {
+  const simloop::Model model = simloop::Model::pusher_scene();
+  const simloop::Data data(model);
+  EXPECT_TRUE(data.fits(model.with_timestep(0.05)));
+  const simloop::Model bigger = simloop::Model::from_xml_string(
+      scene_with("</worldbody>", "<body name=\"extra\" pos=\"1 1 1\"><freejoint/><geom size=\"0.1\"/></body></worldbody>"));
+  EXPECT_FALSE(data.fits(bigger));
+  simloop::Data mismatched(bigger);
+  EXPECT_THROW((void)simloop::run(model, simloop::RunConfig{}, mismatched), simloop::InvalidArgument);
+}
+
+TEST(Model, MissingPiecesAreNamed) {
+  EXPECT_NE(message_of<simloop::InvalidArgument>([] {
+              (void)simloop::Model::from_xml_string(scene_with("name=\"box\"", "name=\"crate\""), "test.xml");
+            }).find("test.xml: the model has no body named \"box\""),
+            std::string::npos);
+  EXPECT_NE(message_of<simloop::InvalidArgument>([] {
+              (void)simloop::Model::from_xml_string(scene_with("<freejoint/>", "<joint type=\"slide\"/>"));
+            }).find("body \"box\" must have exactly one joint, a free joint"),
+            std::string::npos);
+  const std::string no_actuator = scene_with(
+      "<motor name=\"push_motor\" joint=\"pusher_slide\" gear=\"10\" ctrlrange=\"-1 1\"/>", "");
+  EXPECT_NE(message_of<simloop::InvalidArgument>([&] {
+              (void)simloop::Model::from_xml_string(no_actuator);
+            }).find("no actuator"),
+            std::string::npos);
+  const std::string ball = scene_with("type=\"slide\" axis=\"1 0 0\"", "type=\"ball\"");
+  EXPECT_NE(message_of<simloop::InvalidArgument>([&] { (void)simloop::Model::from_xml_string(ball); })
+                .find("slide or hinge"),
+            std::string::npos);
+}
+
+TEST(Model, InvalidXmlRaisesMujocosOwnMessageAndWritesNoLog) {
+  test::TempDir dir;
+  test::in_directory(dir.path(), [] {
+    const std::string msg = message_of<simloop::MujocoError>(
+        [] { (void)simloop::Model::from_xml_string("<mujoco><worldbody><body></mujoco>", "broken.xml"); });
+    EXPECT_EQ(msg.rfind("broken.xml: XML parse error", 0), 0u) << msg;
+    EXPECT_NE(msg.find("XML_ERROR_MISMATCHED_ELEMENT"), std::string::npos) << msg;
+    // Schema errors go through MuJoCo's parser too: the chapter's
+    // ctrlrange without autolimits is one on 2.2.
+    const std::string no_autolimits = scene_with("<compiler autolimits=\"true\"/>", "");
+    const std::string msg2 =
+        message_of<simloop::MujocoError>([&] { (void)simloop::Model::from_xml_string(no_autolimits); });
+    EXPECT_NE(msg2.find("ctrlrange"), std::string::npos) << msg2;
+  });
+  EXPECT_FALSE(fs::exists(dir.path() / "MUJOCO_LOG.TXT"));
+}
+
+TEST(Model, FromFile) {
+  test::TempDir dir;
+  const fs::path path = dir.path() / "scene.xml";
+  test::write_text(path, std::string(simloop::pusher_scene_xml()));
+  const simloop::Model model = simloop::Model::from_file(path.string());
+  EXPECT_EQ(model.get()->nq, 8);
+  const std::string msg =
+      message_of<simloop::IoError>([&] { (void)simloop::Model::from_file((dir.path() / "nope.xml").string()); });
+  EXPECT_NE(msg.find("nope.xml: cannot open (No such file or directory)"), std::string::npos) << msg;
+}
+
+TEST(Model, MujocoErrorsBecomeExceptionsAndWriteNoLog) {
+  // By default MuJoCo 2.2 would log, wait for Enter and exit on each of these.
+  test::TempDir dir;
+  test::in_directory(dir.path(), [] {
+    // While compiling: a stack far too small for the forward pass that
+    // compilation runs.
+    const std::string small_stack =
+        scene_with("<compiler autolimits=\"true\"/>", "<compiler autolimits=\"true\"/><size nstack=\"100\"/>");
+    const std::string msg =
+        message_of<simloop::MujocoError>([&] { (void)simloop::Model::from_xml_string(small_stack, "tiny.xml"); });
+    EXPECT_EQ(msg, "tiny.xml: Error: engine error: Stack overflow") << msg;
+
+    // While stepping: mj_step raises mju_error for an integrator it does not
+    // know. (Model is read-only by design; the test reaches past that.)
+    const simloop::Model broken = simloop::Model::pusher_scene().with_timestep(0.002);
+    const_cast<mjModel*>(broken.get())->opt.integrator = 99;
+    const std::string step_msg =
+        message_of<simloop::MujocoError>([&] { (void)simloop::run(broken, simloop::RunConfig{}); });
+    EXPECT_NE(step_msg.find("integrator"), std::string::npos) << step_msg;
+
+    // The process carries on, and a good model still runs.
+    simloop::RunConfig smoke;
+    smoke.smoke = true;
+    EXPECT_EQ(simloop::run(simloop::Model::pusher_scene(), smoke).metrics.steps, 300);
+  });
+  EXPECT_FALSE(fs::exists(dir.path() / "MUJOCO_LOG.TXT"));
+}
+
+TEST(Model, ReportsTheLinkedMujocoVersion) {
+  EXPECT_EQ(simloop::mujoco_version(), "MuJoCo 2.2.2");
+}
+
+}  // namespace
