@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "mujoco_guard.hpp"
+#include "warning_counter.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/number_format.hpp"
 
@@ -15,57 +16,6 @@ namespace {
 // Trajectories beyond this are refused up front rather than left to the
 // allocator (4 GiB: 24 million rows of the 22 columns).
 constexpr std::int64_t kMaxTrajectoryValues = std::int64_t{1} << 29;
-
-// MuJoCo 2.2's texts for its warnings (mju_warningText), rebuilt here because
-// that function writes a shared static buffer and batches step in threads.
-std::string warning_message(int warning, int info) {
-  static constexpr const char* kFormats[mjNWARNING] = {
-      "Inertia matrix is too close to singular at DOF %d. Check model.",
-      "Pre-allocated contact buffer is full. Increase nconmax above %d.",
-      "Pre-allocated constraint buffer is full. Increase njmax above %d.",
-      "Pre-allocated visual geom buffer is full. Increase maxgeom above %d.",
-      "Nan, Inf or huge value in QPOS at DOF %d. The simulation is unstable.",
-      "Nan, Inf or huge value in QVEL at DOF %d. The simulation is unstable.",
-      "Nan, Inf or huge value in QACC at DOF %d. The simulation is unstable.",
-      "Nan, Inf or huge value in CTRL at ACTUATOR %d. The simulation is unstable."};
-  char text[160];
-  std::snprintf(text, sizeof text, kFormats[warning], info);
-  return text;
-}
-
-constexpr const char* kWarningNames[mjNWARNING] = {
-    "mjWARN_INERTIA", "mjWARN_CONTACTFULL", "mjWARN_CNSTRFULL", "mjWARN_VGEOMFULL",
-    "mjWARN_BADQPOS", "mjWARN_BADQVEL", "mjWARN_BADQACC", "mjWARN_BADCTRL"};
-
-// Counts MuJoCo's warnings step by step. MuJoCo's own counters are not
-// enough: a bad acceleration makes it reset mjData, counters included. So
-// after each step we move the counts into our totals and zero them.
-class WarningCounter {
- public:
-  void after_step(mjData* d, std::int64_t step) noexcept {
-    for (int i = 0; i < mjNWARNING; ++i) {
-      mjWarningStat& stat = d->warning[i];
-      if (stat.number == 0) continue;
-      if (count_[i] == 0) first_step_[i] = step;
-      count_[i] += stat.number;
-      last_info_[i] = stat.lastinfo;
-      stat.number = 0;
-    }
-  }
-  [[nodiscard]] std::vector<Warning> warnings() const {
-    std::vector<Warning> out;
-    for (int i = 0; i < mjNWARNING; ++i) {
-      if (count_[i] == 0) continue;
-      out.push_back({kWarningNames[i], count_[i], first_step_[i], warning_message(i, last_info_[i])});
-    }
-    return out;
-  }
-
- private:
-  int count_[mjNWARNING] = {};
-  int last_info_[mjNWARNING] = {};
-  std::int64_t first_step_[mjNWARNING] = {};
-};
 
 // Writes trajectory row `row`: the state now, and the inputs just written
 // (or NaN for the final row, which has no step after it).
@@ -132,7 +82,7 @@ RunResult run(const Model& model_in, const RunConfig& config, Data& workspace) {
   result.shove = draw_shove(config.seed, steps);
   const Shove& shove = result.shove;
   Trajectory traj(Trajectory::rows_for(steps, every));
-  WarningCounter warnings;
+  detail::WarningCounter warnings;
   double box_pos_at_push[3] = {};
 
   // mj_forward fills in the derived state (poses, contacts) without advancing

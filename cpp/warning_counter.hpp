@@ -1,0 +1,36 @@
+// Counting MuJoCo's warnings per run (internal to the library).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include <mujoco/mujoco.h>
+
+#include "simloop/run.hpp"
+
+namespace simloop::detail {
+
+// Counts MuJoCo's warnings step by step. MuJoCo's own counters are not
+// enough: a bad acceleration makes it reset mjData, counters included. So
+// after each step we move the counts into our totals and zero them.
+class WarningCounter {
+ public:
+  void after_step(mjData* d, std::int64_t step) noexcept {
+    for (int i = 0; i < mjNWARNING; ++i) {
+      mjWarningStat& stat = d->warning[i];
+      if (stat.number == 0) continue;
+      if (count_[i] == 0) first_step_[i] = step;
+      count_[i] += stat.number;
+      last_info_[i] = stat.lastinfo;
+      stat.number = 0;
+    }
+  }
+  [[nodiscard]] std::vector<Warning> warnings() const;
+
+ private:
+  int count_[mjNWARNING] = {};
+  int last_info_[mjNWARNING] = {};
+  std::int64_t first_step_[mjNWARNING] = {};
+};
+
+}  // namespace simloop::detail

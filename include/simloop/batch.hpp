@@ -1,0 +1,24 @@
+// Many runs over one compiled model: the chapter's "one model, many datas".
+#pragma once
+
+#include <vector>
+
+#include "simloop/model.hpp"
+#include "simloop/run.hpp"
+
+namespace simloop {
+
+// Runs every config on `model` with `threads` workers (0: one per core), each
+// worker stepping its own Data; the model is shared read-only (one copy per
+// distinct timestep, made before any worker starts). Each run resets its
+// Data, so result i is bitwise identical to run(model, configs[i]), whatever
+// the thread count. All configs are validated before any run starts
+// (InvalidArgument naming the config's index); if runs fail, the failure of
+// the lowest index is rethrown after all workers have stopped.
+[[nodiscard]] std::vector<RunResult> run_batch(const Model& model, const std::vector<RunConfig>& configs,
+                                               int threads = 0);
+
+// The worker count run_batch uses for `threads` and `jobs`.
+[[nodiscard]] int batch_workers(int threads, std::size_t jobs) noexcept;
+
+}  // namespace simloop
