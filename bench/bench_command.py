@@ -8,7 +8,10 @@ are shared. Wall-clock is measured here, from spawn to exit. Peak memory is
 the VmHWM that sim_loop reports on its last line: wait4's ru_maxrss would also
 count this Python process, which the child is a copy of until it execs.
 
-    python3 bench/bench_command.py [--build build] [--runs 31]
+    python3 bench/bench_command.py [--build build] [--runs 31] [--callgrind]
+
+--callgrind also counts instructions (valgrind, about a minute): the
+driver-versus-bare ratio in instructions does not move with machine load.
 """
 import argparse
 import re
@@ -40,6 +43,7 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--build", type=Path, default=Path("build"), help="CMake build directory")
     parser.add_argument("--runs", type=int, default=31)
+    parser.add_argument("--callgrind", action="store_true", help="also count instructions with valgrind")
     args = parser.parse_args()
     exe = args.build / "sim_loop"
     if not exe.exists():
@@ -55,7 +59,30 @@ def main() -> int:
     print(f"  peak memory median {mem:.1f} MiB  (max {max(rss):.1f})"
           f"  ratio to the 16 MiB budget: {mem / RSS_BUDGET_MIB:.2f}")
     print(flush=True)
-    return subprocess.call([str(args.build / "bench_loop")])
+    status = subprocess.call([str(args.build / "bench_loop"), "61"])
+    if args.callgrind:
+        print(flush=True)
+        print(callgrind_ratio(args.build))
+    return status
+
+
+def callgrind_ratio(build: Path) -> str:
+    """Instructions of simloop::run against bare_loop, inclusive, from one callgrind run."""
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "callgrind.out"
+        subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", str(build / "bench_loop"),
+                        "3", "2000"], check=True, capture_output=True)
+        report = subprocess.run(["callgrind_annotate", "--inclusive=yes", str(out)], check=True,
+                                capture_output=True, text=True).stdout
+    def count(pattern: str) -> int:
+        match = re.search(r"^\s*([0-9,]+) .*" + pattern, report, re.MULTILINE)
+        if not match:
+            sys.exit(f"callgrind: no line for {pattern}")
+        return int(match.group(1).replace(",", ""))
+    driver = count(re.escape("simloop::run(simloop::Model const&, simloop::RunConfig const&, simloop::Data&)"))
+    bare = count("bare_loop")
+    return (f"callgrind, 4 runs each: simloop::run {driver:,} instructions, bare loop {bare:,}: "
+            f"ratio {driver / bare:.4f}")
 
 
 if __name__ == "__main__":

@@ -3,11 +3,17 @@
 // medians and their ratio are printed. Target: driver <= 1.03 x bare.
 //
 //   build/bench_loop [rounds=41] [steps=2000]
+//   build/bench_loop --serve   one simloop::run (as sim_loop calls it) per
+//                              line read from stdin; prints its seconds.
+//                              bench/bench_python.py interleaves these with
+//                              simloop.run() calls, so both see the same machine.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <iostream>
+#include <string>
 #include <vector>
 
 #include "simloop/model.hpp"
@@ -23,7 +29,7 @@ double median(std::vector<double> v) {
 
 // The chapter's loop with nothing around it: no trajectory, no warning
 // bookkeeping, no error guard.
-void bare_loop(const mjModel* m, mjData* d, const simloop::SceneLayout& at, const simloop::Shove& shove,
+[[gnu::noinline]] void bare_loop(const mjModel* m, mjData* d, const simloop::SceneLayout& at, const simloop::Shove& shove,
                std::int64_t steps) {
   mj_resetData(m, d);
   mj_forward(m, d);
@@ -46,19 +52,39 @@ double seconds(F&& f) {
 
 }  // namespace
 
+int serve() {
+  const simloop::Model model = simloop::Model::pusher_scene();
+  const simloop::RunConfig config;
+  for (std::string line; std::getline(std::cin, line);) {
+    simloop::RunResult result;
+    const double s = seconds([&] { result = simloop::run(model, config); });
+    std::printf("%.9f\n", s);
+    std::fflush(stdout);
+  }
+  return 0;
+}
+
 int main(int argc, char** argv) {
+  if (argc > 1 && std::strcmp(argv[1], "--serve") == 0) return serve();
   const int rounds = argc > 1 ? std::atoi(argv[1]) : 41;
   const std::int64_t steps = argc > 2 ? std::atoll(argv[2]) : 2000;
   const simloop::Model model = simloop::Model::pusher_scene();
-  simloop::Data bare_data(model), driver_data(model);
+  // One Data for both loops: two arenas would sit at different addresses,
+  // and cache aliasing then biases one loop by several percent per process.
+  simloop::Data data(model);
+  simloop::Data& bare_data = data;
+  simloop::Data& driver_data = data;
   simloop::RunConfig config;
   config.steps = steps;
+  if (const char* every = std::getenv("BENCH_RECORD_EVERY")) config.record_every = std::atoll(every);
   const simloop::Shove shove = simloop::draw_shove(config.seed, steps);
 
   // Same inputs, same physics: the two loops must end in the same state.
   bare_loop(model.get(), bare_data.get(), model.layout(), shove, steps);
+  double bare_qpos[8];
+  std::memcpy(bare_qpos, bare_data.get()->qpos, sizeof bare_qpos);
   const simloop::RunResult check = simloop::run(model, config, driver_data);
-  const bool same = std::memcmp(bare_data.get()->qpos, driver_data.get()->qpos, sizeof(double) * 8) == 0;
+  const bool same = std::memcmp(bare_qpos, driver_data.get()->qpos, sizeof bare_qpos) == 0;
 
   std::vector<double> bare, driver, ratio;
   simloop::RunResult sink;

@@ -109,8 +109,8 @@ Options parse(int argc, const char* const* argv) {
   return opts;
 }
 
-std::string help_text() {
-  return R"(usage: sim_loop [options]
+std::string help_text(std::string_view program, std::string_view recording) {
+  std::string text = "usage: " + std::string(program) + R"( [options]
 
 The chapter's MuJoCo simulation loop (ch0.1-sim-loop): a box on a floor, a
 pusher on a slide joint at full throttle, and a seeded sideways shove on the
@@ -129,14 +129,16 @@ options:
                     an actuator 0 on a slide or hinge joint (default: the
                     chapter's pusher scene)
   --rerun, --no-rerun
-                    accepted so the chapter's command lines work; sim_loop
-                    writes no recording (the .rrd comes from the Python side)
+                    )";
+  text += recording;
+  text += R"(
   --version         print the version and exit
   -h, --help        print this help and exit
 
 exit status: 0 done, 1 the run failed (MuJoCo error, cannot write outputs),
 2 bad command line or input (a flag's value, --model, --out).
 )";
+  return text;
 }
 
 }  // namespace simloop::cli

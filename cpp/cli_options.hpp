@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 
 #include "simloop/run.hpp"
 
@@ -26,8 +27,11 @@ class UsageError : public std::runtime_error {
 };
 
 // Parses argv (argv[0] is skipped). Accepts "--flag value" and "--flag=value".
+// Shared by sim_loop and `python -m simloop`, so both take the same flags and
+// refuse bad ones with the same words.
 [[nodiscard]] Options parse(int argc, const char* const* argv);
 
-[[nodiscard]] std::string help_text();
+// --help for `program`; `recording` says what --rerun does there.
+[[nodiscard]] std::string help_text(std::string_view program, std::string_view recording);
 
 }  // namespace simloop::cli

@@ -64,7 +64,11 @@ int main(int argc, char** argv) {
     return fail(kExitUsage, e.what());
   }
   if (opts.help) {
-    std::fputs(cli::help_text().c_str(), stdout);
+    std::fputs(cli::help_text("sim_loop",
+                              "accepted so the chapter's command lines work; sim_loop\n"
+                              "                    writes no recording (python -m simloop does)")
+                   .c_str(),
+               stdout);
     return 0;
   }
   if (opts.version) {
@@ -73,7 +77,7 @@ int main(int argc, char** argv) {
   }
 
   // Banner: the chapter's startup contract (tier; wall-clock comes at the end).
-  std::printf("ch0.1-sim-loop | tier: cpu | %s | sim_loop %s\n", simloop::mujoco_version().c_str(),
+  std::printf("ch0.1-sim-loop | tier: cpu | %s | simloop %s\n", simloop::mujoco_version().c_str(),
               simloop::kVersion);
   std::fflush(stdout);
 
@@ -99,7 +103,7 @@ int main(int argc, char** argv) {
     std::printf("trajectory: %s (%lld rows)\n", files.trajectory.c_str(),
                 static_cast<long long>(result.trajectory.rows()));
     if (opts.rerun) {
-      std::printf("recording: none (sim_loop writes no .rrd)\n");
+      std::printf("recording: none (sim_loop writes no .rrd; python -m simloop records one)\n");
     }
   } catch (const simloop::Error& e) {
     return fail(kExitRunFailed, e.what());

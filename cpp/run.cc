@@ -21,7 +21,8 @@ constexpr std::int64_t kMaxTrajectoryValues = std::int64_t{1} << 29;
 // (or NaN for the final row, which has no step after it).
 void record_row(Trajectory& traj, std::int64_t row, std::int64_t step, const mjData* d,
                 const SceneLayout& at, bool with_inputs) {
-  const auto put = [&](int column, double value) { traj.mutable_column(column)[row] = value; };
+  double* values = traj.mutable_row(row);
+  const auto put = [values](int column, double value) { values[column] = value; };
   const double* box_q = d->qpos + at.box_qposadr;
   const double* box_v = d->qvel + at.box_dofadr;
   const double* shove = d->xfrc_applied + 6 * at.box_body;
@@ -85,29 +86,35 @@ RunResult run(const Model& model_in, const RunConfig& config, Data& workspace) {
   detail::WarningCounter warnings;
   double box_pos_at_push[3] = {};
 
-  // mj_forward fills in the derived state (poses, contacts) without advancing
-  // time, so row 0 is the true rest pose at t = 0.
-  detail::mujoco_call([&] {
-    mj_resetData(m, d);
-    mj_forward(m, d);
-  });
   double* box_force = d->xfrc_applied + 6 * at.box_body;
   std::int64_t row = 0;
-  for (std::int64_t step = 0; step < steps; ++step) {
-    const bool in_shove = config.perturb && shove.acts_at(step);
-    if (step == shove.start_step) {
-      // A copy, as the chapter takes: xpos is overwritten by the next step.
-      for (int i = 0; i < 3; ++i) box_pos_at_push[i] = d->xpos[3 * at.box_body + i];
+  // One guard around the whole loop: a MuJoCo error jumps back out of it, and
+  // nothing inside owns anything that would need destroying.
+  detail::mujoco_call([&] {
+    // mj_forward fills in the derived state (poses, contacts) without
+    // advancing time, so row 0 is the true rest pose at t = 0.
+    mj_resetData(m, d);
+    mj_forward(m, d);
+    std::int64_t until_record = 0;  // counts down to the next recorded step
+    for (std::int64_t step = 0; step < steps; ++step) {
+      const bool in_shove = config.perturb && shove.acts_at(step);
+      if (step == shove.start_step) {
+        // A copy, as the chapter takes: xpos is overwritten by the next step.
+        for (int i = 0; i < 3; ++i) box_pos_at_push[i] = d->xpos[3 * at.box_body + i];
+      }
+      // The rhythm: write intent, write interference, step.
+      d->ctrl[0] = 1.0;  // full throttle on the slide motor
+      box_force[0] = 0.0;
+      box_force[1] = in_shove ? shove.force_y() : 0.0;  // write 0 explicitly: xfrc_applied persists
+      box_force[2] = 0.0;
+      if (until_record-- == 0) {
+        record_row(traj, row++, step, d, at, true);
+        until_record = every - 1;
+      }
+      mj_step(m, d);
+      warnings.after_step(d, step);
     }
-    // The rhythm: write intent, write interference, step.
-    d->ctrl[0] = 1.0;  // full throttle on the slide motor
-    box_force[0] = 0.0;
-    box_force[1] = in_shove ? shove.force_y() : 0.0;  // write 0 explicitly: xfrc_applied persists
-    box_force[2] = 0.0;
-    if (step % every == 0) record_row(traj, row++, step, d, at, true);
-    detail::mujoco_call([&] { mj_step(m, d); });
-    warnings.after_step(d, step);
-  }
+  });
   record_row(traj, row, steps, d, at, false);
 
   // Inspect, as the chapter does: the box's free joint owns qpos[adr..adr+3)

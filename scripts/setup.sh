@@ -1,14 +1,28 @@
 #!/usr/bin/env bash
 # Installs what simloop needs on Debian 12 and is missing (apt-get, through
-# sudo when not root), then configures and builds the C++ tree into build/.
-# Sourced by scripts/run.sh and scripts/test.sh; safe to run again.
+# sudo when not root), then builds the C++ tree into build/. With --python,
+# also makes the virtual environment .venv and installs the package into it
+# (pip install ".[test]": scikit-build-core builds the module from the same
+# CMake tree). Called by scripts/run.sh and scripts/test.sh; safe to rerun.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
+with_python=0
+[[ ${1:-} == --python ]] && with_python=1
 
+python=${PYTHON:-python3}
 apt_packages=(libmujoco-dev libqhull-dev libgtest-dev)
 command -v g++ >/dev/null 2>&1 || apt_packages+=(g++)
 command -v make >/dev/null 2>&1 || command -v ninja >/dev/null 2>&1 || apt_packages+=(make)
 command -v cmake >/dev/null 2>&1 || apt_packages+=(cmake)
+if ((with_python)); then
+  if ! command -v "$python" >/dev/null 2>&1; then
+    apt_packages+=(python3 python3-venv python3-dev)
+  else
+    "$python" -c "import ensurepip, venv" 2>/dev/null || apt_packages+=(python3-venv)
+    "$python" -c "import os, sys, sysconfig; sys.exit(not os.path.exists(os.path.join(sysconfig.get_paths()['include'], 'Python.h')))" \
+      || apt_packages+=(python3-dev)
+  fi
+fi
 
 missing=()
 for pkg in "${apt_packages[@]}"; do
@@ -30,3 +44,9 @@ fi
 
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build build -j "$(nproc)"
+
+if ((with_python)); then
+  [[ -x .venv/bin/python ]] || "$python" -m venv .venv
+  echo "setup: pip install .[test] into .venv"
+  .venv/bin/python -m pip install -q --disable-pip-version-check ".[test]"
+fi

