@@ -27,14 +27,14 @@ std::vector<RunResult> run_batch(const Model& model, const std::vector<RunConfig
       throw InvalidArgument("run " + std::to_string(i) + ": " + e.what());
     }
   }
-  // The model is frozen while stepping, so each timestep gets its own copy,
-  // made here, before the workers share them.
-  std::map<double, Model> models;
+  // The model is frozen while stepping, so each setting (timestep, energy)
+  // gets its own copy, made here, before the workers share them.
+  std::map<std::pair<double, bool>, Model> models;
   std::vector<const Model*> model_of(configs.size());
   for (std::size_t i = 0; i < configs.size(); ++i) {
-    const double dt = configs[i].timestep;
-    auto it = models.find(dt);
-    if (it == models.end()) it = models.emplace(dt, dt == model.timestep() ? model : model.with_timestep(dt)).first;
+    const std::pair<double, bool> key{configs[i].timestep, configs[i].audit_energy};
+    auto it = models.find(key);
+    if (it == models.end()) it = models.emplace(key, model.for_run(key.first, key.second)).first;
     model_of[i] = &it->second;
   }
 

@@ -5,14 +5,23 @@
 #include <filesystem>
 #include <stdexcept>
 #include <string>
+#include <vector>
 #include <string_view>
 
 #include "simloop/run.hpp"
 
 namespace simloop::cli {
 
+enum class Command { kRun, kSweep };
+
 struct Options {
+  Command command = Command::kRun;
   RunConfig run;
+  // `sweep`: the timesteps (empty: the default range), the span, the workers.
+  std::vector<double> sweep_timesteps;
+  double sweep_duration = 4.0;
+  int threads = 0;         // 0: one per core
+  bool plot = false;       // --plot: trajectory.png / sweep.png
   std::filesystem::path out = "outputs/ch0.1-sim-loop";
   std::string model_path;  // empty: the embedded pusher scene
   bool rerun = true;       // accepted for the chapter's command lines; sim_loop records nothing
@@ -31,7 +40,15 @@ class UsageError : public std::runtime_error {
 // refuse bad ones with the same words.
 [[nodiscard]] Options parse(int argc, const char* const* argv);
 
-// --help for `program`; `recording` says what --rerun does there.
+// --help for `program`; `recording` says what --rerun does there, `plot`
+// what --plot does.
 [[nodiscard]] std::string help_text(std::string_view program, std::string_view recording);
+[[nodiscard]] std::string sweep_help_text(std::string_view program);
+
+// The default sweep: 25 timesteps from 0.0005 s to 1 s, log-spaced, which
+// spans the stable range, the edge, and the box sinking through the floor.
+inline constexpr double kSweepFrom = 0.0005;
+inline constexpr double kSweepTo = 1.0;
+inline constexpr int kSweepCount = 25;
 
 }  // namespace simloop::cli

@@ -1,7 +1,12 @@
 // sim_loop: parses flags, calls the library, reports. All simulation lives in
 // simloop::run; this file only turns its results and errors into text and
 // exit codes.
+#include <spawn.h>
+#include <sys/wait.h>
+
 #include <chrono>
+#include <cstdlib>
+#include <filesystem>
 #include <optional>
 #include <cstdio>
 #include <string>
@@ -11,7 +16,10 @@
 #include "simloop/model.hpp"
 #include "simloop/output.hpp"
 #include "simloop/run.hpp"
+#include "simloop/sweep.hpp"
 #include "simloop/version.hpp"
+
+extern char** environ;
 
 namespace {
 
@@ -52,6 +60,38 @@ double peak_memory_mib() {
   return kib < 0 ? -1.0 : kib / 1024.0;
 }
 
+// --plot: the chart is drawn by the Python package (matplotlib), which reads
+// the CSV just written. SIMLOOP_PYTHON names the interpreter that has it.
+int plot_with_python(const std::filesystem::path& out, const char* what) {
+  const char* env = std::getenv("SIMLOOP_PYTHON");
+  const std::string python = env && *env ? env : "python3";
+  const std::string out_text = out.string();
+  const char* argv[] = {python.c_str(), "-m", "simloop", "plot", what, "--out", out_text.c_str(), nullptr};
+  pid_t pid = 0;
+  std::fflush(stdout);
+  if (posix_spawnp(&pid, python.c_str(), nullptr, nullptr, const_cast<char* const*>(argv), environ) != 0) {
+    return fail(kExitRunFailed, "--plot: cannot start " + python + " (set SIMLOOP_PYTHON to a Python with simloop)");
+  }
+  int status = 0;
+  waitpid(pid, &status, 0);
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    return fail(kExitRunFailed, "--plot: " + python + " -m simloop plot failed (it needs the simloop package and "
+                                "matplotlib; scripts/test.sh installs both into .venv: SIMLOOP_PYTHON=.venv/bin/python)");
+  }
+  return 0;
+}
+
+int sweep_command(const simloop::cli::Options& opts, const simloop::Model& model) {
+  const simloop::SweepResult result =
+      simloop::sweep(model, opts.sweep_timesteps, opts.sweep_duration, opts.threads);
+  const std::filesystem::path csv = opts.out / "sweep.csv";
+  simloop::write_file_atomically(csv, simloop::sweep_csv(result));
+  std::fputs(simloop::sweep_summary(result).c_str(), stdout);
+  std::printf("sweep: %s\n", csv.c_str());
+  if (opts.plot) return plot_with_python(opts.out, "sweep");
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -62,6 +102,10 @@ int main(int argc, char** argv) {
     opts = cli::parse(argc, argv);
   } catch (const cli::UsageError& e) {
     return fail(kExitUsage, e.what());
+  }
+  if (opts.help && opts.command == cli::Command::kSweep) {
+    std::fputs(cli::sweep_help_text("sim_loop").c_str(), stdout);
+    return 0;
   }
   if (opts.help) {
     std::fputs(cli::help_text("sim_loop",
@@ -95,6 +139,18 @@ int main(int argc, char** argv) {
     return fail(kExitUsage, "--out: " + std::string(e.what()));
   }
 
+  if (opts.command == cli::Command::kSweep) {
+    try {
+      const int status = sweep_command(opts, *model);
+      if (status != 0) return status;
+    } catch (const simloop::Error& e) {
+      return fail(kExitRunFailed, e.what());
+    }
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+    std::printf("wall-clock: %.1f ms, peak memory: %.1f MiB\n", seconds * 1e3, peak_memory_mib());
+    return 0;
+  }
+
   try {
     const simloop::RunResult result = simloop::run(*model, opts.run);
     const simloop::OutputFiles files = simloop::write_outputs(result, opts.out);
@@ -104,6 +160,11 @@ int main(int argc, char** argv) {
                 static_cast<long long>(result.trajectory.rows()));
     if (opts.rerun) {
       std::printf("recording: none (sim_loop writes no .rrd; python -m simloop records one)\n");
+    }
+    if (opts.plot) {
+      const int status = plot_with_python(opts.out, "trajectory");
+      if (status != 0) return status;
+      std::printf("plot: %s\n", (opts.out / "trajectory.png").c_str());
     }
   } catch (const simloop::Error& e) {
     return fail(kExitRunFailed, e.what());

@@ -139,6 +139,14 @@ Model Model::with_timestep(double timestep) const {
   return Model(std::shared_ptr<const mjModel>(copy, ModelDeleter{}), layout_);
 }
 
+Model Model::for_run(double timestep, bool energy) const {
+  if (timestep == this->timestep() && energy == computes_energy()) return *this;
+  Model copy = with_timestep(timestep);
+  mjModel* m = const_cast<mjModel*>(copy.get());  // our fresh copy, not yet shared
+  m->opt.enableflags = energy ? (m->opt.enableflags | mjENBL_ENERGY) : (m->opt.enableflags & ~mjENBL_ENERGY);
+  return copy;
+}
+
 Data::Data(const Model& model) {
   const mjModel* m = model.get();
   mjData* d = nullptr;

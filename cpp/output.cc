@@ -89,14 +89,14 @@ std::string metrics_json(const Metrics& m) {
 
 std::string trajectory_csv(const Trajectory& t) {
   std::string out;
-  out.reserve(static_cast<size_t>(t.rows() + 1) * Trajectory::kNumColumns * 12);
-  for (int c = 0; c < Trajectory::kNumColumns; ++c) {
+  out.reserve(static_cast<size_t>(t.rows() + 1) * static_cast<size_t>(t.columns()) * 12);
+  for (int c = 0; c < t.columns(); ++c) {
     if (c > 0) out += ',';
     out += Trajectory::kColumnNames[c];
   }
   out += '\n';
   for (std::int64_t r = 0; r < t.rows(); ++r) {
-    for (int c = 0; c < Trajectory::kNumColumns; ++c) {
+    for (int c = 0; c < t.columns(); ++c) {
       if (c > 0) out += ',';
       const double v = t.at(r, c);
       if (Trajectory::is_input_column(c) && std::isnan(v)) continue;  // final row: no inputs
@@ -132,6 +132,15 @@ std::string summary_text(const RunResult& r) {
     std::snprintf(line, sizeof line, "MuJoCo warning %s: raised %d time%s, first in step %lld: %s\n",
                   w.name.c_str(), w.count, w.count == 1 ? "" : "s", static_cast<long long>(w.first_step),
                   w.message.c_str());
+    out += line;
+  }
+  if (r.config.audit_energy) {
+    const EnergyTotals& e = r.energy;
+    std::snprintf(line, sizeof line,
+                  "energy audit: change %+.4f J = work by motor %+.4f, shove %+.4f, damping %+.4f, "
+                  "contacts %+.4f (positive steps %+.4f) + unexplained %+.4f J\n",
+                  e.energy_end - e.energy_start, e.work_actuator, e.work_shove, e.work_passive, e.work_constraint,
+                  e.work_constraint_positive, e.unexplained);
     out += line;
   }
   if (!r.warnings.empty()) {

@@ -5,6 +5,7 @@
 #include <limits>
 #include <sstream>
 
+#include "energy_audit.hpp"
 #include "mujoco_guard.hpp"
 #include "warning_counter.hpp"
 #include "simloop/errors.hpp"
@@ -67,7 +68,7 @@ RunResult run(const Model& model, const RunConfig& config) {
 
 RunResult run(const Model& model_in, const RunConfig& config, Data& workspace) {
   validate(config);
-  const Model model = model_in.timestep() == config.timestep ? model_in : model_in.with_timestep(config.timestep);
+  const Model model = model_in.for_run(config.timestep, config.audit_energy);
   if (!workspace.fits(model)) {
     throw InvalidArgument("workspace Data was made for a model of another size");
   }
@@ -82,8 +83,10 @@ RunResult run(const Model& model_in, const RunConfig& config, Data& workspace) {
   result.timestep = m->opt.timestep;
   result.shove = draw_shove(config.seed, steps);
   const Shove& shove = result.shove;
-  Trajectory traj(Trajectory::rows_for(steps, every));
+  const bool audit = config.audit_energy;
+  Trajectory traj(Trajectory::rows_for(steps, every), audit ? Trajectory::kNumColumns : Trajectory::kNumBaseColumns);
   detail::WarningCounter warnings;
+  detail::EnergyAudit energy(m->nv);
   double box_pos_at_push[3] = {};
 
   double* box_force = d->xfrc_applied + 6 * at.box_body;
@@ -107,15 +110,32 @@ RunResult run(const Model& model_in, const RunConfig& config, Data& workspace) {
       box_force[0] = 0.0;
       box_force[1] = in_shove ? shove.force_y() : 0.0;  // write 0 explicitly: xfrc_applied persists
       box_force[2] = 0.0;
-      if (until_record-- == 0) {
+      const bool recorded = until_record-- == 0;
+      if (recorded) {
         record_row(traj, row++, step, d, at, true);
         until_record = every - 1;
       }
+      if (audit) energy.before_step(d);
       mj_step(m, d);
       warnings.after_step(d, step);
+      if (audit) {
+        // The row's state is the one this step started from: its energy is
+        // known now, and the work before this step's is what the row holds.
+        const double entering = energy.observe(d);
+        if (recorded) energy.fill_row(traj.mutable_row(row - 1), entering);
+        energy.add_step_work(m, d, at.box_body);
+      }
+    }
+    record_row(traj, row, steps, d, at, false);
+    if (audit) {
+      // MuJoCo computes energy during a step; the final state has had none,
+      // so a forward pass (no time advances) computes its energy.
+      mj_forward(m, d);
+      const double final_energy = d->energy[0] + d->energy[1];
+      energy.fill_row(traj.mutable_row(row), final_energy);
+      result.energy = energy.totals(final_energy);
     }
   });
-  record_row(traj, row, steps, d, at, false);
 
   // Inspect, as the chapter does: the box's free joint owns qpos[adr..adr+3)
   // (position) and qvel[adr..adr+3) (linear velocity).

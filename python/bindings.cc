@@ -19,6 +19,7 @@
 #include "simloop/output.hpp"
 #include "simloop/run.hpp"
 #include "simloop/sim.hpp"
+#include "simloop/sweep.hpp"
 #include "simloop/version.hpp"
 
 namespace py = pybind11;
@@ -47,8 +48,8 @@ py::dict metrics_dict(const simloop::Metrics& m) {
 py::array trajectory_view(const py::object& owner) {
   const Trajectory& t = owner.cast<const RunResult&>().trajectory;
   const auto rows = static_cast<py::ssize_t>(t.rows());
-  py::array view(py::dtype::of<double>(), {rows, static_cast<py::ssize_t>(Trajectory::kNumColumns)},
-                 {static_cast<py::ssize_t>(sizeof(double)) * Trajectory::kNumColumns,
+  py::array view(py::dtype::of<double>(), {rows, static_cast<py::ssize_t>(t.columns())},
+                 {static_cast<py::ssize_t>(sizeof(double)) * t.columns(),
                   static_cast<py::ssize_t>(sizeof(double))},
                  t.data(), owner);
   py::detail::array_proxy(view.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
@@ -58,22 +59,22 @@ py::array trajectory_view(const py::object& owner) {
 py::array column_view(const py::object& owner, int column) {
   const Trajectory& t = owner.cast<const RunResult&>().trajectory;
   py::array view(py::dtype::of<double>(), {static_cast<py::ssize_t>(t.rows())},
-                 {static_cast<py::ssize_t>(sizeof(double)) * Trajectory::kNumColumns}, t.data() + column, owner);
+                 {static_cast<py::ssize_t>(sizeof(double)) * t.columns()}, t.data() + column, owner);
   py::detail::array_proxy(view.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
   return view;
 }
 
-int column_index(const std::string& name) {
-  for (int c = 0; c < Trajectory::kNumColumns; ++c) {
+int column_index(const Trajectory& t, const std::string& name) {
+  for (int c = 0; c < t.columns(); ++c) {
     if (Trajectory::kColumnNames[c] == name) return c;
   }
-  throw py::key_error("no trajectory column named '" + name + "'; see simloop.COLUMN_NAMES");
+  throw py::key_error("no trajectory column named '" + name + "'; see result.column_names");
 }
 
-py::tuple column_names() {
-  py::tuple names(static_cast<size_t>(Trajectory::kNumColumns));
-  for (int c = 0; c < Trajectory::kNumColumns; ++c) {
-    names[static_cast<size_t>(c)] = py::str(std::string(Trajectory::kColumnNames[c]));
+py::tuple column_names(int first, int end) {
+  py::tuple names(static_cast<size_t>(end - first));
+  for (int c = first; c < end; ++c) {
+    names[static_cast<size_t>(c - first)] = py::str(std::string(Trajectory::kColumnNames[c]));
   }
   return names;
 }
@@ -87,7 +88,8 @@ PYBIND11_MODULE(_core, m) {
   m.attr("__version__") = simloop::kVersion;
   m.attr("MUJOCO_VERSION") = simloop::mujoco_version();
   m.attr("PUSHER_SCENE_XML") = std::string(simloop::pusher_scene_xml());
-  m.attr("COLUMN_NAMES") = column_names();
+  m.attr("COLUMN_NAMES") = column_names(0, Trajectory::kNumBaseColumns);
+  m.attr("ENERGY_COLUMN_NAMES") = column_names(Trajectory::kNumBaseColumns, Trajectory::kNumColumns);
   m.attr("SMOKE_STEPS") = simloop::kSmokeSteps;
   m.attr("SHOVE_STEPS") = simloop::kShoveSteps;
 
@@ -124,10 +126,11 @@ PYBIND11_MODULE(_core, m) {
 
   py::class_<simloop::RunConfig>(m, "RunConfig")
       .def(py::init([](std::uint64_t seed, std::int64_t steps, double timestep, bool perturb, bool smoke,
-                       std::int64_t record_every) {
-             return simloop::RunConfig{seed, steps, timestep, perturb, smoke, record_every};
+                       std::int64_t record_every, bool audit_energy) {
+             return simloop::RunConfig{seed, steps, timestep, perturb, smoke, record_every, audit_energy};
            }),
-           "seed"_a, "steps"_a, "timestep"_a, "perturb"_a, "smoke"_a, "record_every"_a)
+           "seed"_a, "steps"_a, "timestep"_a, "perturb"_a, "smoke"_a, "record_every"_a, "audit_energy"_a = false)
+      .def_readonly("audit_energy", &simloop::RunConfig::audit_energy)
       .def_readonly("seed", &simloop::RunConfig::seed)
       .def_readonly("steps", &simloop::RunConfig::steps)
       .def_readonly("timestep", &simloop::RunConfig::timestep)
@@ -163,18 +166,42 @@ PYBIND11_MODULE(_core, m) {
       .def_property_readonly("trajectory", [](const py::object& self) { return trajectory_view(self); },
                              "(rows, columns) read-only float64 view; columns as in COLUMN_NAMES.")
       .def(
-          "column", [](const py::object& self, const std::string& name) { return column_view(self, column_index(name)); },
+          "column",
+          [](const py::object& self, const std::string& name) {
+            return column_view(self, column_index(self.cast<const RunResult&>().trajectory, name));
+          },
           "name"_a, "One trajectory column as a read-only (strided) view (no copy).")
       .def_property_readonly(
           "columns",
           [](const py::object& self) {
             py::dict columns;
-            for (int c = 0; c < Trajectory::kNumColumns; ++c) {
+            for (int c = 0; c < self.cast<const RunResult&>().trajectory.columns(); ++c) {
               columns[py::str(std::string(Trajectory::kColumnNames[c]))] = column_view(self, c);
             }
             return columns;
           },
           "Every trajectory column by name, as read-only views (no copy).")
+      .def_property_readonly(
+          "column_names",
+          [](const RunResult& r) { return column_names(0, r.trajectory.columns()); },
+          "This result's trajectory columns (COLUMN_NAMES, then ENERGY_COLUMN_NAMES with the audit).")
+      .def_property_readonly(
+          "energy",
+          [](const RunResult& r) -> py::object {
+            if (!r.config.audit_energy) return py::none();
+            const simloop::EnergyTotals& e = r.energy;
+            py::dict d;
+            d["energy_start"] = e.energy_start;
+            d["energy_end"] = e.energy_end;
+            d["work_actuator"] = e.work_actuator;
+            d["work_shove"] = e.work_shove;
+            d["work_passive"] = e.work_passive;
+            d["work_constraint"] = e.work_constraint;
+            d["work_constraint_positive"] = e.work_constraint_positive;
+            d["unexplained"] = e.unexplained;
+            return std::move(d);
+          },
+          "The energy audit's totals, J (None unless audit_energy).")
       .def_property_readonly("rows", [](const RunResult& r) { return r.trajectory.rows(); },
                              "Trajectory rows (without building a numpy view).")
       .def_property_readonly("shove", [](const RunResult& r) { return r.shove; })
@@ -252,8 +279,64 @@ PYBIND11_MODULE(_core, m) {
     return py::make_tuple(vec(t.rest_position.data(), 3), vec(t.axis.data(), 3), t.q0);
   });
 
+  py::class_<simloop::SweepPoint>(m, "SweepPoint", "One timestep of a sweep.")
+      .def_readonly("timestep", &simloop::SweepPoint::timestep)
+      .def_readonly("steps", &simloop::SweepPoint::steps)
+      .def_readonly("peak_box_z", &simloop::SweepPoint::peak_box_z)
+      .def_readonly("max_abs_box_y", &simloop::SweepPoint::max_abs_box_y)
+      .def_readonly("final_box_x", &simloop::SweepPoint::final_box_x)
+      .def_readonly("final_box_y", &simloop::SweepPoint::final_box_y)
+      .def_readonly("final_box_z", &simloop::SweepPoint::final_box_z)
+      .def_readonly("final_pusher_x", &simloop::SweepPoint::final_pusher_x)
+      .def_readonly("warnings", &simloop::SweepPoint::warnings)
+      .def_property_readonly("work_constraint_positive",
+                             [](const simloop::SweepPoint& p) { return p.energy.work_constraint_positive; })
+      .def_property_readonly("energy_unexplained", [](const simloop::SweepPoint& p) { return p.energy.unexplained; })
+      .def_property_readonly("energy_change",
+                             [](const simloop::SweepPoint& p) { return p.energy.energy_end - p.energy.energy_start; })
+      .def_readonly("stable", &simloop::SweepPoint::stable)
+      .def("__repr__", [](const simloop::SweepPoint& p) {
+        return "SweepPoint(timestep=" + simloop::python_float_repr(p.timestep) +
+               ", stable=" + (p.stable ? "True" : "False") + ")";
+      });
+  py::class_<simloop::SweepResult>(m, "SweepResult", "A timestep sweep of the baseline run.")
+      .def_readonly("duration", &simloop::SweepResult::duration)
+      .def_readonly("points", &simloop::SweepResult::points)
+      .def_property_readonly("edge", [](const simloop::SweepResult& r) -> py::object {
+        if (r.edge_index < 0) return py::none();
+        return py::float_(r.points[static_cast<size_t>(r.edge_index)].timestep);
+      }, "The largest stable timestep (None if even the finest is unstable).")
+      .def("csv", &simloop::sweep_csv)
+      .def("summary", &simloop::sweep_summary)
+      .def(
+          "write",
+          [](const simloop::SweepResult& r, const std::filesystem::path& out) {
+            simloop::prepare_output_dir(out);
+            simloop::write_file_atomically(out / "sweep.csv", simloop::sweep_csv(r));
+            return out / "sweep.csv";
+          },
+          "out"_a, "Writes sweep.csv into out (atomically); returns its path.");
+  m.def(
+      "sweep",
+      [](const simloop::Model& model, const std::vector<double>& timesteps, double duration, int threads) {
+        py::gil_scoped_release release;
+        return simloop::sweep(model, timesteps, duration, threads);
+      },
+      "model"_a, "timesteps"_a, "duration"_a, "threads"_a);
+  m.def("log_spaced", &simloop::log_spaced, "start"_a, "stop"_a, "count"_a);
+  m.attr("STABLE_HOP") = simloop::kStableHop;
+  m.attr("STABLE_SINK") = simloop::kStableSink;
+  m.attr("BOX_REST_Z") = simloop::kBoxRestZ;
+
   // The command line, parsed by the same code as sim_loop's.
   py::class_<simloop::cli::Options>(m, "CommandLine")
+      .def_property_readonly("command", [](const simloop::cli::Options& o) {
+        return o.command == simloop::cli::Command::kSweep ? "sweep" : "run";
+      })
+      .def_readonly("sweep_timesteps", &simloop::cli::Options::sweep_timesteps)
+      .def_readonly("sweep_duration", &simloop::cli::Options::sweep_duration)
+      .def_readonly("threads", &simloop::cli::Options::threads)
+      .def_readonly("plot", &simloop::cli::Options::plot)
       .def_readonly("run", &simloop::cli::Options::run)
       .def_property_readonly("out", [](const simloop::cli::Options& o) { return o.out; })
       .def_readonly("model_path", &simloop::cli::Options::model_path)
@@ -270,6 +353,7 @@ PYBIND11_MODULE(_core, m) {
     }
   });
   m.def("help_text", &simloop::cli::help_text, "program"_a, "recording"_a);
+  m.def("sweep_help_text", &simloop::cli::sweep_help_text, "program"_a);
   m.def("prepare_output_dir", &simloop::prepare_output_dir, "dir"_a);
   m.def("write_file_atomically", [](const std::filesystem::path& path, const std::string& contents) {
     simloop::write_file_atomically(path, contents);

@@ -49,6 +49,12 @@ class Model {
   // unless timestep is finite and positive.
   [[nodiscard]] Model with_timestep(double timestep) const;
 
+  // The model a run steps: this one if it already has `timestep` and
+  // MuJoCo's energy computation (mjENBL_ENERGY) set as `energy` says,
+  // otherwise a copy that has. Energy is a diagnostic: it changes no physics.
+  [[nodiscard]] Model for_run(double timestep, bool energy) const;
+  [[nodiscard]] bool computes_energy() const noexcept { return (model_->opt.enableflags & mjENBL_ENERGY) != 0; }
+
   [[nodiscard]] const mjModel* get() const noexcept { return model_.get(); }
   [[nodiscard]] double timestep() const noexcept { return model_->opt.timestep; }
   [[nodiscard]] const SceneLayout& layout() const noexcept { return layout_; }

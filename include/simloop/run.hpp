@@ -22,6 +22,7 @@ struct RunConfig {
   bool perturb = true;             // false: no shove (the baseline)
   bool smoke = false;              // fixed kSmokeSteps steps
   std::int64_t record_every = 1;   // trajectory row every K steps (+ the final state)
+  bool audit_energy = false;       // account for every joule: adds the energy columns
 
   [[nodiscard]] std::int64_t num_steps() const noexcept { return smoke ? kSmokeSteps : steps; }
 };
@@ -64,13 +65,24 @@ class Trajectory {
     kBoxX, kBoxY, kBoxZ, kBoxQw, kBoxQx, kBoxQy, kBoxQz,
     kBoxVx, kBoxVy, kBoxVz, kBoxWx, kBoxWy, kBoxWz,
     kPusherX, kPusherVx, kNcon,
+    kNumBaseColumns,
+    // The energy audit's columns (RunConfig::audit_energy), all in joules.
+    // energy: kinetic + potential of the row's state. work_*: work done on
+    // the system by each kind of force from t = 0 up to the row's state
+    // (cumulative, so any two rows give the work between them). *_positive:
+    // only the steps where constraints (contacts) did positive work.
+    // energy_unexplained: (energy - energy at t = 0) - all the work above.
+    kEnergy = kNumBaseColumns, kWorkActuator, kWorkShove, kWorkPassive, kWorkConstraint,
+    kWorkConstraintPositive, kEnergyUnexplained,
     kNumColumns
   };
   static constexpr std::array<std::string_view, kNumColumns> kColumnNames = {
       "step", "time", "ctrl", "shove_x", "shove_y", "shove_z",
       "box_x", "box_y", "box_z", "box_qw", "box_qx", "box_qy", "box_qz",
       "box_vx", "box_vy", "box_vz", "box_wx", "box_wy", "box_wz",
-      "pusher_x", "pusher_vx", "ncon"};
+      "pusher_x", "pusher_vx", "ncon",
+      "energy", "work_actuator", "work_shove", "work_passive", "work_constraint",
+      "work_constraint_positive", "energy_unexplained"};
   // Columns whose values are whole numbers (written without a decimal point).
   [[nodiscard]] static constexpr bool is_integer_column(int column) noexcept {
     return column == kStep || column == kNcon;
@@ -85,25 +97,41 @@ class Trajectory {
   }
 
   Trajectory() = default;
-  explicit Trajectory(std::int64_t rows) : rows_(rows), values_(static_cast<size_t>(rows) * kNumColumns) {}
+  // `columns`: kNumBaseColumns, or kNumColumns with the energy audit.
+  Trajectory(std::int64_t rows, int columns)
+      : rows_(rows), columns_(columns), values_(static_cast<size_t>(rows) * static_cast<size_t>(columns)) {}
 
   [[nodiscard]] std::int64_t rows() const noexcept { return rows_; }
+  [[nodiscard]] int columns() const noexcept { return columns_; }
   [[nodiscard]] double at(std::int64_t row, int column) const noexcept {
-    return values_[static_cast<size_t>(row) * kNumColumns + static_cast<size_t>(column)];
+    return values_[static_cast<size_t>(row) * static_cast<size_t>(columns_) + static_cast<size_t>(column)];
   }
-  // Row `row`: kNumColumns adjacent values.
+  // Row `row`: columns() adjacent values.
   [[nodiscard]] const double* row(std::int64_t row) const noexcept {
-    return values_.data() + static_cast<size_t>(row) * kNumColumns;
+    return values_.data() + static_cast<size_t>(row) * static_cast<size_t>(columns_);
   }
   [[nodiscard]] double* mutable_row(std::int64_t row) noexcept {
-    return values_.data() + static_cast<size_t>(row) * kNumColumns;
+    return values_.data() + static_cast<size_t>(row) * static_cast<size_t>(columns_);
   }
-  // All rows() x kNumColumns values, row-major.
+  // All rows() x columns() values, row-major.
   [[nodiscard]] const double* data() const noexcept { return values_.data(); }
 
  private:
   std::int64_t rows_ = 0;
+  int columns_ = kNumBaseColumns;
   std::vector<double> values_;
+};
+
+// The energy audit's totals over a whole run (RunConfig::audit_energy), J.
+struct EnergyTotals {
+  double energy_start = 0.0;     // kinetic + potential at t = 0
+  double energy_end = 0.0;       // ... at the final state
+  double work_actuator = 0.0;    // by the motor
+  double work_shove = 0.0;       // by the shove (xfrc_applied)
+  double work_passive = 0.0;     // by joint damping (and springs, if any)
+  double work_constraint = 0.0;  // by contacts and other constraints
+  double work_constraint_positive = 0.0;  // the steps where they added energy
+  double unexplained = 0.0;      // (energy_end - energy_start) - all the work
 };
 
 struct RunResult {
@@ -112,6 +140,7 @@ struct RunResult {
   Shove shove;             // the shove drawn for this run (applied only if perturb)
   Trajectory trajectory;
   std::vector<Warning> warnings;
+  EnergyTotals energy;     // zeros unless config.audit_energy
   double timestep = 0.0;   // the model's timestep during the run
   double sim_time = 0.0;   // mjData::time at the end
 };

@@ -9,9 +9,10 @@ The loop itself is C++ (simloop._core); this package checks arguments, gives
 numpy views of the trajectory, and writes the rerun recording.
 """
 
-from ._api import Sim, load_model, run, run_batch
+from ._api import Sim, load_model, run, run_batch, sweep
 from ._core import (
     COLUMN_NAMES,
+    ENERGY_COLUMN_NAMES,
     MUJOCO_VERSION,
     Contact,
     Model,
@@ -19,11 +20,14 @@ from ._core import (
     MujocoWarning,
     RunResult,
     Shove,
+    SweepPoint,
+    SweepResult,
     __version__,
 )
 
 __all__ = [
     "COLUMN_NAMES",
+    "ENERGY_COLUMN_NAMES",
     "MUJOCO_VERSION",
     "Contact",
     "Model",
@@ -32,8 +36,11 @@ __all__ = [
     "RunResult",
     "Shove",
     "Sim",
+    "SweepPoint",
+    "SweepResult",
     "__version__",
     "load_model",
     "run",
     "run_batch",
+    "sweep",
 ]

@@ -36,15 +36,54 @@ def _peak_memory_mib() -> float:
     return -1.0
 
 
+def _plot_command(args: List[str]) -> int:
+    """`python -m simloop plot trajectory|sweep [--out DIR]`: draws the PNG from
+    the CSV in DIR. sim_loop --plot calls this."""
+    usage = "usage: python -m simloop plot trajectory|sweep [--out DIR]"
+    if not args or args[0] not in ("trajectory", "sweep") or len(args) not in (1, 3) or \
+            (len(args) == 3 and args[1] != "--out"):
+        return _fail(EXIT_USAGE, usage)
+    from .plots import sweep_png, trajectory_png
+
+    out = Path(args[2] if len(args) == 3 else "outputs/ch0.1-sim-loop")
+    csv = out / f"{args[0]}.csv"
+    if not csv.is_file():
+        return _fail(EXIT_USAGE, f"--out: {csv}: no such file (run the command first)")
+    draw = trajectory_png if args[0] == "trajectory" else sweep_png
+    try:
+        draw(csv, out / f"{args[0]}.png")
+    except (OSError, ValueError, KeyError) as e:
+        return _fail(EXIT_RUN_FAILED, f"plot: {csv}: {e}")
+    return 0
+
+
+def _sweep(opts, model, out: Path) -> None:
+    from . import _core
+
+    result = _core.sweep(model, opts.sweep_timesteps, opts.sweep_duration, opts.threads)
+    csv = result.write(out)
+    print(result.summary(), end="")
+    print(f"sweep: {csv}")
+    if opts.plot:
+        from .plots import sweep_png
+
+        print(f"plot: {sweep_png(csv, out / 'sweep.png')}")
+
+
 def main(argv: Optional[List[str]] = None) -> int:
     started = time.perf_counter()
+    args = sys.argv[1:] if argv is None else list(argv)
+    if args and args[0] == "plot":
+        return _plot_command(args[1:])
     from . import _core, load_model
 
-    args = sys.argv[1:] if argv is None else list(argv)
     try:
         opts = _core.parse_command_line(args)
     except ValueError as e:
         return _fail(EXIT_USAGE, str(e))
+    if opts.help and opts.command == "sweep":
+        print(_core.sweep_help_text("python -m simloop"), end="")
+        return 0
     if opts.help:
         print(_core.help_text(f"python -m simloop (or {PROGRAM})",
                               "record sim_loop.rrd in --out (the default), or not"), end="")
@@ -64,6 +103,14 @@ def main(argv: Optional[List[str]] = None) -> int:
     except OSError as e:
         return _fail(EXIT_USAGE, f"--out: {e}")
 
+    if opts.command == "sweep":
+        try:
+            _sweep(opts, model, out)
+        except (OSError, _core.MujocoError, ValueError) as e:
+            return _fail(EXIT_RUN_FAILED, str(e))
+        print(f"wall-clock: {(time.perf_counter() - started) * 1e3:.1f} ms, peak memory: {_peak_memory_mib():.1f} MiB")
+        return 0
+
     try:
         result = _core.run(model, opts.run)
         metrics_path, trajectory_path = result.write(out)
@@ -75,6 +122,10 @@ def main(argv: Optional[List[str]] = None) -> int:
 
             rrd = record(result, out / "sim_loop.rrd", model)
             print(f"recording: {rrd} -- open it with: rerun {rrd}")
+        if opts.plot:
+            from .plots import trajectory_png
+
+            print(f"plot: {trajectory_png(trajectory_path, out / 'trajectory.png')}")
     except (OSError, _core.MujocoError, ValueError) as e:
         return _fail(EXIT_RUN_FAILED, str(e))
     elapsed = time.perf_counter() - started

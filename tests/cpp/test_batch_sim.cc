@@ -18,8 +18,8 @@ const simloop::Model& scene() {
 }
 
 bool same_bits(const Trajectory& a, const Trajectory& b) {
-  return a.rows() == b.rows() &&
-         std::memcmp(a.data(), b.data(), sizeof(double) * static_cast<size_t>(a.rows()) * Trajectory::kNumColumns) == 0;
+  return a.rows() == b.rows() && a.columns() == b.columns() &&
+         std::memcmp(a.data(), b.data(), sizeof(double) * static_cast<size_t>(a.rows()) * static_cast<size_t>(a.columns())) == 0;
 }
 
 std::vector<simloop::RunConfig> mixed_configs() {

@@ -171,6 +171,19 @@ TEST(Command, BreakItTheCoarseTimestepHopsAndDrifts) {
   for (double f : coarse.at("shove_y")) EXPECT_TRUE(f == 0.0 || std::isnan(f));
 }
 
+TEST(Command, SweepNamesTheEdgeAndWritesItsCsv) {
+  test::TempDir dir;
+  const Outcome o = sim_loop(dir.path(), {"sweep", "--timesteps", "0.002,0.004,0.005,0.5", "--out", "s"});
+  ASSERT_EQ(o.exit_code, 0) << o.err;
+  EXPECT_NE(o.out.find("largest stable timestep: 0.004 s\n"), std::string::npos) << o.out;
+  const auto csv = read_csv(dir.path() / "s" / "sweep.csv");
+  EXPECT_EQ(csv.at("timestep"), (std::vector<double>{0.002, 0.004, 0.005, 0.5}));
+  EXPECT_EQ(csv.at("stable"), (std::vector<double>{1, 1, 0, 0}));
+  EXPECT_EQ(csv.at("steps"), (std::vector<double>{2000, 1000, 800, 8}));
+  const Outcome help = sim_loop(dir.path(), {"sweep", "--help"});
+  EXPECT_EQ(help.out.rfind("usage: sim_loop sweep", 0), 0u);
+}
+
 struct BadInput {
   std::vector<std::string> args;
   int exit_code;
@@ -205,12 +218,19 @@ TEST(Command, BadInputGetsOneLineAndChangesNothing) {
       {{"--model", "broken.xml"}, 2, "--model: broken.xml: XML parse error"},
       {{"--model", "no_box.xml"}, 2, "--model: no_box.xml: the model has no body named \"box\""},
       {{"--bogus"}, 2, "unknown option '--bogus'"},
+      {{"sweep", "--duration", "0"}, 2, "--duration must be a positive, finite number of seconds, got '0'"},
+      {{"sweep", "--threads", "0"}, 2, "--threads must be a whole number from 1 to 4096, got '0'"},
+      {{"sweep", "--timesteps", "0.001,x"}, 2, "--timesteps must be a positive, finite number of seconds, got 'x'"},
+      {{"sweep", "--range", "0.1:0.001:5"}, 2, "--range: timestep range must run from a positive timestep up to a larger one"},
+      {{"sweep", "--range", "0.001:0.1"}, 2, "--range must be FROM:TO:COUNT, got '0.001:0.1'"},
+      {{"sweep", "--seed", "1"}, 2, "--seed is not a sweep option"},
+      {{"--threads", "2"}, 2, "--threads belongs to the sweep command"},
   };
   for (const BadInput& c : cases) {
     std::vector<std::string> args = c.args;
     if (std::find(args.begin(), args.end(), "--out") == args.end()) args.insert(args.end(), {"--out", "out"});
     const Outcome o = sim_loop(dir.path(), args);
-    SCOPED_TRACE(c.args.front() + " " + (c.args.size() > 1 ? c.args[1] : ""));
+    SCOPED_TRACE(c.args.front() + " " + (c.args.size() > 1 ? c.args[1] : "") + " " + (c.args.size() > 2 ? c.args[2] : ""));
     EXPECT_EQ(o.exit_code, c.exit_code);
     EXPECT_EQ(o.err.rfind("sim_loop: ", 0), 0u) << o.err;
     EXPECT_NE(o.err.find(c.message_part), std::string::npos) << o.err;

@@ -79,9 +79,9 @@ TEST(TrajectoryCsv, RoundTripsEveryDoubleExactly) {
   std::int64_t row = 0;
   while (std::getline(csv, line)) {
     const auto cells = split(line);
-    ASSERT_EQ(cells.size(), static_cast<size_t>(simloop::Trajectory::kNumColumns)) << line;
+    ASSERT_EQ(cells.size(), static_cast<size_t>(t.columns())) << line;
     EXPECT_EQ(cells[0], std::to_string(static_cast<long long>(t.at(row, 0)))) << "step is a whole number";
-    for (int c = 0; c < simloop::Trajectory::kNumColumns; ++c) {
+    for (int c = 0; c < t.columns(); ++c) {
       const double expected = t.at(row, c);
       if (std::isnan(expected)) {
         EXPECT_TRUE(cells[c].empty()) << "row " << row << " column " << c;

@@ -30,8 +30,8 @@ simloop::RunConfig config_with(std::int64_t steps, double timestep = 0.002, bool
 }
 
 bool same_bits(const Trajectory& a, const Trajectory& b) {
-  if (a.rows() != b.rows()) return false;
-  return std::memcmp(a.data(), b.data(), sizeof(double) * static_cast<size_t>(a.rows()) * Trajectory::kNumColumns) == 0;
+  if (a.rows() != b.rows() || a.columns() != b.columns()) return false;
+  return std::memcmp(a.data(), b.data(), sizeof(double) * static_cast<size_t>(a.rows()) * static_cast<size_t>(a.columns())) == 0;
 }
 
 double column_max(const Trajectory& t, int column, bool absolute = false) {
@@ -125,7 +125,7 @@ TEST(Run, TheSeedChangesTheShoveAndNothingElse) {
   EXPECT_NE(shoved0.shove.force_y(), shoved1.shove.force_y());
   // Identical up to the shove (row 300 differs only in the shove written
   // for step 300), different after it.
-  for (int c = 0; c < Trajectory::kNumColumns; ++c) {
+  for (int c = 0; c < Trajectory::kNumBaseColumns; ++c) {
     for (std::int64_t row = 0; row <= 300; ++row) {
       if (c == Trajectory::kShoveY && row == 300) continue;
       ASSERT_EQ(shoved0.trajectory.at(row, c), base0.trajectory.at(row, c)) << row << " " << c;

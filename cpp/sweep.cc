@@ -1,0 +1,146 @@
+#include "simloop/sweep.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+#include "simloop/batch.hpp"
+#include "simloop/errors.hpp"
+#include "simloop/number_format.hpp"
+
+namespace simloop {
+
+std::vector<double> log_spaced(double from, double to, int count) {
+  if (!(std::isfinite(from) && from > 0.0 && std::isfinite(to) && to >= from)) {
+    throw InvalidArgument("timestep range must run from a positive timestep up to a larger one, got " +
+                          python_float_repr(from) + " to " + python_float_repr(to));
+  }
+  if (count < 1 || (count == 1 && to != from)) {
+    throw InvalidArgument("timestep count must be at least 2 for a range (1 if from == to), got " +
+                          std::to_string(count));
+  }
+  std::vector<double> out;
+  for (int i = 0; i < count; ++i) {
+    const double t = count == 1 ? 0.0 : static_cast<double>(i) / (count - 1);
+    // Endpoints exactly as given; round the rest to 6 significant digits so
+    // the CSV and the table show the timestep that actually ran.
+    const double value = i == 0 ? from : i == count - 1 ? to : std::exp(std::log(from) + t * std::log(to / from));
+    char text[32];
+    std::snprintf(text, sizeof text, "%.6g", value);
+    out.push_back(i == 0 || i == count - 1 ? value : std::strtod(text, nullptr));
+  }
+  return out;
+}
+
+SweepResult sweep(const Model& model, std::vector<double> timesteps, double duration, int threads) {
+  if (!(std::isfinite(duration) && duration > 0.0)) {
+    throw InvalidArgument("duration must be a positive, finite number of seconds, got " + python_float_repr(duration));
+  }
+  if (timesteps.empty()) throw InvalidArgument("timesteps must not be empty");
+  for (double dt : timesteps) {
+    if (!(std::isfinite(dt) && dt > 0.0)) {
+      throw InvalidArgument("timestep must be a positive, finite number of seconds, got " + python_float_repr(dt));
+    }
+  }
+  std::sort(timesteps.begin(), timesteps.end());
+  timesteps.erase(std::unique(timesteps.begin(), timesteps.end()), timesteps.end());
+
+  std::vector<RunConfig> configs;
+  for (double dt : timesteps) {
+    RunConfig c;
+    c.timestep = dt;
+    c.steps = std::max<std::int64_t>(1, std::llround(duration / dt));
+    c.perturb = false;
+    c.audit_energy = true;
+    configs.push_back(c);
+  }
+  // Ascending timesteps put the longest runs first, which keeps the workers
+  // evenly loaded to the end.
+  const std::vector<RunResult> runs = run_batch(model, configs, threads);
+
+  SweepResult result;
+  result.duration = duration;
+  for (const RunResult& r : runs) {
+    const Trajectory& t = r.trajectory;
+    SweepPoint p;
+    p.timestep = r.timestep;
+    p.steps = r.metrics.steps;
+    p.peak_box_z = -INFINITY;
+    for (std::int64_t row = 0; row < t.rows(); ++row) {
+      p.peak_box_z = std::max(p.peak_box_z, t.at(row, Trajectory::kBoxZ));
+      p.max_abs_box_y = std::max(p.max_abs_box_y, std::fabs(t.at(row, Trajectory::kBoxY)));
+    }
+    const std::int64_t last = t.rows() - 1;
+    p.final_box_x = t.at(last, Trajectory::kBoxX);
+    p.final_box_y = t.at(last, Trajectory::kBoxY);
+    p.final_box_z = t.at(last, Trajectory::kBoxZ);
+    p.final_pusher_x = t.at(last, Trajectory::kPusherX);
+    for (const Warning& w : r.warnings) p.warnings += w.count;
+    p.energy = r.energy;
+    result.points.push_back(p);
+  }
+  for (SweepPoint& p : result.points) {
+    p.stable = p.peak_box_z <= kBoxRestZ + kStableHop && p.final_box_z >= kBoxRestZ - kStableSink && p.warnings == 0;
+  }
+  for (size_t i = 0; i < result.points.size() && result.points[i].stable; ++i) result.edge_index = static_cast<int>(i);
+  return result;
+}
+
+std::string sweep_csv(const SweepResult& result) {
+  std::string out =
+      "timestep,steps,peak_box_z,max_abs_box_y,final_box_x,final_box_y,final_box_z,final_pusher_x,warnings,"
+      "energy_change,work_actuator,work_passive,work_constraint,work_constraint_positive,energy_unexplained,"
+      "stable\n";
+  for (const SweepPoint& p : result.points) {
+    const double values[] = {p.timestep, p.peak_box_z, p.max_abs_box_y, p.final_box_x, p.final_box_y,
+                             p.final_box_z, p.final_pusher_x};
+    append_shortest(out, values[0]);
+    out += ',' + std::to_string(p.steps);
+    for (size_t i = 1; i < std::size(values); ++i) {
+      out += ',';
+      append_shortest(out, values[i]);
+    }
+    out += ',' + std::to_string(p.warnings);
+    const EnergyTotals& e = p.energy;
+    for (double v : {e.energy_end - e.energy_start, e.work_actuator, e.work_passive, e.work_constraint,
+                     e.work_constraint_positive, e.unexplained}) {
+      out += ',';
+      append_shortest(out, v);
+    }
+    out += p.stable ? ",1\n" : ",0\n";
+  }
+  return out;
+}
+
+std::string sweep_summary(const SweepResult& result) {
+  char line[256];
+  std::string out;
+  std::snprintf(line, sizeof line, "swept %zu timesteps, %s s of sim time each, no shove\n", result.points.size(),
+                python_float_repr(result.duration).c_str());
+  out += line;
+  out += "  timestep   steps  peak z (m)  max |y| (m)  final z (m)  contacts +work (J)  unexplained (J)  warnings  stable\n";
+  for (size_t i = 0; i < result.points.size(); ++i) {
+    const SweepPoint& p = result.points[i];
+    std::snprintf(line, sizeof line, "  %8.5g %7lld  %10.4f  %11.4f  %11.4f  %18.4f  %15.4f  %8d  %s%s\n", p.timestep,
+                  static_cast<long long>(p.steps), p.peak_box_z, p.max_abs_box_y, p.final_box_z,
+                  p.energy.work_constraint_positive, p.energy.unexplained, p.warnings, p.stable ? "yes" : "no",
+                  static_cast<int>(i) == result.edge_index ? "  <- edge" : "");
+    out += line;
+  }
+  if (result.edge_index >= 0) {
+    std::snprintf(line, sizeof line, "largest stable timestep: %s s\n",
+                  python_float_repr(result.points[static_cast<size_t>(result.edge_index)].timestep).c_str());
+  } else {
+    std::snprintf(line, sizeof line, "largest stable timestep: none (even the finest is unstable)\n");
+  }
+  out += line;
+  std::snprintf(line, sizeof line,
+                "  stable: the box rises at most %g mm above rest (%.2f m) and ends at most %g mm below it, and "
+                "MuJoCo raised no warning\n",
+                kStableHop * 1e3, kBoxRestZ, kStableSink * 1e3);
+  out += line;
+  return out;
+}
+
+}  // namespace simloop

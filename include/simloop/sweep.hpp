@@ -1,0 +1,63 @@
+// Break It, measured: the baseline run (no shove) at many timesteps over the
+// same span of simulated time, and where it stops being stable.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "simloop/model.hpp"
+#include "simloop/run.hpp"
+
+namespace simloop {
+
+// The stability criterion, stated once. A timestep is stable when, over the
+// sweep's span, (1) the box's centre never rises more than kStableHop above
+// its resting height (10% of its half-height: the push itself lifts it 1.7 to
+// 4.7 mm at every timestep up to 0.0033 s, through contact softness; from
+// about 0.0046 s the hop grows past 5 mm and on to 64 mm), (2) it does not end
+// more than kStableSink below its resting height (from about 0.1 s it sinks
+// into the floor, and through it from about 0.28 s), and (3) MuJoCo raised no
+// warning. Sideways drift does not mark the edge: the box drifts a few
+// centimetres at every timestep on MuJoCo 2.2.2.
+inline constexpr double kStableHop = 0.005;   // m
+inline constexpr double kStableSink = 0.001;  // m
+inline constexpr double kBoxRestZ = 0.05;     // m, the chapter's box at rest
+
+struct SweepPoint {
+  double timestep = 0.0;
+  std::int64_t steps = 0;
+  double peak_box_z = 0.0;      // highest the box's centre got, m
+  double max_abs_box_y = 0.0;   // furthest sideways, m
+  double final_box_x = 0.0, final_box_y = 0.0, final_box_z = 0.0;
+  double final_pusher_x = 0.0;
+  int warnings = 0;             // MuJoCo warnings raised, all kinds
+  EnergyTotals energy;          // the energy audit over the run
+  bool stable = false;
+};
+
+struct SweepResult {
+  double duration = 0.0;             // sim seconds each run covers
+  std::vector<SweepPoint> points;    // in ascending timestep order
+  // The largest timestep below which every swept timestep is stable; -1 if
+  // even the finest is not.
+  int edge_index = -1;
+};
+
+// `count` timesteps from `from` to `to`, evenly spaced in log scale.
+[[nodiscard]] std::vector<double> log_spaced(double from, double to, int count);
+
+// Runs the baseline at every timestep (sorted, duplicates dropped) for
+// round(duration / timestep) steps, in parallel over one model, with the
+// energy audit on. Throws InvalidArgument naming a bad timestep, duration or
+// thread count.
+[[nodiscard]] SweepResult sweep(const Model& model, std::vector<double> timesteps, double duration = 4.0,
+                                int threads = 0);
+
+// sweep.csv: a header and one line per timestep.
+[[nodiscard]] std::string sweep_csv(const SweepResult& result);
+
+// A table for people, then the edge and the criterion.
+[[nodiscard]] std::string sweep_summary(const SweepResult& result);
+
+}  // namespace simloop

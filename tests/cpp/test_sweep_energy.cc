@@ -1,0 +1,117 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+
+#include "simloop/errors.hpp"
+#include "simloop/output.hpp"
+#include "simloop/run.hpp"
+#include "simloop/sweep.hpp"
+
+namespace {
+
+using simloop::Trajectory;
+
+const simloop::Model& scene() {
+  static const simloop::Model model = simloop::Model::pusher_scene();
+  return model;
+}
+
+simloop::RunResult audited(double timestep, std::int64_t steps, bool perturb) {
+  simloop::RunConfig c;
+  c.timestep = timestep;
+  c.steps = steps;
+  c.perturb = perturb;
+  c.audit_energy = true;
+  return simloop::run(scene(), c);
+}
+
+TEST(EnergyAudit, ChangesNoPhysics) {
+  simloop::RunConfig plain;
+  plain.steps = 1200;
+  simloop::RunConfig audit = plain;
+  audit.audit_energy = true;
+  const auto a = simloop::run(scene(), plain);
+  const auto b = simloop::run(scene(), audit);
+  ASSERT_EQ(a.trajectory.columns(), Trajectory::kNumBaseColumns);
+  ASSERT_EQ(b.trajectory.columns(), Trajectory::kNumColumns);
+  for (std::int64_t r = 0; r < a.trajectory.rows(); ++r) {
+    ASSERT_EQ(std::memcmp(a.trajectory.row(r), b.trajectory.row(r), sizeof(double) * Trajectory::kNumBaseColumns), 0)
+        << "row " << r;
+  }
+  EXPECT_EQ(simloop::metrics_json(a.metrics), simloop::metrics_json(b.metrics));
+}
+
+TEST(EnergyAudit, ColumnsAddUpRowByRow) {
+  const auto r = audited(0.002, 2000, true);
+  const Trajectory& t = r.trajectory;
+  const double e0 = t.at(0, Trajectory::kEnergy);
+  // At rest: potential m g z of the box (0.5 kg at 0.05 m) and pusher (1 kg at 0.05 m).
+  EXPECT_NEAR(e0, 1.5 * 9.81 * 0.05, 1e-9);
+  for (std::int64_t row = 0; row < t.rows(); ++row) {
+    const double work = t.at(row, Trajectory::kWorkActuator) + t.at(row, Trajectory::kWorkShove) +
+                        t.at(row, Trajectory::kWorkPassive) + t.at(row, Trajectory::kWorkConstraint);
+    ASSERT_NEAR(t.at(row, Trajectory::kEnergyUnexplained), t.at(row, Trajectory::kEnergy) - e0 - work, 1e-9);
+  }
+  const simloop::EnergyTotals& e = r.energy;
+  EXPECT_EQ(e.energy_end, t.at(t.rows() - 1, Trajectory::kEnergy));
+  EXPECT_GT(e.work_actuator, 10.0);   // the motor drives everything
+  EXPECT_LT(e.work_passive, -5.0);    // damping takes energy out
+  EXPECT_LT(e.work_constraint, 0.0);  // friction takes energy out
+  EXPECT_GT(e.work_shove, 0.0);       // the shove put some in
+  // At a sound timestep the known forces explain nearly everything: measured
+  // -0.0076 J unexplained out of +47.6 J of motor work.
+  EXPECT_LT(std::fabs(e.unexplained), 0.02);
+  EXPECT_EQ(audited(0.002, 300, false).energy.work_shove, 0.0);
+}
+
+// Measured over 4 s without the shove: contacts' positive work 0.0354 J at
+// 0.002 s and 0.2991 J at 0.05 s; unexplained -0.0051 J and -0.1015 J.
+TEST(EnergyAudit, SeparatesTheStableRunFromTheUnstableOne) {
+  const auto fine = audited(0.002, 2000, false);
+  const auto coarse = audited(0.05, 80, false);
+  EXPECT_LT(fine.energy.work_constraint_positive, 0.05);
+  EXPECT_GT(coarse.energy.work_constraint_positive, 0.2);
+  EXPECT_GT(coarse.energy.work_constraint_positive, 5 * fine.energy.work_constraint_positive);
+  EXPECT_LT(std::fabs(fine.energy.unexplained), 0.01);
+  EXPECT_GT(std::fabs(coarse.energy.unexplained), 5 * std::fabs(fine.energy.unexplained));
+  EXPECT_NE(simloop::summary_text(coarse).find("energy audit: change "), std::string::npos);
+}
+
+TEST(Sweep, FindsTheEdgeWhereTheHopBegins) {
+  const simloop::SweepResult s = simloop::sweep(scene(), {0.5, 0.04, 0.02, 0.008, 0.005, 0.004, 0.002, 0.001, 0.002});
+  ASSERT_EQ(s.points.size(), 8u);  // sorted, duplicate dropped
+  EXPECT_EQ(s.points.front().timestep, 0.001);
+  EXPECT_EQ(s.points[1].steps, 2000);  // 4 s of sim time
+  ASSERT_GE(s.edge_index, 0);
+  EXPECT_EQ(s.points[static_cast<size_t>(s.edge_index)].timestep, 0.004);
+  // Measured peak z: 0.0535 (0.001 to 0.004), 0.0573 (0.005), 0.0587 (0.008),
+  // 0.0654 (0.02), 0.0963 (0.04); at 0.5 the box ends at z -0.37.
+  for (size_t i = 0; i < 3; ++i) EXPECT_NEAR(s.points[i].peak_box_z, 0.0535, 0.001);
+  EXPECT_GT(s.points[3].peak_box_z, 0.055);
+  EXPECT_GT(s.points[6].peak_box_z, 0.09);
+  EXPECT_LT(s.points[7].final_box_z, 0.0);
+  EXPECT_FALSE(s.points[7].stable);
+  const std::string summary = simloop::sweep_summary(s);
+  EXPECT_NE(summary.find("largest stable timestep: 0.004 s"), std::string::npos) << summary;
+}
+
+TEST(Sweep, IsTheSameWhateverTheThreadCount) {
+  const std::vector<double> dts = simloop::log_spaced(0.001, 0.1, 9);
+  EXPECT_EQ(simloop::sweep_csv(simloop::sweep(scene(), dts, 2.0, 1)), simloop::sweep_csv(simloop::sweep(scene(), dts, 2.0, 2)));
+}
+
+TEST(Sweep, LogSpacingAndBadInput) {
+  const auto dts = simloop::log_spaced(0.001, 0.1, 3);
+  ASSERT_EQ(dts.size(), 3u);
+  EXPECT_EQ(dts[0], 0.001);
+  EXPECT_EQ(dts[1], 0.01);
+  EXPECT_EQ(dts[2], 0.1);
+  EXPECT_THROW((void)simloop::log_spaced(0.1, 0.001, 3), simloop::InvalidArgument);
+  EXPECT_THROW((void)simloop::log_spaced(0.0, 0.1, 3), simloop::InvalidArgument);
+  EXPECT_THROW((void)simloop::sweep(scene(), {}), simloop::InvalidArgument);
+  EXPECT_THROW((void)simloop::sweep(scene(), {0.002, -1.0}), simloop::InvalidArgument);
+  EXPECT_THROW((void)simloop::sweep(scene(), {0.002}, 0.0), simloop::InvalidArgument);
+}
+
+}  // namespace
