@@ -53,6 +53,8 @@ def test_sweep_commands_agree(tmp_path):
         assert proc.returncode == 0, proc.stderr
         assert "largest stable timestep: 0.002 s" in proc.stdout
     assert (tmp_path / "py" / "o" / "sweep.csv").read_bytes() == (tmp_path / "cpp" / "o" / "sweep.csv").read_bytes()
+    assert (tmp_path / "py" / "o" / "sweep.png").read_bytes()[:4] == b"\x89PNG"  # the Python command always draws
+    assert not (tmp_path / "cpp" / "o" / "sweep.png").exists()  # sim_loop only with --plot
 
 
 def test_plots_are_pictures(tmp_path):
