@@ -76,7 +76,6 @@ int main(int argc, char** argv) {
   simloop::Data& driver_data = data;
   simloop::RunConfig config;
   config.steps = steps;
-  if (const char* every = std::getenv("BENCH_RECORD_EVERY")) config.record_every = std::atoll(every);
   const simloop::Shove shove = simloop::draw_shove(config.seed, steps);
 
   // Same inputs, same physics: the two loops must end in the same state.

@@ -88,7 +88,29 @@ int sweep_command(const simloop::cli::Options& opts, const simloop::Model& model
   simloop::write_file_atomically(csv, simloop::sweep_csv(result));
   std::fputs(simloop::sweep_summary(result).c_str(), stdout);
   std::printf("sweep: %s\n", csv.c_str());
-  if (opts.plot) return plot_with_python(opts.out, "sweep");
+  if (opts.plot) {
+    const int status = plot_with_python(opts.out, "sweep");
+    if (status != 0) return status;
+    std::printf("plot: %s\n", (opts.out / "sweep.png").c_str());
+  }
+  return 0;
+}
+
+int run_command(const simloop::cli::Options& opts, const simloop::Model& model) {
+  const simloop::RunResult result = simloop::run(model, opts.run);
+  const simloop::OutputFiles files = simloop::write_outputs(result, opts.out);
+  std::fputs(simloop::summary_text(result).c_str(), stdout);
+  std::printf("metrics: %s\n", files.metrics.c_str());
+  std::printf("trajectory: %s (%lld rows)\n", files.trajectory.c_str(),
+              static_cast<long long>(result.trajectory.rows()));
+  if (opts.rerun) {
+    std::printf("recording: none (sim_loop writes no .rrd; python -m simloop records one)\n");
+  }
+  if (opts.plot) {
+    const int status = plot_with_python(opts.out, "trajectory");
+    if (status != 0) return status;
+    std::printf("plot: %s\n", (opts.out / "trajectory.png").c_str());
+  }
   return 0;
 }
 
@@ -139,33 +161,9 @@ int main(int argc, char** argv) {
     return fail(kExitUsage, "--out: " + std::string(e.what()));
   }
 
-  if (opts.command == cli::Command::kSweep) {
-    try {
-      const int status = sweep_command(opts, *model);
-      if (status != 0) return status;
-    } catch (const simloop::Error& e) {
-      return fail(kExitRunFailed, e.what());
-    }
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-    std::printf("wall-clock: %.1f ms, peak memory: %.1f MiB\n", seconds * 1e3, peak_memory_mib());
-    return 0;
-  }
-
   try {
-    const simloop::RunResult result = simloop::run(*model, opts.run);
-    const simloop::OutputFiles files = simloop::write_outputs(result, opts.out);
-    std::fputs(simloop::summary_text(result).c_str(), stdout);
-    std::printf("metrics: %s\n", files.metrics.c_str());
-    std::printf("trajectory: %s (%lld rows)\n", files.trajectory.c_str(),
-                static_cast<long long>(result.trajectory.rows()));
-    if (opts.rerun) {
-      std::printf("recording: none (sim_loop writes no .rrd; python -m simloop records one)\n");
-    }
-    if (opts.plot) {
-      const int status = plot_with_python(opts.out, "trajectory");
-      if (status != 0) return status;
-      std::printf("plot: %s\n", (opts.out / "trajectory.png").c_str());
-    }
+    const int status = opts.command == cli::Command::kSweep ? sweep_command(opts, *model) : run_command(opts, *model);
+    if (status != 0) return status;
   } catch (const simloop::Error& e) {
     return fail(kExitRunFailed, e.what());
   } catch (const std::exception& e) {  // out of memory, for one
