@@ -60,28 +60,23 @@ def load_policy_loop():
     return module
 
 
-def shoved_steps_of_buggy_loop(decide_every: int, steps: int = 2000) -> int:
-    """Replays the buggy loop one step at a time, counting steps with a force on the box."""
-    shove = simloop.run(steps=steps).shove
-    sim = simloop.Sim()
+class CountingSim(simloop.Sim):
+    """A Sim that steps one step at a time and counts the steps with a force on the box."""
+
     shoved = 0
-    for step in range(0, steps, decide_every):
-        if shove.start_step <= step < shove.start_step + shove.steps:
-            sim.apply_force([0.0, shove.force_y, 0.0])
-        else:
-            sim.clear_force()
-        for _ in range(decide_every):
-            shoved += bool(sim.applied_force[1] != 0.0)
-            sim.step(1, ctrl=1.0)
-    return shoved
+
+    def step(self, n=1, ctrl=None):
+        for _ in range(n):
+            self.shoved += bool(self.applied_force[1] != 0.0)
+            super().step(1, ctrl)
 
 
 def check_sticky(path: Path) -> bool:
     answer = number(answer_lines(path)[0], "the number of steps")
     module = load_policy_loop()
-    actual = shoved_steps_of_buggy_loop(module.DECIDE_EVERY)
+    sim = module.policy_loop(sim=CountingSim())
+    actual = sim.shoved
     reference = simloop.run(seed=0)
-    sim = module.policy_loop()
     print(f"simloop.run:         box final y {reference.metrics['box_final_pos'][1]:.6f} m (shove for 50 steps)")
     print(f"policy_loop.py:      box final y {sim.box_position[1]:.6f} m")
     print(f"the buggy loop shoved for {actual} steps; you answered {answer:g}.")

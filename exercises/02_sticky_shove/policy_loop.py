@@ -8,9 +8,9 @@ import simloop
 DECIDE_EVERY = 20  # steps between the policy's decisions
 
 
-def policy_loop(seed: int = 0, steps: int = 2000) -> simloop.Sim:
-    shove = simloop.run(seed=seed, steps=steps, smoke=False).shove  # the same shove schedule
-    sim = simloop.Sim()
+def policy_loop(seed: int = 0, steps: int = 2000, sim=None) -> simloop.Sim:
+    shove = simloop.run(seed=seed, steps=steps).shove  # the same shove schedule
+    sim = sim if sim is not None else simloop.Sim()
     for step in range(0, steps, DECIDE_EVERY):
         in_shove = shove.start_step <= step < shove.start_step + shove.steps
         if in_shove:
