@@ -2,11 +2,14 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <exception>
 #include <map>
 #include <string>
+#include <system_error>
 #include <thread>
 
+#include "run_detail.hpp"
 #include "simloop/errors.hpp"
 
 namespace simloop {
@@ -16,7 +19,8 @@ int batch_workers(int threads, std::size_t jobs) noexcept {
   return static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(wanted), std::max<std::size_t>(jobs, 1)));
 }
 
-std::vector<RunResult> run_batch(const Model& model, const std::vector<RunConfig>& configs, int threads) {
+std::vector<RunResult> run_batch(const Model& model, const std::vector<RunConfig>& configs, int threads,
+                                 RunControl* control) {
   if (threads < 0) {
     throw InvalidArgument("threads must be at least 1, or 0 for one per core, got " + std::to_string(threads));
   }
@@ -45,21 +49,50 @@ std::vector<RunResult> run_batch(const Model& model, const std::vector<RunConfig
 
   std::vector<RunResult> results(configs.size());
   std::vector<std::exception_ptr> errors(configs.size());
+  // Workers stop taking runs once any run failed or a stop was requested.
+  RunControl own_control;
+  RunControl& ctl = control ? *control : own_control;
+  for (const RunConfig& c : configs) ctl.add_total(c.num_steps());
   std::atomic<std::size_t> next{0};
+  std::atomic<int> running{0};
   const auto work = [&](Data& data) noexcept {
     for (std::size_t i; (i = next.fetch_add(1)) < configs.size();) {
       try {
-        results[i] = run(*model_of[i], configs[i], data);
+        results[i] = detail::run_counted_elsewhere(*model_of[i], configs[i], data, nullptr, &ctl);
       } catch (...) {
         errors[i] = std::current_exception();
+        next.store(configs.size());
       }
     }
+    running.fetch_sub(1);
   };
   std::vector<std::thread> pool;
   pool.reserve(static_cast<std::size_t>(workers - 1));
-  for (int w = 1; w < workers; ++w) pool.emplace_back(work, std::ref(datas[static_cast<std::size_t>(w)]));
+  running.store(1);
+  for (int w = 1; w < workers; ++w) {
+    running.fetch_add(1);
+    try {
+      pool.emplace_back(work, std::ref(datas[static_cast<std::size_t>(w)]));
+    } catch (const std::system_error&) {
+      // No more threads to be had (a process limit): the ones running share
+      // the work, which gives the same results with fewer workers.
+      running.fetch_sub(1);
+      break;
+    }
+  }
   work(datas[0]);  // the calling thread is worker 0
+  // Worker 0 is the control's thread: while the others finish, it keeps
+  // polling, so a stop still takes effect promptly.
+  while (running.load() > 0) {
+    try {
+      ctl.check();
+    } catch (const Interrupted&) {
+      // Every worker sees the stop at its next chunk; wait for them.
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
   for (std::thread& t : pool) t.join();
+  if (ctl.stop_requested()) throw Interrupted("interrupted");
   for (const std::exception_ptr& e : errors) {
     if (e) std::rethrow_exception(e);
   }

@@ -1,5 +1,6 @@
 #include "simloop/run.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -7,6 +8,7 @@
 
 #include "energy_audit.hpp"
 #include "mujoco_guard.hpp"
+#include "run_detail.hpp"
 #include "warning_counter.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/number_format.hpp"
@@ -18,11 +20,9 @@ namespace {
 // allocator (4 GiB: 24 million rows of the 22 columns).
 constexpr std::int64_t kMaxTrajectoryValues = std::int64_t{1} << 29;
 
-// Writes trajectory row `row`: the state now, and the inputs just written
+// Writes one trajectory row: the state now, and the inputs just written
 // (or NaN for the final row, which has no step after it).
-void record_row(Trajectory& traj, std::int64_t row, std::int64_t step, const mjData* d,
-                const SceneLayout& at, bool with_inputs) {
-  double* values = traj.mutable_row(row);
+void record_row(double* values, std::int64_t step, const mjData* d, const SceneLayout& at, bool with_inputs) {
   const auto put = [values](int column, double value) { values[column] = value; };
   const double* box_q = d->qpos + at.box_qposadr;
   const double* box_v = d->qvel + at.box_dofadr;
@@ -66,7 +66,51 @@ RunResult run(const Model& model, const RunConfig& config) {
   return run(model, config, workspace);
 }
 
-RunResult run(const Model& model_in, const RunConfig& config, Data& workspace) {
+namespace {
+
+// The default sink: keeps every row in the result's Trajectory.
+class KeepRows final : public RowSink {
+ public:
+  explicit KeepRows(Trajectory& into) : into_(into) {}
+  void start(int columns, std::int64_t rows) override { into_ = Trajectory(rows, columns); }
+  void write(const double* rows, std::int64_t count) override {
+    std::copy(rows, rows + count * into_.columns(), into_.mutable_row(next_));
+    next_ += count;
+  }
+
+ private:
+  Trajectory& into_;
+  std::int64_t next_ = 0;
+};
+
+// The rows recorded during one chunk of steps, handed to the sink after it.
+class RowBlock {
+ public:
+  RowBlock(int columns, std::int64_t capacity)
+      : columns_(columns), values_(static_cast<size_t>(capacity) * static_cast<size_t>(columns)) {}
+  [[nodiscard]] double* next() noexcept { return values_.data() + static_cast<size_t>(count_++) * columns_; }
+  [[nodiscard]] double* last() noexcept { return values_.data() + static_cast<size_t>(count_ - 1) * columns_; }
+  void flush_to(RowSink& sink) {
+    if (count_ > 0) sink.write(values_.data(), count_);
+    count_ = 0;
+  }
+
+ private:
+  int columns_;
+  std::int64_t count_ = 0;
+  std::vector<double> values_;
+};
+
+}  // namespace
+
+RunResult run(const Model& model, const RunConfig& config, Data& workspace, RowSink* sink,
+              RunControl* control) {
+  if (control) control->add_total(config.num_steps());
+  return detail::run_counted_elsewhere(model, config, workspace, sink, control);
+}
+
+RunResult detail::run_counted_elsewhere(const Model& model_in, const RunConfig& config, Data& workspace,
+                                        RowSink* sink, RunControl* control) {
   validate(config);
   const Model model = model_in.for_run(config.timestep, config.audit_energy);
   if (!workspace.fits(model)) {
@@ -82,60 +126,74 @@ RunResult run(const Model& model_in, const RunConfig& config, Data& workspace) {
   result.config = config;
   result.timestep = m->opt.timestep;
   result.shove = draw_shove(config.seed, steps);
+  result.rows = Trajectory::rows_for(steps, every);
   const Shove& shove = result.shove;
   const bool audit = config.audit_energy;
-  Trajectory traj(Trajectory::rows_for(steps, every), audit ? Trajectory::kNumColumns : Trajectory::kNumBaseColumns);
+  const int columns = audit ? Trajectory::kNumColumns : Trajectory::kNumBaseColumns;
+  KeepRows keep(result.trajectory);
+  RowSink& rows = sink ? *sink : keep;
+  rows.start(columns, result.rows);
+  RowBlock block(columns, std::min(result.rows, RunControl::kChunkSteps / every + 2));
   detail::WarningCounter warnings;
   detail::EnergyAudit energy(m->nv);
   double box_pos_at_push[3] = {};
 
   double* box_force = d->xfrc_applied + 6 * at.box_body;
-  std::int64_t row = 0;
-  // One guard around the whole loop: a MuJoCo error jumps back out of it, and
-  // nothing inside owns anything that would need destroying.
+  // mj_forward fills in the derived state (poses, contacts) without
+  // advancing time, so row 0 is the true rest pose at t = 0.
   detail::mujoco_call([&] {
-    // mj_forward fills in the derived state (poses, contacts) without
-    // advancing time, so row 0 is the true rest pose at t = 0.
     mj_resetData(m, d);
     mj_forward(m, d);
-    std::int64_t until_record = 0;  // counts down to the next recorded step
-    for (std::int64_t step = 0; step < steps; ++step) {
-      const bool in_shove = config.perturb && shove.acts_at(step);
-      if (step == shove.start_step) {
-        // A copy, as the chapter takes: xpos is overwritten by the next step.
-        for (int i = 0; i < 3; ++i) box_pos_at_push[i] = d->xpos[3 * at.box_body + i];
-      }
-      // The rhythm: write intent, write interference, step.
-      d->ctrl[0] = 1.0;  // full throttle on the slide motor
-      box_force[0] = 0.0;
-      box_force[1] = in_shove ? shove.force_y() : 0.0;  // write 0 explicitly: xfrc_applied persists
-      box_force[2] = 0.0;
-      const bool recorded = until_record-- == 0;
-      if (recorded) {
-        record_row(traj, row++, step, d, at, true);
-        until_record = every - 1;
-      }
-      if (audit) energy.before_step(d);
-      mj_step(m, d);
-      warnings.after_step(d, step);
-      if (audit) {
-        // The row's state is the one this step started from: its energy is
-        // known now, and the work before this step's is what the row holds.
-        const double entering = energy.observe(d);
-        if (recorded) energy.fill_row(traj.mutable_row(row - 1), entering);
-        energy.add_step_work(m, d, at.box_body);
-      }
-    }
-    record_row(traj, row, steps, d, at, false);
-    if (audit) {
-      // MuJoCo computes energy during a step; the final state has had none,
-      // so a forward pass (no time advances) computes its energy.
-      mj_forward(m, d);
-      const double final_energy = d->energy[0] + d->energy[1];
-      energy.fill_row(traj.mutable_row(row), final_energy);
-      result.energy = energy.totals(final_energy);
-    }
   });
+  std::int64_t until_record = 0;  // counts down to the next recorded step
+  // The loop runs in chunks: each inside one guard (a MuJoCo error jumps back
+  // out of it, and nothing inside owns anything that would need destroying),
+  // then the chunk's rows go to the sink and the control may stop the run.
+  for (std::int64_t step = 0; step < steps;) {
+    const std::int64_t chunk_start = step;
+    const std::int64_t chunk_end = std::min(steps, step + RunControl::kChunkSteps);
+    detail::mujoco_call([&] {
+      for (; step < chunk_end; ++step) {
+        const bool in_shove = config.perturb && shove.acts_at(step);
+        if (step == shove.start_step) {
+          // A copy, as the chapter takes: xpos is overwritten by the next step.
+          for (int i = 0; i < 3; ++i) box_pos_at_push[i] = d->xpos[3 * at.box_body + i];
+        }
+        // The rhythm: write intent, write interference, step.
+        d->ctrl[0] = 1.0;  // full throttle on the slide motor
+        box_force[0] = 0.0;
+        box_force[1] = in_shove ? shove.force_y() : 0.0;  // write 0 explicitly: xfrc_applied persists
+        box_force[2] = 0.0;
+        const bool recorded = until_record-- == 0;
+        if (recorded) {
+          record_row(block.next(), step, d, at, true);
+          until_record = every - 1;
+        }
+        if (audit) energy.before_step(d);
+        mj_step(m, d);
+        warnings.after_step(d, step);
+        if (audit) {
+          // The row's state is the one this step started from: its energy is
+          // known now, and the work before this step's is what the row holds.
+          const double entering = energy.observe(d);
+          if (recorded) energy.fill_row(block.last(), entering);
+          energy.add_step_work(m, d, at.box_body);
+        }
+      }
+    });
+    block.flush_to(rows);
+    if (control) control->advance(chunk_end - chunk_start);
+  }
+  record_row(block.next(), steps, d, at, false);
+  if (audit) {
+    // MuJoCo computes energy during a step; the final state has had none,
+    // so a forward pass (no time advances) computes its energy.
+    detail::mujoco_call([&] { mj_forward(m, d); });
+    const double final_energy = d->energy[0] + d->energy[1];
+    energy.fill_row(block.last(), final_energy);
+    result.energy = energy.totals(final_energy);
+  }
+  block.flush_to(rows);
 
   // Inspect, as the chapter does: the box's free joint owns qpos[adr..adr+3)
   // (position) and qvel[adr..adr+3) (linear velocity).
@@ -153,7 +211,6 @@ RunResult run(const Model& model_in, const RunConfig& config, Data& workspace) {
   metrics.lateral_drift = round6(drift);
   metrics.shove_moved_box = drift > 0.01;
 
-  result.trajectory = std::move(traj);
   result.warnings = warnings.warnings();
   result.sim_time = d->time;
   return result;

@@ -1,5 +1,6 @@
 #include "simloop/sim.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -58,14 +59,20 @@ std::array<double, 3> Sim::applied_force() const noexcept {
   return {slot[0], slot[1], slot[2]};
 }
 
-void Sim::step(std::int64_t n) {
+void Sim::step(std::int64_t n, RunControl* control) {
   if (n < 1) throw InvalidArgument("n must be at least 1, got " + std::to_string(n));
   const mjModel* m = model_.get();
   mjData* d = data_.get();
-  for (std::int64_t i = 0; i < n; ++i) {
-    detail::mujoco_call([&] { mj_step(m, d); });
-    counter_->after_step(d, steps_);
-    ++steps_;
+  if (control) control->add_total(n);
+  for (std::int64_t done = 0; done < n;) {
+    const std::int64_t chunk = std::min(n - done, RunControl::kChunkSteps);
+    for (std::int64_t i = 0; i < chunk; ++i) {
+      detail::mujoco_call([&] { mj_step(m, d); });
+      counter_->after_step(d, steps_);
+      ++steps_;
+    }
+    done += chunk;
+    if (control) control->advance(chunk);
   }
 }
 

@@ -33,7 +33,8 @@ std::vector<double> log_spaced(double from, double to, int count) {
   return out;
 }
 
-SweepResult sweep(const Model& model, std::vector<double> timesteps, double duration, int threads) {
+SweepResult sweep(const Model& model, std::vector<double> timesteps, double duration, int threads,
+                  RunControl* control) {
   if (!(std::isfinite(duration) && duration > 0.0)) {
     throw InvalidArgument("duration must be a positive, finite number of seconds, got " + python_float_repr(duration));
   }
@@ -57,7 +58,7 @@ SweepResult sweep(const Model& model, std::vector<double> timesteps, double dura
   }
   // Ascending timesteps put the longest runs first, which keeps the workers
   // evenly loaded to the end.
-  const std::vector<RunResult> runs = run_batch(model, configs, threads);
+  const std::vector<RunResult> runs = run_batch(model, configs, threads, control);
 
   SweepResult result;
   result.duration = duration;

@@ -263,7 +263,8 @@ PYBIND11_MODULE(_core, m) {
       .def("apply_force", &simloop::Sim::apply_force, "force"_a)
       .def("clear_force", &simloop::Sim::clear_force)
       .def_property_readonly("applied_force", [](const simloop::Sim& s) { return vec(s.applied_force().data(), 3); })
-      .def("step", &simloop::Sim::step, "n"_a, py::call_guard<py::gil_scoped_release>())
+      .def("step", [](simloop::Sim& s, std::int64_t n) { s.step(n); }, "n"_a,
+           py::call_guard<py::gil_scoped_release>())
       .def_property_readonly("time", &simloop::Sim::time)
       .def_property_readonly("steps_taken", &simloop::Sim::steps_taken)
       .def_property_readonly("box_position", [](const simloop::Sim& s) { return vec(s.box_position().data(), 3); })

@@ -14,9 +14,12 @@ namespace simloop {
 // Data, so result i is bitwise identical to run(model, configs[i]), whatever
 // the thread count. All configs are validated before any run starts
 // (InvalidArgument naming the config's index); if runs fail, the failure of
-// the lowest index is rethrown after all workers have stopped.
+// the lowest index is rethrown after all workers have stopped, and no new run
+// starts once one has failed. If threads cannot be created, fewer workers do
+// the work (the results are the same). With a `control`, the batch can be
+// stopped (Interrupted) and watched; its poll runs on the calling thread.
 [[nodiscard]] std::vector<RunResult> run_batch(const Model& model, const std::vector<RunConfig>& configs,
-                                               int threads = 0);
+                                               int threads = 0, RunControl* control = nullptr);
 
 // The worker count run_batch uses for `threads` and `jobs`.
 [[nodiscard]] int batch_workers(int threads, std::size_t jobs) noexcept;

@@ -34,4 +34,11 @@ class IoError : public Error {
   using Error::Error;
 };
 
+// The work was stopped on request (RunControl::request_stop: Ctrl-C in the
+// commands, KeyboardInterrupt in Python) before it finished.
+class Interrupted : public Error {
+ public:
+  using Error::Error;
+};
+
 }  // namespace simloop

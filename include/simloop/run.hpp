@@ -7,6 +7,7 @@
 #include <string_view>
 #include <vector>
 
+#include "simloop/control.hpp"
 #include "simloop/model.hpp"
 #include "simloop/shove.hpp"
 
@@ -122,6 +123,21 @@ class Trajectory {
   std::vector<double> values_;
 };
 
+// Where a run's trajectory rows go as the loop makes them: kept in memory
+// (RunResult::trajectory, the default), streamed to a file by the commands,
+// or reduced on the fly. The loop hands over rows in blocks between its
+// chunks of steps, outside MuJoCo's C frames, so a sink may throw (a full
+// disk): the run stops and the exception reaches the caller.
+class RowSink {
+ public:
+  virtual ~RowSink() = default;
+  // Once, before any row: the width of every row (Trajectory::kNumBaseColumns,
+  // or kNumColumns with the energy audit) and how many rows will come.
+  virtual void start(int columns, std::int64_t rows) = 0;
+  // `count` rows, each `columns` adjacent doubles, in order.
+  virtual void write(const double* rows, std::int64_t count) = 0;
+};
+
 // The energy audit's totals over a whole run (RunConfig::audit_energy), J.
 struct EnergyTotals {
   double energy_start = 0.0;     // kinetic + potential at t = 0
@@ -138,7 +154,8 @@ struct RunResult {
   RunConfig config;
   Metrics metrics;
   Shove shove;             // the shove drawn for this run (applied only if perturb)
-  Trajectory trajectory;
+  Trajectory trajectory;    // empty when the rows went to a RowSink
+  std::int64_t rows = 0;    // trajectory rows the run recorded, kept or not
   std::vector<Warning> warnings;
   EnergyTotals energy;     // zeros unless config.audit_energy
   double timestep = 0.0;   // the model's timestep during the run
@@ -151,7 +168,10 @@ struct RunResult {
 
 // The same, reusing `workspace` (reset first), which must fit the model:
 // batches keep one Data per worker. The result does not depend on what the
-// workspace held before.
-[[nodiscard]] RunResult run(const Model& model, const RunConfig& config, Data& workspace);
+// workspace held before. With a `sink`, the rows go there and
+// result.trajectory stays empty. With a `control`, the run can be stopped
+// (Interrupted) and watched.
+[[nodiscard]] RunResult run(const Model& model, const RunConfig& config, Data& workspace,
+                            RowSink* sink = nullptr, RunControl* control = nullptr);
 
 }  // namespace simloop

@@ -45,8 +45,10 @@ class Sim {
   void clear_force() noexcept;
   [[nodiscard]] std::array<double, 3> applied_force() const noexcept;
 
-  // Advances n steps (n >= 1) with the current ctrl and force.
-  void step(std::int64_t n = 1);
+  // Advances n steps (n >= 1) with the current ctrl and force. With a
+  // `control`, a long step can be stopped between chunks (Interrupted; the
+  // steps already taken stay taken).
+  void step(std::int64_t n = 1, RunControl* control = nullptr);
 
   [[nodiscard]] double time() const noexcept { return data_.get()->time; }
   [[nodiscard]] std::int64_t steps_taken() const noexcept { return steps_; }

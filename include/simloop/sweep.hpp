@@ -50,9 +50,9 @@ struct SweepResult {
 // Runs the baseline at every timestep (sorted, duplicates dropped) for
 // round(duration / timestep) steps, in parallel over one model, with the
 // energy audit on. Throws InvalidArgument naming a bad timestep, duration or
-// thread count.
+// thread count. With a `control`, it can be stopped (Interrupted) and watched.
 [[nodiscard]] SweepResult sweep(const Model& model, std::vector<double> timesteps, double duration = 4.0,
-                                int threads = 0);
+                                int threads = 0, RunControl* control = nullptr);
 
 // sweep.csv: a header and one line per timestep.
 [[nodiscard]] std::string sweep_csv(const SweepResult& result);

@@ -1,0 +1,135 @@
+// Stopping and watching long work (RunControl), and rows streamed to a sink.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <vector>
+
+#include "simloop/batch.hpp"
+#include "simloop/control.hpp"
+#include "simloop/errors.hpp"
+#include "simloop/run.hpp"
+#include "simloop/sim.hpp"
+#include "simloop/sweep.hpp"
+
+namespace {
+
+const simloop::Model& scene() {
+  static const simloop::Model model = simloop::Model::pusher_scene();
+  return model;
+}
+
+// A sink that keeps what it is given, to compare with the kept trajectory.
+class CollectRows final : public simloop::RowSink {
+ public:
+  void start(int columns, std::int64_t rows) override {
+    columns_ = columns;
+    announced = rows;
+  }
+  void write(const double* rows, std::int64_t count) override {
+    values.insert(values.end(), rows, rows + count * columns_);
+    ++blocks;
+  }
+  int columns_ = 0;
+  std::int64_t announced = -1;
+  int blocks = 0;
+  std::vector<double> values;
+};
+
+TEST(RowSink, GetsTheSameRowsTheResultWouldKeep) {
+  for (bool audit : {false, true}) {
+    for (std::int64_t every : {1, 3, 64, 65, 5000}) {
+      simloop::RunConfig config;
+      config.steps = 1000;
+      config.record_every = every;
+      config.audit_energy = audit;
+      const simloop::RunResult kept = simloop::run(scene(), config);
+      simloop::Data data(scene());
+      CollectRows sink;
+      const simloop::RunResult streamed = simloop::run(scene(), config, data, &sink);
+      EXPECT_EQ(streamed.trajectory.rows(), 0);
+      EXPECT_EQ(streamed.rows, kept.rows);
+      EXPECT_EQ(sink.announced, kept.trajectory.rows());
+      ASSERT_EQ(sink.values.size(), static_cast<size_t>(kept.trajectory.rows() * kept.trajectory.columns()));
+      EXPECT_EQ(std::memcmp(sink.values.data(), kept.trajectory.data(), sink.values.size() * sizeof(double)), 0)
+          << "audit " << audit << " every " << every;
+      // Rows arrive in blocks as the loop goes, not all at the end.
+      if (every == 1) EXPECT_GT(sink.blocks, 10);
+    }
+  }
+}
+
+TEST(RowSink, AThrowingSinkStopsTheRunAndTheErrorReachesTheCaller) {
+  class Full final : public simloop::RowSink {
+   public:
+    void start(int, std::int64_t) override {}
+    void write(const double*, std::int64_t) override {
+      if (++writes == 3) throw simloop::IoError("disk full");
+    }
+    int writes = 0;
+  } sink;
+  simloop::RunConfig config;
+  simloop::Data data(scene());
+  EXPECT_THROW((void)simloop::run(scene(), config, data, &sink), simloop::IoError);
+  EXPECT_EQ(sink.writes, 3);
+}
+
+TEST(RunControl, PollIsCalledAndCanStopARun) {
+  simloop::RunConfig config;
+  config.steps = 10'000'000;  // about a minute if nothing stopped it
+  int polls = 0;
+  std::int64_t last_done = -1, total = 0;
+  simloop::RunControl control([&](std::int64_t done, std::int64_t all) {
+    ++polls;
+    EXPECT_GT(done, last_done);
+    last_done = done;
+    total = all;
+    if (polls == 3) control.request_stop();
+  });
+  simloop::Data data(scene());
+  EXPECT_THROW((void)simloop::run(scene(), config, data, nullptr, &control), simloop::Interrupted);
+  EXPECT_EQ(polls, 3);
+  EXPECT_EQ(total, config.steps);
+  EXPECT_LT(control.steps_done(), config.steps / 10);
+}
+
+TEST(RunControl, AStopRequestedBeforehandStopsAtTheFirstChunk) {
+  simloop::RunControl control;
+  control.request_stop();
+  simloop::RunConfig config;
+  simloop::Data data(scene());
+  EXPECT_THROW((void)simloop::run(scene(), config, data, nullptr, &control), simloop::Interrupted);
+  EXPECT_EQ(control.steps_done(), simloop::RunControl::kChunkSteps);
+
+  simloop::Sim sim(scene());
+  EXPECT_THROW(sim.step(1000, &control), simloop::Interrupted);
+  EXPECT_EQ(sim.steps_taken(), simloop::RunControl::kChunkSteps);
+}
+
+TEST(RunControl, StopsABatchAndASweepOnEveryWorker) {
+  std::vector<simloop::RunConfig> configs(8);
+  for (auto& c : configs) c.steps = 5'000'000;
+  int polls = 0;
+  simloop::RunControl control([&](std::int64_t, std::int64_t) {
+    if (++polls == 2) control.request_stop();
+  });
+  EXPECT_THROW((void)simloop::run_batch(scene(), configs, 2, &control), simloop::Interrupted);
+  EXPECT_LT(control.steps_done(), 1'000'000);
+
+  int sweep_polls = 0;
+  simloop::RunControl sweep_control([&](std::int64_t, std::int64_t) {
+    if (++sweep_polls == 2) sweep_control.request_stop();
+  });
+  EXPECT_THROW((void)simloop::sweep(scene(), {1e-5, 2e-5}, 100.0, 2, &sweep_control), simloop::Interrupted);
+}
+
+TEST(RunControl, CountsProgressOverABatch) {
+  std::vector<simloop::RunConfig> configs(5);
+  for (auto& c : configs) c.steps = 700;
+  simloop::RunControl control;
+  const auto results = simloop::run_batch(scene(), configs, 2, &control);
+  EXPECT_EQ(results.size(), 5u);
+  EXPECT_EQ(control.steps_total(), 3500);
+  EXPECT_EQ(control.steps_done(), 3500);
+}
+
+}  // namespace
