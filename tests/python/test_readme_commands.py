@@ -1,8 +1,11 @@
 """The README's commands work as printed after scripts/test.sh, with nothing
 set by hand: no SIMLOOP_PYTHON, the venv's bin off PATH, the system python3."""
 
+import os
+import shutil
 import subprocess
 import sys
+from pathlib import Path
 
 from conftest import ROOT, sim_loop_exe
 
@@ -29,3 +32,17 @@ def test_sim_loop_plot_without_a_python_is_one_line(tmp_path):
     assert proc.stderr.splitlines() == [
         "sim_loop: --plot: cannot start /nonexistent/python (scripts/test.sh installs the simloop package into "
         "the project's .venv; or set SIMLOOP_PYTHON to a Python that has it)"]
+
+
+def test_viewer_line_names_a_rerun_that_exists(tmp_path):
+    """`open it with: VIEWER PATH` works as typed where the command ran, also
+    when rerun is only in the venv's bin, off PATH."""
+    proc = subprocess.run([sys.executable, "-m", "simloop", "--smoke", "--out", "o"], cwd=tmp_path,
+                          capture_output=True, text=True, env={"PATH": SYSTEM_PATH})
+    assert proc.returncode == 0, proc.stderr
+    line = next(line for line in proc.stdout.splitlines() if line.startswith("recording: "))
+    viewer, rrd = line.split(" -- open it with: ")[1].rsplit(" ", 1)
+    assert rrd == os.path.join("o", "sim_loop.rrd")
+    exe = tmp_path / viewer if os.sep in viewer else shutil.which(viewer, path=SYSTEM_PATH)
+    assert exe and os.access(exe, os.X_OK), f"{viewer!r} in {line!r} is not a command there"
+    assert os.path.samefile(exe, Path(sys.executable).with_name("rerun"))  # the viewer of this rerun-sdk
