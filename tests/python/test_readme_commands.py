@@ -46,3 +46,18 @@ def test_viewer_line_names_a_rerun_that_exists(tmp_path):
     exe = tmp_path / viewer if os.sep in viewer else shutil.which(viewer, path=SYSTEM_PATH)
     assert exe and os.access(exe, os.X_OK), f"{viewer!r} in {line!r} is not a command there"
     assert os.path.samefile(exe, Path(sys.executable).with_name("rerun"))  # the viewer of this rerun-sdk
+
+
+def test_check_py_runs_as_a_command(tmp_path):
+    """`exercises/check.py N`: executable, and under the system python3 it
+    re-runs itself with the project's .venv, which has simloop."""
+    answer = tmp_path / "answer.txt"
+    answer.write_text("# nothing yet\n")
+    proc = subprocess.run([str(ROOT / "exercises" / "check.py"), "1", "--answer", str(answer)], cwd=ROOT,
+                          capture_output=True, text=True, env={"PATH": SYSTEM_PATH}, timeout=120)
+    if VENV_PYTHON.exists():
+        assert proc.returncode == 2, proc.stderr  # got as far as reading the (blank) answer
+        assert "needs the simloop package" not in proc.stderr and "Traceback" not in proc.stderr
+    else:
+        assert proc.returncode == 2
+        assert proc.stderr.startswith("check.py: needs the simloop package")
