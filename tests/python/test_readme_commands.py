@@ -61,3 +61,12 @@ def test_check_py_runs_as_a_command(tmp_path):
     else:
         assert proc.returncode == 2
         assert proc.stderr.startswith("check.py: needs the simloop package")
+
+
+def test_callgrind_without_valgrind_is_one_line(tmp_path):
+    proc = subprocess.run([sys.executable, str(ROOT / "bench" / "bench_command.py"), "--callgrind",
+                           "--build", str(sim_loop_exe().parent)],
+                          capture_output=True, text=True, env={"PATH": str(tmp_path)}, timeout=60)
+    assert proc.returncode == 1
+    assert proc.stderr.splitlines() == ["--callgrind: valgrind is not installed (apt-get install valgrind)"]
+    assert proc.stdout == ""  # refused before measuring anything
