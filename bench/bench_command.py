@@ -15,6 +15,7 @@ driver-versus-bare ratio in instructions does not move with machine load.
 """
 import argparse
 import re
+import shutil
 import statistics
 import subprocess
 import sys
@@ -48,6 +49,8 @@ def main() -> int:
     exe = args.build / "sim_loop"
     if not exe.exists():
         sys.exit(f"--build: {exe} not found; build first (README)")
+    if args.callgrind and not (shutil.which("valgrind") and shutil.which("callgrind_annotate")):
+        sys.exit("--callgrind: valgrind is not installed (apt-get install valgrind)")
     with tempfile.TemporaryDirectory() as tmp:
         run_once(exe, Path(tmp))  # warm the page cache
         walls, rss = zip(*(run_once(exe, Path(tmp)) for _ in range(args.runs)))

@@ -61,22 +61,24 @@ double peak_memory_mib() {
 }
 
 // --plot: the chart is drawn by the Python package (matplotlib), which reads
-// the CSV just written. SIMLOOP_PYTHON names the interpreter that has it.
+// the CSV just written. The interpreter: $SIMLOOP_PYTHON if set, else the one
+// CMake recorded (the project's .venv, which scripts/test.sh makes).
 int plot_with_python(const std::filesystem::path& out, const char* what) {
   const char* env = std::getenv("SIMLOOP_PYTHON");
-  const std::string python = env && *env ? env : "python3";
+  const std::string python = env && *env ? env : SIMLOOP_DEFAULT_PYTHON;
   const std::string out_text = out.string();
   const char* argv[] = {python.c_str(), "-m", "simloop", "plot", what, "--out", out_text.c_str(), nullptr};
   pid_t pid = 0;
   std::fflush(stdout);
   if (posix_spawnp(&pid, python.c_str(), nullptr, nullptr, const_cast<char* const*>(argv), environ) != 0) {
-    return fail(kExitRunFailed, "--plot: cannot start " + python + " (set SIMLOOP_PYTHON to a Python with simloop)");
+    return fail(kExitRunFailed, "--plot: cannot start " + python + " (scripts/test.sh installs the simloop package "
+                                "into the project's .venv; or set SIMLOOP_PYTHON to a Python that has it)");
   }
   int status = 0;
   waitpid(pid, &status, 0);
   if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
     return fail(kExitRunFailed, "--plot: " + python + " -m simloop plot failed (it needs the simloop package and "
-                                "matplotlib; scripts/test.sh installs both into .venv: SIMLOOP_PYTHON=.venv/bin/python)");
+                                "matplotlib; scripts/test.sh installs both into the project's .venv)");
   }
   return 0;
 }

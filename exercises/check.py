@@ -6,10 +6,18 @@ Exit status: 0 the answer holds, 1 it does not, 2 there is no answer to check.
 
 import argparse
 import importlib.util
+import os
 import sys
 from pathlib import Path
 
-import simloop
+try:
+    import simloop
+except ImportError:  # run as exercises/check.py by the system python3: use the project's .venv
+    VENV_PYTHON = Path(__file__).resolve().parent.parent / ".venv" / "bin" / "python"
+    if VENV_PYTHON.exists() and Path(sys.prefix).resolve() != VENV_PYTHON.parent.parent.resolve():
+        os.execv(VENV_PYTHON, [str(VENV_PYTHON), *sys.argv])
+    print("check.py: needs the simloop package: scripts/test.sh installs it into .venv", file=sys.stderr)
+    sys.exit(2)
 
 HERE = Path(__file__).resolve().parent
 FOLDERS = {1: "01_timestep_edge", 2: "02_sticky_shove", 3: "03_predict_drift"}

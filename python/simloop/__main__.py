@@ -57,6 +57,22 @@ def _plot_command(args: List[str]) -> int:
     return 0
 
 
+def _viewer() -> str:
+    """How to start rerun's viewer from here: `rerun` when that is this Python's
+    own, else the path of the one beside this Python (a venv's bin, off PATH)."""
+    import os
+    import shutil
+
+    beside = Path(sys.executable).with_name("rerun")
+    on_path = shutil.which("rerun")
+    if not beside.exists() or (on_path and os.path.samefile(on_path, beside)):
+        return "rerun"
+    relative = os.path.relpath(beside)
+    if relative.startswith(".."):
+        return str(beside)
+    return relative if os.sep in relative else os.path.join(".", relative)
+
+
 def _sweep(opts, model, out: Path) -> None:
     from . import _core
 
@@ -121,7 +137,7 @@ def main(argv: Optional[List[str]] = None) -> int:
             from .recording import record
 
             rrd = record(result, out / "sim_loop.rrd", model)
-            print(f"recording: {rrd} -- open it with: rerun {rrd}")
+            print(f"recording: {rrd} -- open it with: {_viewer()} {rrd}")
         if opts.plot:
             from .plots import trajectory_png
 

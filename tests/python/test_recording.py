@@ -31,7 +31,7 @@ def recorded(tmp_path_factory):
     proc = run_command(["--seed", "0", "--out", str(out)], out)
     assert proc.returncode == 0, proc.stderr
     rrd = out / "sim_loop.rrd"
-    assert f"recording: {rrd} -- open it with: rerun {rrd}" in proc.stdout
+    assert f"recording: {rrd} -- open it with: " in proc.stdout  # the viewer: test_readme_commands.py
     return load_chunks(rrd), simloop.run(seed=0)
 
 

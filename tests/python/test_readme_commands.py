@@ -1,0 +1,72 @@
+"""The README's commands work as printed after scripts/test.sh, with nothing
+set by hand: no SIMLOOP_PYTHON, the venv's bin off PATH, the system python3."""
+
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+from conftest import ROOT, sim_loop_exe
+
+SYSTEM_PATH = "/usr/bin:/bin"  # as in a new shell: .venv/bin is not on it
+VENV_PYTHON = ROOT / ".venv" / "bin" / "python"
+
+
+def test_sim_loop_plot_finds_the_projects_venv(tmp_path):
+    proc = subprocess.run([str(sim_loop_exe()), "--smoke", "--plot", "--out", "o"], cwd=tmp_path,
+                          capture_output=True, text=True, env={"PATH": SYSTEM_PATH})
+    if VENV_PYTHON.exists():  # scripts/test.sh made it
+        assert proc.returncode == 0, proc.stderr
+        assert (tmp_path / "o" / "trajectory.png").read_bytes()[:4] == b"\x89PNG"
+    else:
+        assert proc.returncode == 1
+        assert proc.stderr.startswith(f"sim_loop: --plot: cannot start {VENV_PYTHON} (scripts/test.sh")
+        assert len(proc.stderr.splitlines()) == 1
+
+
+def test_sim_loop_plot_without_a_python_is_one_line(tmp_path):
+    proc = subprocess.run([str(sim_loop_exe()), "--smoke", "--plot", "--out", "o"], cwd=tmp_path,
+                          capture_output=True, text=True, env={"SIMLOOP_PYTHON": "/nonexistent/python"})
+    assert proc.returncode == 1
+    assert proc.stderr.splitlines() == [
+        "sim_loop: --plot: cannot start /nonexistent/python (scripts/test.sh installs the simloop package into "
+        "the project's .venv; or set SIMLOOP_PYTHON to a Python that has it)"]
+
+
+def test_viewer_line_names_a_rerun_that_exists(tmp_path):
+    """`open it with: VIEWER PATH` works as typed where the command ran, also
+    when rerun is only in the venv's bin, off PATH."""
+    proc = subprocess.run([sys.executable, "-m", "simloop", "--smoke", "--out", "o"], cwd=tmp_path,
+                          capture_output=True, text=True, env={"PATH": SYSTEM_PATH})
+    assert proc.returncode == 0, proc.stderr
+    line = next(line for line in proc.stdout.splitlines() if line.startswith("recording: "))
+    viewer, rrd = line.split(" -- open it with: ")[1].rsplit(" ", 1)
+    assert rrd == os.path.join("o", "sim_loop.rrd")
+    exe = tmp_path / viewer if os.sep in viewer else shutil.which(viewer, path=SYSTEM_PATH)
+    assert exe and os.access(exe, os.X_OK), f"{viewer!r} in {line!r} is not a command there"
+    assert os.path.samefile(exe, Path(sys.executable).with_name("rerun"))  # the viewer of this rerun-sdk
+
+
+def test_check_py_runs_as_a_command(tmp_path):
+    """`exercises/check.py N`: executable, and under the system python3 it
+    re-runs itself with the project's .venv, which has simloop."""
+    answer = tmp_path / "answer.txt"
+    answer.write_text("# nothing yet\n")
+    proc = subprocess.run([str(ROOT / "exercises" / "check.py"), "1", "--answer", str(answer)], cwd=ROOT,
+                          capture_output=True, text=True, env={"PATH": SYSTEM_PATH}, timeout=120)
+    if VENV_PYTHON.exists():
+        assert proc.returncode == 2, proc.stderr  # got as far as reading the (blank) answer
+        assert "needs the simloop package" not in proc.stderr and "Traceback" not in proc.stderr
+    else:
+        assert proc.returncode == 2
+        assert proc.stderr.startswith("check.py: needs the simloop package")
+
+
+def test_callgrind_without_valgrind_is_one_line(tmp_path):
+    proc = subprocess.run([sys.executable, str(ROOT / "bench" / "bench_command.py"), "--callgrind",
+                           "--build", str(sim_loop_exe().parent)],
+                          capture_output=True, text=True, env={"PATH": str(tmp_path)}, timeout=60)
+    assert proc.returncode == 1
+    assert proc.stderr.splitlines() == ["--callgrind: valgrind is not installed (apt-get install valgrind)"]
+    assert proc.stdout == ""  # refused before measuring anything
