@@ -129,6 +129,12 @@ Options parse(int argc, const char* const* argv) {
     } else if (arg == "--seed") {
       run_only();
       opts.run.seed = parse_u64(arg, value(), 0, std::numeric_limits<std::uint64_t>::max());
+    } else if (arg == "--rng") {
+      run_only();
+      const std::string_view v = value();
+      const std::optional<ShoveRng> rng = parse_rng(v);
+      if (!rng) throw UsageError("--rng must be mt19937_64 or numpy, got " + quoted(v));
+      opts.run.rng = *rng;
     } else if (arg == "--steps") {
       run_only();
       opts.run.steps = static_cast<std::int64_t>(parse_u64(arg, value(), 1, kMaxSteps));
@@ -198,6 +204,9 @@ box halfway through. Writes metrics.json and trajectory.csv into --out.
 
 options:
   --seed N          seeds the shove direction and strength (0 .. 2^64-1; default 0)
+  --rng NAME        the generator that draws the shove: mt19937_64 (default,
+                    std::mt19937_64) or numpy (the chapter's
+                    np.random.default_rng(seed), PCG64; numpy not needed)
   --steps N         steps to run (default 2000)
   --timestep S      sim seconds per mj_step (default 0.002; 0.05 breaks it)
   --smoke           fixed 300-step run for CI; two runs match byte for byte

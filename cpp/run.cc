@@ -81,7 +81,7 @@ RunResult run(const Model& model_in, const RunConfig& config, Data& workspace) {
   RunResult result;
   result.config = config;
   result.timestep = m->opt.timestep;
-  result.shove = draw_shove(config.seed, steps);
+  result.shove = draw_shove(config.seed, steps, config.rng);
   const Shove& shove = result.shove;
   const bool audit = config.audit_energy;
   Trajectory traj(Trajectory::rows_for(steps, every), audit ? Trajectory::kNumColumns : Trajectory::kNumBaseColumns);
