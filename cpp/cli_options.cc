@@ -183,7 +183,7 @@ Options parse(int argc, const char* const* argv) {
     }
   }
   if (sweeping) {
-    if (opts.sweep_timesteps.empty()) opts.sweep_timesteps = log_spaced(kSweepFrom, kSweepTo, kSweepCount);
+    if (opts.sweep_timesteps.empty()) opts.sweep_timesteps = default_sweep_timesteps();
     return opts;
   }
   // The library would refuse it too; say it in the flags' words.
@@ -251,9 +251,9 @@ raised no warning. The largest stable timestep is the largest one below which
 every swept timestep is stable.
 
 options:
-  --timesteps A,B,...   the timesteps to run
+  --timesteps A,B,...   the timesteps to run (default: 25 round ones, 1, 2, 3,
+                        4, 5, 6 and 8 per decade, from 0.0005 to 1)
   --range FROM:TO:N     N timesteps from FROM to TO, log-spaced
-                        (default 0.0005:1:25)
   --duration S          sim seconds per run (default 4)
   --threads N           workers (default: one per core)
   --out DIR             output directory (default outputs/ch0.1-sim-loop)

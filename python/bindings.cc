@@ -342,6 +342,8 @@ PYBIND11_MODULE(_core, m) {
       },
       "model"_a, "timesteps"_a, "duration"_a, "threads"_a);
   m.def("log_spaced", &simloop::log_spaced, "start"_a, "stop"_a, "count"_a);
+  m.def("default_sweep_timesteps", &simloop::default_sweep_timesteps,
+        "The default sweep's 25 round timesteps (1, 2, 3, 4, 5, 6, 8 per decade, 0.0005 s to 1 s).");
   m.attr("STABLE_HOP") = simloop::kStableHop;
   m.attr("STABLE_SINK") = simloop::kStableSink;
   m.attr("BOX_REST_Z") = simloop::kBoxRestZ;

@@ -64,10 +64,10 @@ def _sweep(opts, model, out: Path) -> None:
     csv = result.write(out)
     print(result.summary(), end="")
     print(f"sweep: {csv}")
-    # The chart is the point of a sweep: drawn always here (--plot or not).
-    from .plots import sweep_png
+    if opts.plot:  # as for sim_loop sweep: the chart only when asked for
+        from .plots import sweep_png
 
-    print(f"plot: {sweep_png(csv, out / 'sweep.png')}")
+        print(f"plot: {sweep_png(csv, out / 'sweep.png')}")
 
 
 def main(argv: Optional[List[str]] = None) -> int:

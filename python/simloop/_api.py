@@ -276,8 +276,9 @@ def sweep(timesteps: Optional[Iterable[float]] = None, duration: float = 4.0, th
           model: ModelLike = None) -> "_core.SweepResult":
     """The baseline (no shove) at many timesteps over the same span of sim time.
 
-    timesteps: None for the default (25 log-spaced from 0.0005 s to 1 s, from
-        the stable range through the edge to the box sinking into the floor).
+    timesteps: None for the default: 25 round timesteps (1, 2, 3, 4, 5, 6 and
+        8 per decade) from 0.0005 s to 1 s, from the stable range through the
+        edge to the box sinking into the floor.
     duration: sim seconds each run covers (round(duration / timestep) steps).
 
     Runs in parallel over one compiled model with the energy audit on. The
@@ -288,7 +289,7 @@ def sweep(timesteps: Optional[Iterable[float]] = None, duration: float = 4.0, th
     rest, ends at most 1 mm below rest, and MuJoCo raised no warning.
     """
     if timesteps is None:
-        values = _core.log_spaced(0.0005, 1.0, 25)
+        values = _core.default_sweep_timesteps()
     else:
         values = [_check_timestep(t, "timesteps[%d]" % i) for i, t in enumerate(_sequence("timesteps", timesteps))]
         if not values:

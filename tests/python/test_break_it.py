@@ -52,9 +52,29 @@ def test_sweep_commands_agree(tmp_path):
         proc = run_command(flags, tmp_path / name, python=python)
         assert proc.returncode == 0, proc.stderr
         assert "largest stable timestep: 0.002 s" in proc.stdout
+        assert not (tmp_path / name / "o" / "sweep.png").exists()  # both draw only with --plot
     assert (tmp_path / "py" / "o" / "sweep.csv").read_bytes() == (tmp_path / "cpp" / "o" / "sweep.csv").read_bytes()
-    assert (tmp_path / "py" / "o" / "sweep.png").read_bytes()[:4] == b"\x89PNG"  # the Python command always draws
-    assert not (tmp_path / "cpp" / "o" / "sweep.png").exists()  # sim_loop only with --plot
+
+
+def test_both_sweep_commands_plot_when_asked(tmp_path):
+    flags = ["sweep", "--timesteps", "0.002,0.05", "--duration", "0.5", "--plot", "--out", "o"]
+    env = {"SIMLOOP_PYTHON": sys.executable, "PATH": "/usr/bin:/bin"}  # sim_loop draws through this Python
+    for name, cmd in (("py", [sys.executable, "-m", "simloop"]), ("cpp", [str(sim_loop_exe())])):
+        (tmp_path / name).mkdir()
+        proc = subprocess.run(cmd + flags, cwd=tmp_path / name, capture_output=True, text=True, env=env, timeout=120)
+        assert proc.returncode == 0, proc.stderr
+        png = tmp_path / name / "o" / "sweep.png"
+        assert png.read_bytes()[:4] == b"\x89PNG"
+        assert f"plot: o/sweep.png" in proc.stdout
+
+
+def test_the_default_sweep_is_round_and_the_same_in_both_front_ends():
+    default = simloop._core.default_sweep_timesteps()
+    assert default[0] == 0.0005 and default[-1] == 1.0 and default == sorted(default)
+    for t in default:
+        assert float(f"{t:.0e}") == t and f"{t:.0e}"[0] in "1234568", t
+    assert [p.timestep for p in simloop.sweep(duration=0.01).points] == default
+    assert list(simloop._core.parse_command_line(["sweep"]).sweep_timesteps) == default
 
 
 def test_plots_are_pictures(tmp_path):
