@@ -120,7 +120,7 @@ def main(argv: Optional[List[str]] = None) -> int:
         if opts.rerun:
             from .recording import record
 
-            rrd = record(result, out / "sim_loop.rrd", model)
+            rrd = record(result, out / "sim_loop.rrd", opts.model_path or None)
             print(f"recording: {rrd} -- open it with: rerun {rrd}")
         if opts.plot:
             from .plots import trajectory_png
