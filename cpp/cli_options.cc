@@ -212,8 +212,9 @@ options:
   --smoke           fixed 300-step run for CI; two runs match byte for byte
   --out DIR         output directory (default outputs/ch0.1-sim-loop)
   --no-perturb      skip the shove: the baseline run
-  --plot            also draw trajectory.png (box y and z against time, the
-                    shove shaded), with matplotlib through the Python package
+  --plot            also draw trajectory.png (x of the pusher and the box, box
+                    y and z, contacts; the shove shaded), with matplotlib
+                    through the Python package
   --energy-audit    account for every joule: energy and work columns in
                     trajectory.csv, totals in the summary
   --record-every K  write every K-th step to trajectory.csv (default 1; the
