@@ -130,6 +130,16 @@ def run(seed: int = 0, steps: int = 2000, timestep: float = 0.002, perturb: bool
     return _core.run(load_model(model), config)
 
 
+def draw_shove(seed: int = 0, steps: int = 2000, rng: str = "mt19937_64") -> "_core.Shove":
+    """The shove a run of `steps` steps draws from `seed`, without running it.
+
+    The same Shove as run(seed=seed, steps=steps, rng=rng).shove: newtons,
+    sign, force_y, start_step (steps // 2) and steps (50).
+    """
+    return _core.draw_shove(_check_int("seed", seed, 0, _U64_MAX), _check_int("steps", steps, 1, _I64_MAX),
+                            _check_rng(rng))
+
+
 def _sequence(name: str, values: object) -> list:
     if isinstance(values, (str, bytes)) or not isinstance(values, Iterable):
         raise TypeError(f"{name} must be a sequence, got {_describe(values)}")

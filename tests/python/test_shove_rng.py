@@ -89,3 +89,13 @@ def test_a_bad_generator_is_refused_by_name(tmp_path, python):
     assert proc.returncode == 2
     assert "--rng must be mt19937_64 or numpy, got 'pcg64'" in proc.stderr
     assert not (tmp_path / "o").exists()
+
+
+def test_draw_shove_is_the_runs_shove_without_the_run():
+    for rng in ("mt19937_64", "numpy"):
+        drawn = simloop.draw_shove(seed=7, steps=600, rng=rng)
+        ran = simloop.run(seed=7, steps=600, rng=rng).shove
+        assert (drawn.newtons, drawn.sign, drawn.start_step, drawn.steps, drawn.rng) == \
+               (ran.newtons, ran.sign, ran.start_step, ran.steps, ran.rng)
+    with pytest.raises(ValueError, match="rng must be 'mt19937_64' or 'numpy', got 'pcg'"):
+        simloop.draw_shove(rng="pcg")
