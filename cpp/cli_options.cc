@@ -129,6 +129,12 @@ Options parse(int argc, const char* const* argv) {
     } else if (arg == "--seed") {
       run_only();
       opts.run.seed = parse_u64(arg, value(), 0, std::numeric_limits<std::uint64_t>::max());
+    } else if (arg == "--rng") {
+      run_only();
+      const std::string_view v = value();
+      const std::optional<ShoveRng> rng = parse_rng(v);
+      if (!rng) throw UsageError("--rng must be mt19937_64 or numpy, got " + quoted(v));
+      opts.run.rng = *rng;
     } else if (arg == "--steps") {
       run_only();
       opts.run.steps = static_cast<std::int64_t>(parse_u64(arg, value(), 1, kMaxSteps));
@@ -177,7 +183,7 @@ Options parse(int argc, const char* const* argv) {
     }
   }
   if (sweeping) {
-    if (opts.sweep_timesteps.empty()) opts.sweep_timesteps = log_spaced(kSweepFrom, kSweepTo, kSweepCount);
+    if (opts.sweep_timesteps.empty()) opts.sweep_timesteps = default_sweep_timesteps();
     return opts;
   }
   // The library would refuse it too; say it in the flags' words.
@@ -198,13 +204,17 @@ box halfway through. Writes metrics.json and trajectory.csv into --out.
 
 options:
   --seed N          seeds the shove direction and strength (0 .. 2^64-1; default 0)
+  --rng NAME        the generator that draws the shove: mt19937_64 (default,
+                    std::mt19937_64) or numpy (the chapter's
+                    np.random.default_rng(seed), PCG64; numpy not needed)
   --steps N         steps to run (default 2000)
   --timestep S      sim seconds per mj_step (default 0.002; 0.05 breaks it)
   --smoke           fixed 300-step run for CI; two runs match byte for byte
   --out DIR         output directory (default outputs/ch0.1-sim-loop)
   --no-perturb      skip the shove: the baseline run
-  --plot            also draw trajectory.png (box y and z against time, the
-                    shove shaded), with matplotlib through the Python package
+  --plot            also draw trajectory.png (x of the pusher and the box, box
+                    y and z, contacts; the shove shaded), with matplotlib
+                    through the Python package
   --energy-audit    account for every joule: energy and work columns in
                     trajectory.csv, totals in the summary
   --record-every K  write every K-th step to trajectory.csv (default 1; the
@@ -242,9 +252,9 @@ raised no warning. The largest stable timestep is the largest one below which
 every swept timestep is stable.
 
 options:
-  --timesteps A,B,...   the timesteps to run
+  --timesteps A,B,...   the timesteps to run (default: 25 round ones, 1, 2, 3,
+                        4, 5, 6 and 8 per decade, from 0.0005 to 1)
   --range FROM:TO:N     N timesteps from FROM to TO, log-spaced
-                        (default 0.0005:1:25)
   --duration S          sim seconds per run (default 4)
   --threads N           workers (default: one per core)
   --out DIR             output directory (default outputs/ch0.1-sim-loop)

@@ -45,10 +45,4 @@ class UsageError : public std::runtime_error {
 [[nodiscard]] std::string help_text(std::string_view program, std::string_view recording);
 [[nodiscard]] std::string sweep_help_text(std::string_view program);
 
-// The default sweep: 25 timesteps from 0.0005 s to 1 s, log-spaced, which
-// spans the stable range, the edge, and the box sinking through the floor.
-inline constexpr double kSweepFrom = 0.0005;
-inline constexpr double kSweepTo = 1.0;
-inline constexpr int kSweepCount = 25;
-
 }  // namespace simloop::cli

@@ -122,8 +122,11 @@ std::string summary_text(const RunResult& r) {
                 m.box_final_pos[0], m.box_final_pos[1], m.box_final_pos[2], m.box_final_speed);
   out += line;
   if (m.perturb) {
-    std::snprintf(line, sizeof line, "shove: %+.1f N in y for %lld steps -> %.3f m of sideways drift\n",
-                  r.shove.force_y(), static_cast<long long>(r.shove.num_steps), m.lateral_drift);
+    const std::string_view rng = rng_description(r.shove.rng);
+    std::snprintf(line, sizeof line,
+                  "shove: %+.1f N in y for %lld steps -> %.3f m of sideways drift (drawn by %.*s from seed %llu)\n",
+                  r.shove.force_y(), static_cast<long long>(r.shove.num_steps), m.lateral_drift,
+                  static_cast<int>(rng.size()), rng.data(), static_cast<unsigned long long>(m.seed));
   } else {
     std::snprintf(line, sizeof line, "no shove (baseline run)\n");
   }

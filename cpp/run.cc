@@ -125,7 +125,7 @@ RunResult detail::run_counted_elsewhere(const Model& model_in, const RunConfig& 
   RunResult result;
   result.config = config;
   result.timestep = m->opt.timestep;
-  result.shove = draw_shove(config.seed, steps);
+  result.shove = draw_shove(config.seed, steps, config.rng);
   result.rows = Trajectory::rows_for(steps, every);
   const Shove& shove = result.shove;
   const bool audit = config.audit_energy;

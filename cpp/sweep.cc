@@ -33,6 +33,11 @@ std::vector<double> log_spaced(double from, double to, int count) {
   return out;
 }
 
+std::vector<double> default_sweep_timesteps() {
+  return {0.0005, 0.0006, 0.0008, 0.001, 0.002, 0.003, 0.004, 0.005, 0.006, 0.008, 0.01, 0.02, 0.03,
+          0.04,   0.05,   0.06,   0.08,  0.1,   0.2,   0.3,   0.4,   0.5,   0.6,   0.8,  1.0};
+}
+
 SweepResult sweep(const Model& model, std::vector<double> timesteps, double duration, int threads,
                   RunControl* control) {
   if (!(std::isfinite(duration) && duration > 0.0)) {
@@ -120,15 +125,40 @@ std::string sweep_summary(const SweepResult& result) {
   std::snprintf(line, sizeof line, "swept %zu timesteps, %s s of sim time each, no shove\n", result.points.size(),
                 python_float_repr(result.duration).c_str());
   out += line;
-  out += "  timestep   steps  peak z (m)  max |y| (m)  final z (m)  contacts +work (J)  unexplained (J)  warnings  stable\n";
+  // Every cell as text first, then each column as wide as its widest cell,
+  // so the table stays aligned whatever the numbers are.
+  const std::vector<std::string> header = {"timestep (s)", "steps", "peak z (m)", "max |y| (m)", "final z (m)",
+                                           "contacts +work (J)", "unexplained (J)", "warnings", "stable"};
+  std::vector<std::vector<std::string>> rows;
+  const auto fixed = [](double value, int decimals) {
+    char text[64];
+    std::snprintf(text, sizeof text, "%.*f", decimals, value);
+    return std::string(text);
+  };
   for (size_t i = 0; i < result.points.size(); ++i) {
     const SweepPoint& p = result.points[i];
-    std::snprintf(line, sizeof line, "  %8.5g %7lld  %10.4f  %11.4f  %11.4f  %18.4f  %15.4f  %8d  %s%s\n", p.timestep,
-                  static_cast<long long>(p.steps), p.peak_box_z, p.max_abs_box_y, p.final_box_z,
-                  p.energy.work_constraint_positive, p.energy.unexplained, p.warnings, p.stable ? "yes" : "no",
-                  static_cast<int>(i) == result.edge_index ? "  <- edge" : "");
-    out += line;
+    rows.push_back({python_float_repr(p.timestep), std::to_string(p.steps), fixed(p.peak_box_z, 4),
+                    fixed(p.max_abs_box_y, 4), fixed(p.final_box_z, 4), fixed(p.energy.work_constraint_positive, 4),
+                    fixed(p.energy.unexplained, 4), std::to_string(p.warnings),
+                    std::string(p.stable ? "yes" : "no") +
+                        (static_cast<int>(i) == result.edge_index ? "  <- edge" : "")});
   }
+  std::vector<size_t> width(header.size());
+  for (size_t c = 0; c < header.size(); ++c) {
+    width[c] = header[c].size();
+    for (const auto& row : rows) width[c] = std::max(width[c], row[c].size());
+  }
+  const auto append_row = [&](const std::vector<std::string>& cells) {
+    std::string text = " ";
+    for (size_t c = 0; c < cells.size(); ++c) {
+      const bool last = c + 1 == cells.size();  // left-aligned, unpadded: it carries the edge mark
+      const std::string pad(last ? 0 : width[c] - cells[c].size(), ' ');
+      text += "  " + (last ? cells[c] : pad + cells[c]);
+    }
+    out += text + "\n";
+  };
+  append_row(header);
+  for (const auto& row : rows) append_row(row);
   if (result.edge_index >= 0) {
     std::snprintf(line, sizeof line, "largest stable timestep: %s s\n",
                   python_float_repr(result.points[static_cast<size_t>(result.edge_index)].timestep).c_str());

@@ -21,10 +21,41 @@ except ImportError:  # run as exercises/check.py by the system python3: use the 
 
 HERE = Path(__file__).resolve().parent
 FOLDERS = {1: "01_timestep_edge", 2: "02_sticky_shove", 3: "03_predict_drift"}
+# The questions as shipped: check.py grades these copies, never the files a
+# learner edits (02_sticky_shove/loop.py is there to be fixed).
+PRISTINE = HERE / "_pristine"
+# Wrong answers so far, per exercise, kept beside the answer file: the first
+# wrong answer gets a hint; a second, different one (or --reveal) the solution.
+ATTEMPTS_FILE = ".check_attempts.json"
+
+import json  # noqa: E402  (below the header, which a launcher may rewrite)
+import re  # noqa: E402
+
+TIMESTEP = 0.002  # the chapter's, s
+# unit: (dimension, factor to SI; for "steps", to steps)
+UNITS = {
+    "s": ("time", 1.0), "sec": ("time", 1.0), "secs": ("time", 1.0), "second": ("time", 1.0),
+    "seconds": ("time", 1.0), "ms": ("time", 1e-3),
+    "m": ("length", 1.0), "cm": ("length", 1e-2), "mm": ("length", 1e-3),
+    "n": ("force", 1.0),
+    "step": ("steps", 1.0), "steps": ("steps", 1.0),
+}
+DIMENSIONS = {"time": "a time (s or ms)", "length": "a distance (m, cm or mm)", "force": "a force (N)",
+              "steps": "a number of steps"}
+NUMBER_WITH_UNIT = re.compile(r"\s*([-+]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][-+]?\d+)?)\s*([A-Za-z]*)\s*")
 
 
 class NoAnswer(Exception):
     pass
+
+
+class Verdict:
+    """What a check found. `report` and `why` answer the answer given and never
+    give the solution away; `hint` goes with a first wrong answer; `solution`
+    with a right one, a second wrong one, or --reveal."""
+
+    def __init__(self, holds, report, why, hint, solution):
+        self.holds, self.report, self.why, self.hint, self.solution = holds, report, why, hint, solution
 
 
 def answer_lines(path: Path) -> list:
@@ -38,31 +69,85 @@ def answer_lines(path: Path) -> list:
     return lines
 
 
-def number(text: str, what: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise NoAnswer(f"{what} must be a number, got {text!r}")
-    return value
+def quantity(text: str, what: str, dimensions: tuple, default_unit: str) -> tuple:
+    """(value, dimension) of an answer such as '0.002 s', '2ms', '6 cm' or '1000'.
+
+    The value is in SI units (s, m, N), or in steps; a bare number is in
+    `default_unit`. Refuses a unit of another dimension, naming what it wants.
+    """
+    match = NUMBER_WITH_UNIT.fullmatch(text)
+    unit = match.group(2) if match else ""
+    key = unit if unit in UNITS else unit.lower()
+    if not match or (unit and key not in UNITS):
+        raise NoAnswer(f"{what} must be a number with or without a unit (s, ms, m, cm, mm, N), got {text!r}")
+    dimension, factor = UNITS[key or default_unit]
+    if dimension not in dimensions:
+        wanted = " or ".join(DIMENSIONS[d] for d in dimensions)
+        raise NoAnswer(f"{what} is {wanted}, got {text!r} ({DIMENSIONS[dimension]})")
+    return float(match.group(1)) * factor, dimension
 
 
-def check_edge(path: Path) -> bool:
-    predicted = number(answer_lines(path)[0], "the prediction")
-    result = simloop.sweep()
-    edge = result.edge
-    print(result.summary(), end="")
-    holds = edge / 1.5 <= predicted <= edge * 1.5
-    print(f"\nyou predicted {predicted:g} s; the sweep's edge is {edge:g} s "
-          f"(accepted: {edge / 1.5:.4g} to {edge * 1.5:.4g} s).")
-    print("It holds." if holds else "It does not hold.")
-    print("Why: below the edge the push lifts the box 2 to 5 mm through the contacts' softness, whatever the "
-          "timestep; past it, each step extrapolates so far into the contact that the solver's correction throws "
-          "the box up, and the contacts do positive work (the 'contacts +work' column) that no force explains.")
-    return holds
+def _fmt(seconds: float) -> str:
+    return f"{seconds:g} s"
 
 
-def load_policy_loop():
-    spec = importlib.util.spec_from_file_location("policy_loop", HERE / FOLDERS[2] / "policy_loop.py")
+# ---- 1. the timestep edge ---------------------------------------------------
+
+def check_edge(path: Path) -> Verdict:
+    predicted, _ = quantity(answer_lines(path)[0], "the prediction", ("time",), "s")
+    if predicted <= 0:
+        raise NoAnswer(f"the prediction must be a positive timestep, got {predicted:g} s")
+    # The question as shipped: the default sweep (25 round timesteps, 0.0005 s
+    # to 1 s, 4 s of sim time each) and the library's stability criterion.
+    result = simloop.sweep(simloop._core.default_sweep_timesteps())
+    points = result.points
+    edge_index = next(i for i, p in enumerate(points) if p.timestep == result.edge)
+    edge, first_unstable = result.edge, points[edge_index + 1].timestep
+    low, high = edge / 1.5, first_unstable
+    holds = low <= predicted <= high
+    report = [f"you predicted {_fmt(predicted)}."]
+    # What your own timestep does, by the same criterion and over the same 4 s.
+    if predicted >= 2e-5:
+        mine = simloop.sweep([predicted]).points[0]
+        rise_mm = (mine.peak_box_z - simloop._core.BOX_REST_Z) * 1e3
+        sink_mm = (simloop._core.BOX_REST_Z - mine.final_box_z) * 1e3
+        verdict = "stable" if mine.stable else "unstable"
+        detail = f"rose {rise_mm:.1f} mm above rest" + (f" and ended {sink_mm:.1f} mm into the floor"
+                                                         if sink_mm > 1.0 else "")
+        report.append(f"At {_fmt(predicted)} the box {detail}: {verdict} by the criterion.")
+    else:
+        mine = None
+        report.append(f"({_fmt(predicted)} is too fine to run here: {4 / predicted:.0f} steps.)")
+    if holds:
+        why = ["Right. Below the edge the push lifts the box 2 to 4 mm through the contacts' softness, whatever "
+               "the timestep; past it each step extrapolates so far into the contact that the solver's correction "
+               "throws the box up, and the contacts do positive work (the 'contacts +work' column) that no force "
+               "explains. The chapter's 0.002 s has a factor of 2 to spare."]
+    elif predicted > high:
+        if mine is not None and mine.stable:
+            why = [f"Your {_fmt(predicted)} is stable on its own, but it is past the edge: the edge is the largest "
+                   "timestep below which every timestep is stable, and some smaller ones are not."]
+        else:
+            why = [f"Your {_fmt(predicted)} is already past the edge: the box hops or sinks there."]
+        if predicted >= 0.05:
+            why.append("At 0.05 s and beyond you are in Break It itself.")
+    else:
+        why = [f"Your {_fmt(predicted)} is stable, and so are timesteps well above it: the edge is higher. The "
+               "chapter warns against 0.0002 s for the same reason: ten times the steps for nothing."]
+    hint = ["Try a few timesteps before you predict again and watch the box's height:",
+            "  python -m simloop --timestep T --no-perturb --plot    (trajectory.png; stable: z stays under "
+            "0.055 m and ends above 0.049 m)"]
+    solution = [result.summary().rstrip("\n"),
+                f"The edge is {_fmt(edge)}; the next timestep, {_fmt(first_unstable)}, is unstable. Accepted: "
+                f"{low:.2g} to {high:g} s. The edge is a band rather than a line: between 0.003 and 0.005 s the "
+                "hop wavers around the 5 mm criterion (`python -m simloop sweep --plot` draws the whole curve)."]
+    return Verdict(holds, report, why, hint, solution)
+
+
+# ---- 2. the sticky shove ----------------------------------------------------
+
+def load_module(path: Path, name: str):
+    spec = importlib.util.spec_from_file_location(name, path)
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
@@ -79,23 +164,88 @@ class CountingSim(simloop.Sim):
             super().step(1, ctrl)
 
 
-def check_sticky(path: Path) -> bool:
-    answer = number(answer_lines(path)[0], "the number of steps")
-    module = load_policy_loop()
-    sim = module.policy_loop(sim=CountingSim())
-    actual = sim.shoved
+def check_sticky(path: Path) -> Verdict:
+    value, dimension = quantity(answer_lines(path)[0], "the number of steps", ("steps", "time"), "steps")
+    answer = value / TIMESTEP if dimension == "time" else value
+    answer = round(answer) if abs(answer - round(answer)) < 1e-6 else answer
+    # The question as shipped: the pristine loop, whatever the learner's copy now holds.
+    shipped = load_module(PRISTINE / FOLDERS[2] / "loop.py", "shipped_loop")
+    sim = shipped.chapter_loop(sim=CountingSim())
+    actual, shove = sim.shoved, simloop.draw_shove(seed=0, steps=2000)
+    after = 2000 - shove.start_step
     reference = simloop.run(seed=0)
-    print(f"simloop.run:         box final y {reference.metrics['box_final_pos'][1]:.6f} m (shove for 50 steps)")
-    print(f"policy_loop.py:      box final y {sim.box_position[1]:.6f} m")
-    print(f"the buggy loop shoved for {actual} steps; you answered {answer:g}.")
     holds = answer == actual
-    print("It holds." if holds else "It does not hold.")
-    print(f"Why: the policy decides at steps 1000, 1020, 1040 and 1060. At 1040 the window is still open, so it "
-          f"writes the shove, and xfrc_applied PERSISTS: MuJoCo keeps applying it on every one of the next "
-          f"{module.DECIDE_EVERY} steps until the decision at 1060 clears it. The shove lasts until the next "
-          f"decision, not until its window closes.")
-    return holds
+    report = [f"simloop.run(seed=0): the box ends at y {reference.metrics['box_final_pos'][1]:.3f} m "
+              f"(the shove pushed for {shove.steps} steps)",
+              f"the shipped loop.py:  the box ends at y {sim.box_position[1]:.3f} m",
+              f"you answered {answer:g} step{'' if answer == 1 else 's'}" + (f" ({value:g} s at {TIMESTEP} s a step)." if dimension == "time"
+                                                   else ".")]
+    if holds:
+        why = [f"Right: written once at step {shove.start_step}, the force stayed in xfrc_applied and pushed on "
+               f"every step to the end of the run, {actual} steps, {actual // shove.steps} times the chapter's "
+               f"{shove.steps}. MuJoCo never clears it. The chapter's loop writes 0 explicitly on every step "
+               "outside the shove's window for exactly this reason."]
+    elif answer == shove.steps:
+        why = [f"{shove.steps} is how long the shove was meant to last (shove.steps), and it would be right if "
+               "something stopped it after its window. Look for the line that does."]
+    elif answer == 1:
+        why = ["1 would be right if MuJoCo cleared xfrc_applied after each step, as if a force were a kick. "
+               "It does not: read what simloop.Sim.apply_force says about it."]
+    elif answer <= 0:
+        why = ["Then the box would have stayed near its line, as it does in simloop.run: it did not."]
+    elif answer > after:
+        why = [f"The force is first written at step {shove.start_step} of 2000, so it cannot have pushed for "
+               f"more than the {after} steps left."]
+    else:
+        why = [f"Between {shove.steps} and the end of the run, yes, but not {answer:g}: ask what would ever "
+               "change the force after it was written."]
+    hint = ["What does MuJoCo do with xfrc_applied between one mj_step and the next? Which line of loop.py would "
+            "ever set it back to zero?"]
+    solution = [f"The shove pushed for {actual} steps, from step {shove.start_step} to the last step of the run: "
+                "apply_force writes xfrc_applied once, and it persists until something writes it again. "
+                f"{shove.force_y:+.1f} N for {actual * TIMESTEP:g} s instead of {shove.steps * TIMESTEP:g} s drives "
+                f"the box {sim.box_position[1]:.1f} m off its line.",
+                "The fix: clear the force when the window ends (sim.clear_force()), or write the force, zero "
+                "outside the window, on every step, as the chapter's loop does. Then `check.py 2 --fix`."]
+    return Verdict(holds, report, why, hint, solution)
 
+
+def check_fix(loop_path: Path) -> bool:
+    """Does the learner's loop.py now match simloop.run exactly? (Separate from the answer.)"""
+    if not loop_path.is_file():
+        raise NoAnswer(f"cannot read {loop_path}")
+    if loop_path.read_bytes() == (PRISTINE / FOLDERS[2] / "loop.py").read_bytes():
+        print(f"{loop_path.name} is still the shipped loop: the bug is still there. Fix it first.")
+        return False
+    module = load_module(loop_path, "learner_loop")
+    ok = True
+    for seed, steps in ((0, 2000), (2, 600), (1, 301)):
+        sim = module.chapter_loop(seed=seed, steps=steps, sim=CountingSim())
+        final = simloop.run(seed=seed, steps=steps).trajectory[-1]
+        names = simloop.COLUMN_NAMES
+        expected = {
+            "box position": [final[names.index(c)] for c in ("box_x", "box_y", "box_z")],
+            "box velocity": [final[names.index(c)] for c in ("box_vx", "box_vy", "box_vz")],
+            "box orientation": [final[names.index(c)] for c in ("box_qw", "box_qx", "box_qy", "box_qz")],
+            "pusher x": [final[names.index("pusher_x")]],
+        }
+        mine = {"box position": list(sim.box_position), "box velocity": list(sim.box_velocity),
+                "box orientation": list(sim.box_quaternion), "pusher x": [sim.pusher_x]}
+        differs = [k for k in expected if mine[k] != expected[k]]
+        shove_steps = simloop.draw_shove(seed=seed, steps=steps).steps
+        if differs:
+            ok = False
+            print(f"seed {seed}, {steps} steps: the shove pushed for {sim.shoved} steps (simloop.run: "
+                  f"{shove_steps}); differs from simloop.run in: {', '.join(differs)} "
+                  f"(box y {mine['box position'][1]:.6f} against {expected['box position'][1]:.6f} m).")
+        else:
+            print(f"seed {seed}, {steps} steps: the same as simloop.run, bit for bit (the shove pushed for "
+                  f"{sim.shoved} steps).")
+    print("Your fix holds." if ok else "Your fix does not hold yet.")
+    return ok
+
+
+# ---- 3. below and above friction ---------------------------------------------
 
 def slide(force: float) -> float:
     """Sideways distance (m) of a box at rest pushed with `force` N for 50 steps, then left for 500."""
@@ -109,7 +259,7 @@ def slide(force: float) -> float:
     return sim.box_position[1] - y0
 
 
-def check_drift(path: Path) -> bool:
+def check_drift(path: Path) -> Verdict:
     fields = {}
     for line in answer_lines(path):
         key, _, value = line.partition(":")
@@ -118,38 +268,120 @@ def check_drift(path: Path) -> bool:
     for key in ("stays_at_4N", "slide_at_9N_cm"):
         if key not in fields:
             raise NoAnswer(f"{path}: fill in {key}")
-    stays = fields["stays_at_4N"].lower()
-    if stays not in ("yes", "no"):
+    stays = {"yes": "yes", "y": "yes", "no": "no", "n": "no"}.get(fields["stays_at_4N"].lower())
+    if stays is None:
         raise NoAnswer(f"stays_at_4N must be yes or no, got {fields['stays_at_4N']!r}")
-    predicted_cm = number(fields["slide_at_9N_cm"], "slide_at_9N_cm")
+    predicted_m, _ = quantity(fields["slide_at_9N_cm"], "slide_at_9N_cm", ("length",), "cm")
+    predicted_cm = predicted_m * 100
+    # The question as shipped: slide() above, a box at rest pushed for 0.1 s.
     at4, at9 = slide(4.0), slide(9.0)
     really_stays = abs(at4) < 0.002
     ok_stays = (stays == "yes") == really_stays
-    ok_slide = at9 * 100 / 2 <= predicted_cm <= at9 * 100 * 2
-    print(f"4 N: the box moved {at4 * 1000:.2f} mm ({'stays' if really_stays else 'moves'}); you said "
-          f"{stays}: {'holds' if ok_stays else 'does not hold'}.")
-    print(f"9 N: the box slid {at9 * 100:.2f} cm; you said {predicted_cm:g} cm (accepted: {at9 * 50:.2f} to "
-          f"{at9 * 200:.2f}): {'holds' if ok_slide else 'does not hold'}.")
+    low, high = at9 * 100 / 2, at9 * 100 * 2
+    ok_slide = low <= predicted_cm <= high
+    report = [f"4 N: you said it {'stays' if stays == 'yes' else 'moves'}: "
+              f"{'holds' if ok_stays else 'does not hold'}.",
+              f"9 N: you said {predicted_cm:g} cm: {'holds' if ok_slide else 'does not hold'}."]
     friction = 0.5 * 9.81 * 1.0
-    v = (9.0 - friction) / 0.5 * 0.1
-    sum_cm = (0.5 * (9.0 - friction) / 0.5 * 0.1**2 + v * v / (2 * 9.81)) * 100
-    print(f"The sum: 9 N - {friction:.2f} N friction = {9 - friction:.2f} N net on 0.5 kg for 0.1 s gives "
-          f"{v:.2f} m/s and {sum_cm:.1f} cm in all. MuJoCo's contacts are soft: the box creeps even below "
-          f"friction (about 1 mm at 4 N), and the friction cone is approximated, so the real slide differs.")
-    return ok_stays and ok_slide
+    accel = (9.0 - friction) / 0.5
+    v = accel * 0.1
+    push_cm, coast_cm = 0.5 * accel * 0.1**2 * 100, v * v / (2 * 9.81) * 100
+    why, hint = [], []
+    if ok_stays:
+        why.append(f"4 N: right. It is below what static friction can hold (m g mu = {friction:.2f} N); the box "
+                   f"only creeps {at4 * 1000:.2f} mm, through the contacts' softness.")
+    else:
+        why.append(f"4 N: you expected it to {'stay' if stays == 'yes' else 'move more than 2 mm'}; it did not.")
+        hint.append("4 N: compare it with the largest force friction can hold on a 0.5 kg box (m g mu).")
+    if ok_slide:
+        why.append(f"9 N: right: MuJoCo slid it {at9 * 100:.2f} cm; you said {predicted_cm:g} cm, within a factor "
+                   "of 2.")
+    elif predicted_cm > high:
+        why.append(f"9 N: {predicted_cm:g} cm is more than twice what MuJoCo did. Friction acts during the push "
+                   "too, not only after it: only the force above friction accelerates the box.")
+        hint.append("9 N: net force during the push (9 N minus friction), the speed after 0.1 s, then how far "
+                    "friction (a deceleration of mu g) lets it coast.")
+    else:
+        why.append(f"9 N: {predicted_cm:g} cm is less than half what MuJoCo did. The box does not stop when the "
+                   "push does: it coasts until friction has taken all its speed.")
+        hint.append("9 N: the speed at release, v = (9 N - friction) / m * 0.1 s, then the coasting distance "
+                    "v^2 / (2 mu g).")
+    solution = [f"4 N: the box moved {at4 * 1000:.2f} mm (it stays). 9 N: it slid {at9 * 100:.2f} cm "
+                f"(accepted: {low:.2f} to {high:.2f} cm).",
+                f"The sum: 9 N - {friction:.2f} N friction = {9 - friction:.2f} N net on 0.5 kg for 0.1 s gives "
+                f"{v:.2f} m/s and {push_cm:.1f} cm; coasting against friction adds {coast_cm:.1f} cm: "
+                f"{push_cm + coast_cm:.1f} cm in all. MuJoCo's contacts are soft, the box creeps even below friction, "
+                "and the friction cone is approximated, so the real slide differs."]
+    return Verdict(ok_stays and ok_slide, report, why, hint, solution)
 
+
+# ---- grading ------------------------------------------------------------------
 
 CHECKS = {1: check_edge, 2: check_sticky, 3: check_drift}
+
+
+def _attempts_path(answer: Path) -> Path:
+    return answer.resolve().parent / ATTEMPTS_FILE
+
+
+def wrong_answers(answer: Path, exercise: int) -> list:
+    try:
+        return json.loads(_attempts_path(answer).read_text()).get(str(exercise), [])
+    except (OSError, ValueError):
+        return []
+
+
+def remember_wrong(answer: Path, exercise: int, text: str) -> int:
+    """Records a wrong answer; returns how many different wrong answers there have been."""
+    path = _attempts_path(answer)
+    try:
+        state = json.loads(path.read_text())
+    except (OSError, ValueError):
+        state = {}
+    seen = state.setdefault(str(exercise), [])
+    if text not in seen:
+        seen.append(text)
+    try:
+        path.write_text(json.dumps(state, indent=2) + "\n")
+    except OSError:
+        pass  # a read-only folder: every wrong answer is then a first one
+    return len(seen)
+
+
+def grade(exercise: int, path: Path, reveal: bool) -> bool:
+    verdict = CHECKS[exercise](path)
+    print("\n".join(verdict.report))
+    print("It holds." if verdict.holds else "It does not hold.")
+    print("Why: " + "\n".join(verdict.why))
+    if verdict.holds:
+        print("\n".join(verdict.solution))
+        return True
+    tries = remember_wrong(path, exercise, " | ".join(answer_lines(path)))
+    if reveal or tries >= 2:
+        print("The solution:\n" + "\n".join(verdict.solution))
+    else:
+        print("Hint: " + "\n".join(verdict.hint))
+        print("Change your answer and check again; a second, different wrong answer (or --reveal) shows the "
+              "solution.")
+    return False
 
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("exercise", type=int, choices=sorted(CHECKS))
     parser.add_argument("--answer", type=Path, help="the answer file (default: the exercise's answer.txt)")
+    parser.add_argument("--reveal", action="store_true", help="show the solution even after a first wrong answer")
+    parser.add_argument("--fix", nargs="?", type=Path, const=HERE / FOLDERS[2] / "loop.py", default=None,
+                        metavar="LOOP", help="exercise 2 only: check your fixed loop.py (or LOOP) against "
+                                             "simloop.run, instead of your answer")
     args = parser.parse_args(argv)
-    path = args.answer or HERE / FOLDERS[args.exercise] / "answer.txt"
     try:
-        return 0 if CHECKS[args.exercise](path) else 1
+        if args.fix is not None:
+            if args.exercise != 2:
+                raise NoAnswer("--fix is for exercise 2, the one with a loop to fix")
+            return 0 if check_fix(args.fix) else 1
+        path = args.answer or HERE / FOLDERS[args.exercise] / "answer.txt"
+        return 0 if grade(args.exercise, path, args.reveal) else 1
     except NoAnswer as e:
         print(f"check.py: {e}", file=sys.stderr)
         return 2

@@ -8,6 +8,7 @@
 #include <pybind11/stl/filesystem.h>
 
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -79,6 +80,12 @@ py::tuple column_names(int first, int end) {
   return names;
 }
 
+simloop::ShoveRng shove_rng(const std::string& name) {
+  const std::optional<simloop::ShoveRng> rng = simloop::parse_rng(name);
+  if (!rng) throw py::value_error("rng must be 'mt19937_64' or 'numpy', got '" + name + "'");
+  return *rng;
+}
+
 py::array vec(const double* values, size_t n) { return py::array_t<double>(static_cast<py::ssize_t>(n), values); }
 
 }  // namespace
@@ -126,10 +133,13 @@ PYBIND11_MODULE(_core, m) {
 
   py::class_<simloop::RunConfig>(m, "RunConfig")
       .def(py::init([](std::uint64_t seed, std::int64_t steps, double timestep, bool perturb, bool smoke,
-                       std::int64_t record_every, bool audit_energy) {
-             return simloop::RunConfig{seed, steps, timestep, perturb, smoke, record_every, audit_energy};
+                       std::int64_t record_every, bool audit_energy, const std::string& rng) {
+             return simloop::RunConfig{seed, steps, timestep, perturb, smoke, record_every, audit_energy,
+                                       shove_rng(rng)};
            }),
-           "seed"_a, "steps"_a, "timestep"_a, "perturb"_a, "smoke"_a, "record_every"_a, "audit_energy"_a = false)
+           "seed"_a, "steps"_a, "timestep"_a, "perturb"_a, "smoke"_a, "record_every"_a, "audit_energy"_a = false,
+           "rng"_a = "mt19937_64")
+      .def_property_readonly("rng", [](const simloop::RunConfig& c) { return std::string(simloop::rng_name(c.rng)); })
       .def_readonly("audit_energy", &simloop::RunConfig::audit_energy)
       .def_readonly("seed", &simloop::RunConfig::seed)
       .def_readonly("steps", &simloop::RunConfig::steps)
@@ -144,11 +154,19 @@ PYBIND11_MODULE(_core, m) {
       .def_readonly("start_step", &simloop::Shove::start_step)
       .def_readonly("steps", &simloop::Shove::num_steps)
       .def_property_readonly("force_y", &simloop::Shove::force_y)
+      .def_property_readonly("rng", [](const simloop::Shove& s) { return std::string(simloop::rng_name(s.rng)); },
+                             "The generator that drew it: 'mt19937_64' or 'numpy'.")
       .def("__repr__", [](const simloop::Shove& s) {
         return "Shove(newtons=" + simloop::python_float_repr(s.newtons) + ", sign=" +
                simloop::python_float_repr(s.sign) + ", start_step=" + std::to_string(s.start_step) +
-               ", steps=" + std::to_string(s.num_steps) + ")";
+               ", steps=" + std::to_string(s.num_steps) + ", rng='" + std::string(simloop::rng_name(s.rng)) + "')";
       });
+  m.def(
+      "draw_shove",
+      [](std::uint64_t seed, std::int64_t steps, const std::string& rng) {
+        return simloop::draw_shove(seed, steps, shove_rng(rng));
+      },
+      "seed"_a, "steps"_a = 2000, "rng"_a = "mt19937_64", "The shove a run of `steps` steps draws from `seed`.");
 
   py::class_<simloop::Warning>(m, "MujocoWarning", "A warning MuJoCo raised while stepping.")
       .def_readonly("name", &simloop::Warning::name)
@@ -325,6 +343,8 @@ PYBIND11_MODULE(_core, m) {
       },
       "model"_a, "timesteps"_a, "duration"_a, "threads"_a);
   m.def("log_spaced", &simloop::log_spaced, "start"_a, "stop"_a, "count"_a);
+  m.def("default_sweep_timesteps", &simloop::default_sweep_timesteps,
+        "The default sweep's 25 round timesteps (1, 2, 3, 4, 5, 6, 8 per decade, 0.0005 s to 1 s).");
   m.attr("STABLE_HOP") = simloop::kStableHop;
   m.attr("STABLE_SINK") = simloop::kStableSink;
   m.attr("BOX_REST_Z") = simloop::kBoxRestZ;

@@ -24,6 +24,7 @@ struct RunConfig {
   bool smoke = false;              // fixed kSmokeSteps steps
   std::int64_t record_every = 1;   // trajectory row every K steps (+ the final state)
   bool audit_energy = false;       // account for every joule: adds the energy columns
+  ShoveRng rng = ShoveRng::kMt19937_64;  // the generator that draws the shove from the seed
 
   [[nodiscard]] std::int64_t num_steps() const noexcept { return smoke ? kSmokeSteps : steps; }
 };

@@ -14,11 +14,10 @@ namespace simloop {
 // The stability criterion, stated once. A timestep is stable when, over the
 // sweep's span, (1) the box's centre never rises more than kStableHop above
 // its resting height (10% of its half-height: the push itself lifts it 1.7 to
-// 4.7 mm at every timestep up to 0.0033 s, through contact softness; from
-// about 0.0046 s the hop grows past 5 mm and on to 64 mm), (2) it does not end
-// more than kStableSink below its resting height (from about 0.1 s it sinks
-// into the floor, and through it from about 0.28 s), and (3) MuJoCo raised no
-// warning. Sideways drift does not mark the edge: the box drifts a few
+// 3.5 mm at every default timestep up to 0.004 s, through contact softness;
+// from 0.005 s the hop passes 5 mm, 46 mm at 0.04 s), (2) it does not end more
+// than kStableSink below its resting height (from 0.08 s it sinks into the
+// floor, and through it from 0.3 s), and (3) MuJoCo raised no warning. Sideways drift does not mark the edge: the box drifts a few
 // centimetres at every timestep on MuJoCo 2.2.2.
 inline constexpr double kStableHop = 0.005;   // m
 inline constexpr double kStableSink = 0.001;  // m
@@ -46,6 +45,12 @@ struct SweepResult {
 
 // `count` timesteps from `from` to `to`, evenly spaced in log scale.
 [[nodiscard]] std::vector<double> log_spaced(double from, double to, int count);
+
+// The default sweep: 25 round timesteps, 1, 2, 3, 4, 5, 6 and 8 times a power
+// of ten, from 0.0005 s to 1 s (each exactly the double its decimal names).
+// Seven per decade, not 1-2-5: the edge lies between 0.002 and 0.005 s, and
+// 1-2-5 would have nothing there to find it with.
+[[nodiscard]] std::vector<double> default_sweep_timesteps();
 
 // Runs the baseline at every timestep (sorted, duplicates dropped) for
 // round(duration / timestep) steps, in parallel over one model, with the

@@ -9,7 +9,7 @@ The loop itself is C++ (simloop._core); this package checks arguments, gives
 numpy views of the trajectory, and writes the rerun recording.
 """
 
-from ._api import Sim, load_model, run, run_batch, sweep
+from ._api import Sim, draw_shove, load_model, run, run_batch, sweep
 from ._core import (
     COLUMN_NAMES,
     ENERGY_COLUMN_NAMES,
@@ -39,6 +39,7 @@ __all__ = [
     "SweepPoint",
     "SweepResult",
     "__version__",
+    "draw_shove",
     "load_model",
     "run",
     "run_batch",

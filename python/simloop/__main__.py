@@ -36,24 +36,60 @@ def _peak_memory_mib() -> float:
     return -1.0
 
 
+PLOT_USAGE = ("usage: python -m simloop plot trajectory|sweep [--out DIR] [--compare DIR ...] [--x auto|time|step]\n"
+              "  draws DIR/trajectory.png or DIR/sweep.png from the CSV the command wrote there;\n"
+              "  --compare DIR (trajectory only, repeatable): draw DIR's run on the same axes;\n"
+              "  --x: sim time, or the step index (auto: time, unless the runs' timesteps differ)")
+
+
 def _plot_command(args: List[str]) -> int:
-    """`python -m simloop plot trajectory|sweep [--out DIR]`: draws the PNG from
-    the CSV in DIR. sim_loop --plot calls this."""
-    usage = "usage: python -m simloop plot trajectory|sweep [--out DIR]"
-    if not args or args[0] not in ("trajectory", "sweep") or len(args) not in (1, 3) or \
-            (len(args) == 3 and args[1] != "--out"):
-        return _fail(EXIT_USAGE, usage)
+    """`python -m simloop plot trajectory|sweep [--out DIR] [--compare DIR ...]
+    [--x auto|time|step]`: draws the PNG from the CSV in DIR. sim_loop --plot calls this."""
+    if args and args[0] in ("-h", "--help"):
+        print(PLOT_USAGE)
+        return 0
+    if not args or args[0] not in ("trajectory", "sweep"):
+        return _fail(EXIT_USAGE, "plot needs 'trajectory' or 'sweep' first (see plot --help)")
+    what, rest = args[0], args[1:]
+    out, compare, x_axis = Path("outputs/ch0.1-sim-loop"), [], "auto"
+    i = 0
+    while i < len(rest):
+        flag, inline = rest[i].partition("=")[::2] if rest[i].startswith("--") else (rest[i], "")
+        if flag not in ("--out", "--compare", "--x"):
+            return _fail(EXIT_USAGE, f"plot: unknown argument '{rest[i]}' (see plot --help)")
+        if not inline:
+            if i + 1 >= len(rest):
+                return _fail(EXIT_USAGE, f"plot: {flag} needs a value")
+            i += 1
+            inline = rest[i]
+        if flag == "--out":
+            out = Path(inline)
+        elif flag == "--compare":
+            compare.append(Path(inline))
+        elif inline not in ("auto", "time", "step"):
+            return _fail(EXIT_USAGE, f"plot: --x must be auto, time or step, got '{inline}'")
+        else:
+            x_axis = inline
+        i += 1
+    if compare and what != "trajectory":
+        return _fail(EXIT_USAGE, "plot: --compare draws trajectories only")
     from .plots import sweep_png, trajectory_png
 
-    out = Path(args[2] if len(args) == 3 else "outputs/ch0.1-sim-loop")
-    csv = out / f"{args[0]}.csv"
-    if not csv.is_file():
-        return _fail(EXIT_USAGE, f"--out: {csv}: no such file (run the command first)")
-    draw = trajectory_png if args[0] == "trajectory" else sweep_png
+    csv = out / f"{what}.csv"
+    for flag, path in [("--out", csv)] + [("--compare", c / "trajectory.csv") for c in compare]:
+        if not path.is_file():
+            return _fail(EXIT_USAGE, f"{flag}: {path}: no such file (run the command first)")
+    # A comparison gets its own file, beside the run's own picture.
+    png = out / (f"{what}_vs_{'_'.join(c.name or 'run' for c in compare)}.png" if compare else f"{what}.png")
     try:
-        draw(csv, out / f"{args[0]}.png")
+        if what == "sweep":
+            sweep_png(csv, png)
+        else:
+            trajectory_png(csv, png, compare=[c / "trajectory.csv" for c in compare], x=x_axis)
     except (OSError, ValueError, KeyError) as e:
         return _fail(EXIT_RUN_FAILED, f"plot: {csv}: {e}")
+    if compare:  # sim_loop --plot prints its own line; a comparison is asked for by hand
+        print(f"plot: {png}")
     return 0
 
 
@@ -80,10 +116,10 @@ def _sweep(opts, model, out: Path) -> None:
     csv = result.write(out)
     print(result.summary(), end="")
     print(f"sweep: {csv}")
-    # The chart is the point of a sweep: drawn always here (--plot or not).
-    from .plots import sweep_png
+    if opts.plot:  # as for sim_loop sweep: the chart only when asked for
+        from .plots import sweep_png
 
-    print(f"plot: {sweep_png(csv, out / 'sweep.png')}")
+        print(f"plot: {sweep_png(csv, out / 'sweep.png')}")
 
 
 def main(argv: Optional[List[str]] = None) -> int:
@@ -136,7 +172,7 @@ def main(argv: Optional[List[str]] = None) -> int:
         if opts.rerun:
             from .recording import record
 
-            rrd = record(result, out / "sim_loop.rrd", model)
+            rrd = record(result, out / "sim_loop.rrd", opts.model_path or None)
             print(f"recording: {rrd} -- open it with: {_viewer()} {rrd}")
         if opts.plot:
             from .plots import trajectory_png

@@ -77,8 +77,19 @@ def load_model(model: ModelLike = None) -> Model:
     raise TypeError(f"model must be None, a simloop.Model or a path to an MJCF file, got {_describe(model)}")
 
 
+RNGS = ("mt19937_64", "numpy")
+
+
+def _check_rng(value: object) -> str:
+    if not isinstance(value, str):
+        raise TypeError(f"rng must be a str, got {_describe(value)}")
+    if value not in RNGS:
+        raise ValueError(f"rng must be 'mt19937_64' or 'numpy', got {value!r}")
+    return value
+
+
 def _config(seed: object, steps: object, timestep: object, perturb: object, smoke: object,
-            record_every: object, audit_energy: object = False) -> _core.RunConfig:
+            record_every: object, audit_energy: object = False, rng: object = "mt19937_64") -> _core.RunConfig:
     return _core.RunConfig(
         seed=_check_int("seed", seed, 0, _U64_MAX),
         steps=_check_int("steps", steps, 1, _I64_MAX),
@@ -87,11 +98,13 @@ def _config(seed: object, steps: object, timestep: object, perturb: object, smok
         smoke=_check_bool("smoke", smoke),
         record_every=_check_int("record_every", record_every, 1, _I64_MAX),
         audit_energy=_check_bool("audit_energy", audit_energy),
+        rng=_check_rng(rng),
     )
 
 
 def run(seed: int = 0, steps: int = 2000, timestep: float = 0.002, perturb: bool = True, smoke: bool = False,
-        model: ModelLike = None, record_every: int = 1, audit_energy: bool = False) -> RunResult:
+        model: ModelLike = None, record_every: int = 1, audit_energy: bool = False,
+        rng: str = "mt19937_64") -> RunResult:
     """Runs the chapter's loop once and returns what happened.
 
     seed: seeds the shove (0 to 2**64-1), and nothing else.
@@ -103,14 +116,28 @@ def run(seed: int = 0, steps: int = 2000, timestep: float = 0.002, perturb: bool
         always kept).
     audit_energy: account for every joule: the trajectory gains the
         ENERGY_COLUMN_NAMES columns and .energy holds the totals.
+    rng: the generator that draws the shove from the seed: "mt19937_64"
+        (std::mt19937_64, the default) or "numpy" (the chapter's
+        np.random.default_rng(seed), PCG64, reproduced in C++ bit for bit;
+        seed 0 shoves +9.82 N).
 
     The result has .metrics (the dict metrics.json holds), .trajectory (a
     read-only (rows, 22) float64 view, no copy) and .columns / .column(name),
     .shove, .warnings, .summary(), and .write(out) for metrics.json and
     trajectory.csv, byte-identical to `sim_loop` with the same flags.
     """
-    config = _config(seed, steps, timestep, perturb, smoke, record_every, audit_energy)
+    config = _config(seed, steps, timestep, perturb, smoke, record_every, audit_energy, rng)
     return _core.run(load_model(model), config)
+
+
+def draw_shove(seed: int = 0, steps: int = 2000, rng: str = "mt19937_64") -> "_core.Shove":
+    """The shove a run of `steps` steps draws from `seed`, without running it.
+
+    The same Shove as run(seed=seed, steps=steps, rng=rng).shove: newtons,
+    sign, force_y, start_step (steps // 2) and steps (50).
+    """
+    return _core.draw_shove(_check_int("seed", seed, 0, _U64_MAX), _check_int("steps", steps, 1, _I64_MAX),
+                            _check_rng(rng))
 
 
 def _sequence(name: str, values: object) -> list:
@@ -121,7 +148,7 @@ def _sequence(name: str, values: object) -> list:
 
 def run_batch(seeds: Iterable[int] = (0,), timesteps: Iterable[float] = (0.002,), *, steps: int = 2000,
               perturb: bool = True, smoke: bool = False, model: ModelLike = None, record_every: int = 1,
-              audit_energy: bool = False, threads: Optional[int] = None) -> List[RunResult]:
+              audit_energy: bool = False, threads: Optional[int] = None, rng: str = "mt19937_64") -> List[RunResult]:
     """Runs every (seed, timestep) pair over one compiled model, in parallel.
 
     Results come in the order of itertools.product(seeds, timesteps), and each
@@ -132,7 +159,7 @@ def run_batch(seeds: Iterable[int] = (0,), timesteps: Iterable[float] = (0.002,)
     seed_list = [_check_int("seeds[%d]" % i, s, 0, _U64_MAX) for i, s in enumerate(_sequence("seeds", seeds))]
     timestep_list = [_check_timestep(t, "timesteps[%d]" % i) for i, t in enumerate(_sequence("timesteps", timesteps))]
     workers = 0 if threads is None else _check_int("threads", threads, 1, 4096)
-    configs = [_config(s, steps, t, perturb, smoke, record_every, audit_energy)
+    configs = [_config(s, steps, t, perturb, smoke, record_every, audit_energy, rng)
                for s in seed_list for t in timestep_list]
     return _core.run_batch(load_model(model), configs, workers)
 
@@ -259,8 +286,9 @@ def sweep(timesteps: Optional[Iterable[float]] = None, duration: float = 4.0, th
           model: ModelLike = None) -> "_core.SweepResult":
     """The baseline (no shove) at many timesteps over the same span of sim time.
 
-    timesteps: None for the default (25 log-spaced from 0.0005 s to 1 s, from
-        the stable range through the edge to the box sinking into the floor).
+    timesteps: None for the default: 25 round timesteps (1, 2, 3, 4, 5, 6 and
+        8 per decade) from 0.0005 s to 1 s, from the stable range through the
+        edge to the box sinking into the floor.
     duration: sim seconds each run covers (round(duration / timestep) steps).
 
     Runs in parallel over one compiled model with the energy audit on. The
@@ -271,7 +299,7 @@ def sweep(timesteps: Optional[Iterable[float]] = None, duration: float = 4.0, th
     rest, ends at most 1 mm below rest, and MuJoCo raised no warning.
     """
     if timesteps is None:
-        values = _core.log_spaced(0.0005, 1.0, 25)
+        values = _core.default_sweep_timesteps()
     else:
         values = [_check_timestep(t, "timesteps[%d]" % i) for i, t in enumerate(_sequence("timesteps", timesteps))]
         if not values:

@@ -2,15 +2,31 @@
 
 Both read the CSV files the commands write, so `sim_loop --plot` (which calls
 `python -m simloop plot`) and `python -m simloop --plot` draw the same chart.
+`trajectory_png(..., compare=[other csv])` draws several runs on the same
+axes (the baseline against Break It, say).
 """
 
 from __future__ import annotations
 
 import os
 from pathlib import Path
-from typing import Union
+from typing import Iterable, Union
 
 PathLike = Union[str, "os.PathLike[str]"]
+
+BOX_COLOR = "#d94c40"     # the scene's colours
+PUSHER_COLOR = "#4073d9"
+CONTACT_COLOR = "#555555"
+# Runs after the first, when comparing: one colour per run.
+RUN_COLORS = ["#d94c40", "#1b7f79", "#8a4fbf", "#c98a00"]
+REST_Z = 0.05             # the box's centre at rest, m
+# The z axis a sound run and Break It share: fixed, widened only if a run
+# leaves it (autoscaled, 3 mm of contact softness looks as wild as a hop).
+Z_RANGE = (0.04, 0.12)
+# The sweep's z panel: the stable band (-1 mm, +5 mm) and a little around it;
+# points beyond are drawn on the edge, with their values.
+SWEEP_Z_RANGE = (0.040, 0.066)
+CHAPTER_TIMESTEPS = ((0.002, "chapter's 0.002 s"), (0.05, "Break It 0.05 s"))
 
 
 def _pyplot():
@@ -32,44 +48,156 @@ def _read_csv(path: Path):
     return {name: table[:, i] for i, name in enumerate(names)}
 
 
-def _save(fig, png: Path) -> Path:
+def _save_and_close(fig, png: Path) -> Path:
     """Writes beside the destination, then renames: never a half-written PNG."""
     temp = png.with_name("." + png.name + ".tmp")
-    fig.savefig(temp, format="png", dpi=110)
-    os.replace(temp, png)
+    try:
+        fig.savefig(temp, format="png", dpi=110)
+        os.replace(temp, png)
+    finally:
+        _pyplot().close(fig)
+        temp.unlink(missing_ok=True)
     return png
 
 
-def trajectory_png(csv: PathLike, png: PathLike) -> Path:
-    """Box y and z against time, the shove's window shaded."""
+def _shove_window(cols):
+    """(first step, last step + 1, force) of the shove, or None."""
     import numpy as np
 
-    cols = _read_csv(Path(csv))
-    plt = _pyplot()
-    time, y, z = cols["time"], cols["box_y"], cols["box_z"]
     shove = np.nan_to_num(cols["shove_y"])
-    fig, (ax_y, ax_z) = plt.subplots(2, 1, sharex=True, figsize=(8, 5.5))
-    for ax, values, label in ((ax_y, y, "box y (m): sideways"), (ax_z, z, "box z (m): height of its centre")):
-        ax.plot(time, values, color="#d94c40", lw=1.4)
-        ax.set_ylabel(label)
+    acting = np.flatnonzero(shove != 0.0)
+    if not acting.size:
+        return None
+    return acting[0], min(acting[-1] + 1, len(shove) - 1), shove[acting[0]]
+
+
+def describe_run(cols, name: str = "") -> str:
+    """'name: 2000 steps of 0.002 s, shove +7.0 N' from a trajectory's columns."""
+    steps = int(cols["step"][-1])
+    dt = _timestep(cols)
+    window = _shove_window(cols)
+    shove = f"shove {window[2]:+.1f} N in y" if window else "no shove"
+    text = f"{steps} steps of {dt:.4g} s, {shove}"
+    return f"{name}: {text}" if name else text
+
+
+def _timestep(cols) -> float:
+    steps = cols["step"][-1]
+    return float(cols["time"][-1] / steps) if steps else float("nan")
+
+
+def trajectory_png(csv: PathLike, png: PathLike, compare: Iterable[PathLike] = (), x: str = "auto") -> Path:
+    """Draws trajectory_figure(csv, compare, x) into `png`."""
+    return _save_and_close(trajectory_figure(csv, compare, x), Path(png))
+
+
+def trajectory_figure(csv: PathLike, compare: Iterable[PathLike] = (), x: str = "auto"):
+    """The run against time: x of the pusher and the box, the box's y and z,
+    and the contact count; the shove's window shaded.
+
+    compare: other trajectory.csv files, drawn on the same axes (each run in
+    its own colour; the box solid, the pusher dashed). x: "time" (sim
+    seconds), "step" (step index), or "auto": time, unless the runs have
+    different timesteps (the baseline's 4 s beside Break It's 100 s), then step.
+    """
+    import numpy as np
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
+    if x not in ("auto", "time", "step"):
+        raise ValueError(f"x must be 'auto', 'time' or 'step', got {x!r}")
+    paths = [Path(csv), *[Path(c) for c in compare]]
+    runs = [(_read_csv(p), p.parent.name) for p in paths]
+    comparing = len(runs) > 1
+    timesteps = sorted({round(_timestep(cols), 12) for cols, _ in runs})
+    if x == "auto":
+        x = "step" if len(timesteps) > 1 else "time"
+    plt = _pyplot()
+    fig, (ax_x, ax_y, ax_z, ax_c) = plt.subplots(4, 1, sharex=True, figsize=(9, 9),
+                                                 gridspec_kw={"height_ratios": [1.1, 1, 1.2, 0.7]})
+    legend = []  # one legend for the figure, above the axes: never on the data
+    z_low, z_high = Z_RANGE
+    for k, (cols, name) in enumerate(runs):
+        t = cols["time"] if x == "time" else cols["step"]
+        box_color = RUN_COLORS[k % len(RUN_COLORS)] if comparing else BOX_COLOR
+        pusher_color = box_color if comparing else PUSHER_COLOR
+        shade = box_color if comparing else PUSHER_COLOR
+        ax_x.plot(t, cols["box_x"], color=box_color, lw=1.4)
+        ax_x.plot(t, cols["pusher_x"], color=pusher_color, lw=1.2, ls="--")
+        ax_y.plot(t, cols["box_y"], color=box_color, lw=1.4)
+        ax_z.plot(t, cols["box_z"], color=box_color, lw=1.2)
+        ax_c.step(t, cols["ncon"], where="post", color=box_color if comparing else CONTACT_COLOR, lw=1.0,
+                  alpha=0.8 if comparing else 1.0)
+        if comparing:
+            legend.append((Line2D([], [], color=box_color, lw=2), describe_run(cols, name)))
+        window = _shove_window(cols)
+        if window:
+            first, last, force = window
+            for ax in (ax_x, ax_y, ax_z, ax_c):
+                ax.axvspan(t[first], t[last], color=shade, alpha=0.15)
+            legend.append((Patch(color=shade, alpha=0.3), (f"{name}: " if comparing else "") +
+                           f"shove {force:+.1f} N in y, steps {first} to {last - 1}"))
+        z = cols["box_z"]
+        finite = z[np.isfinite(z)]
+        if finite.size:
+            z_low, z_high = min(z_low, finite.min() - 0.005), max(z_high, finite.max() + 0.005)
+            peak = int(np.nanargmax(z))
+            ax_z.plot(t[peak], z[peak], "o", color=box_color, ms=5)
+            right_half = t[peak] > (t[0] + t[-1]) / 2  # label towards the middle, inside the axes
+            ax_z.annotate(f"peak {z[peak]:.4f} m, step {int(cols['step'][peak])}", (t[peak], z[peak]),
+                          xytext=(-6 if right_half else 6, 6 + 12 * k), textcoords="offset points", fontsize=8,
+                          color=box_color, ha="right" if right_half else "left")
+    if comparing:
+        legend += [(Line2D([], [], color="black", lw=1.4), "box"), (Line2D([], [], color="black", ls="--"), "pusher")]
+    else:
+        legend = [(Line2D([], [], color=BOX_COLOR, lw=1.4), "box"),
+                  (Line2D([], [], color=PUSHER_COLOR, ls="--"), "pusher")] + legend
+    legend.append((Line2D([], [], color="grey", lw=0.8, ls=":"), "box at rest (z 0.05 m)"))
+    ax_z.axhline(REST_Z, color="grey", lw=0.8, ls=":")
+    ax_z.set_ylim(z_low, z_high)
+    ax_x.set_ylabel("x (m)")
+    ax_y.set_ylabel("box y (m)\nsideways")
+    ax_z.set_ylabel("box z (m)\nheight of its centre")
+    ax_c.set_ylabel("contacts")
+    if x == "time":
+        ax_c.set_xlabel("sim time (s)")
+    elif len(timesteps) > 1:
+        ax_c.set_xlabel("step (the runs' timesteps differ: " + " s, ".join(f"{t:g}" for t in timesteps) + " s)")
+    else:
+        ax_c.set_xlabel("step")
+    for ax in (ax_x, ax_y, ax_z, ax_c):
         ax.grid(alpha=0.3)
-        acting = np.flatnonzero(shove != 0.0)
-        if acting.size:
-            ax.axvspan(time[acting[0]], time[min(acting[-1] + 1, len(time) - 1)], color="#4073d9", alpha=0.18,
-                       label=f"shove {shove[acting[0]]:+.1f} N in y")
-            ax.legend(loc="best", fontsize=8)
-    ax_z.axhline(0.05, color="grey", lw=0.8, ls="--")
-    ax_z.set_xlabel("sim time (s)")
-    dt = time[1] - time[0] if len(time) > 1 else float("nan")
-    fig.suptitle(f"ch0.1-sim-loop: the box, {int(cols['step'][-1])} steps of {dt:.4g} s")
-    fig.tight_layout()
-    out = _save(fig, Path(png))
-    plt.close(fig)
-    return out
+    title = "ch0.1-sim-loop: " + (" against ".join(name for _, name in runs) if comparing
+                                  else describe_run(runs[0][0]))
+    fig.suptitle(title)
+    handles, labels = zip(*legend)
+    rows = (len(legend) + 1) // 2
+    fig.legend(handles, labels, loc="upper center", bbox_to_anchor=(0.5, 0.955), ncol=2, frameon=False, fontsize=8)
+    fig.tight_layout(rect=(0, 0, 1, 0.99 - 0.022 * rows))
+    return fig
+
+
+def _mark_off_scale(ax, xs, values, low, high, color):
+    """Draws points beyond [low, high] on the edge, as arrows, with their values."""
+    for x, v in zip(xs, values):
+        if low <= v <= high:
+            continue
+        above = v > high
+        edge = high if above else low
+        ax.plot(x, edge, "^" if above else "v", color=color, ms=7, clip_on=False, zorder=5)
+        ax.annotate(f"{v:.3g}", (x, edge), xytext=(0, -9 if above else 9), textcoords="offset points",
+                    rotation=90, fontsize=7, color=color, ha="center", va="top" if above else "bottom")
 
 
 def sweep_png(csv: PathLike, png: PathLike) -> Path:
-    """The sweep's figures against the timestep (log scale), the edge marked."""
+    """Draws sweep_figure(csv) into `png`."""
+    return _save_and_close(sweep_figure(csv), Path(png))
+
+
+def sweep_figure(csv: PathLike):
+    """The sweep's figures against the timestep (log scale): z zoomed on the
+    stable band with the far points marked on its edges, the edge, the
+    chapter's 0.002 s and 0.05 s, sideways drift, and the energy audit."""
     import numpy as np
 
     cols = _read_csv(Path(csv))
@@ -77,18 +205,23 @@ def sweep_png(csv: PathLike, png: PathLike) -> Path:
     dt = cols["timestep"]
     stable = cols["stable"] == 1
     edge = dt[np.flatnonzero(np.cumprod(stable))[-1]] if stable[0] else None
-    fig, axes = plt.subplots(3, 1, sharex=True, figsize=(8, 8))
+    fig, axes = plt.subplots(3, 1, sharex=True, figsize=(10, 8.5), gridspec_kw={"height_ratios": [1.6, 1, 1]})
     ax_z, ax_y, ax_e = axes
-    ax_z.plot(dt, cols["peak_box_z"], "o-", color="#d94c40", ms=3, label="peak z")
-    ax_z.plot(dt, cols["final_box_z"], "s--", color="#7a3b35", ms=3, label="final z")
-    ax_z.axhline(0.05, color="grey", lw=0.8, ls="--")
-    ax_z.axhspan(0.049, 0.055, color="green", alpha=0.08, label="stable band (-1 mm, +5 mm)")
+    low, high = SWEEP_Z_RANGE
+    peak, final = cols["peak_box_z"], cols["final_box_z"]
+    ax_z.axhspan(REST_Z - 0.001, REST_Z + 0.005, color="green", alpha=0.12, label="stable band\n(-1 mm, +5 mm)")
+    ax_z.axhline(REST_Z, color="grey", lw=0.8, ls="--")
+    ax_z.plot(dt, np.clip(peak, low, high), "o-", color=BOX_COLOR, ms=4, label="peak z")
+    ax_z.plot(dt, np.clip(final, low, high), "s--", color="#7a3b35", ms=3, label="final z")
+    _mark_off_scale(ax_z, dt, peak, low, high, BOX_COLOR)
+    _mark_off_scale(ax_z, dt, final, low, high, "#7a3b35")
+    ax_z.plot([], [], "v", color="grey", label="off the scale\n(value in m)")
+    ax_z.set_ylim(low, high)
     ax_z.set_ylabel("box centre z (m)")
-    ax_z.set_ylim(max(min(cols["final_box_z"].min(), 0.04) - 0.01, -0.2), max(cols["peak_box_z"].max() + 0.01, 0.07))
-    ax_y.plot(dt, cols["max_abs_box_y"], "o-", color="#4073d9", ms=3)
+    ax_y.plot(dt, cols["max_abs_box_y"], "o-", color=PUSHER_COLOR, ms=3, label="largest |y|")
     ax_y.set_ylabel("largest |y| (m)")
-    ax_e.plot(dt, cols["work_constraint_positive"], "o-", color="#b5651d", ms=3, label="contacts' positive work")
-    ax_e.plot(dt, cols["energy_unexplained"], "o-", color="#555555", ms=3, label="unexplained by any force")
+    ax_e.plot(dt, cols["work_constraint_positive"], "o-", color="#b5651d", ms=3, label="contacts'\npositive work")
+    ax_e.plot(dt, cols["energy_unexplained"], "o-", color="#555555", ms=3, label="unexplained\nby any force")
     ax_e.axhline(0.0, color="grey", lw=0.8)
     ax_e.set_yscale("symlog", linthresh=0.01)
     ax_e.set_ylabel("energy over the run (J)")
@@ -97,14 +230,19 @@ def sweep_png(csv: PathLike, png: PathLike) -> Path:
         ax.set_xscale("log")
         ax.grid(alpha=0.3, which="both")
         for x in dt[~stable]:
-            ax.axvline(x, color="#d94c40", alpha=0.06, lw=6)
+            ax.axvline(x, color=BOX_COLOR, alpha=0.07, lw=6)
         if edge is not None:
             ax.axvline(edge, color="black", lw=1.2, ls=":", label=f"edge: {edge:.4g} s" if ax is ax_z else None)
-    ax_z.legend(loc="upper left", fontsize=8)
-    ax_e.legend(loc="upper left", fontsize=8)
+        for x, name in CHAPTER_TIMESTEPS:
+            ax.axvline(x, color="#2a6f2a", lw=1.0, ls="-.", alpha=0.8)
+            if ax is ax_z:  # named above the panel, clear of the off-scale values
+                ax.annotate(name, (x, 1.0), xycoords=("data", "axes fraction"), xytext=(0, 3),
+                            textcoords="offset points", fontsize=8, color="#2a6f2a", ha="center", va="bottom")
+    ax_z.plot([], [], color="#2a6f2a", ls="-.", label="the chapter's\ntimesteps")
+    ax_z.plot([], [], color=BOX_COLOR, alpha=0.25, lw=6, label="unstable")
+    for ax in axes:  # legends beside the axes, never on the data
+        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
     title = f"Break It, swept: largest stable timestep {edge:.4g} s" if edge is not None else "no stable timestep"
     fig.suptitle(title)
     fig.tight_layout()
-    out = _save(fig, Path(png))
-    plt.close(fig)
-    return out
+    return fig

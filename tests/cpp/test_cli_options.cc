@@ -34,6 +34,13 @@ TEST(CliOptions, DefaultsAreTheChapters) {
   EXPECT_EQ(o.out, "outputs/ch0.1-sim-loop");
   EXPECT_TRUE(o.rerun);
   EXPECT_TRUE(o.model_path.empty());
+  EXPECT_EQ(o.run.rng, simloop::ShoveRng::kMt19937_64);
+}
+
+TEST(CliOptions, RngPicksTheShovesGenerator) {
+  EXPECT_EQ(parse({"--rng", "numpy"}).run.rng, simloop::ShoveRng::kNumpy);
+  EXPECT_EQ(parse({"--rng=numpy"}).run.rng, simloop::ShoveRng::kNumpy);
+  EXPECT_EQ(parse({"--rng", "numpy", "--rng", "mt19937_64"}).run.rng, simloop::ShoveRng::kMt19937_64);
 }
 
 TEST(CliOptions, ParsesEveryFlagInBothSpellings) {
@@ -79,6 +86,9 @@ TEST(CliOptions, BadValuesNameTheFlagAndTheValue) {
   EXPECT_EQ(usage_error({"--frobnicate"}), "unknown option '--frobnicate' (see --help)");
   EXPECT_EQ(usage_error({"seed"}), "unexpected argument 'seed' (see --help)");
   EXPECT_EQ(usage_error({"--smoke=yes"}), "--smoke takes no value, got 'yes'");
+  EXPECT_EQ(usage_error({"--rng", "pcg64"}), "--rng must be mt19937_64 or numpy, got 'pcg64'");
+  EXPECT_EQ(usage_error({"--rng"}), "--rng needs a value");
+  EXPECT_EQ(usage_error({"sweep", "--rng", "numpy"}), "--rng is not a sweep option (see sweep --help)");
   const std::string huge = usage_error({"--steps", "4000000000000"});
   EXPECT_NE(huge.find("raise record_every"), std::string::npos) << huge;
 }

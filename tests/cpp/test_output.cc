@@ -166,6 +166,14 @@ TEST(Summary, SaysWhatTheChapterSays) {
   const std::string text = simloop::summary_text(shoved);
   EXPECT_EQ(text.rfind("stepped 300 steps of 0.002 s -> 0.60 s of sim time\n", 0), 0u) << text;
   EXPECT_NE(text.find("shove: +7.0 N in y for 50 steps -> "), std::string::npos) << text;
+  // The summary names the generator that drew the shove.
+  EXPECT_NE(text.find(" of sideways drift (drawn by std::mt19937_64 from seed 0)\n"), std::string::npos) << text;
+  config.rng = simloop::ShoveRng::kNumpy;
+  const std::string numpy = simloop::summary_text(simloop::run(model, config));
+  EXPECT_NE(numpy.find("shove: +9.8 N in y for 50 steps -> "), std::string::npos) << numpy;
+  EXPECT_NE(numpy.find(" of sideways drift (drawn by numpy default_rng (PCG64) from seed 0)\n"), std::string::npos)
+      << numpy;
+  config.rng = simloop::ShoveRng::kMt19937_64;
   config.perturb = false;
   const std::string baseline = simloop::summary_text(simloop::run(model, config));
   EXPECT_NE(baseline.find("no shove (baseline run)\n"), std::string::npos) << baseline;

@@ -1,7 +1,12 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
+#include <string>
+#include <vector>
 
 #include "simloop/errors.hpp"
 #include "simloop/output.hpp"
@@ -94,6 +99,54 @@ TEST(Sweep, FindsTheEdgeWhereTheHopBegins) {
   EXPECT_FALSE(s.points[7].stable);
   const std::string summary = simloop::sweep_summary(s);
   EXPECT_NE(summary.find("largest stable timestep: 0.004 s"), std::string::npos) << summary;
+}
+
+TEST(Sweep, TheTableStaysAlignedWhateverTheNumbers) {
+  // Timesteps with long decimals, and run counts from 1 to 6 digits.
+  const simloop::SweepResult s = simloop::sweep(scene(), {0.0006863, 0.00094201, 0.002, 1.0}, 0.5);
+  const std::string summary = simloop::sweep_summary(s);
+  std::vector<std::string> lines;
+  for (size_t start = 0, end; (end = summary.find('\n', start)) != std::string::npos; start = end + 1) {
+    lines.push_back(summary.substr(start, end - start));
+  }
+  ASSERT_GE(lines.size(), 6u) << summary;
+  const std::string& header = lines[1];
+  EXPECT_NE(lines[2].find("0.0006863"), std::string::npos) << summary;
+  EXPECT_NE(lines[3].find("0.00094201"), std::string::npos) << summary;
+  // Every cell is right-aligned under its header's last character; the
+  // stable column starts where its header does.
+  for (const char* label : {"timestep (s)", "steps", "peak z (m)", "max |y| (m)", "final z (m)",
+                            "contacts +work (J)", "unexplained (J)", "warnings"}) {
+    const size_t end = header.find(label) + std::string(label).size();
+    for (size_t row = 2; row < 6; ++row) {
+      ASSERT_GT(lines[row].size(), end) << summary;
+      EXPECT_NE(lines[row][end - 1], ' ') << label << " in\n" << summary;
+      EXPECT_EQ(lines[row][end], ' ') << label << " in\n" << summary;
+    }
+  }
+  const size_t stable = header.find("stable");
+  for (size_t row = 2; row < 6; ++row) {
+    const std::string cell = lines[row].substr(stable);
+    EXPECT_TRUE(cell.rfind("yes", 0) == 0 || cell.rfind("no", 0) == 0) << summary;
+  }
+}
+
+TEST(Sweep, TheDefaultTimestepsAreRound) {
+  const std::vector<double> dts = simloop::default_sweep_timesteps();
+  ASSERT_EQ(dts.size(), 25u);
+  EXPECT_EQ(dts.front(), 0.0005);
+  EXPECT_EQ(dts.back(), 1.0);
+  for (size_t i = 0; i < dts.size(); ++i) {
+    // One significant digit, and exactly the double that decimal names.
+    char text[32];
+    std::snprintf(text, sizeof text, "%.0e", dts[i]);
+    EXPECT_EQ(std::strtod(text, nullptr), dts[i]) << text;
+    EXPECT_NE(std::string("1234568").find(text[0]), std::string::npos) << text;
+    if (i > 0) EXPECT_GT(dts[i], dts[i - 1]);
+  }
+  // The chapter's default and Break It's timestep are on the grid.
+  EXPECT_NE(std::find(dts.begin(), dts.end(), 0.002), dts.end());
+  EXPECT_NE(std::find(dts.begin(), dts.end(), 0.05), dts.end());
 }
 
 TEST(Sweep, IsTheSameWhateverTheThreadCount) {

@@ -28,6 +28,8 @@ BAD_RUN_ARGUMENTS = [
     ({"record_every": 0}, ValueError, "record_every must be at least 1, got 0"),
     ({"model": 3}, TypeError, "model must be None, a simloop.Model or a path to an MJCF file, got 3 (int)"),
     ({"steps": 4_000_000_000_000}, ValueError, "raise record_every"),
+    ({"rng": "pcg64"}, ValueError, "rng must be 'mt19937_64' or 'numpy', got 'pcg64'"),
+    ({"rng": None}, TypeError, "rng must be a str, got None (NoneType)"),
 ]
 
 

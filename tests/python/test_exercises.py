@@ -1,5 +1,7 @@
-"""Each exercise's check accepts a right answer, rejects a wrong one, and asks for a missing one."""
+"""Each exercise's check grades the shipped question, speaks to the answer
+given, hints before it tells, and (exercise 2) checks the fix separately."""
 
+import shutil
 import subprocess
 import sys
 
@@ -7,52 +9,168 @@ import pytest
 
 from conftest import ROOT
 
-CHECK = ROOT / "exercises" / "check.py"
+EXERCISES = ROOT / "exercises"
+CHECK = EXERCISES / "check.py"
+FOLDERS = {1: "01_timestep_edge", 2: "02_sticky_shove", 3: "03_predict_drift"}
+FIXED_LINES = """            sim.apply_force([0.0, shove.force_y, 0.0])
+        if step == shove.start_step + shove.steps:
+            sim.clear_force()
+"""
 
 
-def check(exercise, answer_text, tmp_path):
+def check(exercise, answer_text, tmp_path, *flags, check_py=CHECK):
     answer = tmp_path / "answer.txt"
     answer.write_text(answer_text)
-    return subprocess.run([sys.executable, str(CHECK), str(exercise), "--answer", str(answer)],
+    return subprocess.run([sys.executable, str(check_py), str(exercise), "--answer", str(answer), *flags],
                           capture_output=True, text=True, timeout=300)
 
 
+def fix_loop(path, lines=FIXED_LINES):
+    text = path.read_text()
+    buggy = "            sim.apply_force([0.0, shove.force_y, 0.0])  # the shove: shove.steps (50) steps of it\n"
+    assert buggy in text
+    path.write_text(text.replace(buggy, lines))
+
+
 @pytest.mark.parametrize("exercise, right, wrong", [
-    (1, "# the edge\n0.003\n", "0.05\n"),                      # edge measured at 0.0033 s
-    (2, "60\n", "50\n"),                                        # the shove persists to the next decision
+    (1, "# the edge\n0.003\n", "0.05\n"),                      # edge 0.004 s; 0.005 s hops 7.3 mm
+    (2, "1000\n", "50\n"),                                      # set once at step 1000, never cleared
     (3, "stays_at_4N: yes\nslide_at_9N_cm: 6\n",                # measured: 1.25 mm, 5.9 cm
      "stays_at_4N: no\nslide_at_9N_cm: 6\n"),
 ])
 def test_check_accepts_right_and_rejects_wrong(exercise, right, wrong, tmp_path):
     accepted = check(exercise, right, tmp_path)
     assert accepted.returncode == 0, accepted.stdout + accepted.stderr
-    assert "It holds." in accepted.stdout or "): holds." in accepted.stdout
+    assert "It holds." in accepted.stdout
     rejected = check(exercise, wrong, tmp_path)
     assert rejected.returncode == 1, rejected.stdout + rejected.stderr
-    assert "not hold" in rejected.stdout
+    assert "It does not hold." in rejected.stdout
+
+
+@pytest.mark.parametrize("exercise, answer", [
+    (1, "0.004 s"), (1, "4ms"), (1, "4 ms"), (1, "0.004s"), (1, "  4e-3 s "),
+    (2, "1000 steps"), (2, "2 s"), (2, "2000 ms"),
+    (3, "stays_at_4N: yes\nslide_at_9N_cm: 6 cm\n"), (3, "stays_at_4N: yes\nslide_at_9N_cm: 0.06 m\n"),
+    (3, "stays_at_4N: Yes\nslide_at_9N_cm: 60mm\n"),
+])
+def test_answers_take_units_and_spacing(exercise, answer, tmp_path):
+    proc = check(exercise, answer + "\n", tmp_path)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+
+
+@pytest.mark.parametrize("exercise, answer, message", [
+    (1, "5 N", "the prediction is a time (s or ms), got '5 N' (a force (N))"),
+    (1, "fast", "the prediction must be a number with or without a unit"),
+    (1, "0.004 furlongs", "the prediction must be a number with or without a unit"),
+    (2, "7 cm", "the number of steps is a number of steps or a time (s or ms), got '7 cm'"),
+    (3, "stays_at_4N: yes\nslide_at_9N_cm: 9 N\n", "slide_at_9N_cm is a distance (m, cm or mm), got '9 N'"),
+    (3, "stays_at_4N: maybe\nslide_at_9N_cm: 6\n", "stays_at_4N must be yes or no, got 'maybe'"),
+])
+def test_an_unreadable_answer_is_named(exercise, answer, message, tmp_path):
+    proc = check(exercise, answer + "\n", tmp_path)
+    assert proc.returncode == 2
+    assert message in proc.stderr
 
 
 def test_a_wrong_slide_is_rejected(tmp_path):
     assert check(3, "stays_at_4N: yes\nslide_at_9N_cm: 40\n", tmp_path).returncode == 1
 
 
+@pytest.mark.parametrize("exercise, first, second, solution", [
+    (1, "0.05", "0.001", "largest stable timestep: 0.004 s"),
+    (2, "50", "1", "The shove pushed for 1000 steps"),
+    (3, "stays_at_4N: no\nslide_at_9N_cm: 30", "stays_at_4N: yes\nslide_at_9N_cm: 1", "it slid 5.9"),
+])
+def test_a_first_wrong_answer_gets_a_hint_not_the_solution(exercise, first, second, solution, tmp_path):
+    one = check(exercise, first, tmp_path)
+    assert one.returncode == 1 and "Hint: " in one.stdout and solution not in one.stdout, one.stdout
+    again = check(exercise, first, tmp_path)  # the same answer again: still only the hint
+    assert "Hint: " in again.stdout and solution not in again.stdout, again.stdout
+    two = check(exercise, second, tmp_path)  # a second, different wrong answer: the solution
+    assert two.returncode == 1 and "The solution:" in two.stdout and solution in two.stdout, two.stdout
+    fresh = tmp_path / "fresh"
+    fresh.mkdir()
+    revealed = check(exercise, first, fresh, "--reveal")
+    assert "The solution:" in revealed.stdout and solution in revealed.stdout
+    right = {1: "0.004", 2: "1000", 3: "stays_at_4N: yes\nslide_at_9N_cm: 6"}[exercise]
+    assert solution in check(exercise, right, tmp_path / "fresh").stdout  # a right answer sees it too
+
+
+@pytest.mark.parametrize("exercise, answer, explanation", [
+    (1, "0.01", "is stable on its own, but it is past the edge"),
+    (1, "0.05", "At 0.05 s and beyond you are in Break It itself."),
+    (1, "0.001", "is stable, and so are timesteps well above it"),
+    (2, "50", "50 is how long the shove was meant to last"),
+    (2, "1", "1 would be right if MuJoCo cleared xfrc_applied after each step"),
+    (2, "5000", "cannot have pushed for more than the 1000 steps left"),
+    (3, "stays_at_4N: yes\nslide_at_9N_cm: 30", "30 cm is more than twice what MuJoCo did"),
+    (3, "stays_at_4N: yes\nslide_at_9N_cm: 1", "1 cm is less than half what MuJoCo did"),
+])
+def test_the_explanation_answers_the_answer_given(exercise, answer, explanation, tmp_path):
+    proc = check(exercise, answer, tmp_path)
+    assert explanation in proc.stdout, proc.stdout
+
+
+def test_exercise_1_reports_what_the_learners_own_timestep_did(tmp_path):
+    import simloop
+
+    point = simloop.sweep([0.05]).points[0]
+    proc = check(1, "50 ms", tmp_path)
+    assert f"At 0.05 s the box rose {(point.peak_box_z - 0.05) * 1e3:.1f} mm above rest" in proc.stdout
+
+
 @pytest.mark.parametrize("exercise", [1, 2, 3])
 def test_the_shipped_answer_files_are_blank(exercise, tmp_path):
-    folder = {1: "01_timestep_edge", 2: "02_sticky_shove", 3: "03_predict_drift"}[exercise]
-    blank = (ROOT / "exercises" / folder / "answer.txt").read_text()
+    blank = (EXERCISES / FOLDERS[exercise] / "answer.txt").read_text()
     proc = check(exercise, blank, tmp_path)
     assert proc.returncode == 2
     assert "check.py:" in proc.stderr
 
 
-def test_the_policy_loop_is_almost_right_and_wrong():
-    sys.path.insert(0, str(ROOT / "exercises" / "02_sticky_shove"))
+def test_the_pristine_copy_is_the_shipped_loop():
+    assert (EXERCISES / "_pristine" / FOLDERS[2] / "loop.py").read_bytes() == \
+           (EXERCISES / FOLDERS[2] / "loop.py").read_bytes()
+
+
+def test_the_shipped_loop_sets_the_shove_once_and_it_persists():
+    sys.path.insert(0, str(EXERCISES / FOLDERS[2]))
     try:
-        import policy_loop
+        import loop
     finally:
         sys.path.pop(0)
     import simloop
 
     reference = simloop.run(seed=0).metrics["box_final_pos"][1]
-    buggy = policy_loop.policy_loop().box_position[1]
-    assert 0.01 < abs(buggy - reference) < 0.1  # close enough to look right, far enough to be wrong
+    buggy = loop.chapter_loop()
+    # The force is still written when the run ends, and has carried the box
+    # far further sideways than the 50-step shove does.
+    assert buggy.applied_force[1] == simloop.draw_shove(seed=0).force_y
+    assert buggy.box_position[1] > 10 * reference
+
+
+def test_the_question_survives_the_learners_fix(tmp_path):
+    copy = tmp_path / "exercises"
+    shutil.copytree(EXERCISES, copy, ignore=shutil.ignore_patterns("__pycache__", ".check_attempts.json"))
+    loop = copy / FOLDERS[2] / "loop.py"
+    still_buggy = subprocess.run([sys.executable, str(copy / "check.py"), "2", "--fix"], capture_output=True,
+                                 text=True, timeout=300)
+    assert still_buggy.returncode == 1 and "still the shipped loop" in still_buggy.stdout
+    fix_loop(loop)
+    # The answer is graded from the pristine copy: still 1000, whatever loop.py now does.
+    assert check(2, "1000", tmp_path, check_py=copy / "check.py").returncode == 0
+    assert check(2, "50", tmp_path, check_py=copy / "check.py").returncode == 1
+    fixed = subprocess.run([sys.executable, str(copy / "check.py"), "2", "--fix"], capture_output=True, text=True,
+                           timeout=300)
+    assert fixed.returncode == 0, fixed.stdout + fixed.stderr
+    assert fixed.stdout.count("bit for bit") == 3 and "Your fix holds." in fixed.stdout
+
+
+def test_a_fix_that_is_not_quite_right_is_refused(tmp_path):
+    loop = tmp_path / "loop.py"
+    shutil.copy(EXERCISES / FOLDERS[2] / "loop.py", loop)
+    fix_loop(loop, FIXED_LINES.replace("shove.start_step + shove.steps", "shove.start_step + 60"))
+    proc = subprocess.run([sys.executable, str(CHECK), "2", "--fix", str(loop)], capture_output=True, text=True,
+                          timeout=300)
+    assert proc.returncode == 1
+    assert "the shove pushed for 60 steps (simloop.run: 50)" in proc.stdout
+    assert "Your fix does not hold yet." in proc.stdout

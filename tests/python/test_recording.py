@@ -7,51 +7,70 @@ import rerun.chunk
 
 import simloop
 from conftest import run_command
+from simloop import recording
+
+TEMPORAL = ["/world/objects/box", "/world/robot/pusher", "/world/objects/box/shove", "/plots/box/x",
+            "/plots/box/y", "/plots/box/z", "/plots/box/speed", "/plots/pusher/x", "/plots/contacts"]
+ENERGY = ["/plots/energy/" + name for name in simloop.ENERGY_COLUMN_NAMES]
 
 
-def load_chunks(path):
-    """{(entity path, static): merged record-batch columns as numpy}."""
+def load_chunks(path, store=None):
+    """{(entity path, static): merged record-batch columns as Python lists}, without row ids."""
     reader = rerun.chunk.RrdReader(str(path))
-    assert [r.application_id for r in reader.recordings()] == ["simloop_ch0_1_sim_loop"]
     merged = {}
-    for chunk in reader.stream():
+    for chunk in reader.stream(store=store):
         batch = chunk.to_record_batch()
         entry = merged.setdefault((chunk.entity_path, chunk.is_static), {})
         for name in batch.schema.names:
             column = batch.column(name)
+            if name.endswith("RowId"):  # a fresh time-based id per row, every time
+                continue
             if pa.types.is_duration(column.type):  # sim_time: nanoseconds
+                column = column.cast(pa.int64())
+            if pa.types.is_timestamp(column.type):
                 column = column.cast(pa.int64())
             entry.setdefault(name, []).extend(column.to_pylist())
     return merged
 
 
-@pytest.fixture(scope="module")
-def recorded(tmp_path_factory):
-    out = tmp_path_factory.mktemp("rec")
-    proc = run_command(["--seed", "0", "--out", str(out)], out)
+def scalars(chunks, entity):
+    return np.array([v[0] for v in chunks[(entity, False)]["Scalars:scalars"]])
+
+
+def recordings(path):
+    return [(r.application_id, r.recording_id) for r in rerun.chunk.RrdReader(str(path)).recordings()]
+
+
+def record_with_command(tmp_path, name, flags):
+    out = tmp_path / name
+    proc = run_command([*flags, "--out", str(out)], tmp_path)
     assert proc.returncode == 0, proc.stderr
     rrd = out / "sim_loop.rrd"
     assert f"recording: {rrd} -- open it with: " in proc.stdout  # the viewer: test_readme_commands.py
+    return rrd
+
+
+@pytest.fixture(scope="module")
+def recorded(tmp_path_factory):
+    rrd = record_with_command(tmp_path_factory.mktemp("rec"), "o", ["--seed", "0"])
     return load_chunks(rrd), simloop.run(seed=0)
 
 
-def test_entities_timeline_and_frame_count(recorded):
+def test_entities_timelines_and_every_step(recorded):
     chunks, result = recorded
-    assert set(chunks) == {("/world/objects/box", False), ("/world/robot/pusher", False),
-                           ("/world/objects/box/shove", False), ("/world/objects/box", True),
-                           ("/world/robot/pusher", True)}
-    for entity in ("/world/objects/box", "/world/robot/pusher", "/world/objects/box/shove"):
-        times = chunks[(entity, False)]["sim_time"]
-        assert len(times) == 2000 // 5  # every 5th step
-        assert times == sorted(times)
-    # sim_time is a duration: step k sits at k * timestep seconds.
-    ns = np.array(chunks[("/world/objects/box", False)]["sim_time"], dtype=np.int64)
-    expected = result.column("time")[::5][:400]
-    np.testing.assert_allclose(ns / 1e9, expected, atol=1e-9)
+    assert {entity for entity, static in chunks if not static} == set(TEMPORAL)
+    assert {entity for entity, static in chunks if static} >= {"/world/floor", "/world/objects/box",
+                                                                "/world/robot/pusher", "/plots/box/z"}
+    times = result.column("time")
+    for entity in TEMPORAL:
+        columns = chunks[(entity, False)]
+        # Every step, from the rest pose at t = 0 to the final state.
+        assert columns["step"] == list(range(2001)), entity
+        np.testing.assert_allclose(np.array(columns["sim_time"]) / 1e9, times, rtol=0, atol=1e-9)
 
 
-def test_static_boxes(recorded):
-    chunks, _ = recorded
+def test_static_boxes_and_the_floor(recorded):
+    chunks, result = recorded
     box = chunks[("/world/objects/box", True)]
     pusher = chunks[("/world/robot/pusher", True)]
     np.testing.assert_allclose(box["Boxes3D:half_sizes"][0], [[0.05, 0.05, 0.05]])
@@ -59,12 +78,20 @@ def test_static_boxes(recorded):
     # Colours are packed 0xRRGGBBAA.
     assert box["Boxes3D:colors"][0] == [(217 << 24) | (76 << 16) | (64 << 8) | 255]
     assert pusher["Boxes3D:colors"][0] == [(64 << 24) | (115 << 16) | (217 << 8) | 255]
+    floor = chunks[("/world/floor", True)]
+    centre, half = np.array(floor["Boxes3D:centers"][0][0]), np.array(floor["Boxes3D:half_sizes"][0][0])
+    assert abs(centre[2] + half[2]) < 1e-6  # its top is the floor, z = 0
+    # It covers the chapter's 4 m x 4 m floor and everywhere the box went.
+    for column, axis in (("box_x", 0), ("box_y", 1)):
+        values = result.column(column)
+        assert centre[axis] - half[axis] <= min(values.min(), -2.0)
+        assert centre[axis] + half[axis] >= max(values.max(), 2.0)
 
 
 def test_box_pose_matches_the_trajectory(recorded):
     chunks, result = recorded
     box = chunks[("/world/objects/box", False)]
-    rows = result.trajectory[:-1][::5]  # entering steps 0, 5, ..., 1995
+    rows = result.trajectory
     names = simloop.COLUMN_NAMES
     translations = np.array([t[0] for t in box["Transform3D:translation"]])
     expected = rows[:, [names.index(c) for c in ("box_x", "box_y", "box_z")]]
@@ -77,19 +104,106 @@ def test_box_pose_matches_the_trajectory(recorded):
     np.testing.assert_allclose(pusher[:, 1:], 0.0 * pusher[:, 1:] + [0.0, 0.05], atol=1e-7)
 
 
+def test_the_series_are_the_trajectory_exactly(recorded):
+    chunks, result = recorded
+    for entity, column in (("/plots/box/x", "box_x"), ("/plots/box/y", "box_y"), ("/plots/box/z", "box_z"),
+                           ("/plots/pusher/x", "pusher_x"), ("/plots/contacts", "ncon")):
+        np.testing.assert_array_equal(scalars(chunks, entity), result.column(column), err_msg=entity)
+    v = np.column_stack([result.column(c) for c in ("box_vx", "box_vy", "box_vz")])
+    np.testing.assert_allclose(scalars(chunks, "/plots/box/speed"), np.linalg.norm(v, axis=1), rtol=1e-15)
+    # Each series is named for the viewer's legend.
+    assert chunks[("/plots/box/z", True)]["SeriesLines:names"][0] == ["box z (m), height of its centre"]
+
+
 def test_the_arrow_shows_the_shove_exactly_while_it_acts(recorded):
     chunks, result = recorded
     arrows = chunks[("/world/objects/box/shove", False)]
     vectors = np.array([v[0] for v in arrows["Arrows3D:vectors"]])
     origins = np.array([o[0] for o in arrows["Arrows3D:origins"]])
-    steps = np.arange(0, 2000, 5)
+    steps = np.arange(0, 2001)
     inside = (steps >= result.shove.start_step) & (steps < result.shove.start_step + result.shove.steps)
     lengths = np.linalg.norm(vectors, axis=1)
-    assert inside.sum() == 10
+    assert inside.sum() == 50
     assert np.all(lengths[~inside] == 0.0)
     # In the box's frame (the entity is the box's child), 0.02 x the shove.
     np.testing.assert_allclose(lengths[inside], 0.02 * result.shove.newtons, rtol=1e-6)
     assert np.all(origins == 0.0)
+
+
+def test_break_its_peak_is_in_the_file(tmp_path):
+    rrd = record_with_command(tmp_path, "b", ["--timestep", "0.05", "--no-perturb"])
+    chunks = load_chunks(rrd)
+    z = scalars(chunks, "/plots/box/z")
+    steps = chunks[("/plots/box/z", False)]["step"]
+    trajectory_z = simloop.run(timestep=0.05, perturb=False).column("box_z")
+    assert z.max() == trajectory_z.max()
+    assert steps[int(np.argmax(z))] == int(np.argmax(trajectory_z))
+    # The transform carries it too (as float32).
+    box_z = np.array([t[0][2] for t in chunks[("/world/objects/box", False)]["Transform3D:translation"]])
+    assert abs(box_z.max() - trajectory_z.max()) < 1e-6
+
+
+def test_the_energy_audit_is_recorded_when_on(tmp_path):
+    rrd = record_with_command(tmp_path, "e", ["--smoke", "--energy-audit"])
+    chunks = load_chunks(rrd)
+    result = simloop.run(smoke=True, audit_energy=True)
+    for entity, column in zip(ENERGY, simloop.ENERGY_COLUMN_NAMES):
+        np.testing.assert_array_equal(scalars(chunks, entity), result.column(column), err_msg=entity)
+    plain = load_chunks(record_with_command(tmp_path, "p", ["--smoke"]))
+    assert not any(entity.startswith("/plots/energy") for entity, _ in plain)
+
+
+def test_the_recording_id_follows_the_run(tmp_path):
+    a = record_with_command(tmp_path, "a", ["--smoke"])
+    again = record_with_command(tmp_path, "again", ["--smoke"])
+    other_seed = record_with_command(tmp_path, "seed", ["--smoke", "--seed", "1"])
+    other_rng = record_with_command(tmp_path, "rng", ["--smoke", "--rng", "numpy"])
+    ids = [recordings(p) for p in (a, again, other_seed, other_rng)]
+    assert all(len(i) == 1 and i[0][0] == "simloop_ch0_1_sim_loop" for i in ids)
+    assert ids[0] == ids[1]                                  # the same run: the same recording
+    assert len({i[0][1] for i in ids[1:]}) == 3              # different runs: different recordings
+    # Identical runs hold identical data (the bytes differ: rerun's row and
+    # chunk ids are time-based, and the blueprint's store id is random).
+    assert load_chunks(a) == load_chunks(again)
+
+
+def test_recording_id_sees_every_parameter_and_the_model(tmp_path):
+    base = simloop.run(steps=20)
+    same = recording.recording_id(base)
+    assert recording.recording_id(simloop.run(steps=20)) == same
+    for kwargs in ({"seed": 1}, {"timestep": 0.001}, {"perturb": False}, {"rng": "numpy"}, {"record_every": 2},
+                   {"audit_energy": True}, {"steps": 21}):
+        assert recording.recording_id(simloop.run(**{"steps": 20, **kwargs})) != same, kwargs
+    scene = tmp_path / "scene.xml"
+    scene.write_text(simloop._core.PUSHER_SCENE_XML)
+    assert recording.recording_id(base, scene) != same  # a file is identified by its bytes
+    scene2 = tmp_path / "scene2.xml"
+    scene2.write_text(simloop._core.PUSHER_SCENE_XML.replace('damping="4"', 'damping="5"'))
+    assert recording.recording_id(base, scene2) != recording.recording_id(base, scene)
+
+
+def test_the_blueprint_opens_the_3d_view_beside_the_time_series(tmp_path):
+    rrd = record_with_command(tmp_path, "bp", ["--smoke"])
+    reader = rerun.chunk.RrdReader(str(rrd))
+    [store] = reader.blueprints()
+    chunks = load_chunks(rrd, store=store)
+    by_entity = {entity: columns for (entity, _), columns in chunks.items()}
+
+    def single(entity, field):
+        [value] = [v for name, v in by_entity[entity].items() if name.endswith(":" + field)]
+        return value[0]
+
+    root_uuid = single("/viewport", "root_container")[0]
+    root = "/container/" + "".join(f"{b:02x}" for b in root_uuid)
+    root = next(e for e in by_entity if e.replace("-", "") == root)
+    assert single(root, "container_kind")[0] == 2  # Horizontal
+    left, right = single(root, "contents")
+    assert single("/" + left, "class_identifier") == ["3D"]
+    assert single("/" + left, "space_origin") == ["/world"]
+    assert single("/" + right, "container_kind")[0] == 3  # Vertical: the time series, stacked
+    views = single("/" + right, "contents")
+    assert all(single("/" + v, "class_identifier") == ["TimeSeries"] for v in views)
+    assert single("/" + views[0] + "/ViewContents", "query") == ["/plots/box/z"]
 
 
 def test_no_rerun_writes_no_recording(tmp_path):
