@@ -48,6 +48,8 @@ volatile std::sig_atomic_t g_signal = 0;
 // Set while nothing is half-done (no temporary file exists): loading the
 // model, which cannot be stopped between chunks, ends the process at once.
 volatile std::sig_atomic_t g_exit_at_once = 0;
+// Set once this run's outputs are in place (a stop after that keeps them).
+bool g_outputs_written = false;
 
 extern "C" void on_stop_signal(int sig) {
   if (g_signal == 0) g_signal = sig;
@@ -151,6 +153,14 @@ std::string doing(const simloop::cli::Options& opts) {
          ", --record-every " + std::to_string(run.record_every) + ")";
 }
 
+// The line and exit code for a stop on SIGINT or SIGTERM.
+int interrupted() {
+  const int sig = g_signal != 0 ? g_signal : SIGINT;
+  return fail(kExitSignalBase + sig, std::string("interrupted (") + (sig == SIGTERM ? "SIGTERM" : "SIGINT") + "); " +
+                                         (g_outputs_written ? "after the outputs were written"
+                                                            : "the earlier outputs were left as they were"));
+}
+
 // Stops early if a signal asked to: the work so far is dropped.
 void check_stop() {
   if (g_control.stop_requested()) throw simloop::Interrupted("interrupted");
@@ -172,37 +182,49 @@ int plot_with_python(const std::filesystem::path& out, const char* what) {
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
   posix_spawn_file_actions_adddup2(&actions, err_pipe[1], STDERR_FILENO);
+  // Its own process group, so that a stop ends it and anything it started.
+  posix_spawnattr_t attributes;
+  posix_spawnattr_init(&attributes);
+  posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETPGROUP);
+  posix_spawnattr_setpgroup(&attributes, 0);
   pid_t pid = 0;
   std::fflush(stdout);
   const int spawned =
-      posix_spawnp(&pid, python.c_str(), &actions, nullptr, const_cast<char* const*>(argv), environ);
+      posix_spawnp(&pid, python.c_str(), &actions, &attributes, const_cast<char* const*>(argv), environ);
+  posix_spawnattr_destroy(&attributes);
   posix_spawn_file_actions_destroy(&actions);
   ::close(err_pipe[1]);
   if (spawned != 0) {
     ::close(err_pipe[0]);
     return fail(kExitRunFailed, "--plot: cannot start " + python + " (set SIMLOOP_PYTHON to a Python with simloop)");
   }
+  // Read its stderr until it exits (not until the pipe's end: something it
+  // started may hold that open); on a stop, end its process group.
   std::string err_text;
-  bool stopped = false;
-  for (;;) {
+  int status = 0;
+  bool exited = false, stopped = false;
+  while (!exited) {
     if (g_control.stop_requested() && !stopped) {
-      ::kill(pid, SIGTERM);
+      ::kill(-pid, SIGTERM);
       stopped = true;
     }
     pollfd p{err_pipe[0], POLLIN, 0};
-    const int ready = ::poll(&p, 1, 20);
-    if (ready < 0 && errno != EINTR) break;
-    if (ready <= 0) continue;
-    char buf[4096];
+    if (::poll(&p, 1, 20) > 0) {
+      char buf[4096];
+      const ssize_t n = ::read(err_pipe[0], buf, sizeof buf);
+      if (n > 0 && err_text.size() < (1u << 16)) err_text.append(buf, static_cast<size_t>(n));
+    }
+    const pid_t done = ::waitpid(pid, &status, WNOHANG);
+    exited = done == pid || (done < 0 && errno != EINTR);
+  }
+  // What it wrote just before exiting, without waiting for the pipe's end.
+  ::fcntl(err_pipe[0], F_SETFL, O_NONBLOCK);
+  for (char buf[4096]; err_text.size() < (1u << 16);) {
     const ssize_t n = ::read(err_pipe[0], buf, sizeof buf);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) break;  // EOF: it exited (or closed its stderr)
-    if (err_text.size() < (1u << 16)) err_text.append(buf, static_cast<size_t>(n));
+    if (n <= 0) break;
+    err_text.append(buf, static_cast<size_t>(n));
   }
   ::close(err_pipe[0]);
-  int status = 0;
-  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-  }
   check_stop();
   if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
     std::string last;  // its last non-empty line
@@ -228,6 +250,7 @@ int sweep_command(const simloop::cli::Options& opts, const simloop::Model& model
   file.append(simloop::sweep_csv(result));
   file.finish();
   simloop::commit_together({&file}, &g_control);
+  g_outputs_written = true;
   std::fputs(simloop::sweep_summary(result).c_str(), stdout);
   std::printf("sweep: %s\n", csv.c_str());
   if (opts.plot) {
@@ -246,6 +269,7 @@ int run_command(const simloop::cli::Options& opts, const simloop::Model& model) 
   simloop::Data workspace(model);
   const simloop::RunResult result = simloop::run(model, opts.run, workspace, &writer.trajectory(), &g_control);
   const simloop::OutputFiles files = writer.commit(result.metrics, &g_control);
+  g_outputs_written = true;
   std::fputs(simloop::summary_text(result).c_str(), stdout);
   std::printf("metrics: %s\n", files.metrics.c_str());
   std::printf("trajectory: %s (%lld rows)\n", files.trajectory.c_str(), static_cast<long long>(result.rows));
@@ -332,9 +356,7 @@ int run_main(int argc, char** argv) {
     const int status = opts.command == cli::Command::kSweep ? sweep_command(opts, *model) : run_command(opts, *model);
     if (status != 0) return status;
   } catch (const simloop::Interrupted&) {
-    return fail(kExitSignalBase + (g_signal != 0 ? g_signal : SIGINT),
-                std::string("interrupted (") + (g_signal == SIGTERM ? "SIGTERM" : "SIGINT") +
-                    "); the earlier outputs were left as they were");
+    return interrupted();
   } catch (const simloop::MujocoError& e) {
     return fail(kExitRunFailed, "MuJoCo error while " + doing(opts) + ": " + e.what());
   } catch (const simloop::Error& e) {  // IoError names its file; InvalidArgument its input
@@ -346,12 +368,7 @@ int run_main(int argc, char** argv) {
   } catch (const std::exception& e) {
     return fail(kExitRunFailed, "while " + doing(opts) + ": " + e.what());
   }
-  if (g_control.stop_requested()) {
-    // The signal came after the outputs were put in place: they are complete.
-    return fail(kExitSignalBase + (g_signal != 0 ? g_signal : SIGINT),
-                std::string("interrupted (") + (g_signal == SIGTERM ? "SIGTERM" : "SIGINT") +
-                    ") after the outputs were written");
-  }
+  if (g_control.stop_requested()) return interrupted();  // after the outputs were put in place
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   std::printf("wall-clock: %.1f ms, peak memory: %.1f MiB\n", seconds * 1e3, peak_memory_mib());
   return 0;

@@ -509,6 +509,28 @@ TEST(Command, APlotFailureIsOneLine) {
   EXPECT_TRUE(fs::is_regular_file(dir.path() / "out" / "metrics.json"));
 }
 
+// Item 8: a stop while the chart is drawn ends the plotting process (and what
+// it started) at once; the outputs, written before, are complete.
+TEST(Command, ASignalWhilePlottingStopsPromptly) {
+  test::TempDir dir;
+  const fs::path slow = dir.path() / "slow-python";
+  test::write_text(slow, "#!/bin/sh\nsleep 30\n");  // a plotter that hangs, through a grandchild
+  fs::permissions(slow, fs::perms::owner_all);
+  ::setenv("SIMLOOP_PYTHON", slow.c_str(), 1);
+  Background child(dir.path(), {"--smoke", "--plot", "--out", "out"});
+  ::unsetenv("SIMLOOP_PYTHON");
+  ASSERT_TRUE(child.started());
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  child.signal(SIGINT);
+  double seconds = 0;
+  Outcome o;
+  child.wait(std::chrono::seconds(40), &seconds, &o);
+  EXPECT_EQ(o.exit_code, 130) << o.err;
+  EXPECT_LT(seconds, 0.2);
+  EXPECT_EQ(o.err, "sim_loop: interrupted (SIGINT); after the outputs were written\n");
+  EXPECT_EQ(names_in(dir.path() / "out"), (std::set<std::string>{"metrics.json", "trajectory.csv"}));
+}
+
 // Item 13: running out of memory names what was being done, with which inputs.
 TEST(Command, OutOfMemorySaysWhatWasBeingDone) {
   test::TempDir dir;
