@@ -285,11 +285,20 @@ class Background {
   Background& operator=(const Background&) = delete;
 
   [[nodiscard]] bool started() const { return pid_ > 0; }
-  void signal(int sig) const { ::kill(pid_, sig); }
-  // Waits up to `limit` for it to end. Returns its exit code, -1 if a signal
-  // killed it, or -2 if it was still running (then it is killed). Sets
-  // `seconds` to how long it took. Moves its stdout and stderr into `o`.
-  int wait(std::chrono::duration<double> limit, double* seconds, Outcome* o) {
+  // After `delay`, sends `sig` and waits up to 10 s for the process to end:
+  // its stdout, stderr and exit code (-1 if a signal killed it, -2 if it was
+  // still running, and then killed), and in `seconds` how long it took from
+  // the signal.
+  Outcome signal_after(std::chrono::duration<double> delay, int sig, double* seconds) {
+    std::this_thread::sleep_for(delay);
+    ::kill(pid_, sig);
+    Outcome o;
+    wait(std::chrono::seconds(10), seconds, &o);
+    return o;
+  }
+
+ private:
+  void wait(std::chrono::duration<double> limit, double* seconds, Outcome* o) {
     const auto start = std::chrono::steady_clock::now();
     int status = 0;
     int code = -2;
@@ -314,10 +323,8 @@ class Background {
     o->err = test::read_text(cwd_ / ".stderr");
     fs::remove(cwd_ / ".stdout");
     fs::remove(cwd_ / ".stderr");
-    return code;
   }
 
- private:
   fs::path cwd_;
   pid_t pid_ = -1;
 };
@@ -346,11 +353,8 @@ TEST(Command, SignalsStopLongWorkPromptlyAndKeepTheEarlierOutputs) {
       SCOPED_TRACE(args.front() + (sig == SIGINT ? " SIGINT" : " SIGTERM"));
       Background child(dir.path(), args);
       ASSERT_TRUE(child.started());
-      std::this_thread::sleep_for(std::chrono::milliseconds(500));
-      child.signal(sig);
       double seconds = 0;
-      Outcome o;
-      child.wait(std::chrono::seconds(10), &seconds, &o);
+      const Outcome o = child.signal_after(std::chrono::milliseconds(500), sig, &seconds);
       EXPECT_EQ(o.exit_code, 128 + sig) << o.err;
       EXPECT_LT(seconds, 0.2) << "from the signal to the exit";
       EXPECT_EQ(o.err.rfind("sim_loop: interrupted (", 0), 0u) << o.err;
@@ -390,11 +394,8 @@ TEST(Command, SignalsAtRandomMomentsLeaveAllOldOrAllNewOutputs) {
     fs::copy(dir.path() / "old", out);
     Background child(dir.path(), {"--seed", "2", "--steps", "20000", "--out", "out"});
     ASSERT_TRUE(child.started());
-    std::this_thread::sleep_for(std::chrono::duration<double>(moment(random)));
-    child.signal(sig);
     double seconds = 0;
-    Outcome o;
-    child.wait(std::chrono::seconds(10), &seconds, &o);
+    const Outcome o = child.signal_after(std::chrono::duration<double>(moment(random)), sig, &seconds);
     SCOPED_TRACE("attempt " + std::to_string(attempt) + ": " + o.err);
     EXPECT_TRUE(o.exit_code == 0 || o.exit_code == 128 + sig) << o.exit_code;
     ASSERT_EQ(names_in(out), (std::set<std::string>{"metrics.json", "trajectory.csv"})) << "a file was left";
@@ -520,11 +521,8 @@ TEST(Command, ASignalWhilePlottingStopsPromptly) {
   Background child(dir.path(), {"--smoke", "--plot", "--out", "out"});
   ::unsetenv("SIMLOOP_PYTHON");
   ASSERT_TRUE(child.started());
-  std::this_thread::sleep_for(std::chrono::milliseconds(500));
-  child.signal(SIGINT);
   double seconds = 0;
-  Outcome o;
-  child.wait(std::chrono::seconds(40), &seconds, &o);
+  const Outcome o = child.signal_after(std::chrono::milliseconds(500), SIGINT, &seconds);
   EXPECT_EQ(o.exit_code, 130) << o.err;
   EXPECT_LT(seconds, 0.2);
   EXPECT_EQ(o.err, "sim_loop: interrupted (SIGINT); after the outputs were written\n");
