@@ -54,8 +54,11 @@ bool g_outputs_written = false;
 extern "C" void on_stop_signal(int sig) {
   if (g_signal == 0) g_signal = sig;
   if (g_exit_at_once) {
-    static const char kLine[] = "sim_loop: interrupted; nothing was written\n";
-    [[maybe_unused]] const ssize_t n = ::write(STDERR_FILENO, kLine, sizeof kLine - 1);
+    static const char kInt[] = "sim_loop: interrupted (SIGINT); nothing was written\n";
+    static const char kTerm[] = "sim_loop: interrupted (SIGTERM); nothing was written\n";
+    const bool term = sig == SIGTERM;
+    [[maybe_unused]] const ssize_t n =
+        ::write(STDERR_FILENO, term ? kTerm : kInt, (term ? sizeof kTerm : sizeof kInt) - 1);
     ::_exit(kExitSignalBase + sig);
   }
   g_control.request_stop();
@@ -140,8 +143,9 @@ double peak_memory_mib() {
 std::string doing(const simloop::cli::Options& opts) {
   const std::string model = opts.model_path.empty() ? "the pusher scene" : "--model " + opts.model_path;
   if (opts.command == simloop::cli::Command::kSweep) {
-    const std::string count =
-        opts.sweep_timesteps.empty() ? "the default timesteps" : std::to_string(opts.sweep_timesteps.size()) + " timesteps";
+    const std::string count = opts.sweep_timesteps.empty()
+                                  ? "the default timesteps"
+                                  : std::to_string(opts.sweep_timesteps.size()) + " timesteps";
     return "sweeping " + count + " of " + model + " (--duration " + simloop::python_float_repr(opts.sweep_duration) +
            ", --threads " + (opts.threads > 0 ? std::to_string(opts.threads) : std::string("auto")) + ")";
   }
@@ -228,10 +232,11 @@ int plot_with_python(const std::filesystem::path& out, const char* what) {
   check_stop();
   if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
     std::string last;  // its last non-empty line
-    size_t end = err_text.find_last_not_of(" \r\n");
+    const size_t end = err_text.find_last_not_of(" \r\n");
     if (end != std::string::npos) {
-      const size_t begin = err_text.find_last_of('\n', end);
-      last = err_text.substr(begin == std::string::npos ? 0 : begin + 1, end - (begin == std::string::npos ? 0 : begin + 1) + 1);
+      const size_t newline = err_text.find_last_of('\n', end);
+      const size_t begin = newline == std::string::npos ? 0 : newline + 1;
+      last = err_text.substr(begin, end - begin + 1);
     }
     if (last.rfind("sim-loop: ", 0) == 0) last.erase(0, 10);
     return fail(kExitRunFailed, "--plot: " + python + " -m simloop plot failed" +
