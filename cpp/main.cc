@@ -69,7 +69,13 @@ void install_signal_handlers() {
   action.sa_handler = on_stop_signal;
   sigemptyset(&action.sa_mask);
   action.sa_flags = SA_RESTART;
-  for (int sig : {SIGINT, SIGTERM}) ::sigaction(sig, &action, nullptr);
+  for (int sig : {SIGINT, SIGTERM}) {
+    // A signal we were started ignoring stays ignored (a shell's background
+    // job, nohup), as Python and the shell's own tools leave it.
+    struct sigaction inherited {};
+    if (::sigaction(sig, nullptr, &inherited) == 0 && inherited.sa_handler == SIG_IGN) continue;
+    ::sigaction(sig, &action, nullptr);
+  }
   // Past a file-size limit (ulimit -f), write() fails with EFBIG, which we
   // report, instead of the process being killed with its temporary files.
   ::signal(SIGXFSZ, SIG_IGN);

@@ -56,12 +56,18 @@ SLEEPING_COMMAND = textwrap.dedent("""
 """)
 
 
+def _as_from_a_terminal():
+    """SIGINT not ignored in the child, even when the tests run as a
+    background job (which ignores it, and Python then leaves it ignored)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 @pytest.mark.parametrize("sig, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
 def test_a_signal_stops_the_command_at_once_with_one_line(earlier_outputs, sig, code):
     before = snapshot(earlier_outputs)
     with subprocess.Popen([sys.executable, "-c", SLEEPING_COMMAND, "--no-rerun", "--out", str(earlier_outputs)],
                           stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                          text=True) as proc:
+                          text=True, preexec_fn=_as_from_a_terminal) as proc:
         try:
             # The banner says the command got as far as the run.
             assert proc.stdout.readline().startswith("ch0.1-sim-loop | tier: cpu")
