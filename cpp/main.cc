@@ -1,18 +1,29 @@
 // sim_loop: parses flags, calls the library, reports. All simulation lives in
 // simloop::run; this file only turns its results and errors into text and
 // exit codes.
+#include <fcntl.h>
+#include <poll.h>
+#include <signal.h>
 #include <spawn.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
+#include <cerrno>
 #include <chrono>
+#include <csignal>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
+#include <new>
 #include <optional>
 #include <cstdio>
 #include <string>
+#include <system_error>
 
 #include "cli_options.hpp"
+#include "simloop/control.hpp"
 #include "simloop/errors.hpp"
+#include "simloop/number_format.hpp"
 #include "simloop/model.hpp"
 #include "simloop/output.hpp"
 #include "simloop/run.hpp"
@@ -25,6 +36,79 @@ namespace {
 
 constexpr int kExitRunFailed = 1;
 constexpr int kExitUsage = 2;
+// SIGINT and SIGTERM stop the work: exit 128 + the signal's number, as a
+// shell reports a process the signal ended (130 for Ctrl-C, 143 for SIGTERM).
+constexpr int kExitSignalBase = 128;
+
+// The command's one control: SIGINT and SIGTERM request a stop, the loops
+// throw Interrupted within a chunk of steps, and the outputs' temporary files
+// go with the stack. Made at startup, on the main thread (its owner).
+simloop::RunControl g_control;
+volatile std::sig_atomic_t g_signal = 0;
+// Set while nothing is half-done (no temporary file exists): loading the
+// model, which cannot be stopped between chunks, ends the process at once.
+volatile std::sig_atomic_t g_exit_at_once = 0;
+// Set once this run's outputs are in place (a stop after that keeps them).
+bool g_outputs_written = false;
+
+extern "C" void on_stop_signal(int sig) {
+  if (g_signal == 0) g_signal = sig;
+  if (g_exit_at_once) {
+    static const char kInt[] = "sim_loop: interrupted (SIGINT); nothing was written\n";
+    static const char kTerm[] = "sim_loop: interrupted (SIGTERM); nothing was written\n";
+    const bool term = sig == SIGTERM;
+    [[maybe_unused]] const ssize_t n =
+        ::write(STDERR_FILENO, term ? kTerm : kInt, (term ? sizeof kTerm : sizeof kInt) - 1);
+    ::_exit(kExitSignalBase + sig);
+  }
+  g_control.request_stop();
+}
+
+void install_signal_handlers() {
+  struct sigaction action {};
+  action.sa_handler = on_stop_signal;
+  sigemptyset(&action.sa_mask);
+  action.sa_flags = SA_RESTART;
+  for (int sig : {SIGINT, SIGTERM}) {
+    // A signal we were started ignoring stays ignored (a shell's background
+    // job, nohup), as Python and the shell's own tools leave it.
+    struct sigaction inherited {};
+    if (::sigaction(sig, nullptr, &inherited) == 0 && inherited.sa_handler == SIG_IGN) continue;
+    ::sigaction(sig, &action, nullptr);
+  }
+  // Past a file-size limit (ulimit -f), write() fails with EFBIG, which we
+  // report, instead of the process being killed with its temporary files.
+  ::signal(SIGXFSZ, SIG_IGN);
+}
+
+// A closed stdin, stdout or stderr would make the next file we open take its
+// number, and the report would land in an output file: keep 0, 1 and 2 open
+// (on /dev/null). Returns false if stdout was closed.
+bool keep_standard_streams_open() {
+  bool stdout_open = true;
+  for (int fd = 0; fd <= 2; ++fd) {
+    if (::fcntl(fd, F_GETFD) == -1 && errno == EBADF) {
+      if (fd == STDOUT_FILENO) stdout_open = false;
+      const int null = ::open("/dev/null", O_RDWR);  // takes the lowest free number: fd
+      if (null >= 0 && null != fd) ::close(null);
+    }
+  }
+  return stdout_open;
+}
+
+// The report must reach stdout (a full disk, /dev/full): a run whose report
+// was lost exits 1, with one line on stderr, unless it already failed.
+int finish_stdout(int code) {
+  errno = 0;
+  const bool failed = std::fflush(stdout) != 0 || std::ferror(stdout) != 0;
+  const int err = errno;
+  if (failed && code == 0) {
+    std::fprintf(stderr, "sim_loop: cannot write the report to standard output (%s)\n",
+                 err != 0 ? std::strerror(err) : "write error");
+    return kExitRunFailed;
+  }
+  return code;
+}
 
 // One line on stderr, whatever the message held (MuJoCo's XML errors span lines).
 int fail(int code, const std::string& message) {
@@ -60,6 +144,38 @@ double peak_memory_mib() {
   return kib < 0 ? -1.0 : kib / 1024.0;
 }
 
+// What the command was doing, and with which inputs, for error lines:
+// "running 10000000 steps of the pusher scene (--steps 10000000, ...)".
+std::string doing(const simloop::cli::Options& opts) {
+  const std::string model = opts.model_path.empty() ? "the pusher scene" : "--model " + opts.model_path;
+  if (opts.command == simloop::cli::Command::kSweep) {
+    const std::string count = opts.sweep_timesteps.empty()
+                                  ? "the default timesteps"
+                                  : std::to_string(opts.sweep_timesteps.size()) + " timesteps";
+    return "sweeping " + count + " of " + model + " (--duration " + simloop::python_float_repr(opts.sweep_duration) +
+           ", --threads " + (opts.threads > 0 ? std::to_string(opts.threads) : std::string("auto")) + ")";
+  }
+  const simloop::RunConfig& run = opts.run;
+  const std::string steps = std::to_string(run.num_steps());
+  return "running " + steps + " steps of " + model + " (" +
+         (run.smoke ? std::string("--smoke") : "--steps " + steps) +
+         ", --timestep " + simloop::python_float_repr(run.timestep) +
+         ", --record-every " + std::to_string(run.record_every) + ")";
+}
+
+// The line and exit code for a stop on SIGINT or SIGTERM.
+int interrupted() {
+  const int sig = g_signal != 0 ? g_signal : SIGINT;
+  return fail(kExitSignalBase + sig, std::string("interrupted (") + (sig == SIGTERM ? "SIGTERM" : "SIGINT") + "); " +
+                                         (g_outputs_written ? "after the outputs were written"
+                                                            : "the earlier outputs were left as they were"));
+}
+
+// Stops early if a signal asked to: the work so far is dropped.
+void check_stop() {
+  if (g_control.stop_requested()) throw simloop::Interrupted("interrupted");
+}
+
 // --plot: the chart is drawn by the Python package (matplotlib), which reads
 // the CSV just written. The interpreter: $SIMLOOP_PYTHON if set, else the one
 // CMake recorded (the project's .venv, which scripts/test.sh makes).
@@ -68,26 +184,86 @@ int plot_with_python(const std::filesystem::path& out, const char* what) {
   const std::string python = env && *env ? env : SIMLOOP_DEFAULT_PYTHON;
   const std::string out_text = out.string();
   const char* argv[] = {python.c_str(), "-m", "simloop", "plot", what, "--out", out_text.c_str(), nullptr};
+  // Its stderr comes back through a pipe: a failure is reported in our one
+  // line (its last line, a traceback's verdict), not as a traceback and ours.
+  int err_pipe[2];
+  if (::pipe2(err_pipe, O_CLOEXEC) != 0) {
+    return fail(kExitRunFailed, "--plot: cannot start " + python + " (" + std::strerror(errno) + ")");
+  }
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_adddup2(&actions, err_pipe[1], STDERR_FILENO);
+  // Its own process group, so that a stop ends it and anything it started.
+  posix_spawnattr_t attributes;
+  posix_spawnattr_init(&attributes);
+  posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETPGROUP);
+  posix_spawnattr_setpgroup(&attributes, 0);
   pid_t pid = 0;
   std::fflush(stdout);
-  if (posix_spawnp(&pid, python.c_str(), nullptr, nullptr, const_cast<char* const*>(argv), environ) != 0) {
+  const int spawned =
+      posix_spawnp(&pid, python.c_str(), &actions, &attributes, const_cast<char* const*>(argv), environ);
+  posix_spawnattr_destroy(&attributes);
+  posix_spawn_file_actions_destroy(&actions);
+  ::close(err_pipe[1]);
+  if (spawned != 0) {
+    ::close(err_pipe[0]);
     return fail(kExitRunFailed, "--plot: cannot start " + python + " (scripts/test.sh installs the simloop package "
                                 "into the project's .venv; or set SIMLOOP_PYTHON to a Python that has it)");
   }
+  // Read its stderr until it exits (not until the pipe's end: something it
+  // started may hold that open); on a stop, end its process group.
+  std::string err_text;
   int status = 0;
-  waitpid(pid, &status, 0);
+  bool exited = false, stopped = false;
+  while (!exited) {
+    if (g_control.stop_requested() && !stopped) {
+      ::kill(-pid, SIGTERM);
+      stopped = true;
+    }
+    pollfd p{err_pipe[0], POLLIN, 0};
+    if (::poll(&p, 1, 20) > 0) {
+      char buf[4096];
+      const ssize_t n = ::read(err_pipe[0], buf, sizeof buf);
+      if (n > 0 && err_text.size() < (1u << 16)) err_text.append(buf, static_cast<size_t>(n));
+    }
+    const pid_t done = ::waitpid(pid, &status, WNOHANG);
+    exited = done == pid || (done < 0 && errno != EINTR);
+  }
+  // What it wrote just before exiting, without waiting for the pipe's end.
+  ::fcntl(err_pipe[0], F_SETFL, O_NONBLOCK);
+  for (char buf[4096]; err_text.size() < (1u << 16);) {
+    const ssize_t n = ::read(err_pipe[0], buf, sizeof buf);
+    if (n <= 0) break;
+    err_text.append(buf, static_cast<size_t>(n));
+  }
+  ::close(err_pipe[0]);
+  check_stop();
   if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-    return fail(kExitRunFailed, "--plot: " + python + " -m simloop plot failed (it needs the simloop package and "
-                                "matplotlib; scripts/test.sh installs both into the project's .venv)");
+    std::string last;  // its last non-empty line
+    const size_t end = err_text.find_last_not_of(" \r\n");
+    if (end != std::string::npos) {
+      const size_t newline = err_text.find_last_of('\n', end);
+      const size_t begin = newline == std::string::npos ? 0 : newline + 1;
+      last = err_text.substr(begin, end - begin + 1);
+    }
+    if (last.rfind("sim-loop: ", 0) == 0) last.erase(0, 10);
+    return fail(kExitRunFailed, "--plot: " + python + " -m simloop plot failed" +
+                                    (last.empty() ? std::string() : ": " + last) +
+                                    " (the outputs above were written; the plot needs the simloop package and "
+                                    "matplotlib; scripts/test.sh installs both into the project's .venv)");
   }
   return 0;
 }
 
 int sweep_command(const simloop::cli::Options& opts, const simloop::Model& model) {
   const simloop::SweepResult result =
-      simloop::sweep(model, opts.sweep_timesteps, opts.sweep_duration, opts.threads);
+      simloop::sweep(model, opts.sweep_timesteps, opts.sweep_duration, opts.threads, &g_control);
   const std::filesystem::path csv = opts.out / "sweep.csv";
-  simloop::write_file_atomically(csv, simloop::sweep_csv(result));
+  simloop::PendingFile file(csv);
+  file.append(simloop::sweep_csv(result));
+  file.finish();
+  simloop::commit_together({&file}, &g_control);
+  g_outputs_written = true;
   std::fputs(simloop::sweep_summary(result).c_str(), stdout);
   std::printf("sweep: %s\n", csv.c_str());
   if (opts.plot) {
@@ -99,12 +275,17 @@ int sweep_command(const simloop::cli::Options& opts, const simloop::Model& model
 }
 
 int run_command(const simloop::cli::Options& opts, const simloop::Model& model) {
-  const simloop::RunResult result = simloop::run(model, opts.run);
-  const simloop::OutputFiles files = simloop::write_outputs(result, opts.out);
+  // The trajectory goes to its file as the loop steps, so memory stays
+  // bounded however long the run; both outputs are put in place together at
+  // the end, or (an error, a signal) neither.
+  simloop::OutputWriter writer(opts.out);
+  simloop::Data workspace(model);
+  const simloop::RunResult result = simloop::run(model, opts.run, workspace, &writer.trajectory(), &g_control);
+  const simloop::OutputFiles files = writer.commit(result.metrics, &g_control);
+  g_outputs_written = true;
   std::fputs(simloop::summary_text(result).c_str(), stdout);
   std::printf("metrics: %s\n", files.metrics.c_str());
-  std::printf("trajectory: %s (%lld rows)\n", files.trajectory.c_str(),
-              static_cast<long long>(result.trajectory.rows()));
+  std::printf("trajectory: %s (%lld rows)\n", files.trajectory.c_str(), static_cast<long long>(result.rows));
   if (opts.rerun) {
     std::printf("recording: none (sim_loop writes no .rrd; python -m simloop records one)\n");
   }
@@ -116,11 +297,13 @@ int run_command(const simloop::cli::Options& opts, const simloop::Model& model) 
   return 0;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int run_main(int argc, char** argv) {
   const auto started = std::chrono::steady_clock::now();
   namespace cli = simloop::cli;
+  if (!keep_standard_streams_open()) {
+    return fail(kExitRunFailed, "standard output is closed; nothing was run (the report would be lost)");
+  }
+  install_signal_handlers();
   cli::Options opts;
   try {
     opts = cli::parse(argc, argv);
@@ -147,31 +330,71 @@ int main(int argc, char** argv) {
   // Banner: the chapter's startup contract (tier; wall-clock comes at the end).
   std::printf("ch0.1-sim-loop | tier: cpu | %s | simloop %s\n", simloop::mujoco_version().c_str(),
               simloop::kVersion);
-  std::fflush(stdout);
+  if (std::fflush(stdout) != 0 || std::ferror(stdout)) {
+    return fail(kExitRunFailed, std::string("cannot write the report to standard output (") + std::strerror(errno) +
+                                    "); nothing was run");
+  }
 
-  // Inputs first, so that a bad one costs nothing and changes nothing.
+  // Inputs first, so that a bad one costs nothing and changes nothing. A
+  // signal while the model loads ends the process at once: nothing is
+  // half-written yet.
   std::optional<simloop::Model> model;
+  g_exit_at_once = 1;
+  if (g_signal != 0) on_stop_signal(g_signal);
+  const std::string model_flag = opts.model_path.empty() ? "--model" : "--model " + opts.model_path;
   try {
     model = opts.model_path.empty() ? simloop::Model::pusher_scene()
                                     : simloop::Model::from_file(opts.model_path);
   } catch (const simloop::Error& e) {
+    g_exit_at_once = 0;
     return fail(opts.model_path.empty() ? kExitRunFailed : kExitUsage, "--model: " + std::string(e.what()));
+  } catch (const std::bad_alloc&) {
+    g_exit_at_once = 0;
+    return fail(kExitRunFailed, model_flag + ": out of memory while loading the model");
+  } catch (const std::exception& e) {
+    g_exit_at_once = 0;
+    return fail(kExitRunFailed, model_flag + ": while loading the model: " + e.what());
   }
+  // From here on a file may exist that must go (the output directory's
+  // probe, then the temporary outputs): a signal only requests a stop.
+  g_exit_at_once = 0;
   try {
     simloop::prepare_output_dir(opts.out);
-  } catch (const simloop::Error& e) {
+  } catch (const std::exception& e) {
     return fail(kExitUsage, "--out: " + std::string(e.what()));
   }
 
   try {
+    check_stop();
     const int status = opts.command == cli::Command::kSweep ? sweep_command(opts, *model) : run_command(opts, *model);
     if (status != 0) return status;
-  } catch (const simloop::Error& e) {
+  } catch (const simloop::Interrupted&) {
+    return interrupted();
+  } catch (const simloop::MujocoError& e) {
+    return fail(kExitRunFailed, "MuJoCo error while " + doing(opts) + ": " + e.what());
+  } catch (const simloop::Error& e) {  // IoError names its file; InvalidArgument its input
     return fail(kExitRunFailed, e.what());
-  } catch (const std::exception& e) {  // out of memory, for one
-    return fail(kExitRunFailed, e.what());
+  } catch (const std::bad_alloc&) {
+    return fail(kExitRunFailed, "out of memory while " + doing(opts));
+  } catch (const std::system_error& e) {  // threads that cannot be made, for one
+    return fail(kExitRunFailed, "while " + doing(opts) + ": " + e.what());
+  } catch (const std::exception& e) {
+    return fail(kExitRunFailed, "while " + doing(opts) + ": " + e.what());
   }
+  if (g_control.stop_requested()) return interrupted();  // after the outputs were put in place
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   std::printf("wall-clock: %.1f ms, peak memory: %.1f MiB\n", seconds * 1e3, peak_memory_mib());
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int code = kExitRunFailed;
+  try {
+    code = run_main(argc, argv);
+  } catch (...) {  // a bug, but never a crash: say so in one line
+    code = fail(kExitRunFailed, "internal error (please report it)");
+  }
+  return finish_stdout(code);
 }

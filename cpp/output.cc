@@ -1,9 +1,12 @@
 #include "simloop/output.hpp"
 
 #include <fcntl.h>
+#include <pthread.h>
+#include <signal.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -30,41 +33,52 @@ const char* json_bool(bool b) { return b ? "true" : "false"; }
   throw IoError(path.string() + ": " + std::string(what) + " (" + std::strerror(err) + ")");
 }
 
-// A temporary file beside its destination, removed unless committed.
-class PendingFile {
- public:
-  PendingFile(std::filesystem::path target, std::string_view contents) : target_(std::move(target)) {
-    std::string pattern = (target_.parent_path() / ("." + target_.filename().string() + ".tmp.XXXXXX")).string();
-    const int fd = ::mkstemp(pattern.data());
-    if (fd < 0) throw_io(target_, "cannot create a temporary file beside it", errno);
-    temp_ = pattern;
-    size_t done = 0;
-    while (done < contents.size()) {
-      const ssize_t n = ::write(fd, contents.data() + done, contents.size() - done);
-      if (n < 0) {
-        if (errno == EINTR) continue;
-        const int err = errno;
-        ::close(fd);
-        throw_io(target_, "cannot write", err);
+// The header line of trajectory.csv for rows `columns` wide.
+void append_csv_header(std::string& out, int columns) {
+  for (int c = 0; c < columns; ++c) {
+    if (c > 0) out += ',';
+    out += Trajectory::kColumnNames[c];
+  }
+  out += '\n';
+}
+
+// `count` rows of trajectory.csv, each `columns` adjacent values.
+void append_csv_rows(std::string& out, const double* rows, std::int64_t count, int columns) {
+  for (std::int64_t r = 0; r < count; ++r) {
+    const double* row = rows + static_cast<size_t>(r) * static_cast<size_t>(columns);
+    for (int c = 0; c < columns; ++c) {
+      if (c > 0) out += ',';
+      const double v = row[c];
+      if (Trajectory::is_input_column(c) && std::isnan(v)) continue;  // final row: no inputs
+      if (Trajectory::is_integer_column(c)) {
+        out += std::to_string(static_cast<std::int64_t>(v));
+      } else {
+        append_shortest(out, v);
       }
-      done += static_cast<size_t>(n);
     }
-    // mkstemp makes the file 0600; outputs are ordinary files.
-    if (::fchmod(fd, 0644) != 0 || ::close(fd) != 0) throw_io(target_, "cannot write", errno);
+    out += '\n';
   }
-  PendingFile(const PendingFile&) = delete;
-  PendingFile& operator=(const PendingFile&) = delete;
-  ~PendingFile() {
-    if (!temp_.empty()) ::unlink(temp_.c_str());
+}
+
+// Blocks the signals that would end the process (or, in the commands, stop
+// it) for as long as it lives, in the calling thread.
+class BlockTerminatingSignals {
+ public:
+  BlockTerminatingSignals() {
+    sigset_t set;
+    sigemptyset(&set);
+    for (int sig : {SIGINT, SIGTERM, SIGHUP, SIGQUIT}) sigaddset(&set, sig);
+    blocked_ = ::pthread_sigmask(SIG_BLOCK, &set, &previous_) == 0;
   }
-  void commit() {
-    if (::rename(temp_.c_str(), target_.c_str()) != 0) throw_io(target_, "cannot replace", errno);
-    temp_.clear();
+  ~BlockTerminatingSignals() {
+    if (blocked_) ::pthread_sigmask(SIG_SETMASK, &previous_, nullptr);
   }
+  BlockTerminatingSignals(const BlockTerminatingSignals&) = delete;
+  BlockTerminatingSignals& operator=(const BlockTerminatingSignals&) = delete;
 
  private:
-  std::filesystem::path target_;
-  std::string temp_;
+  sigset_t previous_{};
+  bool blocked_ = false;
 };
 
 }  // namespace
@@ -90,24 +104,8 @@ std::string metrics_json(const Metrics& m) {
 std::string trajectory_csv(const Trajectory& t) {
   std::string out;
   out.reserve(static_cast<size_t>(t.rows() + 1) * static_cast<size_t>(t.columns()) * 12);
-  for (int c = 0; c < t.columns(); ++c) {
-    if (c > 0) out += ',';
-    out += Trajectory::kColumnNames[c];
-  }
-  out += '\n';
-  for (std::int64_t r = 0; r < t.rows(); ++r) {
-    for (int c = 0; c < t.columns(); ++c) {
-      if (c > 0) out += ',';
-      const double v = t.at(r, c);
-      if (Trajectory::is_input_column(c) && std::isnan(v)) continue;  // final row: no inputs
-      if (Trajectory::is_integer_column(c)) {
-        out += std::to_string(static_cast<std::int64_t>(v));
-      } else {
-        append_shortest(out, v);
-      }
-    }
-    out += '\n';
-  }
+  append_csv_header(out, t.columns());
+  append_csv_rows(out, t.data(), t.rows(), t.columns());
   return out;
 }
 
@@ -122,11 +120,22 @@ std::string summary_text(const RunResult& r) {
                 m.box_final_pos[0], m.box_final_pos[1], m.box_final_pos[2], m.box_final_speed);
   out += line;
   if (m.perturb) {
+    // The steps the shove acted: its window, cut short if the run ended in it.
+    const std::int64_t pushed = std::max<std::int64_t>(
+        0, std::min(r.shove.num_steps, m.steps - r.shove.start_step));
+    char window[64];
+    if (pushed < r.shove.num_steps) {
+      std::snprintf(window, sizeof window, "%lld step%s (of %lld: the run ended first)",
+                    static_cast<long long>(pushed), pushed == 1 ? "" : "s",
+                    static_cast<long long>(r.shove.num_steps));
+    } else {
+      std::snprintf(window, sizeof window, "%lld steps", static_cast<long long>(pushed));
+    }
     const std::string_view rng = rng_description(r.shove.rng);
     std::snprintf(line, sizeof line,
-                  "shove: %+.1f N in y for %lld steps -> %.3f m of sideways drift (drawn by %.*s from seed %llu)\n",
-                  r.shove.force_y(), static_cast<long long>(r.shove.num_steps), m.lateral_drift,
-                  static_cast<int>(rng.size()), rng.data(), static_cast<unsigned long long>(m.seed));
+                  "shove: %+.1f N in y for %s -> %.3f m of sideways drift (drawn by %.*s from seed %llu)\n",
+                  r.shove.force_y(), window, m.lateral_drift, static_cast<int>(rng.size()), rng.data(),
+                  static_cast<unsigned long long>(m.seed));
   } else {
     std::snprintf(line, sizeof line, "no shove (baseline run)\n");
   }
@@ -167,19 +176,186 @@ void prepare_output_dir(const std::filesystem::path& dir) {
   ::unlink(probe.c_str());
 }
 
+PendingFile::PendingFile(std::filesystem::path target) : target_(std::move(target)) {
+  std::string pattern = (target_.parent_path() / ("." + target_.filename().string() + ".tmp.XXXXXX")).string();
+  fd_ = ::mkostemp(pattern.data(), O_CLOEXEC);
+  if (fd_ < 0) throw_io(target_, "cannot create a temporary file beside it", errno);
+  temp_ = pattern;
+}
+
+PendingFile::~PendingFile() {
+  if (fd_ >= 0) ::close(fd_);
+  if (!temp_.empty()) ::unlink(temp_.c_str());
+}
+
+void PendingFile::append(std::string_view bytes) {
+  if (fd_ < 0) throw IoError(target_.string() + ": write after finish (a simloop bug)");
+  size_t done = 0;
+  while (done < bytes.size()) {
+    const ssize_t n = ::write(fd_, bytes.data() + done, bytes.size() - done);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      throw_io(target_, "cannot write", errno);
+    }
+    done += static_cast<size_t>(n);
+  }
+}
+
+void PendingFile::finish() {
+  if (fd_ < 0) return;
+  const int fd = fd_;
+  fd_ = -1;
+  // mkstemp makes the file 0600; outputs are ordinary files.
+  int err = ::fchmod(fd, 0644) == 0 ? 0 : errno;
+  if (::close(fd) != 0 && err == 0) err = errno;
+  if (err != 0) throw_io(target_, "cannot write", err);
+}
+
+void commit_together(std::initializer_list<PendingFile*> files, const RunControl* control) {
+  struct Step {
+    PendingFile* file;
+    std::string backup;  // empty: there was no old file
+    bool renamed = false;
+  };
+  std::vector<Step> steps;
+  steps.reserve(files.size());
+  for (PendingFile* f : files) {
+    if (f->temp_.empty() || f->fd_ >= 0) {
+      throw IoError(f->target_.string() + ": commit before finish (a simloop bug)");
+    }
+    steps.push_back({f, {}, false});
+  }
+  const BlockTerminatingSignals blocked;
+  if (control && control->stop_requested()) throw Interrupted("interrupted");
+  // Undoes what was done so far; best effort, it is already a failure path.
+  const auto roll_back = [&steps] {
+    for (auto s = steps.rbegin(); s != steps.rend(); ++s) {
+      const char* target = s->file->target_.c_str();
+      if (s->renamed) {
+        if (s->backup.empty()) {
+          ::unlink(target);
+        } else if (::rename(s->backup.c_str(), target) == 0) {
+          s->backup.clear();
+        }
+      }
+      if (!s->backup.empty()) {
+        // Never renamed: the backup is a second link to the untouched old
+        // file, or (moved aside) the old file itself, to be put back.
+        struct stat st {};
+        if (::lstat(target, &st) != 0) {
+          ::rename(s->backup.c_str(), target);
+        } else {
+          ::unlink(s->backup.c_str());
+        }
+      }
+    }
+  };
+  // 1. Keep every old file under a second name.
+  for (Step& s : steps) {
+    const std::filesystem::path& target = s.file->target_;
+    struct stat st {};
+    if (::lstat(target.c_str(), &st) != 0) {
+      if (errno == ENOENT) continue;
+      const int err = errno;
+      roll_back();
+      throw_io(target, "cannot replace", err);
+    }
+    if (S_ISDIR(st.st_mode)) {
+      roll_back();
+      throw IoError(target.string() + ": cannot replace (is a directory)");
+    }
+    std::string backup = s.file->temp_ + ".old";
+    if (::link(target.c_str(), backup.c_str()) != 0) {
+      const int link_err = errno;
+      // No hard links here (some filesystems): move the old file aside. An
+      // immutable file refuses both.
+      if (::rename(target.c_str(), backup.c_str()) != 0) {
+        roll_back();
+        throw_io(target, "cannot replace", link_err);
+      }
+    }
+    s.backup = std::move(backup);
+  }
+  // 2. The new files in.
+  for (Step& s : steps) {
+    if (::rename(s.file->temp_.c_str(), s.file->target_.c_str()) != 0) {
+      const int err = errno;
+      roll_back();
+      throw_io(s.file->target_, "cannot replace", err);
+    }
+    s.renamed = true;
+    s.file->temp_.clear();
+  }
+  // 3. The old files out.
+  for (Step& s : steps) {
+    if (!s.backup.empty()) ::unlink(s.backup.c_str());
+  }
+}
+
 void write_file_atomically(const std::filesystem::path& path, std::string_view contents) {
-  PendingFile file(path, contents);
-  file.commit();
+  PendingFile file(path);
+  file.append(contents);
+  file.finish();
+  commit_together({&file});
+}
+
+void TrajectoryCsvSink::start(int columns, std::int64_t /*rows*/) {
+  columns_ = columns;
+  buffer_.clear();
+  buffer_.reserve(kFlushBytes + 4096);
+  append_csv_header(buffer_, columns);
+}
+
+void TrajectoryCsvSink::write(const double* rows, std::int64_t count) {
+  // A row is at most a few hundred bytes: format in slices that keep the
+  // buffer near kFlushBytes, however many rows come at once.
+  constexpr std::int64_t kRowsPerSlice = 256;
+  while (count > 0) {
+    const std::int64_t n = std::min(count, kRowsPerSlice);
+    append_csv_rows(buffer_, rows, n, columns_);
+    rows += static_cast<size_t>(n) * static_cast<size_t>(columns_);
+    count -= n;
+    if (buffer_.size() >= kFlushBytes) {
+      file_.append(buffer_);
+      buffer_.clear();
+    }
+  }
+}
+
+void TrajectoryCsvSink::finish() {
+  file_.append(buffer_);
+  buffer_.clear();
+  buffer_.shrink_to_fit();
+  file_.finish();
+}
+
+namespace {
+OutputFiles prepared(const std::filesystem::path& dir) {
+  prepare_output_dir(dir);
+  return {dir / "metrics.json", dir / "trajectory.csv"};
+}
+}  // namespace
+
+OutputWriter::OutputWriter(const std::filesystem::path& dir)
+    : files_(prepared(dir)),
+      trajectory_file_(files_.trajectory),
+      csv_(trajectory_file_) {}
+
+OutputFiles OutputWriter::commit(const Metrics& metrics, const RunControl* control) {
+  csv_.finish();
+  PendingFile metrics_file(files_.metrics);
+  metrics_file.append(metrics_json(metrics));
+  metrics_file.finish();
+  commit_together({&trajectory_file_, &metrics_file}, control);
+  return files_;
 }
 
 OutputFiles write_outputs(const RunResult& result, const std::filesystem::path& dir) {
-  prepare_output_dir(dir);
-  OutputFiles files{dir / "metrics.json", dir / "trajectory.csv"};
-  PendingFile metrics(files.metrics, metrics_json(result.metrics));
-  PendingFile trajectory(files.trajectory, trajectory_csv(result.trajectory));
-  trajectory.commit();
-  metrics.commit();
-  return files;
+  const Trajectory& t = result.trajectory;
+  OutputWriter writer(dir);
+  writer.trajectory().start(t.columns(), t.rows());
+  writer.trajectory().write(t.data(), t.rows());
+  return writer.commit(result.metrics);
 }
 
 }  // namespace simloop

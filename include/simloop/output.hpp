@@ -1,12 +1,18 @@
 // What a run leaves behind: metrics.json, trajectory.csv, and the summary
-// lines the commands print. The library writes files only when asked to, and
-// always atomically.
+// lines the commands print. The library writes files only when asked to,
+// always atomically, and the two outputs together: after any failure the
+// directory holds all the old files or all the new ones, and no temporary
+// file (only SIGKILL or a power cut can leave one).
 #pragma once
 
+#include <cstddef>
+#include <cstdint>
 #include <filesystem>
+#include <initializer_list>
 #include <string>
 #include <string_view>
 
+#include "simloop/control.hpp"
 #include "simloop/run.hpp"
 
 namespace simloop {
@@ -21,7 +27,8 @@ namespace simloop {
 [[nodiscard]] std::string trajectory_csv(const Trajectory& trajectory);
 
 // The chapter's closing lines: steps and sim time, where the box ended, the
-// shove and its drift (or "no shove (baseline run)"), and any MuJoCo
+// shove and its drift (or "no shove (baseline run)"; for the steps it acted,
+// its window cut short when the run ends inside it), and any MuJoCo
 // warnings. Each line ends in "\n". Nothing in it depends on time or machine.
 [[nodiscard]] std::string summary_text(const RunResult& result);
 
@@ -29,19 +36,99 @@ namespace simloop {
 // created in it. Throws IoError naming the directory.
 void prepare_output_dir(const std::filesystem::path& dir);
 
-// Replaces `path` with `contents` atomically: a temporary file in the same
-// directory, then rename, so readers see the old file or the new, never a
-// half-written one. Throws IoError naming the path; the old file is kept.
+class PendingFile;
+
+// Puts finished PendingFiles in place, all of them or none: every existing
+// destination is first hard-linked to a backup name beside it (moved there
+// on a filesystem without hard links), then each
+// temporary file is renamed onto its destination; if one rename fails, the
+// ones before it are rolled back from the backups (or removed, where there
+// was no old file), so the directory holds all the old files or all the
+// new ones. A destination that is a directory, or that cannot be replaced
+// (an immutable file), fails before anything is renamed. SIGINT, SIGTERM,
+// SIGHUP and SIGQUIT are blocked in the calling thread during the renames,
+// so a signal cannot cut the commit in half. With a `control` whose stop was
+// requested, nothing is committed and Interrupted is thrown. Readers never
+// see a half-written file. Throws IoError
+// naming the destination that failed; the temporary files remain the
+// PendingFiles' to remove.
+void commit_together(std::initializer_list<PendingFile*> files, const RunControl* control = nullptr);
+
+// A file being written beside its destination: a temporary file
+// ".<name>.tmp.XXXXXX" in the same directory, filled by append(), closed by
+// finish(), and put in place by commit_together(). Until then the
+// destination is untouched; the destructor removes the temporary file unless
+// it was committed, so no error or exception leaves one behind. Throws
+// IoError naming the destination.
+class PendingFile {
+ public:
+  explicit PendingFile(std::filesystem::path target);
+  PendingFile(const PendingFile&) = delete;
+  PendingFile& operator=(const PendingFile&) = delete;
+  ~PendingFile();
+
+  // Writes all of `bytes` (write(2), retried on EINTR and short writes).
+  void append(std::string_view bytes);
+  // Makes the file an ordinary 0644 file and closes it; before committing.
+  void finish();
+  [[nodiscard]] const std::filesystem::path& target() const noexcept { return target_; }
+
+ private:
+  friend void commit_together(std::initializer_list<PendingFile*> files, const RunControl* control);
+  std::filesystem::path target_;
+  std::string temp_;
+  int fd_ = -1;
+};
+
+
+// Replaces `path` with `contents` atomically (a PendingFile committed): readers
+// see the old file or the new, never a half-written one. Throws IoError
+// naming the path; the old file is kept.
 void write_file_atomically(const std::filesystem::path& path, std::string_view contents);
+
+// A RowSink that writes trajectory.csv as the rows come, in bounded memory
+// (a buffer of about kFlushBytes): the same bytes trajectory_csv() makes
+// from the same rows. finish() writes what is buffered; an error writing
+// (a full disk) throws IoError from write() or finish(), which stops a run.
+class TrajectoryCsvSink final : public RowSink {
+ public:
+  static constexpr size_t kFlushBytes = size_t{1} << 20;
+  explicit TrajectoryCsvSink(PendingFile& file) : file_(file) {}
+  void start(int columns, std::int64_t rows) override;
+  void write(const double* rows, std::int64_t count) override;
+  void finish();
+
+ private:
+  PendingFile& file_;
+  int columns_ = 0;
+  std::string buffer_;
+};
 
 struct OutputFiles {
   std::filesystem::path metrics;     // <dir>/metrics.json
   std::filesystem::path trajectory;  // <dir>/trajectory.csv
 };
 
-// Writes metrics.json and trajectory.csv into `dir` (prepared first). Both are
-// written to temporary files before either is renamed into place, so a
-// failure leaves the earlier outputs as they were.
+// A run's two outputs, written as the run goes: construct it (the directory
+// is prepared, trajectory.csv's temporary file made), hand trajectory() to
+// simloop::run as its RowSink, then commit() writes metrics.json's temporary
+// file and puts both in place together (commit_together). Destroyed without
+// a commit (an error, an Interrupted run) it removes its temporary files and
+// leaves the earlier outputs as they were.
+class OutputWriter {
+ public:
+  explicit OutputWriter(const std::filesystem::path& dir);
+  [[nodiscard]] RowSink& trajectory() noexcept { return csv_; }
+  OutputFiles commit(const Metrics& metrics, const RunControl* control = nullptr);
+
+ private:
+  OutputFiles files_;
+  PendingFile trajectory_file_;
+  TrajectoryCsvSink csv_;
+};
+
+// Writes metrics.json and trajectory.csv of an in-memory result into `dir`
+// (prepared first) through an OutputWriter: both or neither are replaced.
 OutputFiles write_outputs(const RunResult& result, const std::filesystem::path& dir);
 
 }  // namespace simloop

@@ -8,7 +8,10 @@ and, as in the chapter, a rerun recording sim_loop.rrd by default
 
 from __future__ import annotations
 
+import os
+import signal
 import sys
+import threading
 import time
 from pathlib import Path
 from typing import List, Optional
@@ -16,11 +19,70 @@ from typing import List, Optional
 PROGRAM = "sim-loop"
 EXIT_RUN_FAILED = 1
 EXIT_USAGE = 2
+# Ctrl-C and SIGTERM stop the work: 128 + the signal's number, as for sim_loop.
+EXIT_SIGINT = 128 + signal.SIGINT
+EXIT_SIGTERM = 128 + signal.SIGTERM
+
+# True once this run's outputs are in place (an interrupt after that keeps them).
+_outputs_written = False
+
+
+class _Terminated(KeyboardInterrupt):
+    """SIGTERM, raised like Ctrl-C's KeyboardInterrupt so both stop the work
+    the same way (the C++ calls check for signals between chunks)."""
+
+
+def _on_sigterm(signum, frame):
+    raise _Terminated()
+
+
+class _ReportLost(Exception):
+    """Writing to stdout failed (a full disk, /dev/full): not an OSError, so
+    that the handlers for the outputs' errors do not take it for theirs."""
+
+
+class _Report:
+    """sys.stdout while the command runs: the same stream, but a failed write
+    raises _ReportLost."""
+
+    def __init__(self, stream):
+        self._stream = stream
+
+    def write(self, text):
+        try:
+            return self._stream.write(text)
+        except OSError as e:
+            raise _ReportLost(e.strerror or str(e)) from None
+
+    def flush(self):
+        try:
+            self._stream.flush()
+        except OSError as e:
+            raise _ReportLost(e.strerror or str(e)) from None
+
+    def __getattr__(self, name):
+        return getattr(self._stream, name)
 
 
 def _fail(code: int, message: str) -> int:
     line = "; ".join(part.strip() for part in str(message).splitlines() if part.strip())
-    print(f"{PROGRAM}: {line}", file=sys.stderr)
+    if sys.stderr is not None:  # (print(file=None) would write to stdout)
+        print(f"{PROGRAM}: {line}", file=sys.stderr)
+    return code
+
+
+def _finish_stdout(code: int) -> int:
+    """A report that did not reach stdout (a full disk, /dev/full) fails the
+    run: exit 1 with one line, unless it failed already."""
+    try:
+        sys.stdout.flush()
+    except OSError as e:
+        # What is still buffered would fail again at exit, with a traceback.
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+        if code == 0:
+            return _fail(EXIT_RUN_FAILED, f"cannot write the report to standard output ({e.strerror or e})")
     return code
 
 
@@ -86,7 +148,7 @@ def _plot_command(args: List[str]) -> int:
             sweep_png(csv, png)
         else:
             trajectory_png(csv, png, compare=[c / "trajectory.csv" for c in compare], x=x_axis)
-    except (OSError, ValueError, KeyError) as e:
+    except (OSError, ValueError, KeyError, ImportError) as e:
         return _fail(EXIT_RUN_FAILED, f"plot: {csv}: {e}")
     if compare:  # sim_loop --plot prints its own line; a comparison is asked for by hand
         print(f"plot: {png}")
@@ -112,8 +174,10 @@ def _viewer() -> str:
 def _sweep(opts, model, out: Path) -> None:
     from . import _core
 
+    global _outputs_written
     result = _core.sweep(model, opts.sweep_timesteps, opts.sweep_duration, opts.threads)
     csv = result.write(out)
+    _outputs_written = True
     print(result.summary(), end="")
     print(f"sweep: {csv}")
     if opts.plot:  # as for sim_loop sweep: the chart only when asked for
@@ -123,6 +187,37 @@ def _sweep(opts, model, out: Path) -> None:
 
 
 def main(argv: Optional[List[str]] = None) -> int:
+    """The command: SIGTERM stops it as Ctrl-C does; either one ends it with one
+    line and exit 130 (SIGINT) or 143 (SIGTERM), the earlier outputs kept (the
+    library writes both outputs together, or neither, and no temporary file)."""
+    global _outputs_written
+    _outputs_written = False
+    if sys.stdout is None:  # started with stdout closed
+        return _fail(EXIT_RUN_FAILED, "standard output is closed; nothing was run (the report would be lost)")
+    previous = None
+    if threading.current_thread() is threading.main_thread():
+        previous = signal.signal(signal.SIGTERM, _on_sigterm)
+    stdout = sys.stdout
+    sys.stdout = _Report(stdout)
+    try:
+        code = _main(argv)
+        sys.stdout.flush()
+    except KeyboardInterrupt as e:
+        name, code = ("SIGTERM", EXIT_SIGTERM) if isinstance(e, _Terminated) else ("SIGINT", EXIT_SIGINT)
+        kept = "after the outputs were written" if _outputs_written else "the earlier outputs were left as they were"
+        code = _fail(code, f"interrupted ({name}); {kept}")
+    except _ReportLost as e:
+        done = "the outputs were written" if _outputs_written else "nothing was written"
+        code = _fail(EXIT_RUN_FAILED, f"cannot write the report to standard output ({e}); {done}")
+    finally:
+        sys.stdout = stdout
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
+    return _finish_stdout(code)
+
+
+def _main(argv: Optional[List[str]]) -> int:
+    global _outputs_written
     started = time.perf_counter()
     args = sys.argv[1:] if argv is None else list(argv)
     if args and args[0] == "plot":
@@ -160,12 +255,15 @@ def main(argv: Optional[List[str]] = None) -> int:
             _sweep(opts, model, out)
         except (OSError, _core.MujocoError, ValueError) as e:
             return _fail(EXIT_RUN_FAILED, str(e))
+        except ImportError as e:  # matplotlib, for sweep.png
+            return _fail(EXIT_RUN_FAILED, f"plot: {e} (sweep.csv was written)")
         print(f"wall-clock: {(time.perf_counter() - started) * 1e3:.1f} ms, peak memory: {_peak_memory_mib():.1f} MiB")
         return 0
 
     try:
         result = _core.run(model, opts.run)
         metrics_path, trajectory_path = result.write(out)
+        _outputs_written = True
         print(result.summary(), end="")
         print(f"metrics: {metrics_path}")
         print(f"trajectory: {trajectory_path} ({result.rows} rows)")
@@ -180,6 +278,8 @@ def main(argv: Optional[List[str]] = None) -> int:
             print(f"plot: {trajectory_png(trajectory_path, out / 'trajectory.png')}")
     except (OSError, _core.MujocoError, ValueError) as e:
         return _fail(EXIT_RUN_FAILED, str(e))
+    except ImportError as e:  # matplotlib for --plot, rerun for the recording
+        return _fail(EXIT_RUN_FAILED, f"{e} (metrics.json and trajectory.csv were written)")
     elapsed = time.perf_counter() - started
     print(f"wall-clock: {elapsed * 1e3:.1f} ms, peak memory: {_peak_memory_mib():.1f} MiB")
     return 0
