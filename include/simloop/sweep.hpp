@@ -44,13 +44,23 @@ struct SweepResult {
   int edge_index = -1;
 };
 
+// A sweep point runs round(duration / timestep) steps, which must lie in
+// kMinSweepSteps .. kMaxSteps: fewer steps cannot show the box settle or hop
+// (the default grid's coarsest point, 1 s over 4 s, has 4), more cannot be
+// counted. sweep_steps returns that count or throws InvalidArgument naming
+// the duration, the timestep and the steps they make.
+inline constexpr std::int64_t kMinSweepSteps = 4;
+[[nodiscard]] std::int64_t sweep_steps(double duration, double timestep);
+
 // `count` timesteps from `from` to `to`, evenly spaced in log scale.
 [[nodiscard]] std::vector<double> log_spaced(double from, double to, int count);
 
 // Runs the baseline at every timestep (sorted, duplicates dropped) for
-// round(duration / timestep) steps, in parallel over one model, with the
-// energy audit on. Throws InvalidArgument naming a bad timestep, duration or
-// thread count. With a `control`, it can be stopped (Interrupted) and watched.
+// round(duration / timestep) steps (sweep_steps), in parallel over one
+// model, with the energy audit on. Each run's rows are reduced as they come
+// (peak, extremes, final values): a sweep keeps no trajectories. Throws
+// InvalidArgument naming a bad timestep, duration or thread count, before
+// any run starts. With a `control`, it can be stopped (Interrupted) and watched.
 [[nodiscard]] SweepResult sweep(const Model& model, std::vector<double> timesteps, double duration = 4.0,
                                 int threads = 0, RunControl* control = nullptr);
 
