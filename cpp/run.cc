@@ -9,6 +9,7 @@
 #include <limits>
 #include <sstream>
 
+#include "divergence.hpp"
 #include "energy_audit.hpp"
 #include "mujoco_guard.hpp"
 #include "run_detail.hpp"
@@ -219,6 +220,7 @@ RunResult detail::run_counted_elsewhere(const Model& model_in, const RunConfig& 
   rows.start(columns, result.rows);
   RowBlock block(columns, std::min(result.rows, RunControl::kChunkSteps / every + 2));
   detail::WarningCounter warnings;
+  detail::DivergenceCheck divergence(m);
   detail::EnergyAudit energy(m->nv);
   double box_pos_at_push[3] = {};
 
@@ -267,6 +269,7 @@ RunResult detail::run_counted_elsewhere(const Model& model_in, const RunConfig& 
           if (audit) energy.before_step(d);
           mj_step(m, d);
           warnings.after_step(d, step);
+          divergence.after_step(d, step);
           if (audit) {
             // The row's state is the one this step started from: its energy is
             // known now, and the work before this step's is what the row holds.
@@ -314,6 +317,7 @@ RunResult detail::run_counted_elsewhere(const Model& model_in, const RunConfig& 
   metrics.shove_moved_box = drift > 0.01;
 
   result.warnings = warnings.warnings();
+  if (divergence.diverged()) result.warnings.push_back(divergence.warning());
   result.sim_time = d->time;
   return result;
 }

@@ -17,8 +17,8 @@ namespace simloop {
 // 4.7 mm at every timestep up to 0.0033 s, through contact softness; from
 // about 0.0046 s the hop grows past 5 mm and on to 64 mm), (2) it does not end
 // more than kStableSink below its resting height (from about 0.1 s it sinks
-// into the floor, and through it from about 0.28 s), and (3) MuJoCo raised no
-// warning. Sideways drift does not mark the edge: the box drifts a few
+// into the floor, and through it from about 0.28 s), and (3) no warning was
+// raised (MuJoCo's, or simloop_DIVERGED). Sideways drift does not mark the edge: the box drifts a few
 // centimetres at every timestep on MuJoCo 2.2.2.
 inline constexpr double kStableHop = 0.005;   // m
 inline constexpr double kStableSink = 0.001;  // m
@@ -31,7 +31,7 @@ struct SweepPoint {
   double max_abs_box_y = 0.0;   // furthest sideways, m
   double final_box_x = 0.0, final_box_y = 0.0, final_box_z = 0.0;
   double final_pusher_x = 0.0;
-  int warnings = 0;             // MuJoCo warnings raised, all kinds
+  int warnings = 0;             // warnings raised, all kinds: MuJoCo's and simloop_DIVERGED
   EnergyTotals energy;          // the energy audit over the run
   bool stable = false;
 };

@@ -19,6 +19,7 @@
 #include "run_detail.hpp"
 #include "simloop/batch.hpp"
 #include "simloop/errors.hpp"
+#include "simloop/output.hpp"
 #include "simloop/run.hpp"
 #include "simloop/sweep.hpp"
 #include "test_util.hpp"
@@ -297,6 +298,64 @@ TEST(Robustness, SweepPointsNeedAFewStepsAndNoMoreThanTheRange) {
   EXPECT_NE(invalid_argument([] { (void)simloop::sweep_steps(4.0, 1.2); }), "accepted");  // 3.33 -> 3 steps
   // The library's sweep refuses before running anything.
   EXPECT_NE(invalid_argument([] { (void)simloop::sweep(scene(), {1e-300, 0.002}); }), "accepted");
+}
+
+// ---- Item 10: blow-ups are reported, not passed in silence ----
+
+const simloop::Warning* diverged(const simloop::RunResult& r) {
+  for (const simloop::Warning& w : r.warnings) {
+    if (w.name == "simloop_DIVERGED") return &w;
+  }
+  return nullptr;
+}
+
+simloop::RunResult run_at(double timestep, std::uint64_t seed = 0) {
+  simloop::RunConfig c;
+  c.timestep = timestep;
+  c.seed = seed;
+  return simloop::run(scene(), c);
+}
+
+TEST(Robustness, HugeTimestepsAreReportedAsDiverged) {
+  for (const double dt : {5.0, 1.0}) {
+    SCOPED_TRACE(dt);
+    const simloop::RunResult r = run_at(dt);
+    const simloop::Warning* w = diverged(r);
+    ASSERT_NE(w, nullptr) << "box ends at z = " << r.metrics.box_final_pos[2];
+    EXPECT_GE(w->count, 1);
+    EXPECT_GE(w->first_step, 0);
+    EXPECT_LT(w->first_step, r.metrics.steps);
+    EXPECT_EQ(w->message.rfind("body \"box\" went through the floor", 0), 0u) << w->message;
+    EXPECT_NE(simloop::summary_text(r).find("simloop warning simloop_DIVERGED: raised"), std::string::npos);
+  }
+}
+
+TEST(Robustness, TheChaptersRunsAndBreakItAreNotDiverged) {
+  for (const std::uint64_t seed : {0, 1, 2, 3}) {
+    EXPECT_EQ(diverged(run_at(0.002, seed)), nullptr) << seed;
+    EXPECT_EQ(diverged(run_at(0.05, seed)), nullptr) << seed;
+  }
+}
+
+TEST(Robustness, WithoutAFloorThereIsNothingToFallThrough) {
+  // The box falls forever (no plane to measure against): not a divergence.
+  std::string xml(simloop::pusher_scene_xml());
+  const std::string plane = "type=\"plane\"";
+  xml.replace(xml.find(plane), plane.size(), "type=\"box\" pos=\"0 0 -1000\"");
+  const simloop::Model model = simloop::Model::from_xml_string(xml, "no floor");
+  simloop::RunConfig c;
+  c.steps = 3000;
+  const simloop::RunResult r = simloop::run(model, c);
+  EXPECT_LT(r.metrics.box_final_pos[2], -10.0);
+  EXPECT_EQ(diverged(r), nullptr);
+}
+
+TEST(Robustness, TheSweepCountsADivergenceAsAWarning) {
+  const simloop::SweepResult s = simloop::sweep(scene(), {0.002, 1.0}, 8.0, 1);
+  ASSERT_EQ(s.points.size(), 2u);
+  EXPECT_EQ(s.points[0].warnings, 0);
+  EXPECT_GT(s.points[1].warnings, 0);
+  EXPECT_FALSE(s.points[1].stable);
 }
 
 }  // namespace
