@@ -12,6 +12,8 @@
 #include <cstring>
 #include <limits>
 #include <string>
+#include <system_error>
+#include <thread>
 #include <vector>
 
 #include "model_detail.hpp"
@@ -220,6 +222,53 @@ TEST(Robustness, ASweepWithoutThreadsToBeHadGivesTheSameCsv) {
   const std::string expected = simloop::sweep_csv(simloop::sweep(scene(), dts, 1.0, 1));
   ThreadLimit limit(0);
   EXPECT_EQ(simloop::sweep_csv(simloop::sweep(scene(), dts, 1.0, 4)), expected);
+}
+
+TEST(Robustness, UnderAProcessLimitABatchAndASweepStillFinishIdentically) {
+  // The real thing, not the hook: in a child whose user may have no more
+  // processes (RLIMIT_NPROC; root drops to "nobody" first, since root is
+  // exempt), std::thread cannot start, and the batch and the sweep must fall
+  // back to the calling thread with the same results.
+  const auto configs = four_runs();
+  const auto serial = simloop::run_batch(scene(), configs, 1);
+  const std::vector<double> dts = {0.002, 0.05};
+  const std::string sweep_expected = simloop::sweep_csv(simloop::sweep(scene(), dts, 0.5, 1));
+  const pid_t pid = fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    if (geteuid() == 0 && (setgid(65534) != 0 || setuid(65534) != 0)) _exit(3);
+    const struct rlimit one {1, 1};
+    if (setrlimit(RLIMIT_NPROC, &one) != 0) _exit(3);
+    // Check that threads really cannot start here.
+    bool started = true;
+    try {
+      std::thread([] {}).join();
+    } catch (const std::system_error&) {
+      started = false;
+    }
+    if (started) _exit(4);
+    try {
+      const auto starved = simloop::run_batch(scene(), configs, 4);
+      for (std::size_t i = 0; i < serial.size(); ++i) {
+        const Trajectory& a = serial[i].trajectory;
+        const Trajectory& b = starved[i].trajectory;
+        if (a.rows() != b.rows() ||
+            std::memcmp(a.data(), b.data(), sizeof(double) * static_cast<size_t>(a.rows() * a.columns())) != 0) {
+          _exit(5);
+        }
+      }
+      if (simloop::sweep_csv(simloop::sweep(scene(), dts, 0.5, 4)) != sweep_expected) _exit(6);
+    } catch (...) {
+      _exit(7);
+    }
+    _exit(0);
+  }
+  int status = 0;
+  waitpid(pid, &status, 0);
+  ASSERT_TRUE(WIFEXITED(status)) << "the child died of signal " << WTERMSIG(status);
+  if (WEXITSTATUS(status) == 3) GTEST_SKIP() << "cannot drop privileges or set RLIMIT_NPROC here";
+  if (WEXITSTATUS(status) == 4) GTEST_SKIP() << "RLIMIT_NPROC does not stop threads here";
+  EXPECT_EQ(WEXITSTATUS(status), 0);
 }
 
 TEST(Robustness, ASweepReducesOnTheFlyToWhatTheFullTrajectoriesSay) {
