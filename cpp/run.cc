@@ -38,7 +38,8 @@ std::string human_bytes(std::uint64_t bytes) {
   return text;
 }
 
-// The cgroup (v2) memory limit of this process, or UINT64_MAX if none.
+// The cgroup (v2) memory limit at /sys/fs/cgroup (a container's own limit),
+// or UINT64_MAX if none.
 std::uint64_t cgroup_memory_max() noexcept {
   std::FILE* f = std::fopen("/sys/fs/cgroup/memory.max", "r");
   if (f == nullptr) return std::numeric_limits<std::uint64_t>::max();
@@ -144,9 +145,9 @@ void check_kept_trajectories(const std::vector<RunConfig>& configs, std::uint64_
 
 RunResult run(const Model& model, const RunConfig& config) {
   validate(config);
-  check_kept_trajectories({config});
+  check_kept_trajectories({config});  // before allocating anything
   Data workspace(model);
-  return run(model, config, workspace);
+  return detail::run_counted_elsewhere(model, config, workspace, nullptr, nullptr);
 }
 
 namespace {
