@@ -321,6 +321,30 @@ TEST(Robustness, BatchSinksGetEveryRowAndTheResultsKeepNone) {
   EXPECT_THROW((void)simloop::run_batch(scene(), configs, {sinks[0]}, 2), simloop::InvalidArgument);
 }
 
+// ---- Item 13: errors say what was being done, on one line ----
+
+TEST(Robustness, MujocoErrorsSayWhatWasBeingDoneOnOneLine) {
+  const simloop::Model broken = scene().with_timestep(0.002);
+  const_cast<mjModel*>(broken.get())->opt.integrator = 99;  // mj_step raises mju_error
+  try {
+    (void)simloop::run(broken, simloop::RunConfig{});
+    ADD_FAILURE() << "ran";
+  } catch (const simloop::MujocoError& e) {
+    const std::string m = e.what();
+    EXPECT_EQ(m.rfind("running the model at timestep 0.002 s, in steps 0 to 63: ", 0), 0u) << m;
+    EXPECT_EQ(m.find('\n'), std::string::npos) << m;
+  }
+  try {
+    (void)simloop::Model::from_xml_string("<mujoco><worldbody><body></mujoco>", "broken.xml");
+    ADD_FAILURE() << "loaded";
+  } catch (const simloop::MujocoError& e) {
+    const std::string m = e.what();
+    EXPECT_EQ(m.rfind("broken.xml: ", 0), 0u) << m;
+    EXPECT_EQ(m.find('\n'), std::string::npos) << m;  // MuJoCo's parser message spans lines
+  }
+  EXPECT_EQ(simloop::detail::one_line("a\nb\r\n\nc  \n"), "a; b; c");
+}
+
 // ---- Item 6: XML sizes the in-memory loader cannot take ----
 
 TEST(Robustness, XmlSizesOutsideWhatMujocoTakesAreNamed) {
