@@ -4,6 +4,7 @@
 #include <atomic>
 #include <chrono>
 #include <exception>
+#include <functional>
 #include <map>
 #include <string>
 #include <system_error>
@@ -14,6 +15,22 @@
 
 namespace simloop {
 
+namespace {
+// Tests only: threads the batch may still start (negative: no limit).
+std::atomic<int> g_thread_starts_left{-1};
+
+std::thread start_thread(const std::function<void()>& work) {
+  int left = g_thread_starts_left.load();
+  while (left >= 0) {
+    if (left == 0) throw std::system_error(std::make_error_code(std::errc::resource_unavailable_try_again));
+    if (g_thread_starts_left.compare_exchange_weak(left, left - 1)) break;
+  }
+  return std::thread(work);
+}
+}  // namespace
+
+void detail::limit_thread_starts_for_testing(int threads) noexcept { g_thread_starts_left.store(threads); }
+
 int batch_workers(int threads, std::size_t jobs) noexcept {
   const int wanted = threads > 0 ? threads : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
   return static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(wanted), std::max<std::size_t>(jobs, 1)));
@@ -21,6 +38,11 @@ int batch_workers(int threads, std::size_t jobs) noexcept {
 
 std::vector<RunResult> run_batch(const Model& model, const std::vector<RunConfig>& configs, int threads,
                                  RunControl* control) {
+  return run_batch(model, configs, {}, threads, control);
+}
+
+std::vector<RunResult> run_batch(const Model& model, const std::vector<RunConfig>& configs,
+                                 const std::vector<RowSink*>& sinks, int threads, RunControl* control) {
   if (threads < 0) {
     throw InvalidArgument("threads must be at least 1, or 0 for one per core, got " + std::to_string(threads));
   }
@@ -30,6 +52,12 @@ std::vector<RunResult> run_batch(const Model& model, const std::vector<RunConfig
     } catch (const InvalidArgument& e) {
       throw InvalidArgument("run " + std::to_string(i) + ": " + e.what());
     }
+  }
+  if (sinks.empty()) {
+    check_kept_trajectories(configs);
+  } else if (sinks.size() != configs.size() || std::find(sinks.begin(), sinks.end(), nullptr) != sinks.end()) {
+    throw InvalidArgument("sinks: one RowSink per config, none null, got " + std::to_string(sinks.size()) +
+                          " for " + std::to_string(configs.size()) + " configs");
   }
   // The model is frozen while stepping, so each setting (timestep, energy)
   // gets its own copy, made here, before the workers share them.
@@ -58,7 +86,8 @@ std::vector<RunResult> run_batch(const Model& model, const std::vector<RunConfig
   const auto work = [&](Data& data) noexcept {
     for (std::size_t i; (i = next.fetch_add(1)) < configs.size();) {
       try {
-        results[i] = detail::run_counted_elsewhere(*model_of[i], configs[i], data, nullptr, &ctl);
+        results[i] = detail::run_counted_elsewhere(*model_of[i], configs[i], data,
+                                                   sinks.empty() ? nullptr : sinks[i], &ctl);
       } catch (...) {
         errors[i] = std::current_exception();
         next.store(configs.size());
@@ -72,7 +101,8 @@ std::vector<RunResult> run_batch(const Model& model, const std::vector<RunConfig
   for (int w = 1; w < workers; ++w) {
     running.fetch_add(1);
     try {
-      pool.emplace_back(work, std::ref(datas[static_cast<std::size_t>(w)]));
+      Data& data = datas[static_cast<std::size_t>(w)];
+      pool.push_back(start_thread([&work, &data] { work(data); }));
     } catch (const std::system_error&) {
       // No more threads to be had (a process limit): the ones running share
       // the work, which gives the same results with fewer workers.

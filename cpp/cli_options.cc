@@ -12,7 +12,49 @@
 namespace simloop::cli {
 namespace {
 
-std::string quoted(std::string_view value) { return "'" + std::string(value) + "'"; }
+// A value as the user typed it, in single quotes, on one line: a quote or
+// backslash gets a backslash, control characters are written \xNN.
+std::string quoted(std::string_view value) {
+  std::string out = "'";
+  for (const char c : value) {
+    const auto byte = static_cast<unsigned char>(c);
+    if (c == '\'' || c == '\\') {
+      out += '\\';
+      out += c;
+    } else if (byte < 0x20 || byte == 0x7f) {
+      static constexpr char kHex[] = "0123456789abcdef";
+      out += "\\x";
+      out += kHex[byte >> 4];
+      out += kHex[byte & 0xf];
+    } else {
+      out += c;
+    }
+  }
+  return out + "'";
+}
+
+// A plain decimal number: [-]digits[.digits][e[+-]digits], at least one
+// digit before the exponent. No spaces, '+' signs, hex, inf or nan: the same
+// strictness as the whole numbers get.
+bool plain_decimal(std::string_view s) {
+  size_t i = 0;
+  if (i < s.size() && s[i] == '-') ++i;
+  size_t digits = 0;
+  while (i < s.size() && s[i] >= '0' && s[i] <= '9') ++i, ++digits;
+  if (i < s.size() && s[i] == '.') {
+    ++i;
+    while (i < s.size() && s[i] >= '0' && s[i] <= '9') ++i, ++digits;
+  }
+  if (digits == 0) return false;
+  if (i < s.size() && (s[i] == 'e' || s[i] == 'E')) {
+    ++i;
+    if (i < s.size() && (s[i] == '+' || s[i] == '-')) ++i;
+    size_t exponent_digits = 0;
+    while (i < s.size() && s[i] >= '0' && s[i] <= '9') ++i, ++exponent_digits;
+    if (exponent_digits == 0) return false;
+  }
+  return i == s.size();
+}
 
 bool all_digits(std::string_view s) {
   if (s.empty()) return false;
@@ -35,10 +77,9 @@ std::uint64_t parse_u64(std::string_view flag, std::string_view value, std::uint
 
 double parse_timestep(std::string_view flag, std::string_view value) {
   const std::string text(value);
-  char* end = nullptr;
-  errno = 0;
-  const double x = std::strtod(text.c_str(), &end);
-  if (text.empty() || end != text.c_str() + text.size() || !std::isfinite(x) || !(x > 0.0)) {
+  const bool plain = plain_decimal(text);
+  const double x = plain ? std::strtod(text.c_str(), nullptr) : 0.0;
+  if (!plain || !std::isfinite(x) || !(x > 0.0)) {
     throw UsageError(std::string(flag) + " must be a positive, finite number of seconds, got " + quoted(value));
   }
   return x;
@@ -77,8 +118,8 @@ std::vector<double> parse_range(std::string_view flag, std::string_view value) {
 }  // namespace
 
 Options parse(int argc, const char* const* argv) {
-  constexpr auto kMaxSteps = static_cast<std::uint64_t>(std::numeric_limits<std::int64_t>::max() / 2);
   Options opts;
+  const char* timesteps_flag = "--duration";  // what set the sweep's timesteps
   int first = 1;
   if (argc > 1 && std::string_view(argv[1]) == "sweep") {
     opts.command = Command::kSweep;
@@ -109,9 +150,11 @@ Options parse(int argc, const char* const* argv) {
     if (arg == "--timesteps") {
       sweep_only();
       opts.sweep_timesteps = parse_timestep_list(arg, value());
+      timesteps_flag = "--timesteps/--duration";
     } else if (arg == "--range") {
       sweep_only();
       opts.sweep_timesteps = parse_range(arg, value());
+      timesteps_flag = "--range/--duration";
     } else if (arg == "--duration") {
       sweep_only();
       const std::string_view v = value();
@@ -137,13 +180,14 @@ Options parse(int argc, const char* const* argv) {
       opts.run.rng = *rng;
     } else if (arg == "--steps") {
       run_only();
-      opts.run.steps = static_cast<std::int64_t>(parse_u64(arg, value(), 1, kMaxSteps));
+      opts.run.steps = static_cast<std::int64_t>(parse_u64(arg, value(), 1, static_cast<std::uint64_t>(kMaxSteps)));
     } else if (arg == "--timestep") {
       run_only();
       opts.run.timestep = parse_timestep(arg, value());
     } else if (arg == "--record-every") {
       run_only();
-      opts.run.record_every = static_cast<std::int64_t>(parse_u64(arg, value(), 1, kMaxSteps));
+      opts.run.record_every =
+          static_cast<std::int64_t>(parse_u64(arg, value(), 1, static_cast<std::uint64_t>(kMaxRecordEvery)));
     } else if (arg == "--out") {
       const std::string_view v = value();
       if (v.empty()) throw UsageError("--out must name a directory, got ''");
@@ -173,8 +217,10 @@ Options parse(int argc, const char* const* argv) {
       no_value();
       opts.rerun = false;
     } else if (arg == "--help" || arg == "-h") {
+      no_value();
       opts.help = true;
     } else if (arg == "--version") {
+      no_value();
       opts.version = true;
     } else if (arg.rfind("-", 0) == 0) {
       throw UsageError("unknown option " + quoted(arg) + " (see --help)");
@@ -184,6 +230,16 @@ Options parse(int argc, const char* const* argv) {
   }
   if (sweeping) {
     if (opts.sweep_timesteps.empty()) opts.sweep_timesteps = default_sweep_timesteps();
+    // Every point must be runnable as asked (sweep_steps): say so now, in
+    // the flags' words, rather than run something else or fail midway.
+    for (const double dt : opts.sweep_timesteps) {
+      if (opts.help || opts.version) break;
+      try {
+        (void)sweep_steps(opts.sweep_duration, dt);
+      } catch (const std::exception& e) {
+        throw UsageError(std::string(timesteps_flag) + ": " + e.what());
+      }
+    }
     return opts;
   }
   // The library would refuse it too; say it in the flags' words.

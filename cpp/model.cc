@@ -7,8 +7,10 @@
 #include <fstream>
 #include <sstream>
 
+#include "model_detail.hpp"
 #include "mujoco_guard.hpp"
 #include "simloop/errors.hpp"
+#include "simloop/number_format.hpp"
 
 namespace simloop {
 namespace {
@@ -75,9 +77,14 @@ SceneLayout resolve_layout(const mjModel* m, std::string_view source) {
 mjModel* load_xml(const char* filename, const mjVFS* vfs, std::string_view source) {
   char error[1024] = "";
   mjModel* m = nullptr;
-  detail::mujoco_call([&] { m = mj_loadXML(filename, vfs, error, sizeof error); });
+  try {
+    detail::mujoco_call([&] { m = mj_loadXML(filename, vfs, error, sizeof error); });
+  } catch (const MujocoError& e) {
+    throw MujocoError(std::string(source) + ": loading the model: " + e.what());
+  }
   if (m == nullptr) {
-    throw MujocoError(std::string(source) + ": " + (error[0] ? error : "MuJoCo could not load the model"));
+    throw MujocoError(std::string(source) + ": " +
+                      (error[0] ? detail::one_line(error) : "MuJoCo could not load the model"));
   }
   return m;
 }
@@ -94,7 +101,19 @@ std::string_view pusher_scene_xml() noexcept { return kPusherSceneXml; }
 
 Model Model::pusher_scene() { return from_xml_string(kPusherSceneXml, "pusher scene"); }
 
+void detail::check_xml_size(std::size_t size, std::string_view source) {
+  if (size == 0) {
+    throw InvalidArgument(std::string(source) + ": the XML is empty (0 bytes)");
+  }
+  if (size > kMaxXmlStringBytes) {
+    throw InvalidArgument(std::string(source) + ": the XML is " + std::to_string(size) +
+                          " bytes; MuJoCo's in-memory loader takes at most " + std::to_string(kMaxXmlStringBytes) +
+                          " (write it to a file and load that)");
+  }
+}
+
 Model Model::from_xml_string(std::string_view xml, std::string_view source) {
+  detail::check_xml_size(xml.size(), source);
   detail::install_mujoco_handlers();
   struct VfsDeleter {
     void operator()(mjVFS* v) const noexcept {
@@ -106,7 +125,12 @@ Model Model::from_xml_string(std::string_view xml, std::string_view source) {
   mj_defaultVFS(vfs.get());
   constexpr const char* kName = "model.xml";
   int status = 0;
-  detail::mujoco_call([&] { status = mj_makeEmptyFileVFS(vfs.get(), kName, static_cast<int>(xml.size())); });
+  const int size = static_cast<int>(xml.size());  // checked above: fits
+  try {
+    detail::mujoco_call([&] { status = mj_makeEmptyFileVFS(vfs.get(), kName, size); });
+  } catch (const MujocoError& e) {
+    throw MujocoError(std::string(source) + ": holding the XML in memory: " + e.what());
+  }
   if (status != 0) {
     throw Error(std::string(source) + ": could not hold the XML in MuJoCo's virtual file system");
   }
@@ -134,7 +158,11 @@ Model Model::with_timestep(double timestep) const {
   }
   mjModel* copy = nullptr;
   const mjModel* src = model_.get();
-  detail::mujoco_call([&] { copy = mj_copyModel(nullptr, src); });
+  try {
+    detail::mujoco_call([&] { copy = mj_copyModel(nullptr, src); });
+  } catch (const MujocoError& e) {
+    throw MujocoError(std::string("copying the model for timestep ") + python_float_repr(timestep) + " s: " + e.what());
+  }
   copy->opt.timestep = timestep;
   return Model(std::shared_ptr<const mjModel>(copy, ModelDeleter{}), layout_);
 }
@@ -150,7 +178,11 @@ Model Model::for_run(double timestep, bool energy) const {
 Data::Data(const Model& model) {
   const mjModel* m = model.get();
   mjData* d = nullptr;
-  detail::mujoco_call([&] { d = mj_makeData(m); });
+  try {
+    detail::mujoco_call([&] { d = mj_makeData(m); });
+  } catch (const MujocoError& e) {
+    throw MujocoError(std::string("making the model's mjData: ") + e.what());
+  }
   data_.reset(d);
   std::memcpy(sizes_.data(), &m->nq, sizeof sizes_);
 }

@@ -5,6 +5,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <mutex>
+#include <new>
 
 #include <mujoco/mujoco.h>
 
@@ -57,5 +58,35 @@ bool call_catching_mujoco_error(void (*fn)(void*), void* context) noexcept {
 }
 
 const char* last_mujoco_error() noexcept { return t_error_message; }
+
+std::string one_line(std::string_view text) {
+  std::string line;
+  bool pending_separator = false;
+  for (const char c : text) {
+    if (c == '\n' || c == '\r') {
+      pending_separator = !line.empty();
+      continue;
+    }
+    if (pending_separator) {
+      line += "; ";
+      pending_separator = false;
+    }
+    line += c;
+  }
+  while (!line.empty() && (line.back() == ' ' || line.back() == '\t')) line.pop_back();
+  return line;
+}
+
+MujocoError error_from_exception(const std::exception_ptr& error) {
+  try {
+    std::rethrow_exception(error);
+  } catch (const std::bad_alloc&) {
+    return MujocoError("MuJoCo ran out of memory");
+  } catch (const std::exception& e) {
+    return MujocoError("MuJoCo failed: " + one_line(e.what()));
+  } catch (...) {
+    return MujocoError("MuJoCo failed with an unknown C++ exception");
+  }
+}
 
 }  // namespace simloop::detail

@@ -10,6 +10,9 @@
 // No C++ exception ever unwinds through MuJoCo's C frames.
 #pragma once
 
+#include <exception>
+#include <string>
+#include <string_view>
 #include <type_traits>
 
 #include "simloop/errors.hpp"
@@ -28,15 +31,38 @@ void install_mujoco_handlers();
 // The message of the last MuJoCo error caught on this thread.
 [[nodiscard]] const char* last_mujoco_error() noexcept;
 
-// Calls `f()` (a lambda that only calls MuJoCo C functions) and throws
-// MujocoError with MuJoCo's message if MuJoCo raised an error.
+// `text` on one line: each run of line breaks becomes "; " (MuJoCo's XML
+// errors span lines), and surrounding blanks are dropped.
+[[nodiscard]] std::string one_line(std::string_view text);
+
+// The MujocoError for a C++ exception that came out of MuJoCo (its XML
+// parser and compiler are C++ inside libmujoco: std::bad_alloc, for one).
+[[nodiscard]] MujocoError error_from_exception(const std::exception_ptr& error);
+
+// Calls `f()` (a lambda that only calls MuJoCo functions) and throws
+// MujocoError with MuJoCo's message, on one line, if MuJoCo raised an error.
+// A C++ exception thrown inside MuJoCo is caught before it reaches the
+// guard's C frames (it would end the process there) and rethrown from here as
+// a MujocoError ("out of memory" for std::bad_alloc).
 template <class F>
 void mujoco_call(F&& f) {
   using Fn = std::remove_reference_t<F>;
-  auto trampoline = [](void* p) { (*static_cast<Fn*>(p))(); };
-  if (!call_catching_mujoco_error(trampoline, &f)) {
-    throw MujocoError(last_mujoco_error());
+  struct Context {
+    Fn* fn;
+    std::exception_ptr error;
+  } context{&f, nullptr};
+  auto trampoline = [](void* p) noexcept {
+    auto* c = static_cast<Context*>(p);
+    try {
+      (*c->fn)();
+    } catch (...) {
+      c->error = std::current_exception();
+    }
+  };
+  if (!call_catching_mujoco_error(trampoline, &context)) {
+    throw MujocoError(one_line(last_mujoco_error()));
   }
+  if (context.error) throw error_from_exception(context.error);
 }
 
 }  // namespace simloop::detail

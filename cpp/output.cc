@@ -141,8 +141,8 @@ std::string summary_text(const RunResult& r) {
   }
   out += line;
   for (const Warning& w : r.warnings) {
-    std::snprintf(line, sizeof line, "MuJoCo warning %s: raised %d time%s, first in step %lld: %s\n",
-                  w.name.c_str(), w.count, w.count == 1 ? "" : "s", static_cast<long long>(w.first_step),
+    std::snprintf(line, sizeof line, "%s warning %s: raised %d time%s, first in step %lld: %s\n",
+                  w.name.rfind("mj", 0) == 0 ? "MuJoCo" : "simloop", w.name.c_str(), w.count, w.count == 1 ? "" : "s", static_cast<long long>(w.first_step),
                   w.message.c_str());
     out += line;
   }

@@ -10,4 +10,8 @@ namespace simloop::detail {
 [[nodiscard]] RunResult run_counted_elsewhere(const Model& model, const RunConfig& config, Data& workspace,
                                               RowSink* sink, RunControl* control);
 
+// Tests only: from now on run_batch can start at most `threads` more threads
+// (as under a process limit, RLIMIT_NPROC); a negative count lifts the limit.
+void limit_thread_starts_for_testing(int threads) noexcept;
+
 }  // namespace simloop::detail

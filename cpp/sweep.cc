@@ -1,8 +1,10 @@
 #include "simloop/sweep.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <string>
 
 #include "simloop/batch.hpp"
@@ -38,50 +40,101 @@ std::vector<double> default_sweep_timesteps() {
           0.04,   0.05,   0.06,   0.08,  0.1,   0.2,   0.3,   0.4,   0.5,   0.6,   0.8,  1.0};
 }
 
+std::int64_t sweep_steps(double duration, double timestep) {
+  if (!(std::isfinite(duration) && duration > 0.0)) {
+    throw InvalidArgument("duration must be a positive, finite number of seconds, got " + python_float_repr(duration));
+  }
+  if (!(std::isfinite(timestep) && timestep > 0.0)) {
+    throw InvalidArgument("timestep must be a positive, finite number of seconds, got " +
+                          python_float_repr(timestep));
+  }
+  const double ratio = duration / timestep;  // may be inf
+  // 2^62 is exact in a double; below it llround cannot overflow.
+  const std::int64_t steps =
+      ratio < 4611686018427387904.0 ? std::llround(ratio) : std::numeric_limits<std::int64_t>::max();
+  if (steps < kMinSweepSteps || steps > kMaxSteps) {
+    char ratio_text[32];
+    std::snprintf(ratio_text, sizeof ratio_text, "%.6g", ratio);
+    throw InvalidArgument("duration " + python_float_repr(duration) + " s at timestep " +
+                          python_float_repr(timestep) + " s is " + ratio_text +
+                          " steps; a sweep point needs " + std::to_string(kMinSweepSteps) + " to " +
+                          std::to_string(kMaxSteps) + " steps (duration / timestep, rounded)");
+  }
+  return steps;
+}
+
+namespace {
+
+// Reduces a run's rows to a sweep point's figures as they come, so a sweep
+// keeps no trajectories, however many timesteps it has.
+class SweepReducer final : public RowSink {
+ public:
+  void start(int columns, std::int64_t /*rows*/) override { columns_ = columns; }
+  void write(const double* rows, std::int64_t count) override {
+    for (std::int64_t i = 0; i < count; ++i) {
+      const double* row = rows + i * columns_;
+      peak_box_z_ = std::max(peak_box_z_, row[Trajectory::kBoxZ]);
+      max_abs_box_y_ = std::max(max_abs_box_y_, std::fabs(row[Trajectory::kBoxY]));
+    }
+    if (count > 0) {
+      const double* last = rows + (count - 1) * columns_;
+      final_ = {last[Trajectory::kBoxX], last[Trajectory::kBoxY], last[Trajectory::kBoxZ],
+                last[Trajectory::kPusherX]};
+    }
+  }
+  void fill(SweepPoint& p) const {
+    p.peak_box_z = peak_box_z_;
+    p.max_abs_box_y = max_abs_box_y_;
+    p.final_box_x = final_[0];
+    p.final_box_y = final_[1];
+    p.final_box_z = final_[2];
+    p.final_pusher_x = final_[3];
+  }
+
+ private:
+  std::int64_t columns_ = 0;
+  double peak_box_z_ = -INFINITY;
+  double max_abs_box_y_ = 0.0;
+  std::array<double, 4> final_{};
+};
+
+}  // namespace
+
 SweepResult sweep(const Model& model, std::vector<double> timesteps, double duration, int threads,
                   RunControl* control) {
   if (!(std::isfinite(duration) && duration > 0.0)) {
     throw InvalidArgument("duration must be a positive, finite number of seconds, got " + python_float_repr(duration));
   }
   if (timesteps.empty()) throw InvalidArgument("timesteps must not be empty");
-  for (double dt : timesteps) {
-    if (!(std::isfinite(dt) && dt > 0.0)) {
-      throw InvalidArgument("timestep must be a positive, finite number of seconds, got " + python_float_repr(dt));
-    }
-  }
-  std::sort(timesteps.begin(), timesteps.end());
-  timesteps.erase(std::unique(timesteps.begin(), timesteps.end()), timesteps.end());
-
   std::vector<RunConfig> configs;
   for (double dt : timesteps) {
     RunConfig c;
     c.timestep = dt;
-    c.steps = std::max<std::int64_t>(1, std::llround(duration / dt));
+    c.steps = sweep_steps(duration, dt);  // refuses a point that cannot be run faithfully
     c.perturb = false;
     c.audit_energy = true;
     configs.push_back(c);
   }
+  std::sort(configs.begin(), configs.end(),
+            [](const RunConfig& a, const RunConfig& b) { return a.timestep < b.timestep; });
+  configs.erase(std::unique(configs.begin(), configs.end(),
+                            [](const RunConfig& a, const RunConfig& b) { return a.timestep == b.timestep; }),
+                configs.end());
   // Ascending timesteps put the longest runs first, which keeps the workers
   // evenly loaded to the end.
-  const std::vector<RunResult> runs = run_batch(model, configs, threads, control);
+  std::vector<SweepReducer> reducers(configs.size());
+  std::vector<RowSink*> sinks;
+  for (SweepReducer& r : reducers) sinks.push_back(&r);
+  const std::vector<RunResult> runs = run_batch(model, configs, sinks, threads, control);
 
   SweepResult result;
   result.duration = duration;
-  for (const RunResult& r : runs) {
-    const Trajectory& t = r.trajectory;
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    const RunResult& r = runs[i];
     SweepPoint p;
     p.timestep = r.timestep;
     p.steps = r.metrics.steps;
-    p.peak_box_z = -INFINITY;
-    for (std::int64_t row = 0; row < t.rows(); ++row) {
-      p.peak_box_z = std::max(p.peak_box_z, t.at(row, Trajectory::kBoxZ));
-      p.max_abs_box_y = std::max(p.max_abs_box_y, std::fabs(t.at(row, Trajectory::kBoxY)));
-    }
-    const std::int64_t last = t.rows() - 1;
-    p.final_box_x = t.at(last, Trajectory::kBoxX);
-    p.final_box_y = t.at(last, Trajectory::kBoxY);
-    p.final_box_z = t.at(last, Trajectory::kBoxZ);
-    p.final_pusher_x = t.at(last, Trajectory::kPusherX);
+    reducers[i].fill(p);
     for (const Warning& w : r.warnings) p.warnings += w.count;
     p.energy = r.energy;
     result.points.push_back(p);

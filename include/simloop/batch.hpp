@@ -18,8 +18,19 @@ namespace simloop {
 // starts once one has failed. If threads cannot be created, fewer workers do
 // the work (the results are the same). With a `control`, the batch can be
 // stopped (Interrupted) and watched; its poll runs on the calling thread.
+// Batches keep their runs' trajectories in memory: the whole batch is
+// refused up front (InvalidArgument) if together they would not fit
+// (check_kept_trajectories, summed over the runs).
 [[nodiscard]] std::vector<RunResult> run_batch(const Model& model, const std::vector<RunConfig>& configs,
                                                int threads = 0, RunControl* control = nullptr);
+
+// The same, with run i's rows going to sinks[i] instead of its result's
+// trajectory (one non-null sink per config, each used by one worker at a
+// time; a sink that reduces rows on the fly lets a batch of any length run
+// in little memory).
+[[nodiscard]] std::vector<RunResult> run_batch(const Model& model, const std::vector<RunConfig>& configs,
+                                               const std::vector<RowSink*>& sinks, int threads = 0,
+                                               RunControl* control = nullptr);
 
 // The worker count run_batch uses for `threads` and `jobs`.
 [[nodiscard]] int batch_workers(int threads, std::size_t jobs) noexcept;

@@ -16,6 +16,12 @@ namespace simloop {
 // --smoke: a short, fixed run so CI can compare two runs byte for byte.
 inline constexpr std::int64_t kSmokeSteps = 300;
 
+// The ranges both faces (sim_loop's flags, Python's arguments) accept:
+// steps and record_every from 1 to 2^62 - 1, so that no count the loop
+// derives from them (rows, steps + K) can overflow an int64.
+inline constexpr std::int64_t kMaxSteps = (std::int64_t{1} << 62) - 1;
+inline constexpr std::int64_t kMaxRecordEvery = kMaxSteps;
+
 struct RunConfig {
   std::uint64_t seed = 0;          // seeds the shove, and nothing else
   std::int64_t steps = 2000;       // ignored when smoke is set
@@ -30,8 +36,31 @@ struct RunConfig {
 };
 
 // Throws InvalidArgument naming the field and value: timestep not finite and
-// positive, steps < 1, record_every < 1, or a trajectory too large to hold.
+// positive, steps or record_every outside 1 .. kMaxSteps / kMaxRecordEvery.
+// (Whether the trajectory fits in memory is a separate question: a run that
+// streams its rows to a RowSink keeps none of them.)
 void validate(const RunConfig& config);
+
+// How much memory a run's kept trajectory (no RowSink: Python's run, batches,
+// sweeps of kept runs) may take: half of the least of the machine's physical
+// memory, the cgroup's memory.max and the process's RLIMIT_AS / RLIMIT_DATA
+// (ulimit -v / -d), in bytes. Runs over it are refused before they start
+// rather than left to the allocator (which may only fail after minutes of
+// stepping, or summon the OOM killer).
+[[nodiscard]] std::uint64_t trajectory_memory_budget() noexcept;
+
+// Bytes of trajectory a run keeps in memory without a RowSink (saturates at
+// UINT64_MAX; the config must be valid).
+[[nodiscard]] std::uint64_t kept_trajectory_bytes(const RunConfig& config) noexcept;
+
+// Throws InvalidArgument if runs that keep their trajectories in memory would
+// together take more than `budget` bytes, saying how much they need and what
+// to change: "steps 10000000000 with record_every 1 would keep 1.6 TiB of
+// trajectory in memory (the limit is 11.6 GiB, half of this machine's
+// memory); raise record_every, or stream the rows (sim_loop writes them to
+// trajectory.csv as it goes)". run() and run_batch() call it.
+void check_kept_trajectories(const std::vector<RunConfig>& configs,
+                             std::uint64_t budget = trajectory_memory_budget());
 
 // metrics.json: the chapter's keys, floats already rounded to 6 decimals.
 struct Metrics {
@@ -93,9 +122,10 @@ class Trajectory {
   [[nodiscard]] static constexpr bool is_input_column(int column) noexcept {
     return column >= kCtrl && column <= kShoveZ;
   }
-  // Rows a run of `steps` steps records: every K-th step, then the final state.
+  // Rows a run of `steps` steps records: every K-th step, then the final
+  // state. Never overflows for steps, record_every in 1 .. kMaxSteps.
   [[nodiscard]] static std::int64_t rows_for(std::int64_t steps, std::int64_t record_every) noexcept {
-    return (steps + record_every - 1) / record_every + 1;
+    return steps / record_every + (steps % record_every != 0 ? 1 : 0) + 1;
   }
 
   Trajectory() = default;

@@ -17,7 +17,8 @@ namespace simloop {
 // 3.5 mm at every default timestep up to 0.004 s, through contact softness;
 // from 0.005 s the hop passes 5 mm, 46 mm at 0.04 s), (2) it does not end more
 // than kStableSink below its resting height (from 0.08 s it sinks into the
-// floor, and through it from 0.3 s), and (3) MuJoCo raised no warning. Sideways drift does not mark the edge: the box drifts a few
+// floor, and through it from 0.3 s), and (3) no warning was raised
+// (MuJoCo's, or simloop_DIVERGED). Sideways drift does not mark the edge: the box drifts a few
 // centimetres at every timestep on MuJoCo 2.2.2.
 inline constexpr double kStableHop = 0.005;   // m
 inline constexpr double kStableSink = 0.001;  // m
@@ -30,7 +31,7 @@ struct SweepPoint {
   double max_abs_box_y = 0.0;   // furthest sideways, m
   double final_box_x = 0.0, final_box_y = 0.0, final_box_z = 0.0;
   double final_pusher_x = 0.0;
-  int warnings = 0;             // MuJoCo warnings raised, all kinds
+  int warnings = 0;             // warnings raised, all kinds: MuJoCo's and simloop_DIVERGED
   EnergyTotals energy;          // the energy audit over the run
   bool stable = false;
 };
@@ -43,6 +44,14 @@ struct SweepResult {
   int edge_index = -1;
 };
 
+// A sweep point runs round(duration / timestep) steps, which must lie in
+// kMinSweepSteps .. kMaxSteps: fewer steps cannot show the box settle or hop
+// (the default grid's coarsest point, 1 s over 4 s, has 4), more cannot be
+// counted. sweep_steps returns that count or throws InvalidArgument naming
+// the duration, the timestep and the steps they make.
+inline constexpr std::int64_t kMinSweepSteps = 4;
+[[nodiscard]] std::int64_t sweep_steps(double duration, double timestep);
+
 // `count` timesteps from `from` to `to`, evenly spaced in log scale.
 [[nodiscard]] std::vector<double> log_spaced(double from, double to, int count);
 
@@ -53,9 +62,11 @@ struct SweepResult {
 [[nodiscard]] std::vector<double> default_sweep_timesteps();
 
 // Runs the baseline at every timestep (sorted, duplicates dropped) for
-// round(duration / timestep) steps, in parallel over one model, with the
-// energy audit on. Throws InvalidArgument naming a bad timestep, duration or
-// thread count. With a `control`, it can be stopped (Interrupted) and watched.
+// round(duration / timestep) steps (sweep_steps), in parallel over one
+// model, with the energy audit on. Each run's rows are reduced as they come
+// (peak, extremes, final values): a sweep keeps no trajectories. Throws
+// InvalidArgument naming a bad timestep, duration or thread count, before
+// any run starts. With a `control`, it can be stopped (Interrupted) and watched.
 [[nodiscard]] SweepResult sweep(const Model& model, std::vector<double> timesteps, double duration = 4.0,
                                 int threads = 0, RunControl* control = nullptr);
 

@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "cli_options.hpp"
+#include "simloop/errors.hpp"
 
 namespace {
 
@@ -89,8 +90,77 @@ TEST(CliOptions, BadValuesNameTheFlagAndTheValue) {
   EXPECT_EQ(usage_error({"--rng", "pcg64"}), "--rng must be mt19937_64 or numpy, got 'pcg64'");
   EXPECT_EQ(usage_error({"--rng"}), "--rng needs a value");
   EXPECT_EQ(usage_error({"sweep", "--rng", "numpy"}), "--rng is not a sweep option (see sweep --help)");
-  const std::string huge = usage_error({"--steps", "4000000000000"});
-  EXPECT_NE(huge.find("raise record_every"), std::string::npos) << huge;
+}
+
+TEST(CliOptions, NumbersAreWrittenPlainlyForEveryFlag) {
+  // --steps refused " 5" while --timestep took " 5", "+5", hex and hex floats.
+  for (const char* bad : {" 5", "5 ", "+5", "0x10", "0x1p-3", "1e", ".", "-", "5e+", "1,5", "infinity", "1_0"}) {
+    SCOPED_TRACE(bad);
+    EXPECT_NE(usage_error({"--timestep", bad}).find("--timestep must be a positive, finite number of seconds"),
+              std::string::npos);
+    EXPECT_NE(usage_error({"--steps", bad}).find("--steps must be a whole number"), std::string::npos);
+  }
+  EXPECT_EQ(parse({"--timestep", "5"}).run.timestep, 5.0);
+  EXPECT_EQ(parse({"--timestep", "5."}).run.timestep, 5.0);
+  EXPECT_EQ(parse({"--timestep", ".5"}).run.timestep, 0.5);
+  EXPECT_EQ(parse({"--timestep", "2e-3"}).run.timestep, 0.002);
+  EXPECT_EQ(parse({"--timestep", "2E+0"}).run.timestep, 2.0);
+  EXPECT_EQ(usage_error({"sweep", "--timesteps", "0.001, 0.002"}),
+            "--timesteps must be a positive, finite number of seconds, got ' 0.002'");
+}
+
+TEST(CliOptions, FlagsWithoutValuesRefuseOne) {
+  EXPECT_EQ(usage_error({"--help=x"}), "--help takes no value, got 'x'");
+  EXPECT_EQ(usage_error({"--version=x"}), "--version takes no value, got 'x'");
+  EXPECT_EQ(usage_error({"--help="}), "--help takes no value, got ''");
+}
+
+TEST(CliOptions, EchoedValuesAreEscapedOntoOneLine) {
+  EXPECT_EQ(usage_error({"--steps", "x'y"}), "--steps must be a whole number from 1 to 4611686018427387903, got 'x\\'y'");
+  EXPECT_EQ(usage_error({"--timestep", "a\nb\\c"}),
+            "--timestep must be a positive, finite number of seconds, got 'a\\x0ab\\\\c'");
+  EXPECT_EQ(usage_error({"--bogus\r"}), "unknown option '--bogus\\x0d' (see --help)");
+}
+
+TEST(CliOptions, SweepPointsMustBeRunnableAsAsked) {
+  // These ran one step and exited 0, or failed midway, before.
+  EXPECT_EQ(usage_error({"sweep", "--duration", "1e300", "--timesteps", "0.01"}),
+            "--timesteps/--duration: duration 1e+300 s at timestep 0.01 s is 1e+302 steps; a sweep point needs 4 to "
+            "4611686018427387903 steps (duration / timestep, rounded)");
+  EXPECT_EQ(usage_error({"sweep", "--timesteps", "1e-300,0.002"}).rfind("--timesteps/--duration: duration 4.0 s at "
+                                                                       "timestep 1e-300 s is 4e+300 steps",
+                                                                       0),
+            0u);
+  EXPECT_EQ(usage_error({"sweep", "--duration", "9e18"}).rfind("--duration: duration 9e+18 s at timestep 0.0005 s", 0),
+            0u);
+  EXPECT_EQ(usage_error({"sweep", "--range", "0.5:2:3", "--duration", "4"}).rfind("--range/--duration: duration 4.0 s "
+                                                                                "at timestep 2.0 s is 2 steps",
+                                                                                0),
+            0u);
+  EXPECT_NO_THROW((void)parse({"sweep"}));
+  EXPECT_TRUE(parse({"sweep", "--duration", "1e300", "--help"}).help);
+}
+
+TEST(CliOptions, StepsAndRecordEveryShareTheLibrarysRange) {
+  EXPECT_EQ(parse({"--steps", "4611686018427387903", "--record-every", "4611686018427387903"}).run.steps,
+            simloop::kMaxSteps);
+  EXPECT_EQ(usage_error({"--steps", "4611686018427387904"}),
+            "--steps must be a whole number from 1 to 4611686018427387903, got '4611686018427387904'");
+  EXPECT_EQ(usage_error({"--record-every", "4611686018427387904"}),
+            "--record-every must be a whole number from 1 to 4611686018427387903, got '4611686018427387904'");
+}
+
+TEST(CliOptions, AHugeRunIsTheLibrarysToRefuseOnlyIfItKeepsItsRows) {
+  // The parser takes any steps in range: sim_loop may stream the rows to a
+  // file. Keeping them in memory is what the library refuses, up front.
+  const auto o = parse({"--steps", "4000000000000"});
+  EXPECT_EQ(o.run.steps, 4000000000000);
+  try {
+    simloop::check_kept_trajectories({o.run});
+    ADD_FAILURE() << "accepted";
+  } catch (const simloop::InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("raise record_every"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace
