@@ -21,6 +21,7 @@
 #include <system_error>
 
 #include "cli_options.hpp"
+#include "mujoco_guard.hpp"
 #include "simloop/control.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/number_format.hpp"
@@ -112,20 +113,7 @@ int finish_stdout(int code) {
 
 // One line on stderr, whatever the message held (MuJoCo's XML errors span lines).
 int fail(int code, const std::string& message) {
-  std::string line;
-  bool pending_separator = false;
-  for (char c : message) {
-    if (c == '\n' || c == '\r') {
-      pending_separator = !line.empty();
-      continue;
-    }
-    if (pending_separator) {
-      line += "; ";
-      pending_separator = false;
-    }
-    line += c;
-  }
-  std::fprintf(stderr, "sim_loop: %s\n", line.c_str());
+  std::fprintf(stderr, "sim_loop: %s\n", simloop::detail::one_line(message).c_str());
   return code;
 }
 

@@ -23,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "simloop/model.hpp"
 #include "test_util.hpp"
 
 namespace fs = std::filesystem;
@@ -550,15 +551,20 @@ TEST(Command, OutOfMemorySaysWhatWasBeingDone) {
 #if defined(__SANITIZE_ADDRESS__)
   GTEST_SKIP() << "AddressSanitizer cannot start under ulimit -v";
 #endif
+  // A sweep no longer keeps trajectories (it reduces them as it goes), so
+  // what runs out of memory now is a scene that asks for a 480 MB stack.
   test::TempDir dir;
-  const Outcome o = sim_loop(dir.path(), {"sweep", "--range", "0.00001:0.01:3000", "--duration", "10", "--out", "s"},
-                             "ulimit -v 300000 &&");
-  if (o.exit_code == 0) GTEST_SKIP() << "this sweep fits in 300 MB now";
-  EXPECT_EQ(o.exit_code, 1);
-  EXPECT_EQ(o.err,
-            "sim_loop: out of memory while sweeping 3000 timesteps of the pusher scene (--duration 10.0, --threads "
-            "auto)\n");
-  EXPECT_FALSE(fs::exists(dir.path() / "s" / "sweep.csv"));
+  std::string xml(simloop::pusher_scene_xml());
+  xml.insert(xml.find('>') + 1, "<size nstack=\"60000000\"/>");
+  test::write_text(dir.path() / "big.xml", xml);
+  for (const std::vector<std::string> args : {std::vector<std::string>{"--model", "big.xml", "--out", "s"},
+                                              std::vector<std::string>{"sweep", "--model", "big.xml", "--out", "s"}}) {
+    const Outcome o = sim_loop(dir.path(), args, "ulimit -v 300000 &&");
+    EXPECT_EQ(o.exit_code, 2);
+    EXPECT_EQ(o.err, "sim_loop: --model: big.xml: Error: engine error: Could not allocate memory\n");
+    EXPECT_FALSE(fs::exists(dir.path() / "s" / "sweep.csv"));
+    EXPECT_FALSE(fs::exists(dir.path() / "s" / "metrics.json"));
+  }
 }
 
 }  // namespace

@@ -102,8 +102,9 @@ TEST(Sweep, FindsTheEdgeWhereTheHopBegins) {
 }
 
 TEST(Sweep, TheTableStaysAlignedWhateverTheNumbers) {
-  // Timesteps with long decimals, and run counts from 1 to 6 digits.
-  const simloop::SweepResult s = simloop::sweep(scene(), {0.0006863, 0.00094201, 0.002, 1.0}, 0.5);
+  // Timesteps with long decimals, and run counts from 1 to 4 digits (a
+  // sweep point needs at least kMinSweepSteps steps).
+  const simloop::SweepResult s = simloop::sweep(scene(), {0.0006863, 0.00094201, 0.002, 1.0}, 4.0);
   const std::string summary = simloop::sweep_summary(s);
   std::vector<std::string> lines;
   for (size_t start = 0, end; (end = summary.find('\n', start)) != std::string::npos; start = end + 1) {
