@@ -159,6 +159,9 @@ def trajectory_figure(csv: PathLike, compare: Iterable[PathLike] = (), x: str = 
     ax_y.set_ylabel("box y (m)\nsideways")
     ax_z.set_ylabel("box z (m)\nheight of its centre")
     ax_c.set_ylabel("contacts")
+    from matplotlib.ticker import MaxNLocator
+
+    ax_c.yaxis.set_major_locator(MaxNLocator(nbins=4, integer=True))  # a count: no 7.5 contacts
     if x == "time":
         ax_c.set_xlabel("sim time (s)")
     elif len(timesteps) > 1:
