@@ -1,0 +1,127 @@
+// The scenario loop on a scene that is not the chapter's: PushT.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <memory>
+
+#include "simloop/errors.hpp"
+#include "simloop/model.hpp"
+#include "simloop/recorder.hpp"
+#include "simloop/scenario.hpp"
+
+namespace {
+
+struct Loaded {
+  std::shared_ptr<mjModel> model;
+  std::shared_ptr<mjData> data;
+};
+
+// The scene through MuJoCo directly: the loop needs nothing but mjModel.
+Loaded load(const char* file) {
+  (void)simloop::Model::pusher_scene();  // installs simloop's MuJoCo handlers
+  char error[512] = "";
+  mjModel* m = mj_loadXML((std::string(SIMLOOP_TEST_SCENES) + "/" + file).c_str(), nullptr, error, sizeof error);
+  if (m == nullptr) throw std::runtime_error(error);
+  return {std::shared_ptr<mjModel>(m, mj_deleteModel), std::shared_ptr<mjData>(mj_makeData(m), mj_deleteData)};
+}
+
+struct PushtRun {
+  simloop::Scenario scenario;
+  simloop::ScenarioRunResult result;
+  int column(const std::string& name) const {
+    for (size_t i = 0; i < result.columns.size(); ++i) {
+      if (result.columns[i].name == name) return static_cast<int>(i);
+    }
+    ADD_FAILURE() << "no column " << name;
+    return 0;
+  }
+  double at(std::int64_t row, const std::string& name) const { return result.trajectory.at(row, column(name)); }
+};
+
+PushtRun run_pusht(std::uint64_t seed, std::int64_t record_every = 1, simloop::RowSink* sink = nullptr) {
+  static const Loaded scene = load("pusht.xml");
+  PushtRun r;
+  r.scenario = simloop::Scenario::from_toml_file(std::string(SIMLOOP_TEST_SCENES) + "/pusht.toml");
+  const simloop::ResolvedScenario resolved = simloop::resolve(r.scenario, scene.model.get());
+  const auto draws = simloop::mt19937_draws(seed);
+  const simloop::Schedule schedule = simloop::build_schedule(resolved, r.scenario, scene.model->opt.timestep, *draws);
+  r.result = simloop::run_schedule(scene.model.get(), scene.data.get(), resolved, schedule, record_every, sink);
+  return r;
+}
+
+TEST(ScenarioRun, ColumnsAreNamedFromTheScene) {
+  const PushtRun r = run_pusht(0);
+  std::vector<std::string> names;
+  for (const simloop::Column& c : r.result.columns) names.push_back(c.name);
+  const std::vector<std::string> expected = {
+      "step", "time", "push_x_ctrl", "push_y_ctrl",
+      "tblock_fx", "tblock_fy", "tblock_fz", "tblock_tx", "tblock_ty", "tblock_tz",
+      "tblock_x", "tblock_y", "tblock_z", "tblock_qw", "tblock_qx", "tblock_qy", "tblock_qz",
+      "tblock_vx", "tblock_vy", "tblock_vz", "tblock_wx", "tblock_wy", "tblock_wz",
+      "pusher_x", "pusher_y", "pusher_z", "pusher_qw", "pusher_qx", "pusher_qy", "pusher_qz",
+      "pusher_vx", "pusher_vy", "pusher_vz", "pusher_wx", "pusher_wy", "pusher_wz",
+      "slide_x_pos", "slide_x_vel", "slide_y_pos", "slide_y_vel",
+      "push_x_force", "push_y_force", "tblock_pos0", "tblock_pos1", "tblock_pos2", "tip_x", "ncon"};
+  EXPECT_EQ(names, expected);
+  EXPECT_EQ(r.result.rows, 1001);  // 2.0 s of 0.002 s steps, plus the final state
+  EXPECT_EQ(r.result.trajectory.rows(), 1001);
+}
+
+TEST(ScenarioRun, TheScheduleIsWhatTheStepsGot) {
+  const PushtRun r = run_pusht(0);
+  // push_y: 0 until 0.5 s (step 250), 0.4 until 1.0 s, then 2.0 asked, 1.0 applied (ctrlrange).
+  EXPECT_EQ(r.at(249, "push_y_ctrl"), 0.0);
+  EXPECT_EQ(r.at(250, "push_y_ctrl"), 0.4);
+  EXPECT_EQ(r.at(499, "push_y_ctrl"), 0.4);
+  EXPECT_EQ(r.at(500, "push_y_ctrl"), 1.0);
+  EXPECT_EQ(r.at(999, "push_x_ctrl"), 0.8);
+  EXPECT_TRUE(std::isnan(r.at(1000, "push_x_ctrl")));  // the final row has no inputs
+  // The bump: steps 600 to 649, along +-y, 0.5 to 1.5 N; zero before and after.
+  const double fy = r.at(600, "tblock_fy");
+  EXPECT_GE(std::fabs(fy), 0.5);
+  EXPECT_LT(std::fabs(fy), 1.5);
+  EXPECT_EQ(r.at(599, "tblock_fy"), 0.0);
+  EXPECT_EQ(r.at(649, "tblock_fy"), fy);
+  EXPECT_EQ(r.at(650, "tblock_fy"), 0.0);
+  EXPECT_EQ(r.at(620, "tblock_fx"), 0.0);
+  EXPECT_FALSE(std::signbit(r.at(620, "tblock_fx")));
+  // The motors did push: the pusher moved in both x and y, and the T moved.
+  EXPECT_GT(r.at(1000, "slide_x_pos"), 0.05);
+  EXPECT_GT(r.at(1000, "slide_y_pos"), 0.01);
+  EXPECT_GT(std::hypot(r.at(1000, "tblock_x") - 0.2, r.at(1000, "tblock_y")), 0.01);
+}
+
+TEST(ScenarioRun, DerivedQuantitiesDoNotLagTheStateTheyBelongTo) {
+  // Body poses and sensors are read after mj_step computed them for the
+  // row's state; joint positions before the step. If either lagged, these
+  // would differ by a step's worth of motion.
+  const PushtRun r = run_pusht(3);
+  for (std::int64_t row : {0, 1, 300, 650, 1000}) {
+    EXPECT_EQ(r.at(row, "tip_x"), r.at(row, "slide_x_pos")) << row;      // jointpos sensor vs qpos
+    EXPECT_EQ(r.at(row, "tblock_pos0"), r.at(row, "tblock_x")) << row;     // framepos sensor vs xpos
+    EXPECT_EQ(r.at(row, "tblock_pos2"), r.at(row, "tblock_z")) << row;
+  }
+  EXPECT_NE(r.at(300, "slide_x_pos"), r.at(301, "slide_x_pos"));  // it does move each step
+}
+
+TEST(ScenarioRun, SameSeedSameBitsOtherSeedOtherBump) {
+  const PushtRun a = run_pusht(7), b = run_pusht(7), c = run_pusht(8);
+  ASSERT_EQ(a.result.trajectory.rows(), b.result.trajectory.rows());
+  const size_t n = static_cast<size_t>(a.result.trajectory.rows() * a.result.trajectory.columns());
+  EXPECT_EQ(std::memcmp(a.result.trajectory.data(), b.result.trajectory.data(), n * sizeof(double)), 0);
+  EXPECT_NE(a.at(600, "tblock_fy"), c.at(600, "tblock_fy"));
+  EXPECT_EQ(a.result.schedule.forces[0].wrench[1], a.at(600, "tblock_fy"));
+}
+
+TEST(ScenarioRun, RecordEveryKeepsTheSameRowsAndTheFinalState) {
+  const PushtRun all = run_pusht(1, 1), some = run_pusht(1, 7);
+  EXPECT_EQ(some.result.trajectory.rows(), 1000 / 7 + 1 + 1);
+  for (std::int64_t i = 0; i + 1 < some.result.trajectory.rows(); ++i) {
+    const size_t w = static_cast<size_t>(all.result.trajectory.columns());
+    EXPECT_EQ(std::memcmp(some.result.trajectory.row(i), all.result.trajectory.row(7 * i), w * sizeof(double)), 0) << i;
+  }
+  EXPECT_EQ(some.at(some.result.trajectory.rows() - 1, "step"), 1000);
+}
+
+}  // namespace
