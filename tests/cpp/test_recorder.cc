@@ -39,6 +39,17 @@ struct PushtRun {
   double at(std::int64_t row, const std::string& name) const { return result.trajectory.at(row, column(name)); }
 };
 
+PushtRun run_file(const char* toml, std::uint64_t seed, std::int64_t record_every = 1) {
+  PushtRun r;
+  r.scenario = simloop::Scenario::from_toml_file(std::string(SIMLOOP_TEST_SCENES) + "/" + toml);
+  const Loaded scene = load(r.scenario.scene.filename().c_str());
+  const simloop::ResolvedScenario resolved = simloop::resolve(r.scenario, scene.model.get());
+  const auto draws = simloop::mt19937_draws(seed);
+  const simloop::Schedule schedule = simloop::build_schedule(resolved, r.scenario, scene.model->opt.timestep, *draws);
+  r.result = simloop::run_schedule(scene.model.get(), scene.data.get(), resolved, schedule, record_every);
+  return r;
+}
+
 PushtRun run_pusht(std::uint64_t seed, std::int64_t record_every = 1, simloop::RowSink* sink = nullptr) {
   static const Loaded scene = load("pusht.xml");
   PushtRun r;
@@ -122,6 +133,103 @@ TEST(ScenarioRun, RecordEveryKeepsTheSameRowsAndTheFinalState) {
     EXPECT_EQ(std::memcmp(some.result.trajectory.row(i), all.result.trajectory.row(7 * i), w * sizeof(double)), 0) << i;
   }
   EXPECT_EQ(some.at(some.result.trajectory.rows() - 1, "step"), 1000);
+}
+
+TEST(ScenarioRun, AWalkerUnderATorqueScheduleRecordsTheDefaults) {
+  const PushtRun r = run_file("walker.toml", 0);
+  EXPECT_EQ(r.result.timestep, 0.004);  // the scene's own
+  EXPECT_EQ(r.result.rows, 751);
+  // Defaults: the free body and every actuator (ctrl and force).
+  for (const char* name : {"torso_z", "torso_wz", "hip_left_ctrl", "knee_right_ctrl", "knee_right_force", "torso_tz"}) {
+    r.column(name);
+  }
+  EXPECT_EQ(r.at(0, "hip_left_ctrl"), 0.5);
+  EXPECT_EQ(r.at(130, "hip_left_ctrl"), -0.5);  // 0.5 s at 0.004 s a step is step 125
+  EXPECT_EQ(r.at(400, "knee_left_ctrl"), 0.2);
+  EXPECT_EQ(r.at(10, "knee_right_ctrl"), -0.3);   // actuator 3, by index
+  EXPECT_EQ(r.at(250, "torso_tz"), 2.0);          // the twist, 1.0 s to 1.05 s
+  EXPECT_EQ(r.at(262, "torso_tz"), 0.0);
+  EXPECT_LT(r.at(750, "torso_z"), 0.8);           // it fell
+  EXPECT_NE(r.at(300, "knee_right_force"), 0.0);
+}
+
+TEST(ScenarioRun, AnArmPushesAPuckOnTwoSlides) {
+  const PushtRun r = run_file("arm_push.toml", 0);
+  double most_contacts = 0;
+  for (std::int64_t i = 0; i < r.result.rows; ++i) most_contacts = std::max(most_contacts, r.at(i, "ncon"));
+  EXPECT_GT(most_contacts, 0);
+  const std::int64_t last = r.result.rows - 1;
+  EXPECT_GT(std::hypot(r.at(last, "puck_x_pos"), r.at(last, "puck_y_pos")), 0.01);  // the puck moved
+  EXPECT_NEAR(r.at(last, "puck_x_pos"), r.at(last, "puck_x") - 0.3, 1e-12);  // joint vs body: the same motion
+  EXPECT_EQ(r.at(420, "puck_fy"), -0.5);  // 2.0 s to 2.2 s: steps 400 to 439
+  EXPECT_EQ(r.at(440, "puck_fy"), 0.0);
+}
+
+}  // namespace
+
+#include "simloop/scene_geometry.hpp"
+
+namespace {
+
+TEST(SceneGeometry, ListsEveryVisibleGeomWithItsShapeAndColour) {
+  const Loaded scene = load("pusht.xml");
+  const std::vector<simloop::GeomShape> shapes = simloop::scene_geometry(scene.model.get());
+  ASSERT_EQ(shapes.size(), 5u);  // floor, goal, the T's two bars, the tip
+  EXPECT_EQ(shapes[0].name, "floor");
+  EXPECT_EQ(shapes[0].body, "world");
+  EXPECT_EQ(shapes[0].kind, simloop::GeomShape::Kind::kPlane);
+  EXPECT_EQ(shapes[2].name, "t_bar");
+  EXPECT_EQ(shapes[2].body, "tblock");
+  EXPECT_EQ(shapes[2].kind, simloop::GeomShape::Kind::kBox);
+  EXPECT_EQ(shapes[2].half_size, (std::array<double, 3>{0.08, 0.02, 0.02}));
+  EXPECT_EQ(shapes[2].pos, (std::array<double, 3>{0.0, 0.03, 0.0}));
+  EXPECT_EQ(shapes[2].rgba, (std::array<float, 4>{0.8f, 0.5f, 0.2f, 1.0f}));
+  EXPECT_EQ(shapes[4].kind, simloop::GeomShape::Kind::kCylinder);
+  EXPECT_EQ(shapes[4].half_size, (std::array<double, 3>{0.015, 0.015, 0.02}));
+  EXPECT_FLOAT_EQ(shapes[1].rgba[3], 0.4f);  // the goal is see-through
+}
+
+TEST(SceneGeometry, MeshesAreTheirBoundingBoxesAndMaterialsGiveColour) {
+  (void)simloop::Model::pusher_scene();
+  const char* xml = R"(<mujoco>
+    <asset>
+      <mesh name="wedge" vertex="0 0 0  1 0 0  0 2 0  0 0 3"/>
+      <material name="blue" rgba="0 0 1 1"/>
+    </asset>
+    <worldbody>
+      <body name="b"><freejoint/><geom name="w" type="mesh" mesh="wedge" material="blue"/></body>
+      <geom name="hidden" type="sphere" size="1" group="3"/>
+      <geom name="clear" type="sphere" size="1" rgba="1 0 0 0"/>
+    </worldbody></mujoco>)";
+  mjVFS vfs;
+  mj_defaultVFS(&vfs);
+  ASSERT_EQ(mj_makeEmptyFileVFS(&vfs, "m.xml", static_cast<int>(std::strlen(xml))), 0);
+  std::memcpy(vfs.filedata[vfs.nfile - 1], xml, std::strlen(xml));
+  char error[512] = "";
+  mjModel* m = mj_loadXML("m.xml", &vfs, error, sizeof error);
+  mj_deleteVFS(&vfs);
+  ASSERT_NE(m, nullptr) << error;
+  const std::vector<simloop::GeomShape> shapes = simloop::scene_geometry(m);
+  ASSERT_EQ(shapes.size(), 1u);
+  EXPECT_EQ(shapes[0].kind, simloop::GeomShape::Kind::kMesh);
+  // MuJoCo moves a mesh to its centre of mass and principal axes (the geom's
+  // pos and quat); the vertices as written, brought into the geom's frame,
+  // lie inside the box, and some touch each face.
+  const simloop::GeomShape& w = shapes[0];
+  double touching = 0;
+  for (const auto& v : std::vector<std::array<double, 3>>{{0, 0, 0}, {1, 0, 0}, {0, 2, 0}, {0, 0, 3}}) {
+    double offset[3] = {v[0] - w.pos[0], v[1] - w.pos[1], v[2] - w.pos[2]}, local[3];
+    double inverse[4] = {w.quat[0], -w.quat[1], -w.quat[2], -w.quat[3]};
+    mju_rotVecQuat(local, offset, inverse);
+    for (int i = 0; i < 3; ++i) {
+      const double from_centre = std::fabs(local[i] - w.mesh_center[static_cast<size_t>(i)]);
+      EXPECT_LE(from_centre, w.half_size[static_cast<size_t>(i)] + 1e-5);
+      if (from_centre > w.half_size[static_cast<size_t>(i)] - 1e-5) ++touching;
+    }
+  }
+  EXPECT_GE(touching, 6);
+  EXPECT_EQ(shapes[0].rgba, (std::array<float, 4>{0.0f, 0.0f, 1.0f, 1.0f}));
+  mj_deleteModel(m);
 }
 
 }  // namespace
