@@ -50,6 +50,12 @@ if(NOT mujoco_DIR)
   _simloop_lacks("MuJoCo 2.2's development files (libmujoco-dev)" libmujoco-dev)
 endif()
 
+# Scenario files are TOML, read with toml++.
+find_package(tomlplusplus 3 CONFIG QUIET)
+if(NOT tomlplusplus_FOUND)
+  _simloop_lacks("toml++, which reads scenario files (libtomlplusplus-dev)" libtomlplusplus-dev)
+endif()
+
 # Debian's mujoco::mujoco names /usr/include/libqhull_r/, which only
 # libqhull-dev installs. GoogleTest by its header too: find_package(GTest)
 # needs a compiler already.

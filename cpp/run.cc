@@ -152,20 +152,6 @@ RunResult run(const Model& model, const RunConfig& config) {
 
 namespace {
 
-// The default sink: keeps every row in the result's Trajectory.
-class KeepRows final : public RowSink {
- public:
-  explicit KeepRows(Trajectory& into) : into_(into) {}
-  void start(int columns, std::int64_t rows) override { into_ = Trajectory(rows, columns); }
-  void write(const double* rows, std::int64_t count) override {
-    std::copy(rows, rows + count * into_.columns(), into_.mutable_row(next_));
-    next_ += count;
-  }
-
- private:
-  Trajectory& into_;
-  std::int64_t next_ = 0;
-};
 
 // The rows recorded during one chunk of steps, handed to the sink after it.
 class RowBlock {
@@ -216,7 +202,7 @@ RunResult detail::run_counted_elsewhere(const Model& model_in, const RunConfig& 
   const Shove& shove = result.shove;
   const bool audit = config.audit_energy;
   const int columns = audit ? Trajectory::kNumColumns : Trajectory::kNumBaseColumns;
-  KeepRows keep(result.trajectory);
+  detail::KeepRows keep(result.trajectory);
   RowSink& rows = sink ? *sink : keep;
   rows.start(columns, result.rows);
   RowBlock block(columns, std::min(result.rows, RunControl::kChunkSteps / every + 2));

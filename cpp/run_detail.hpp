@@ -1,9 +1,26 @@
 // Internals shared by the library's loops.
 #pragma once
 
+#include <algorithm>
+
 #include "simloop/run.hpp"
 
 namespace simloop::detail {
+
+// The default RowSink: keeps every row in a Trajectory.
+class KeepRows final : public RowSink {
+ public:
+  explicit KeepRows(Trajectory& into) : into_(into) {}
+  void start(int columns, std::int64_t rows) override { into_ = Trajectory(rows, columns); }
+  void write(const double* rows, std::int64_t count) override {
+    std::copy(rows, rows + count * into_.columns(), into_.mutable_row(next_));
+    next_ += count;
+  }
+
+ private:
+  Trajectory& into_;
+  std::int64_t next_ = 0;
+};
 
 // run() without announcing its steps to the control: a batch announces all
 // of its runs' steps up front, so progress has its true total from the start.

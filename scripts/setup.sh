@@ -12,7 +12,7 @@ with_python=0
 python=${PYTHON:-python3}
 # libmujoco-dev's CMake config asks for OpenGL (find_dependency) and its target
 # for /usr/include/libqhull_r, but the package depends on neither dev package.
-apt_packages=(libmujoco-dev libqhull-dev libgl-dev libopengl-dev libgtest-dev)
+apt_packages=(libmujoco-dev libqhull-dev libgl-dev libopengl-dev libtomlplusplus-dev libgtest-dev)
 command -v g++ >/dev/null 2>&1 || apt_packages+=(g++)
 command -v make >/dev/null 2>&1 || command -v ninja >/dev/null 2>&1 || apt_packages+=(make)
 command -v cmake >/dev/null 2>&1 || apt_packages+=(cmake)

@@ -1,0 +1,262 @@
+#include "simloop/recorder.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <set>
+
+#include "mujoco_guard.hpp"
+#include "run_detail.hpp"
+#include "simloop/errors.hpp"
+#include "warning_counter.hpp"
+
+namespace simloop {
+namespace {
+
+constexpr double kNone = std::numeric_limits<double>::quiet_NaN();
+
+// "name", or "<kind><id>" for things the scene left unnamed.
+std::string name_of(const mjModel* m, mjtObj type, int id, const char* kind) {
+  const char* name = mj_id2name(m, type, id);
+  return name && *name ? std::string(name) : std::string(kind) + std::to_string(id);
+}
+
+std::vector<std::string> suffixed(const std::string& base, std::initializer_list<const char*> suffixes) {
+  std::vector<std::string> out;
+  for (const char* s : suffixes) out.push_back(base + s);
+  return out;
+}
+
+// base_<suffix>, or base_<suffix>0, base_<suffix>1... for several numbers.
+std::vector<std::string> numbered(const std::string& base, const char* suffix, int count) {
+  if (count == 1) return {base + suffix};
+  std::vector<std::string> out;
+  for (int i = 0; i < count; ++i) out.push_back(base + suffix + std::to_string(i));
+  return out;
+}
+
+const char* joint_unit(int type, bool velocity) {
+  if (type == mjJNT_SLIDE) return velocity ? "m/s" : "m";
+  if (type == mjJNT_HINGE) return velocity ? "rad/s" : "rad";
+  return "";  // ball and free joints mix units (see the README)
+}
+
+}  // namespace
+
+void Recorder::add(Source::Kind kind, int id, int count, const std::vector<std::string>& names,
+                   const std::string& unit, bool integer, bool input) {
+  Source source{kind, id, count, width()};
+  for (const std::string& n : names) columns_.push_back({n, unit, integer, input});
+  const bool derived = kind == Source::kBodyPose || kind == Source::kBodyVelocity ||
+                       kind == Source::kActuatorForce || kind == Source::kSensor || kind == Source::kContacts;
+  (derived ? after_ : before_).push_back(source);
+}
+
+Recorder::Recorder(const mjModel* m, const ResolvedScenario& scenario, const Schedule& schedule) {
+  columns_.push_back({"step", "", true, false});
+  columns_.push_back({"time", "s", false, false});
+  ctrl_low_.assign(static_cast<size_t>(m->nu), -std::numeric_limits<double>::infinity());
+  ctrl_high_.assign(static_cast<size_t>(m->nu), std::numeric_limits<double>::infinity());
+  for (int a = 0; a < m->nu; ++a) {
+    if (m->actuator_ctrllimited[a] && !(m->opt.disableflags & mjDSBL_CLAMPCTRL)) {
+      ctrl_low_[static_cast<size_t>(a)] = m->actuator_ctrlrange[2 * a];
+      ctrl_high_[static_cast<size_t>(a)] = m->actuator_ctrlrange[2 * a + 1];
+    }
+  }
+  // Inputs: the ctrl of every controlled or recorded actuator, the force on
+  // every disturbed body.
+  std::set<int> ctrl_of;
+  for (const auto& c : scenario.controls) ctrl_of.insert(c.actuator);
+  ctrl_of.insert(scenario.actuators.begin(), scenario.actuators.end());
+  for (int a : ctrl_of) {
+    add(Source::kCtrl, a, 1, {name_of(m, mjOBJ_ACTUATOR, a, "actuator") + "_ctrl"}, "", false, true);
+  }
+  std::set<int> pushed;
+  for (const Schedule::Force& f : schedule.forces) pushed.insert(f.body);
+  for (int b : pushed) {
+    add(Source::kXfrc, b, 6, suffixed(name_of(m, mjOBJ_BODY, b, "body"), {"_fx", "_fy", "_fz", "_tx", "_ty", "_tz"}),
+        "N, N m", false, true);
+  }
+  for (int b : scenario.bodies) {
+    const std::string base = name_of(m, mjOBJ_BODY, b, "body");
+    add(Source::kBodyPose, b, 7, suffixed(base, {"_x", "_y", "_z", "_qw", "_qx", "_qy", "_qz"}), "m");
+    add(Source::kBodyVelocity, b, 6, suffixed(base, {"_vx", "_vy", "_vz", "_wx", "_wy", "_wz"}), "m/s, rad/s");
+  }
+  for (int j : scenario.joints) {
+    const std::string base = name_of(m, mjOBJ_JOINT, j, "joint");
+    const int type = m->jnt_type[j];
+    const int nq = type == mjJNT_FREE ? 7 : type == mjJNT_BALL ? 4 : 1;
+    const int nv = type == mjJNT_FREE ? 6 : type == mjJNT_BALL ? 3 : 1;
+    add(Source::kQpos, m->jnt_qposadr[j], nq, numbered(base, "_pos", nq), joint_unit(type, false));
+    add(Source::kQvel, m->jnt_dofadr[j], nv, numbered(base, "_vel", nv), joint_unit(type, true));
+  }
+  for (int a : scenario.actuators) {
+    add(Source::kActuatorForce, a, 1, {name_of(m, mjOBJ_ACTUATOR, a, "actuator") + "_force"}, "N or N m");
+  }
+  for (int s : scenario.sensors) {
+    add(Source::kSensor, m->sensor_adr[s], m->sensor_dim[s], numbered(name_of(m, mjOBJ_SENSOR, s, "sensor"), "", m->sensor_dim[s]),
+        "");
+  }
+  if (scenario.contacts) add(Source::kContacts, 0, 1, {"ncon"}, "", true);
+
+  std::set<std::string> seen;
+  for (const Column& c : columns_) {
+    if (!seen.insert(c.name).second) {
+      throw InvalidArgument("two recorded columns would both be named '" + c.name +
+                            "': rename one of the scene's elements, or record fewer");
+    }
+  }
+}
+
+void Recorder::before_step(double* row, std::int64_t step, const mjModel* m, const mjData* d,
+                           bool inputs) const noexcept {
+  (void)m;
+  row[0] = static_cast<double>(step);
+  row[1] = d->time;
+  for (const Source& s : before_) {
+    double* out = row + s.column;
+    switch (s.kind) {
+      case Source::kCtrl:
+        // What MuJoCo applies: ctrl clamped to ctrlrange (it clamps a copy).
+        out[0] = inputs ? std::clamp(d->ctrl[s.id], ctrl_low_[static_cast<size_t>(s.id)],
+                                     ctrl_high_[static_cast<size_t>(s.id)])
+                        : kNone;
+        break;
+      case Source::kXfrc:
+        for (int i = 0; i < 6; ++i) out[i] = inputs ? d->xfrc_applied[6 * s.id + i] : kNone;
+        break;
+      case Source::kQpos: std::copy(d->qpos + s.id, d->qpos + s.id + s.count, out); break;
+      case Source::kQvel: std::copy(d->qvel + s.id, d->qvel + s.id + s.count, out); break;
+      default: break;
+    }
+  }
+}
+
+void Recorder::after_step(double* row, const mjModel* m, const mjData* d) const noexcept {
+  for (const Source& s : after_) {
+    double* out = row + s.column;
+    switch (s.kind) {
+      case Source::kBodyPose:
+        std::copy(d->xpos + 3 * s.id, d->xpos + 3 * s.id + 3, out);
+        std::copy(d->xquat + 4 * s.id, d->xquat + 4 * s.id + 4, out + 3);
+        break;
+      case Source::kBodyVelocity: {
+        mjtNum velocity[6];  // MuJoCo's order: angular, then linear
+        mj_objectVelocity(m, d, mjOBJ_BODY, s.id, velocity, 0);
+        std::copy(velocity + 3, velocity + 6, out);
+        std::copy(velocity, velocity + 3, out + 3);
+        break;
+      }
+      case Source::kActuatorForce: out[0] = d->actuator_force[s.id]; break;
+      case Source::kSensor: std::copy(d->sensordata + s.id, d->sensordata + s.id + s.count, out); break;
+      case Source::kContacts: out[0] = d->ncon; break;
+      default: break;
+    }
+  }
+}
+
+namespace {
+
+// What xfrc_applied holds from a step on: the sum of the windows open then.
+struct ForceChange {
+  std::int64_t step;
+  int body;
+  std::array<double, 6> wrench;
+};
+
+std::vector<ForceChange> force_changes(const Schedule& schedule) {
+  std::set<std::pair<std::int64_t, int>> points;  // (step, body) where a window opens or closes
+  for (const Schedule::Force& f : schedule.forces) {
+    if (f.start >= f.end) continue;
+    points.insert({f.start, f.body});
+    points.insert({f.end, f.body});
+  }
+  std::vector<ForceChange> out;
+  for (const auto& [step, body] : points) {
+    if (step >= schedule.steps) continue;
+    ForceChange c{step, body, {}};
+    for (const Schedule::Force& f : schedule.forces) {
+      if (f.body == body && f.start <= step && step < f.end) {
+        for (int i = 0; i < 6; ++i) c.wrench[static_cast<size_t>(i)] += f.wrench[static_cast<size_t>(i)];
+      }
+    }
+    out.push_back(c);
+  }
+  return out;  // sorted by step: std::set's order
+}
+
+
+}  // namespace
+
+ScenarioRunResult run_schedule(const mjModel* m, mjData* d, const ResolvedScenario& scenario,
+                               const Schedule& schedule, std::int64_t record_every, RowSink* sink,
+                               RunControl* control) {
+  if (record_every < 1) throw InvalidArgument("record_every must be at least 1, got " + std::to_string(record_every));
+  const Recorder recorder(m, scenario, schedule);
+  const std::vector<ForceChange> forces = force_changes(schedule);
+  const std::vector<Schedule::ControlChange>& controls = schedule.control_changes;
+  const std::int64_t steps = schedule.steps;
+  const int width = recorder.width();
+
+  ScenarioRunResult result;
+  result.columns = recorder.columns();
+  result.schedule = schedule;
+  result.timestep = m->opt.timestep;
+  result.rows = Trajectory::rows_for(steps, record_every);
+  detail::KeepRows keep(result.trajectory);
+  RowSink& rows = sink ? *sink : keep;
+  rows.start(width, result.rows);
+  const std::int64_t block_rows = std::min(result.rows, RunControl::kChunkSteps / record_every + 2);
+  std::vector<double> block(static_cast<size_t>(block_rows) * static_cast<size_t>(width));
+  std::int64_t in_block = 0;
+  detail::WarningCounter warnings;
+  if (control) control->add_total(steps);
+
+  detail::mujoco_call([&] {
+    mj_resetData(m, d);
+    mj_forward(m, d);
+  });
+  std::size_t next_control = 0, next_force = 0;
+  std::int64_t until_record = 0;
+  for (std::int64_t step = 0; step < steps;) {
+    const std::int64_t chunk_start = step;
+    const std::int64_t chunk_end = std::min(steps, step + RunControl::kChunkSteps);
+    detail::mujoco_call([&] {
+      for (; step < chunk_end; ++step) {
+        // The rhythm: write intent, write interference, step. The schedule
+        // says what changes at this step; everything else persists.
+        for (; next_control < controls.size() && controls[next_control].step == step; ++next_control) {
+          d->ctrl[controls[next_control].actuator] = controls[next_control].value;
+        }
+        for (; next_force < forces.size() && forces[next_force].step == step; ++next_force) {
+          std::copy(forces[next_force].wrench.begin(), forces[next_force].wrench.end(),
+                    d->xfrc_applied + 6 * forces[next_force].body);
+        }
+        double* row = nullptr;
+        if (until_record-- == 0) {
+          row = block.data() + static_cast<size_t>(in_block++) * static_cast<size_t>(width);
+          recorder.before_step(row, step, m, d, true);
+          until_record = record_every - 1;
+        }
+        mj_step(m, d);
+        warnings.after_step(d, step);
+        if (row) recorder.after_step(row, m, d);
+      }
+    });
+    rows.write(block.data(), in_block);
+    in_block = 0;
+    if (control) control->advance(chunk_end - chunk_start);
+  }
+  double* last = block.data();
+  recorder.before_step(last, steps, m, d, false);
+  detail::mujoco_call([&] { mj_forward(m, d); });
+  recorder.after_step(last, m, d);
+  rows.write(last, 1);
+
+  result.warnings = warnings.warnings();
+  result.sim_time = d->time;
+  return result;
+}
+
+}  // namespace simloop

@@ -1,0 +1,517 @@
+#include "simloop/scenario.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <memory>
+#include <random>
+#include <set>
+#include <sstream>
+
+#include <toml++/toml.h>
+
+#include "simloop/errors.hpp"
+#include "simloop/number_format.hpp"
+
+namespace simloop {
+namespace {
+
+constexpr double kChapterTimestep = 0.002;
+
+// --- TOML reading: every error names the source, the key and what is wrong.
+
+class TableReader {
+ public:
+  TableReader(const toml::table& table, std::string where) : table_(table), where_(std::move(where)) {}
+
+  [[noreturn]] void fail(std::string_view key, const std::string& what) const {
+    throw InvalidArgument(where_ + (key.empty() ? "" : "." + std::string(key)) + ": " + what);
+  }
+
+  // Refuses keys this table does not know, naming the ones it does.
+  void allow_only(std::initializer_list<std::string_view> keys) const {
+    for (const auto& [key, value] : table_) {
+      if (std::find(keys.begin(), keys.end(), key.str()) != keys.end()) continue;
+      std::vector<std::string> known(keys.begin(), keys.end());
+      std::string hint = did_you_mean(key.str(), known);
+      std::string list;
+      for (const std::string& k : known) list += (list.empty() ? "" : ", ") + k;
+      fail(key.str(), "unknown key" + (hint.empty() ? "" : " (did you mean '" + hint + "'?)") + "; known keys: " + list);
+    }
+  }
+
+  [[nodiscard]] bool has(std::string_view key) const { return table_.contains(key); }
+  [[nodiscard]] bool is_integer(std::string_view key) const {
+    const toml::node* node = table_.get(key);
+    return node != nullptr && node->is_integer();
+  }
+
+  [[nodiscard]] std::optional<double> number(std::string_view key) const {
+    const toml::node* node = table_.get(key);
+    if (node == nullptr) return std::nullopt;
+    return as_number(*node, key);
+  }
+
+  [[nodiscard]] double as_number(const toml::node& node, std::string_view key) const {
+    double value = 0.0;
+    if (const auto* i = node.as_integer()) {
+      value = static_cast<double>(i->get());
+    } else if (const auto* f = node.as_floating_point()) {
+      value = f->get();
+    } else {
+      fail(key, "expected a number, got " + type_name(node));
+    }
+    if (!std::isfinite(value)) fail(key, "expected a finite number, got " + python_float_repr(value));
+    return value;
+  }
+
+  [[nodiscard]] std::optional<std::int64_t> integer(std::string_view key, std::int64_t minimum) const {
+    const toml::node* node = table_.get(key);
+    if (node == nullptr) return std::nullopt;
+    const auto* i = node->as_integer();
+    if (i == nullptr) fail(key, "expected a whole number, got " + type_name(*node));
+    if (i->get() < minimum) fail(key, "must be at least " + std::to_string(minimum) + ", got " + std::to_string(i->get()));
+    return i->get();
+  }
+
+  [[nodiscard]] std::optional<std::string> string(std::string_view key) const {
+    const toml::node* node = table_.get(key);
+    if (node == nullptr) return std::nullopt;
+    const auto* s = node->as_string();
+    if (s == nullptr) fail(key, "expected a string, got " + type_name(*node));
+    return s->get();
+  }
+
+  [[nodiscard]] std::optional<bool> boolean(std::string_view key) const {
+    const toml::node* node = table_.get(key);
+    if (node == nullptr) return std::nullopt;
+    const auto* b = node->as_boolean();
+    if (b == nullptr) fail(key, "expected true or false, got " + type_name(*node));
+    return b->get();
+  }
+
+  [[nodiscard]] std::optional<std::vector<double>> numbers(std::string_view key, std::size_t count) const {
+    const toml::node* node = table_.get(key);
+    if (node == nullptr) return std::nullopt;
+    const auto* array = node->as_array();
+    if (array == nullptr || array->size() != count) {
+      fail(key, "expected an array of " + std::to_string(count) + " numbers, got " + type_name(*node));
+    }
+    std::vector<double> out;
+    for (const toml::node& item : *array) out.push_back(as_number(item, key));
+    return out;
+  }
+
+  [[nodiscard]] std::vector<std::string> strings(std::string_view key) const {
+    const toml::node* node = table_.get(key);
+    if (node == nullptr) return {};
+    const auto* array = node->as_array();
+    if (array == nullptr) fail(key, "expected an array of names, got " + type_name(*node));
+    std::vector<std::string> out;
+    for (const toml::node& item : *array) {
+      if (const auto* s = item.as_string()) {
+        out.push_back(s->get());
+      } else {
+        fail(key, "expected an array of names, found " + type_name(item));
+      }
+    }
+    return out;
+  }
+
+  // [[t, value], ...] pairs, `t` in the unit the key implies.
+  [[nodiscard]] std::vector<std::pair<double, double>> pairs(std::string_view key) const {
+    const toml::node* node = table_.get(key);
+    const auto* array = node ? node->as_array() : nullptr;
+    if (array == nullptr || array->empty()) fail(key, "expected an array of [time, value] pairs");
+    std::vector<std::pair<double, double>> out;
+    for (const toml::node& item : *array) {
+      const auto* pair = item.as_array();
+      if (pair == nullptr || pair->size() != 2) fail(key, "expected [time, value] pairs, found " + type_name(item));
+      out.emplace_back(as_number(*pair->get(0), key), as_number(*pair->get(1), key));
+      if (out.size() > 1 && out.back().first <= out[out.size() - 2].first) {
+        fail(key, "times must increase, got " + python_float_repr(out[out.size() - 2].first) + " then " +
+                      python_float_repr(out.back().first));
+      }
+    }
+    return out;
+  }
+
+  [[nodiscard]] const std::string& where() const { return where_; }
+
+ private:
+  static std::string type_name(const toml::node& node) {
+    switch (node.type()) {
+      case toml::node_type::string: return "a string";
+      case toml::node_type::integer: return "an integer";
+      case toml::node_type::floating_point: return "a number";
+      case toml::node_type::boolean: return "a boolean";
+      case toml::node_type::array: return "an array of " + std::to_string(node.as_array()->size());
+      case toml::node_type::table: return "a table";
+      default: return "a date or time";
+    }
+  }
+  const toml::table& table_;
+  std::string where_;
+};
+
+// A point in the run from one of `seconds_key` (s), `steps_key` (steps) or
+// `fraction_key` (of the run's length); at most one may be given.
+std::optional<When> read_when(const TableReader& t, std::string_view seconds_key, std::string_view steps_key,
+                              std::string_view fraction_key = {}) {
+  int given = 0;
+  std::optional<When> when;
+  if (const auto s = t.number(seconds_key)) {
+    if (*s < 0) t.fail(seconds_key, "must not be negative, got " + python_float_repr(*s));
+    when = When::seconds(*s);
+    ++given;
+  }
+  if (const auto n = t.integer(steps_key, 0)) {
+    when = When::steps(*n);
+    ++given;
+  }
+  if (!fraction_key.empty()) {
+    if (const auto f = t.number(fraction_key)) {
+      if (*f < 0 || *f > 1) t.fail(fraction_key, "must be between 0 and 1, got " + python_float_repr(*f));
+      when = When::fraction(*f);
+      ++given;
+    }
+  }
+  if (given > 1) {
+    t.fail("", "give only one of " + std::string(seconds_key) + ", " + std::string(steps_key) +
+                   (fraction_key.empty() ? "" : ", " + std::string(fraction_key)));
+  }
+  return when;
+}
+
+ControlSpec read_control(const TableReader& t) {
+  t.allow_only({"actuator", "value", "schedule", "schedule_steps"});
+  ControlSpec c;
+  if (!t.has("actuator")) t.fail("actuator", "missing: name the actuator (or give its index)");
+  if (t.is_integer("actuator")) {
+    c.actuator = std::to_string(*t.integer("actuator", 0));
+  } else {
+    c.actuator = *t.string("actuator");
+  }
+  const int forms = t.has("value") + t.has("schedule") + t.has("schedule_steps");
+  if (forms != 1) t.fail("", "give exactly one of value, schedule ([seconds, value] pairs), schedule_steps");
+  if (const auto v = t.number("value")) c.schedule.emplace_back(When::steps(0), *v);
+  if (t.has("schedule")) {
+    for (const auto& [s, v] : t.pairs("schedule")) {
+      if (s < 0) t.fail("schedule", "times must not be negative, got " + python_float_repr(s));
+      c.schedule.emplace_back(When::seconds(s), v);
+    }
+  }
+  if (t.has("schedule_steps")) {
+    for (const auto& [s, v] : t.pairs("schedule_steps")) {
+      if (s < 0 || s != std::floor(s)) t.fail("schedule_steps", "steps must be whole and not negative, got " + python_float_repr(s));
+      c.schedule.emplace_back(When::steps(static_cast<std::int64_t>(s)), v);
+    }
+  }
+  return c;
+}
+
+DisturbanceSpec read_disturbance(const TableReader& t) {
+  t.allow_only({"body", "force", "torque", "newtons", "direction", "random_sign", "start", "start_step",
+                "start_fraction", "duration", "steps"});
+  DisturbanceSpec d;
+  const auto body = t.string("body");
+  if (!body) t.fail("body", "missing: name the body to push");
+  d.body = *body;
+  if (const auto f = t.numbers("force", 3)) std::copy(f->begin(), f->end(), d.force.begin());
+  if (const auto q = t.numbers("torque", 3)) std::copy(q->begin(), q->end(), d.torque.begin());
+  if (const auto n = t.numbers("newtons", 2)) {
+    if ((*n)[0] < 0 || (*n)[1] < (*n)[0]) {
+      t.fail("newtons", "expected [low, high] with 0 <= low <= high, got [" + python_float_repr((*n)[0]) + ", " +
+                            python_float_repr((*n)[1]) + "]");
+    }
+    if (t.has("force")) t.fail("", "give force (fixed) or newtons with direction (drawn), not both");
+    const auto dir = t.numbers("direction", 3);
+    if (!dir) t.fail("direction", "missing: newtons draws a strength; direction says which way (a vector)");
+    const double norm = std::sqrt((*dir)[0] * (*dir)[0] + (*dir)[1] * (*dir)[1] + (*dir)[2] * (*dir)[2]);
+    if (norm == 0.0) t.fail("direction", "must not be zero");
+    for (int i = 0; i < 3; ++i) d.force[static_cast<size_t>(i)] = (*dir)[static_cast<size_t>(i)] / norm;
+    d.newtons = std::array<double, 2>{(*n)[0], (*n)[1]};
+  } else if (t.has("direction")) {
+    t.fail("direction", "only with newtons (a drawn strength)");
+  }
+  d.random_sign = t.boolean("random_sign").value_or(false);
+  if (d.random_sign && !d.newtons) t.fail("random_sign", "only with newtons (a drawn strength)");
+  if (const auto start = read_when(t, "start", "start_step", "start_fraction")) d.start = *start;
+  if (const auto duration = read_when(t, "duration", "steps")) d.duration = *duration;
+  return d;
+}
+
+}  // namespace
+
+std::int64_t When::to_steps(double timestep, std::int64_t run_steps) const {
+  double steps = value;
+  if (unit == Unit::kSeconds) steps = std::nearbyint(value / timestep);
+  if (unit == Unit::kFractionOfRun) steps = std::floor(value * static_cast<double>(run_steps));
+  // Beyond any run a scenario can ask for; keeps the conversion defined.
+  constexpr double kFar = 0x1p62;
+  return static_cast<std::int64_t>(std::clamp(steps, 0.0, kFar));
+}
+
+namespace {
+
+// The chapter's draws (shove.hpp): std::mt19937_64, u = (g() >> 11) * 2^-53.
+class Mt19937Draws final : public Draws {
+ public:
+  explicit Mt19937Draws(std::uint64_t seed) : generator_(seed) {}
+  double uniform(double low, double high) override { return low + (high - low) * unit(); }
+  double sign() override { return unit() < 0.5 ? -1.0 : 1.0; }
+
+ private:
+  double unit() { return static_cast<double>(generator_() >> 11) * 0x1.0p-53; }
+  std::mt19937_64 generator_;
+};
+
+}  // namespace
+
+std::unique_ptr<Draws> mt19937_draws(std::uint64_t seed) { return std::make_unique<Mt19937Draws>(seed); }
+
+Scenario Scenario::chapter() {
+  Scenario s;
+  s.name = "ch0.1-sim-loop";
+  s.timestep = kChapterTimestep;
+  s.length = When::steps(2000);
+  s.controls.push_back({"push_motor", {{When::steps(0), 1.0}}});
+  DisturbanceSpec shove;
+  shove.body = "box";
+  shove.force = {0.0, 1.0, 0.0};
+  shove.newtons = std::array<double, 2>{6.0, 12.0};
+  shove.random_sign = true;
+  shove.start = When::fraction(0.5);
+  shove.duration = When::steps(50);
+  s.disturbances.push_back(shove);
+  s.record.bodies = {"box"};
+  s.record.joints = {"pusher_slide"};
+  return s;
+}
+
+Scenario Scenario::from_toml_file(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw IoError("cannot read scenario file " + path.string());
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) throw IoError("cannot read scenario file " + path.string());
+  Scenario s = from_toml_string(text.str(), path.string(), path.parent_path());
+  if (s.name.empty()) s.name = path.stem().string();
+  return s;
+}
+
+Scenario Scenario::from_toml_string(std::string_view text, std::string_view source,
+                                    const std::filesystem::path& base) {
+  toml::table root;
+  try {
+    root = toml::parse(text, source);
+  } catch (const toml::parse_error& e) {
+    const auto& at = e.source().begin;
+    throw InvalidArgument(std::string(source) + ":" + std::to_string(at.line) + ":" + std::to_string(at.column) +
+                          ": " + std::string(e.description()));
+  }
+  const TableReader top(root, std::string(source));
+  top.allow_only({"name", "scene", "timestep", "steps", "duration", "control", "disturbance", "record"});
+  Scenario s;
+  s.name = top.string("name").value_or("");
+  if (const auto scene = top.string("scene")) {
+    if (scene->empty()) top.fail("scene", "must name an MJCF file (leave it out for the chapter's scene)");
+    const std::filesystem::path p(*scene);
+    s.scene = p.is_absolute() || base.empty() ? p : base / p;
+  } else {
+    s.timestep = kChapterTimestep;  // the chapter's scene runs at the chapter's timestep
+  }
+  if (const auto dt = top.number("timestep")) {
+    if (*dt <= 0) top.fail("timestep", "must be a positive number of seconds, got " + python_float_repr(*dt));
+    s.timestep = *dt;
+  }
+  if (const auto length = read_when(top, "duration", "steps")) {
+    if (length->value <= 0) top.fail(length->unit == When::Unit::kSteps ? "steps" : "duration", "must be positive");
+    s.length = *length;
+  }
+  const auto each_table = [&](std::string_view key, auto&& read) {
+    const toml::node* node = root.get(key);
+    if (node == nullptr) return;
+    const auto* array = node->as_array();
+    if (array == nullptr || !array->is_array_of_tables()) {
+      top.fail(key, "expected [[" + std::string(key) + "]] tables");
+    }
+    for (std::size_t i = 0; i < array->size(); ++i) {
+      read(TableReader(*array->get(i)->as_table(), std::string(source) + ": " + std::string(key) + "[" +
+                                                       std::to_string(i) + "]"));
+    }
+  };
+  each_table("control", [&](const TableReader& t) { s.controls.push_back(read_control(t)); });
+  each_table("disturbance", [&](const TableReader& t) { s.disturbances.push_back(read_disturbance(t)); });
+  if (const toml::node* node = root.get("record")) {
+    const auto* table = node->as_table();
+    if (table == nullptr) top.fail("record", "expected a [record] table");
+    const TableReader r(*table, std::string(source) + ": record");
+    r.allow_only({"bodies", "joints", "actuators", "sensors", "contacts"});
+    s.record.bodies = r.strings("bodies");
+    s.record.joints = r.strings("joints");
+    s.record.actuators = r.strings("actuators");
+    s.record.sensors = r.strings("sensors");
+    s.record.contacts = r.boolean("contacts").value_or(true);
+  }
+  return s;
+}
+
+// --- Names.
+
+std::string did_you_mean(std::string_view name, const std::vector<std::string>& candidates) {
+  // Edit distance with transpositions (optimal string alignment),
+  // case-insensitive; a likely typo is at most a third of the name's length
+  // away, and at least one edit for short names.
+  const auto same = [](char a, char b) {
+    return std::tolower(static_cast<unsigned char>(a)) == std::tolower(static_cast<unsigned char>(b));
+  };
+  std::string best;
+  std::size_t best_distance = std::max<std::size_t>(1, name.size() / 3) + 1;
+  for (const std::string& candidate : candidates) {
+    const std::size_t n = name.size(), k = candidate.size();
+    std::vector<std::vector<std::size_t>> dist(n + 1, std::vector<std::size_t>(k + 1));
+    for (std::size_t i = 0; i <= n; ++i) dist[i][0] = i;
+    for (std::size_t j = 0; j <= k; ++j) dist[0][j] = j;
+    for (std::size_t i = 1; i <= n; ++i) {
+      for (std::size_t j = 1; j <= k; ++j) {
+        dist[i][j] = std::min({dist[i - 1][j] + 1, dist[i][j - 1] + 1,
+                               dist[i - 1][j - 1] + (same(name[i - 1], candidate[j - 1]) ? 0 : 1)});
+        if (i > 1 && j > 1 && same(name[i - 1], candidate[j - 2]) && same(name[i - 2], candidate[j - 1])) {
+          dist[i][j] = std::min(dist[i][j], dist[i - 2][j - 2] + 1);
+        }
+      }
+    }
+    if (dist[n][k] < best_distance) {
+      best_distance = dist[n][k];
+      best = candidate;
+    }
+  }
+  return best;
+}
+
+namespace {
+
+std::vector<std::string> names_of(const mjModel* m, mjtObj type, int count, bool (*keep)(const mjModel*, int)) {
+  std::vector<std::string> out;
+  for (int i = 0; i < count; ++i) {
+    const char* name = mj_id2name(m, type, i);
+    if (name != nullptr && *name != '\0' && (keep == nullptr || keep(m, i))) out.emplace_back(name);
+  }
+  return out;
+}
+
+bool body_moves(const mjModel* m, int body) { return m->body_dofnum[body] > 0; }
+
+std::string join(const std::vector<std::string>& names) {
+  if (names.empty()) return "(none)";
+  std::string out;
+  for (const std::string& n : names) out += (out.empty() ? "" : ", ") + n;
+  return out;
+}
+
+int find(const mjModel* m, mjtObj type, const char* kind, const char* what_listed, int count,
+         bool (*listed)(const mjModel*, int), const std::string& name, const std::string& context) {
+  const int id = mj_name2id(m, type, name.c_str());
+  if (id >= 0) return id;
+  const std::vector<std::string> all = names_of(m, type, count, nullptr);
+  const std::string hint = did_you_mean(name, all);
+  throw InvalidArgument(context + ": no " + kind + " named '" + name + "'" +
+                        (hint.empty() ? "" : " (did you mean '" + hint + "'?)") + "; " + what_listed + ": " +
+                        join(names_of(m, type, count, listed)));
+}
+
+int find_actuator(const mjModel* m, const std::string& name, const std::string& context) {
+  if (!name.empty() && std::all_of(name.begin(), name.end(), [](char c) { return c >= '0' && c <= '9'; })) {
+    const long index = name.size() > 9 ? -1 : std::stol(name);
+    if (index < 0 || index >= m->nu) {
+      throw InvalidArgument(context + ": actuator index " + name + " is out of range; the scene has " +
+                            std::to_string(m->nu) + " actuators: " + join(names_of(m, mjOBJ_ACTUATOR, m->nu, nullptr)));
+    }
+    return static_cast<int>(index);
+  }
+  return find(m, mjOBJ_ACTUATOR, "actuator", "its actuators", m->nu, nullptr, name, context);
+}
+
+}  // namespace
+
+ResolvedScenario resolve(const Scenario& scenario, const mjModel* m) {
+  ResolvedScenario r;
+  for (std::size_t i = 0; i < scenario.controls.size(); ++i) {
+    const ControlSpec& c = scenario.controls[i];
+    r.controls.push_back({find_actuator(m, c.actuator, "control[" + std::to_string(i) + "]"), c.schedule});
+  }
+  for (std::size_t i = 0; i < scenario.disturbances.size(); ++i) {
+    const DisturbanceSpec& d = scenario.disturbances[i];
+    const int body = find(m, mjOBJ_BODY, "body", "bodies that can move", m->nbody, body_moves, d.body,
+                          "disturbance[" + std::to_string(i) + "]");
+    if (body == 0) throw InvalidArgument("disturbance[" + std::to_string(i) + "]: the world body cannot be pushed");
+    r.disturbances.push_back({body, d});
+  }
+  const RecordSpec& rec = scenario.record;
+  for (const std::string& n : rec.bodies) {
+    r.bodies.push_back(find(m, mjOBJ_BODY, "body", "bodies that can move", m->nbody, body_moves, n, "record.bodies"));
+  }
+  for (const std::string& n : rec.joints) {
+    r.joints.push_back(find(m, mjOBJ_JOINT, "joint", "its joints", m->njnt, nullptr, n, "record.joints"));
+  }
+  for (const std::string& n : rec.actuators) r.actuators.push_back(find_actuator(m, n, "record.actuators"));
+  for (const std::string& n : rec.sensors) {
+    r.sensors.push_back(find(m, mjOBJ_SENSOR, "sensor", "its sensors", m->nsensor, nullptr, n, "record.sensors"));
+  }
+  // Defaults when nothing is named: every body on a free joint, every actuator.
+  if (rec.bodies.empty() && rec.joints.empty() && rec.actuators.empty() && rec.sensors.empty()) {
+    for (int b = 1; b < m->nbody; ++b) {
+      if (m->body_jntnum[b] >= 1 && m->jnt_type[m->body_jntadr[b]] == mjJNT_FREE) r.bodies.push_back(b);
+    }
+    for (int a = 0; a < m->nu; ++a) r.actuators.push_back(a);
+  }
+  r.contacts = rec.contacts;
+  return r;
+}
+
+Schedule build_schedule(const ResolvedScenario& scenario, const Scenario& spec, double timestep, Draws& draws) {
+  if (!(std::isfinite(timestep) && timestep > 0)) {
+    throw InvalidArgument("timestep must be a positive, finite number of seconds, got " + python_float_repr(timestep));
+  }
+  Schedule s;
+  s.steps = spec.length.to_steps(timestep, 0);
+  if (s.steps < 1) {
+    throw InvalidArgument("the run's length (" + python_float_repr(spec.length.value) +
+                          (spec.length.unit == When::Unit::kSeconds ? " s" : " steps") + ") is less than one step of " +
+                          python_float_repr(timestep) + " s");
+  }
+  for (const ResolvedScenario::Control& c : scenario.controls) {
+    for (const auto& [when, value] : c.schedule) {
+      const std::int64_t step = std::clamp<std::int64_t>(when.to_steps(timestep, s.steps), 0, s.steps);
+      if (step < s.steps) s.control_changes.push_back({step, c.actuator, value});
+    }
+  }
+  std::stable_sort(s.control_changes.begin(), s.control_changes.end(),
+                   [](const Schedule::ControlChange& a, const Schedule::ControlChange& b) { return a.step < b.step; });
+  // The only randomness: drawn here, in scenario order, before any step.
+  for (const ResolvedScenario::Disturbance& d : scenario.disturbances) {
+    const DisturbanceSpec& spec_d = d.spec;
+    Schedule::Force f;
+    f.body = d.body;
+    double scale = 1.0;
+    if (spec_d.newtons) {
+      scale = draws.uniform((*spec_d.newtons)[0], (*spec_d.newtons)[1]);
+      if (spec_d.random_sign) scale *= draws.sign();
+    }
+    for (int i = 0; i < 3; ++i) {
+      // + 0.0: a negative scale times a zero component is -0.0, which would
+      // print as "-0.0" where the chapter writes 0.
+      f.wrench[static_cast<size_t>(i)] = scale * spec_d.force[static_cast<size_t>(i)] + 0.0;
+      f.wrench[static_cast<size_t>(i + 3)] = spec_d.torque[static_cast<size_t>(i)];
+    }
+    f.start = std::clamp<std::int64_t>(spec_d.start.to_steps(timestep, s.steps), 0, s.steps);
+    const std::int64_t duration = std::max<std::int64_t>(0, spec_d.duration.to_steps(timestep, s.steps));
+    f.asked_end = f.start + duration;
+    f.end = std::min(f.asked_end, s.steps);
+    s.forces.push_back(f);
+  }
+  return s;
+}
+
+}  // namespace simloop

@@ -1,0 +1,88 @@
+// What a scenario's run records, and the loop that only reads its schedule.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <mujoco/mujoco.h>
+
+#include "simloop/control.hpp"
+#include "simloop/run.hpp"
+#include "simloop/scenario.hpp"
+
+namespace simloop {
+
+// One trajectory column.
+struct Column {
+  std::string name;      // made from the scene's names: "tblock_x", "push_x_ctrl"
+  std::string unit;      // "m", "rad", "m/s", "N", "" for counts and quaternions...
+  bool integer = false;  // a whole number (written without a decimal point)
+  bool input = false;    // an input written for the step: the final row has none
+};
+
+// The columns of a resolved scenario, laid out once, and how to fill a row.
+//
+// A row holds the state entering its step and the inputs written for that
+// step, as in the chapter. Columns read straight from the state (joint
+// positions and velocities) are taken before mj_step; quantities MuJoCo
+// derives from that state (body poses and velocities, actuator forces,
+// sensors, contacts) are taken right after it, when mj_step has computed them
+// for exactly that state (read before it, they would lag by one step). The
+// final row gets them from mj_forward.
+//
+// Columns, in order: step, time; `<actuator>_ctrl` (the ctrl MuJoCo applied,
+// after ctrlrange clamping) for every controlled or recorded actuator;
+// `<body>_fx _fy _fz _tx _ty _tz` (xfrc_applied, world frame) for every
+// disturbed body; per recorded body `_x _y _z` (position, world, m), `_qw _qx
+// _qy _qz` (orientation), `_vx _vy _vz` (linear velocity, world, m/s), `_wx _wy
+// _wz` (angular velocity, world, rad/s); per recorded joint `_pos` and `_vel`
+// (m and m/s for a slide, rad and rad/s for a hinge; `_pos0..` for the
+// several numbers of ball and free joints); per recorded actuator `_force`
+// (N or N m); per recorded sensor its value(s); `ncon` (contacts).
+class Recorder {
+ public:
+  Recorder(const mjModel* m, const ResolvedScenario& scenario, const Schedule& schedule);
+
+  [[nodiscard]] const std::vector<Column>& columns() const noexcept { return columns_; }
+  [[nodiscard]] int width() const noexcept { return static_cast<int>(columns_.size()); }
+
+  // Before mj_step: step, time, inputs (NaN in the final row) and the state.
+  void before_step(double* row, std::int64_t step, const mjModel* m, const mjData* d, bool inputs) const noexcept;
+  // After mj_step (or mj_forward): what MuJoCo derived from the row's state.
+  void after_step(double* row, const mjModel* m, const mjData* d) const noexcept;
+
+ private:
+  struct Source {
+    enum Kind { kCtrl, kXfrc, kBodyPose, kBodyVelocity, kQpos, kQvel, kActuatorForce, kSensor, kContacts } kind;
+    int id = 0;      // actuator, body, or address into qpos/qvel/sensordata
+    int count = 1;   // numbers it fills
+    int column = 0;  // its first column
+  };
+  void add(Source::Kind kind, int id, int count, const std::vector<std::string>& names, const std::string& unit,
+           bool integer = false, bool input = false);
+  std::vector<Column> columns_;
+  std::vector<Source> before_, after_;
+  std::vector<double> ctrl_low_, ctrl_high_;  // per actuator; +-inf when not limited
+};
+
+// A scenario run's outcome: the schedule it followed (the drawn forces and
+// the windows as they actually happened), the recorded rows, the warnings.
+struct ScenarioRunResult {
+  std::vector<Column> columns;
+  Trajectory trajectory;  // empty when the rows went to a RowSink
+  std::int64_t rows = 0;
+  Schedule schedule;
+  std::vector<Warning> warnings;
+  double timestep = 0.0;
+  double sim_time = 0.0;
+};
+
+// The loop: reset, mj_forward, then for each step write the schedule's
+// inputs (ctrl changes, forces, explicit zeros when a window closes), record,
+// mj_step. `m` and `d` must belong together; `d` is reset first.
+[[nodiscard]] ScenarioRunResult run_schedule(const mjModel* m, mjData* d, const ResolvedScenario& scenario,
+                                             const Schedule& schedule, std::int64_t record_every,
+                                             RowSink* sink = nullptr, RunControl* control = nullptr);
+
+}  // namespace simloop

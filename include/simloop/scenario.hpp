@@ -1,0 +1,166 @@
+// A scenario: the chapter's loop for any scene, as data.
+//
+// The chapter's loop is "write intent into ctrl, write interference into
+// xfrc_applied, mj_step, look at what changed". A Scenario says what to write
+// and what to look at: the scene, the timestep, the length, the controls
+// (intent), the disturbances (interference) and what is recorded. The life of
+// a run is then the shape MuJoCo's testspeed sample has:
+//
+//   Scenario (data: a TOML file, Python keywords, or Scenario::chapter())
+//     -> resolve() against the compiled model: names become indices, once,
+//        with errors that list what the scene has
+//     -> build_schedule() from the run's one seed: every input of every step,
+//        decided before the first step (the only randomness is drawn here)
+//     -> the loop, which only reads the schedule
+//     -> recorders, which write what was asked.
+//
+// This header holds the first three; they depend on nothing but the model.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <mujoco/mujoco.h>
+
+namespace simloop {
+
+// A point or span of a run, in steps or in simulated seconds (converted with
+// the run's timestep, rounded to the nearest step).
+struct When {
+  enum class Unit { kSteps, kSeconds, kFractionOfRun };
+  double value = 0.0;
+  Unit unit = Unit::kSteps;
+
+  [[nodiscard]] static When steps(std::int64_t n) { return {static_cast<double>(n), Unit::kSteps}; }
+  [[nodiscard]] static When seconds(double s) { return {s, Unit::kSeconds}; }
+  // A fraction of the run's length: the chapter shoves at steps // 2 (0.5).
+  [[nodiscard]] static When fraction(double f) { return {f, Unit::kFractionOfRun}; }
+  // The step this names in a run of `run_steps` steps of `timestep` seconds.
+  [[nodiscard]] std::int64_t to_steps(double timestep, std::int64_t run_steps) const;
+};
+
+// Intent: what one actuator's ctrl holds over the run.
+struct ControlSpec {
+  std::string actuator;  // a name, or an index written as a number ("0")
+  // Piecewise constant: each (from, value) holds from `from` until the next.
+  // A constant is one entry from step 0. Before the first entry the ctrl is 0.
+  std::vector<std::pair<When, double>> schedule;
+};
+
+// Interference: a force and/or torque on one body, in the world frame, over
+// a window of steps, written into xfrc_applied (and an explicit zero after).
+struct DisturbanceSpec {
+  std::string body;
+  std::array<double, 3> force{};   // N, world frame, at the body's centre of mass
+  std::array<double, 3> torque{};  // N m, world frame
+  // Drawn from the run's generator when set: the force becomes
+  // direction * uniform(newtons[0], newtons[1]), times a random sign if
+  // random_sign. The chapter's shove: [6, 12] N along +y, random sign.
+  std::optional<std::array<double, 2>> newtons;
+  bool random_sign = false;
+  When start = When::steps(0);
+  When duration = When::steps(1);
+};
+
+// What the trajectory records, by name. Empty lists mean the defaults: every
+// body on a free joint, every actuator.
+struct RecordSpec {
+  std::vector<std::string> bodies;     // position, orientation, linear and angular velocity
+  std::vector<std::string> joints;     // position, velocity (the joint's qpos/qvel)
+  std::vector<std::string> actuators;  // ctrl as applied (after ctrlrange clamping), force
+  std::vector<std::string> sensors;    // sensordata
+  bool contacts = true;                // contact count
+};
+
+struct Scenario {
+  std::string name;              // for titles and recording ids; the file's stem by default
+  std::filesystem::path scene;   // an MJCF file; empty: the chapter's embedded scene
+  std::optional<double> timestep;  // the scene's own unless given
+  When length = When::steps(2000);
+  std::vector<ControlSpec> controls;
+  std::vector<DisturbanceSpec> disturbances;
+  RecordSpec record;
+
+  // The chapter's run: its scene, ctrl 1.0 on push_motor, the shove on box.
+  [[nodiscard]] static Scenario chapter();
+  // A scenario file (TOML). Relative `scene` paths resolve against the
+  // file's folder. Throws InvalidArgument naming the file, the key and what
+  // is wrong; IoError if it cannot be read.
+  [[nodiscard]] static Scenario from_toml_file(const std::filesystem::path& path);
+  // The same from text; `source` names it in errors, `base` resolves `scene`.
+  [[nodiscard]] static Scenario from_toml_string(std::string_view text, std::string_view source = "<string>",
+                                                 const std::filesystem::path& base = {});
+};
+
+// A scenario's names turned into the model's indices, checked once.
+struct ResolvedScenario {
+  struct Control {
+    int actuator = -1;
+    std::vector<std::pair<When, double>> schedule;
+  };
+  struct Disturbance {
+    int body = -1;
+    DisturbanceSpec spec;
+  };
+  std::vector<Control> controls;
+  std::vector<Disturbance> disturbances;
+  std::vector<int> bodies, joints, actuators, sensors;  // to record
+  bool contacts = true;
+};
+
+// Resolves every name in `scenario` against `model`. An unknown name throws
+// InvalidArgument: "no body named 'tblok' (did you mean 'tblock'?); bodies
+// that can move: tblock, pusher". Actuators may be given by index.
+[[nodiscard]] ResolvedScenario resolve(const Scenario& scenario, const mjModel* model);
+
+// The draws a scenario's random disturbances make, in order: one uniform per
+// random disturbance, then one sign if it has random_sign. The chapter's
+// generator (mt19937_64 with spelled-out draws, shove.hpp) is one; others
+// may be added without changing the schedule.
+class Draws {
+ public:
+  virtual ~Draws() = default;
+  [[nodiscard]] virtual double uniform(double low, double high) = 0;  // [low, high)
+  [[nodiscard]] virtual double sign() = 0;                             // -1 or +1
+};
+
+// The chapter's generator: std::mt19937_64 seeded with `seed`, with the
+// draws spelled out as in shove.hpp (uniform: low + (high - low) * u; sign:
+// u < 0.5 ? -1 : +1), so the chapter's shove is the same in either form.
+[[nodiscard]] std::unique_ptr<Draws> mt19937_draws(std::uint64_t seed);
+
+// Every input of a run, decided up front. The loop only reads it.
+struct Schedule {
+  std::int64_t steps = 0;
+  struct ControlChange {
+    std::int64_t step = 0;  // from this step on...
+    int actuator = -1;      // ...ctrl[actuator] holds...
+    double value = 0.0;     // ...this (as written; MuJoCo clamps to ctrlrange)
+  };
+  std::vector<ControlChange> control_changes;  // sorted by step (stable)
+  struct Force {
+    int body = -1;
+    std::array<double, 6> wrench{};  // force, torque: what xfrc_applied gets
+    std::int64_t start = 0;          // first step it acts
+    std::int64_t end = 0;            // first step it no longer acts (start <= end <= steps)
+    std::int64_t asked_end = 0;      // where the scenario asked it to end (may be past the run)
+  };
+  std::vector<Force> forces;
+};
+
+// Draws the random disturbances (in scenario order) and lays out the inputs
+// for a run of the scenario's length at `timestep`.
+[[nodiscard]] Schedule build_schedule(const ResolvedScenario& scenario, const Scenario& spec, double timestep,
+                                      Draws& draws);
+
+// The closest of `candidates` to `name` by edit distance, if close enough to
+// be a likely typo; empty otherwise.
+[[nodiscard]] std::string did_you_mean(std::string_view name, const std::vector<std::string>& candidates);
+
+}  // namespace simloop

@@ -1,0 +1,235 @@
+// The scenario loop on a scene that is not the chapter's: PushT.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <memory>
+
+#include "simloop/errors.hpp"
+#include "simloop/model.hpp"
+#include "simloop/recorder.hpp"
+#include "simloop/scenario.hpp"
+
+namespace {
+
+struct Loaded {
+  std::shared_ptr<mjModel> model;
+  std::shared_ptr<mjData> data;
+};
+
+// The scene through MuJoCo directly: the loop needs nothing but mjModel.
+Loaded load(const char* file) {
+  (void)simloop::Model::pusher_scene();  // installs simloop's MuJoCo handlers
+  char error[512] = "";
+  mjModel* m = mj_loadXML((std::string(SIMLOOP_TEST_SCENES) + "/" + file).c_str(), nullptr, error, sizeof error);
+  if (m == nullptr) throw std::runtime_error(error);
+  return {std::shared_ptr<mjModel>(m, mj_deleteModel), std::shared_ptr<mjData>(mj_makeData(m), mj_deleteData)};
+}
+
+struct PushtRun {
+  simloop::Scenario scenario;
+  simloop::ScenarioRunResult result;
+  int column(const std::string& name) const {
+    for (size_t i = 0; i < result.columns.size(); ++i) {
+      if (result.columns[i].name == name) return static_cast<int>(i);
+    }
+    ADD_FAILURE() << "no column " << name;
+    return 0;
+  }
+  double at(std::int64_t row, const std::string& name) const { return result.trajectory.at(row, column(name)); }
+};
+
+PushtRun run_file(const char* toml, std::uint64_t seed, std::int64_t record_every = 1) {
+  PushtRun r;
+  r.scenario = simloop::Scenario::from_toml_file(std::string(SIMLOOP_TEST_SCENES) + "/" + toml);
+  const Loaded scene = load(r.scenario.scene.filename().c_str());
+  const simloop::ResolvedScenario resolved = simloop::resolve(r.scenario, scene.model.get());
+  const auto draws = simloop::mt19937_draws(seed);
+  const simloop::Schedule schedule = simloop::build_schedule(resolved, r.scenario, scene.model->opt.timestep, *draws);
+  r.result = simloop::run_schedule(scene.model.get(), scene.data.get(), resolved, schedule, record_every);
+  return r;
+}
+
+PushtRun run_pusht(std::uint64_t seed, std::int64_t record_every = 1, simloop::RowSink* sink = nullptr) {
+  static const Loaded scene = load("pusht.xml");
+  PushtRun r;
+  r.scenario = simloop::Scenario::from_toml_file(std::string(SIMLOOP_TEST_SCENES) + "/pusht.toml");
+  const simloop::ResolvedScenario resolved = simloop::resolve(r.scenario, scene.model.get());
+  const auto draws = simloop::mt19937_draws(seed);
+  const simloop::Schedule schedule = simloop::build_schedule(resolved, r.scenario, scene.model->opt.timestep, *draws);
+  r.result = simloop::run_schedule(scene.model.get(), scene.data.get(), resolved, schedule, record_every, sink);
+  return r;
+}
+
+TEST(ScenarioRun, ColumnsAreNamedFromTheScene) {
+  const PushtRun r = run_pusht(0);
+  std::vector<std::string> names;
+  for (const simloop::Column& c : r.result.columns) names.push_back(c.name);
+  const std::vector<std::string> expected = {
+      "step", "time", "push_x_ctrl", "push_y_ctrl",
+      "tblock_fx", "tblock_fy", "tblock_fz", "tblock_tx", "tblock_ty", "tblock_tz",
+      "tblock_x", "tblock_y", "tblock_z", "tblock_qw", "tblock_qx", "tblock_qy", "tblock_qz",
+      "tblock_vx", "tblock_vy", "tblock_vz", "tblock_wx", "tblock_wy", "tblock_wz",
+      "pusher_x", "pusher_y", "pusher_z", "pusher_qw", "pusher_qx", "pusher_qy", "pusher_qz",
+      "pusher_vx", "pusher_vy", "pusher_vz", "pusher_wx", "pusher_wy", "pusher_wz",
+      "slide_x_pos", "slide_x_vel", "slide_y_pos", "slide_y_vel",
+      "push_x_force", "push_y_force", "tblock_pos0", "tblock_pos1", "tblock_pos2", "tip_x", "ncon"};
+  EXPECT_EQ(names, expected);
+  EXPECT_EQ(r.result.rows, 1001);  // 2.0 s of 0.002 s steps, plus the final state
+  EXPECT_EQ(r.result.trajectory.rows(), 1001);
+}
+
+TEST(ScenarioRun, TheScheduleIsWhatTheStepsGot) {
+  const PushtRun r = run_pusht(0);
+  // push_y: 0 until 0.5 s (step 250), 0.4 until 1.0 s, then 2.0 asked, 1.0 applied (ctrlrange).
+  EXPECT_EQ(r.at(249, "push_y_ctrl"), 0.0);
+  EXPECT_EQ(r.at(250, "push_y_ctrl"), 0.4);
+  EXPECT_EQ(r.at(499, "push_y_ctrl"), 0.4);
+  EXPECT_EQ(r.at(500, "push_y_ctrl"), 1.0);
+  EXPECT_EQ(r.at(999, "push_x_ctrl"), 0.8);
+  EXPECT_TRUE(std::isnan(r.at(1000, "push_x_ctrl")));  // the final row has no inputs
+  // The bump: steps 600 to 649, along +-y, 0.5 to 1.5 N; zero before and after.
+  const double fy = r.at(600, "tblock_fy");
+  EXPECT_GE(std::fabs(fy), 0.5);
+  EXPECT_LT(std::fabs(fy), 1.5);
+  EXPECT_EQ(r.at(599, "tblock_fy"), 0.0);
+  EXPECT_EQ(r.at(649, "tblock_fy"), fy);
+  EXPECT_EQ(r.at(650, "tblock_fy"), 0.0);
+  EXPECT_EQ(r.at(620, "tblock_fx"), 0.0);
+  EXPECT_FALSE(std::signbit(r.at(620, "tblock_fx")));
+  // The motors did push: the pusher moved in both x and y, and the T moved.
+  EXPECT_GT(r.at(1000, "slide_x_pos"), 0.05);
+  EXPECT_GT(r.at(1000, "slide_y_pos"), 0.01);
+  EXPECT_GT(std::hypot(r.at(1000, "tblock_x") - 0.2, r.at(1000, "tblock_y")), 0.01);
+}
+
+TEST(ScenarioRun, DerivedQuantitiesDoNotLagTheStateTheyBelongTo) {
+  // Body poses and sensors are read after mj_step computed them for the
+  // row's state; joint positions before the step. If either lagged, these
+  // would differ by a step's worth of motion.
+  const PushtRun r = run_pusht(3);
+  for (std::int64_t row : {0, 1, 300, 650, 1000}) {
+    EXPECT_EQ(r.at(row, "tip_x"), r.at(row, "slide_x_pos")) << row;      // jointpos sensor vs qpos
+    EXPECT_EQ(r.at(row, "tblock_pos0"), r.at(row, "tblock_x")) << row;     // framepos sensor vs xpos
+    EXPECT_EQ(r.at(row, "tblock_pos2"), r.at(row, "tblock_z")) << row;
+  }
+  EXPECT_NE(r.at(300, "slide_x_pos"), r.at(301, "slide_x_pos"));  // it does move each step
+}
+
+TEST(ScenarioRun, SameSeedSameBitsOtherSeedOtherBump) {
+  const PushtRun a = run_pusht(7), b = run_pusht(7), c = run_pusht(8);
+  ASSERT_EQ(a.result.trajectory.rows(), b.result.trajectory.rows());
+  const size_t n = static_cast<size_t>(a.result.trajectory.rows() * a.result.trajectory.columns());
+  EXPECT_EQ(std::memcmp(a.result.trajectory.data(), b.result.trajectory.data(), n * sizeof(double)), 0);
+  EXPECT_NE(a.at(600, "tblock_fy"), c.at(600, "tblock_fy"));
+  EXPECT_EQ(a.result.schedule.forces[0].wrench[1], a.at(600, "tblock_fy"));
+}
+
+TEST(ScenarioRun, RecordEveryKeepsTheSameRowsAndTheFinalState) {
+  const PushtRun all = run_pusht(1, 1), some = run_pusht(1, 7);
+  EXPECT_EQ(some.result.trajectory.rows(), 1000 / 7 + 1 + 1);
+  for (std::int64_t i = 0; i + 1 < some.result.trajectory.rows(); ++i) {
+    const size_t w = static_cast<size_t>(all.result.trajectory.columns());
+    EXPECT_EQ(std::memcmp(some.result.trajectory.row(i), all.result.trajectory.row(7 * i), w * sizeof(double)), 0) << i;
+  }
+  EXPECT_EQ(some.at(some.result.trajectory.rows() - 1, "step"), 1000);
+}
+
+TEST(ScenarioRun, AWalkerUnderATorqueScheduleRecordsTheDefaults) {
+  const PushtRun r = run_file("walker.toml", 0);
+  EXPECT_EQ(r.result.timestep, 0.004);  // the scene's own
+  EXPECT_EQ(r.result.rows, 751);
+  // Defaults: the free body and every actuator (ctrl and force).
+  for (const char* name : {"torso_z", "torso_wz", "hip_left_ctrl", "knee_right_ctrl", "knee_right_force", "torso_tz"}) {
+    r.column(name);
+  }
+  EXPECT_EQ(r.at(0, "hip_left_ctrl"), 0.5);
+  EXPECT_EQ(r.at(130, "hip_left_ctrl"), -0.5);  // 0.5 s at 0.004 s a step is step 125
+  EXPECT_EQ(r.at(400, "knee_left_ctrl"), 0.2);
+  EXPECT_EQ(r.at(10, "knee_right_ctrl"), -0.3);   // actuator 3, by index
+  EXPECT_EQ(r.at(250, "torso_tz"), 2.0);          // the twist, 1.0 s to 1.05 s
+  EXPECT_EQ(r.at(262, "torso_tz"), 0.0);
+  EXPECT_LT(r.at(750, "torso_z"), 0.8);           // it fell
+  EXPECT_NE(r.at(300, "knee_right_force"), 0.0);
+}
+
+TEST(ScenarioRun, AnArmPushesAPuckOnTwoSlides) {
+  const PushtRun r = run_file("arm_push.toml", 0);
+  double most_contacts = 0;
+  for (std::int64_t i = 0; i < r.result.rows; ++i) most_contacts = std::max(most_contacts, r.at(i, "ncon"));
+  EXPECT_GT(most_contacts, 0);
+  const std::int64_t last = r.result.rows - 1;
+  EXPECT_GT(std::hypot(r.at(last, "puck_x_pos"), r.at(last, "puck_y_pos")), 0.01);  // the puck moved
+  EXPECT_NEAR(r.at(last, "puck_x_pos"), r.at(last, "puck_x") - 0.3, 1e-12);  // joint vs body: the same motion
+  EXPECT_EQ(r.at(420, "puck_fy"), -0.5);  // 2.0 s to 2.2 s: steps 400 to 439
+  EXPECT_EQ(r.at(440, "puck_fy"), 0.0);
+}
+
+}  // namespace
+
+#include "simloop/scene_geometry.hpp"
+
+namespace {
+
+TEST(SceneGeometry, ListsEveryVisibleGeomWithItsShapeAndColour) {
+  const Loaded scene = load("pusht.xml");
+  const std::vector<simloop::GeomShape> shapes = simloop::scene_geometry(scene.model.get());
+  ASSERT_EQ(shapes.size(), 5u);  // floor, goal, the T's two bars, the tip
+  EXPECT_EQ(shapes[0].name, "floor");
+  EXPECT_EQ(shapes[0].body, "world");
+  EXPECT_EQ(shapes[0].kind, simloop::GeomShape::Kind::kPlane);
+  EXPECT_EQ(shapes[2].name, "t_bar");
+  EXPECT_EQ(shapes[2].body, "tblock");
+  EXPECT_EQ(shapes[2].kind, simloop::GeomShape::Kind::kBox);
+  EXPECT_EQ(shapes[2].half_size, (std::array<double, 3>{0.08, 0.02, 0.02}));
+  EXPECT_EQ(shapes[2].pos, (std::array<double, 3>{0.0, 0.03, 0.0}));
+  EXPECT_EQ(shapes[2].rgba, (std::array<float, 4>{0.8f, 0.5f, 0.2f, 1.0f}));
+  EXPECT_EQ(shapes[4].kind, simloop::GeomShape::Kind::kCylinder);
+  EXPECT_EQ(shapes[4].half_size, (std::array<double, 3>{0.015, 0.015, 0.02}));
+  EXPECT_FLOAT_EQ(shapes[1].rgba[3], 0.4f);  // the goal is see-through
+}
+
+TEST(SceneGeometry, MeshesAreTheirBoundingBoxesAndMaterialsGiveColour) {
+  (void)simloop::Model::pusher_scene();
+  const char* xml = R"(<mujoco>
+    <asset>
+      <mesh name="wedge" vertex="0 0 0  1 0 0  0 2 0  0 0 3"/>
+      <material name="blue" rgba="0 0 1 1"/>
+    </asset>
+    <worldbody>
+      <body name="b"><freejoint/><geom name="w" type="mesh" mesh="wedge" material="blue"/></body>
+      <geom name="hidden" type="sphere" size="1" group="3"/>
+      <geom name="clear" type="sphere" size="1" rgba="1 0 0 0"/>
+    </worldbody></mujoco>)";
+  mjVFS vfs;
+  mj_defaultVFS(&vfs);
+  ASSERT_EQ(mj_makeEmptyFileVFS(&vfs, "m.xml", static_cast<int>(std::strlen(xml))), 0);
+  std::memcpy(vfs.filedata[vfs.nfile - 1], xml, std::strlen(xml));
+  char error[512] = "";
+  mjModel* m = mj_loadXML("m.xml", &vfs, error, sizeof error);
+  mj_deleteVFS(&vfs);
+  ASSERT_NE(m, nullptr) << error;
+  const std::vector<simloop::GeomShape> shapes = simloop::scene_geometry(m);
+  ASSERT_EQ(shapes.size(), 1u);
+  EXPECT_EQ(shapes[0].kind, simloop::GeomShape::Kind::kMesh);
+  // MuJoCo moves a mesh to its centre of mass and principal axes (the geom's
+  // pos and quat); the vertices as written, brought into the geom's frame,
+  // lie inside the box, and some touch each face.
+  const simloop::GeomShape& w = shapes[0];
+  double touching = 0;
+  for (const auto& v : std::vector<std::array<double, 3>>{{0, 0, 0}, {1, 0, 0}, {0, 2, 0}, {0, 0, 3}}) {
+    double offset[3] = {v[0] - w.pos[0], v[1] - w.pos[1], v[2] - w.pos[2]}, local[3];
+    double inverse[4] = {w.quat[0], -w.quat[1], -w.quat[2], -w.quat[3]};
+    mju_rotVecQuat(local, offset, inverse);
+    for (int i = 0; i < 3; ++i) {
+      const double from_centre = std::fabs(local[i] - w.mesh_center[static_cast<size_t>(i)]);
+      EXPECT_LE(from_centre, w.half_size[static_cast<size_t>(i)] + 1e-5);
+      if (from_centre > w.half_size[static_cast<size_t>(i)] - 1e-5) ++touching;
+    }
+  }
+  EXPECT_GE(touching, 6);
+  EXPECT_EQ(shapes[0].rgba, (std::array<float, 4>{0.0f, 0.0f, 1.0f, 1.0f}));
+  mj_deleteModel(m);
+}
+
+}  // namespace

@@ -1,0 +1,196 @@
+// Scenarios as data: TOML files, names resolved against the scene with
+// errors that say what the scene has, and the schedule drawn up front.
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "simloop/errors.hpp"
+#include "simloop/model.hpp"
+#include "simloop/scenario.hpp"
+#include "simloop/shove.hpp"
+
+namespace {
+
+using simloop::InvalidArgument;
+using simloop::Scenario;
+using simloop::When;
+
+const mjModel* chapter_model() {
+  static const simloop::Model model = simloop::Model::pusher_scene();
+  return model.get();
+}
+
+// The message of the InvalidArgument that `f` throws ("" if none).
+template <class F>
+std::string error_of(F&& f) {
+  try {
+    f();
+  } catch (const InvalidArgument& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Scenario, ATomlFileSaysEverythingAsData) {
+  const Scenario s = Scenario::from_toml_string(R"(
+name = "push it"
+scene = "pusht.xml"
+timestep = 0.001
+duration = 3.0
+
+[[control]]
+actuator = "push_x"
+value = 0.5
+
+[[control]]
+actuator = 1
+schedule = [[0.0, 0.0], [1.5, -0.25]]
+
+[[disturbance]]
+body = "tblock"
+force = [0, 3, 0]
+torque = [0, 0, 0.1]
+start = 1.0
+duration = 0.2
+
+[[disturbance]]
+body = "tblock"
+newtons = [2, 4]
+direction = [3, 4, 0]
+random_sign = true
+start_fraction = 0.5
+steps = 10
+
+[record]
+bodies = ["tblock"]
+joints = ["slide_x"]
+contacts = false
+)",
+                                                "pusht.toml", "/scenes");
+  EXPECT_EQ(s.name, "push it");
+  EXPECT_EQ(s.scene, std::filesystem::path("/scenes/pusht.xml"));
+  EXPECT_EQ(s.timestep, 0.001);
+  EXPECT_EQ(s.length.unit, When::Unit::kSeconds);
+  EXPECT_EQ(s.length.value, 3.0);
+  ASSERT_EQ(s.controls.size(), 2u);
+  EXPECT_EQ(s.controls[1].actuator, "1");
+  ASSERT_EQ(s.controls[1].schedule.size(), 2u);
+  EXPECT_EQ(s.controls[1].schedule[1].second, -0.25);
+  ASSERT_EQ(s.disturbances.size(), 2u);
+  EXPECT_EQ(s.disturbances[0].torque[2], 0.1);
+  EXPECT_EQ(s.disturbances[0].start.unit, When::Unit::kSeconds);
+  EXPECT_DOUBLE_EQ(s.disturbances[1].force[0], 0.6);  // direction normalised
+  EXPECT_DOUBLE_EQ(s.disturbances[1].force[1], 0.8);
+  EXPECT_TRUE(s.disturbances[1].random_sign);
+  EXPECT_EQ(s.disturbances[1].start.unit, When::Unit::kFractionOfRun);
+  EXPECT_EQ(s.disturbances[1].duration.to_steps(0.001, 3000), 10);
+  EXPECT_EQ(s.record.joints, std::vector<std::string>{"slide_x"});
+  EXPECT_FALSE(s.record.contacts);
+}
+
+TEST(Scenario, BadFilesNameTheKeyAndWhatIsWrong) {
+  const auto error = [](const std::string& text) {
+    return error_of([&] { (void)Scenario::from_toml_string(text, "s.toml"); });
+  };
+  EXPECT_EQ(error("timestep = -1"), "s.toml.timestep: must be a positive number of seconds, got -1.0");
+  EXPECT_EQ(error("setps = 5"),
+            "s.toml.setps: unknown key (did you mean 'steps'?); known keys: name, scene, timestep, steps, duration, "
+            "control, disturbance, record");
+  EXPECT_EQ(error("steps = 5\nduration = 1.0"), "s.toml: give only one of duration, steps");
+  EXPECT_EQ(error("[[control]]\nvalue = 1"), "s.toml: control[0].actuator: missing: name the actuator (or give its index)");
+  EXPECT_EQ(error("[[control]]\nactuator = 'a'\nvalue = 'x'"), "s.toml: control[0].value: expected a number, got a string");
+  EXPECT_EQ(error("[[control]]\nactuator = 'a'\nschedule = [[1.0, 0], [0.5, 1]]"),
+            "s.toml: control[0].schedule: times must increase, got 1.0 then 0.5");
+  EXPECT_EQ(error("[[disturbance]]\nbody = 'b'\nnewtons = [6, 12]"),
+            "s.toml: disturbance[0].direction: missing: newtons draws a strength; direction says which way (a vector)");
+  EXPECT_EQ(error("[[disturbance]]\nbody = 'b'\nforce = [1, 2]"),
+            "s.toml: disturbance[0].force: expected an array of 3 numbers, got an array of 2");
+  EXPECT_EQ(error("[[disturbance]]\nbody = 'b'\nforce = [1, 2, inf]"),
+            "s.toml: disturbance[0].force: expected a finite number, got inf");
+  EXPECT_EQ(error("[[disturbance]]\nbody = 'b'\nstart = 1.0\nstart_step = 3"),
+            "s.toml: disturbance[0]: give only one of start, start_step, start_fraction");
+  // Broken TOML: the parser's own words, with the line and column.
+  EXPECT_EQ(error("steps = = 3").rfind("s.toml:1:", 0), 0u) << error("steps = = 3");
+}
+
+TEST(Scenario, UnknownNamesListWhatTheSceneHasWithADidYouMean) {
+  Scenario s = Scenario::chapter();
+  s.disturbances[0].body = "bx";
+  EXPECT_EQ(error_of([&] { (void)simloop::resolve(s, chapter_model()); }),
+            "disturbance[0]: no body named 'bx' (did you mean 'box'?); bodies that can move: box, pusher");
+  s = Scenario::chapter();
+  s.controls[0].actuator = "motor";
+  EXPECT_EQ(error_of([&] { (void)simloop::resolve(s, chapter_model()); }),
+            "control[0]: no actuator named 'motor'; its actuators: push_motor");
+  s.controls[0].actuator = "3";
+  EXPECT_EQ(error_of([&] { (void)simloop::resolve(s, chapter_model()); }),
+            "control[0]: actuator index 3 is out of range; the scene has 1 actuators: push_motor");
+  s = Scenario::chapter();
+  s.record.joints = {"pusher_slid"};
+  EXPECT_EQ(error_of([&] { (void)simloop::resolve(s, chapter_model()); }),
+            "record.joints: no joint named 'pusher_slid' (did you mean 'pusher_slide'?); its joints: pusher_slide");
+}
+
+TEST(Scenario, ResolvesNamesAndIndicesAndDefaultsToFreeBodiesAndActuators) {
+  const mjModel* m = chapter_model();
+  Scenario s = Scenario::chapter();
+  s.controls[0].actuator = "0";
+  const simloop::ResolvedScenario r = simloop::resolve(s, m);
+  EXPECT_EQ(r.controls[0].actuator, 0);
+  EXPECT_EQ(r.disturbances[0].body, mj_name2id(m, mjOBJ_BODY, "box"));
+  EXPECT_EQ(r.joints, std::vector<int>{mj_name2id(m, mjOBJ_JOINT, "pusher_slide")});
+
+  Scenario bare;
+  const simloop::ResolvedScenario defaults = simloop::resolve(bare, m);
+  EXPECT_EQ(defaults.bodies, std::vector<int>{mj_name2id(m, mjOBJ_BODY, "box")});  // the free one
+  EXPECT_EQ(defaults.actuators, std::vector<int>{0});
+}
+
+TEST(Schedule, TheChaptersShoveIsOneDisturbanceDrawnAsBefore) {
+  const mjModel* m = chapter_model();
+  const Scenario s = Scenario::chapter();
+  const simloop::ResolvedScenario r = simloop::resolve(s, m);
+  for (std::uint64_t seed : {0ull, 1ull, 2ull, 12345ull, ~0ull}) {
+    const auto draws = simloop::mt19937_draws(seed);
+    const simloop::Schedule schedule = simloop::build_schedule(r, s, 0.002, *draws);
+    const simloop::Shove shove = simloop::draw_shove(seed, 2000);
+    ASSERT_EQ(schedule.forces.size(), 1u);
+    const simloop::Schedule::Force& f = schedule.forces[0];
+    EXPECT_EQ(f.wrench[1], shove.force_y()) << seed;  // the same bits
+    EXPECT_FALSE(std::signbit(f.wrench[0]));           // +0.0, never -0.0
+    EXPECT_EQ(f.wrench[0], 0.0);
+    EXPECT_EQ(f.start, shove.start_step);
+    EXPECT_EQ(f.end, shove.start_step + shove.num_steps);
+    ASSERT_EQ(schedule.control_changes.size(), 1u);
+    EXPECT_EQ(schedule.control_changes[0].value, 1.0);
+    EXPECT_EQ(schedule.steps, 2000);
+  }
+}
+
+TEST(Schedule, SecondsBecomeStepsAndAWindowCutShortIsReportedAsCut) {
+  const mjModel* m = chapter_model();
+  Scenario s = Scenario::chapter();
+  s.length = When::seconds(0.12);  // 60 steps of 0.002
+  s.controls[0].schedule = {{When::seconds(0.0), 0.5}, {When::seconds(0.05), -1.0}, {When::seconds(10.0), 3.0}};
+  const simloop::ResolvedScenario r = simloop::resolve(s, m);
+  const auto draws = simloop::mt19937_draws(0);
+  const simloop::Schedule schedule = simloop::build_schedule(r, s, 0.002, *draws);
+  EXPECT_EQ(schedule.steps, 60);
+  ASSERT_EQ(schedule.control_changes.size(), 2u);  // the change at 10 s is past the run
+  EXPECT_EQ(schedule.control_changes[1].step, 25);
+  EXPECT_EQ(schedule.forces[0].start, 30);
+  EXPECT_EQ(schedule.forces[0].end, 60);        // what happened: 30 steps
+  EXPECT_EQ(schedule.forces[0].asked_end, 80);  // what was asked: 50
+  s.length = When::seconds(0.0009);
+  EXPECT_EQ(error_of([&] { (void)simloop::build_schedule(r, s, 0.002, *draws); }),
+            "the run's length (0.0009 s) is less than one step of 0.002 s");
+}
+
+TEST(DidYouMean, SuggestsOnlyLikelyTypos) {
+  EXPECT_EQ(simloop::did_you_mean("tblok", {"tblock", "pusher"}), "tblock");
+  EXPECT_EQ(simloop::did_you_mean("PUSHER", {"tblock", "pusher"}), "pusher");
+  EXPECT_EQ(simloop::did_you_mean("floor", {"tblock", "pusher"}), "");
+  EXPECT_EQ(simloop::did_you_mean("x", {}), "");
+}
+
+}  // namespace
