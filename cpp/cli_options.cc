@@ -3,6 +3,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 #include <limits>
 #include <optional>
 #include <string_view>
@@ -83,6 +84,19 @@ double parse_timestep(std::string_view flag, std::string_view value) {
     throw UsageError(std::string(flag) + " must be a positive, finite number of seconds, got " + quoted(value));
   }
   return x;
+}
+
+// ACTUATOR=VALUE: an actuator by name or index, and any finite number.
+std::pair<std::string, double> parse_ctrl(std::string_view flag, std::string_view value) {
+  const size_t eq = value.rfind('=');
+  const std::string number = eq == std::string_view::npos ? std::string() : std::string(value.substr(eq + 1));
+  const bool plain = plain_decimal(number);
+  const double x = plain ? std::strtod(number.c_str(), nullptr) : 0.0;
+  if (eq == 0 || eq == std::string_view::npos || !plain || !std::isfinite(x)) {
+    throw UsageError(std::string(flag) + " must be ACTUATOR=VALUE (an actuator's name or index, a finite number), got " +
+                     quoted(value));
+  }
+  return {std::string(value.substr(0, eq)), x};
 }
 
 std::vector<double> parse_timestep_list(std::string_view flag, std::string_view value) {
@@ -181,9 +195,24 @@ Options parse(int argc, const char* const* argv) {
     } else if (arg == "--steps") {
       run_only();
       opts.run.steps = static_cast<std::int64_t>(parse_u64(arg, value(), 1, static_cast<std::uint64_t>(kMaxSteps)));
+      opts.steps_given = true;
     } else if (arg == "--timestep") {
       run_only();
       opts.run.timestep = parse_timestep(arg, value());
+      opts.timestep_given = true;
+    } else if (arg == "--scenario") {
+      run_only();
+      const std::string_view v = value();
+      if (v.empty()) throw UsageError("--scenario must name a scenario file (TOML), got ''");
+      opts.scenario_path = std::string(v);
+    } else if (arg == "--body") {
+      run_only();
+      const std::string_view v = value();
+      if (v.empty()) throw UsageError("--body must name a body of the scene, got ''");
+      opts.body = std::string(v);
+    } else if (arg == "--ctrl") {
+      run_only();
+      opts.ctrls.push_back(parse_ctrl(arg, value()));
     } else if (arg == "--record-every") {
       run_only();
       opts.run.record_every =
@@ -200,6 +229,7 @@ Options parse(int argc, const char* const* argv) {
       run_only();
       no_value();
       opts.run.smoke = true;
+      opts.steps_given = true;
     } else if (arg == "--energy-audit") {
       run_only();
       no_value();
@@ -242,6 +272,20 @@ Options parse(int argc, const char* const* argv) {
     }
     return opts;
   }
+  if (!opts.scenario_path.empty()) {
+    if (!opts.model_path.empty()) throw UsageError("--model and --scenario: the scenario file names its scene");
+    if (!opts.body.empty() || !opts.ctrls.empty()) {
+      throw UsageError(std::string(opts.body.empty() ? "--ctrl" : "--body") +
+                       " and --scenario: the scenario file says what is pushed and driven");
+    }
+  }
+  if (opts.is_scenario() && opts.plot) {
+    throw UsageError("--plot draws the chapter's run (its box and pusher); a scenario's trajectory.csv has the "
+                     "scene's own columns (not with --scenario, --body or --ctrl)");
+  }
+  if (opts.is_scenario() && opts.run.audit_energy) {
+    throw UsageError("--energy-audit accounts for the chapter's box and pusher only (not with --scenario, --body or --ctrl)");
+  }
   // The library would refuse it too; say it in the flags' words.
   try {
     validate(opts.run);
@@ -249,6 +293,48 @@ Options parse(int argc, const char* const* argv) {
     throw UsageError(std::string("--steps/--record-every: ") + e.what());
   }
   return opts;
+}
+
+Scenario scenario_from_flags(const Options& opts, const Model* scene) {
+  if (!opts.scenario_path.empty()) return Scenario::from_toml_file(opts.scenario_path);
+  Scenario s = Scenario::chapter();
+  if (!opts.model_path.empty()) {
+    s.scene = opts.model_path;
+    s.name = std::filesystem::path(opts.model_path).stem().string();
+    s.timestep.reset();  // the scene's own
+  }
+  if (!opts.ctrls.empty()) {
+    s.controls.clear();
+    for (const auto& [actuator, value] : opts.ctrls) s.controls.push_back({actuator, {{When::steps(0), value}}});
+  } else if (!opts.model_path.empty()) {
+    s.controls.clear();
+    if (scene != nullptr && scene->get()->nu > 0) s.controls.push_back({"0", {{When::steps(0), 1.0}}});
+  }
+  if (!opts.body.empty()) s.disturbances[0].body = opts.body;
+  // Record what moves freely, what is pushed, and every actuator.
+  s.record = RecordSpec{};
+  if (scene != nullptr) {
+    const mjModel* m = scene->get();
+    for (int b = 1; b < m->nbody; ++b) {
+      const char* name = mj_id2name(m, mjOBJ_BODY, b);
+      if (name == nullptr || *name == '\0') continue;
+      const bool free = m->body_jntnum[b] >= 1 && m->jnt_type[m->body_jntadr[b]] == mjJNT_FREE;
+      if (free || name == s.disturbances[0].body) s.record.bodies.push_back(name);
+    }
+    for (int a = 0; a < m->nu; ++a) s.record.actuators.push_back(std::to_string(a));
+  }
+  return s;
+}
+
+ScenarioConfig scenario_config(const Options& opts) {
+  ScenarioConfig c;
+  c.seed = opts.run.seed;
+  c.rng = opts.run.rng;
+  if (opts.timestep_given) c.timestep = opts.run.timestep;
+  if (opts.steps_given) c.steps = opts.run.num_steps();
+  c.perturb = opts.run.perturb;
+  c.record_every = opts.run.record_every;
+  return c;
 }
 
 std::string help_text(std::string_view program, std::string_view recording) {
@@ -275,9 +361,16 @@ options:
                     trajectory.csv, totals in the summary
   --record-every K  write every K-th step to trajectory.csv (default 1; the
                     final state is always written)
-  --model FILE      another MJCF scene: needs a body "box" on a free joint and
-                    an actuator 0 on a slide or hinge joint (default: the
-                    chapter's pusher scene)
+  --model FILE      another MJCF scene, at its own timestep unless --timestep
+                    is given (default: the chapter's pusher scene). Alone it
+                    runs the chapter's loop: a body "box" on a free joint and
+                    an actuator 0 on a slide or hinge joint
+  --body NAME       the body the chapter's shove acts on (default box): runs
+                    a scenario on any scene (see below)
+  --ctrl ACT=VALUE  drive actuator ACT (a name or an index) at VALUE, held
+                    for the whole run; repeatable (default: actuator 0 at 1.0)
+  --scenario FILE   a scenario file (TOML): the scene, timestep, length,
+                    controls, disturbances and recording, as data
   --rerun, --no-rerun
                     )";
   text += recording;
@@ -289,8 +382,14 @@ commands:
   sweep             the baseline at many timesteps: where Break It begins
                     (see sweep --help)
 
+scenarios: with --scenario, --body or --ctrl, trajectory.csv has columns named
+from the scene (a row per step: the ctrl applied, the forces, each recorded
+body's pose and velocity, joints, actuator forces, sensors, contacts) and
+metrics.json the scenario's figures; --steps, --timestep, --seed, --rng,
+--no-perturb, --smoke and --record-every still apply.
+
 exit status: 0 done, 1 the run failed (MuJoCo error, cannot write outputs),
-2 bad command line or input (a flag's value, --model, --out).
+2 bad command line or input (a flag's value, --model, --scenario, --out).
 )";
   return text;
 }

@@ -1,5 +1,6 @@
 // sim_loop's flags: the chapter's, spelled and defaulted as there, plus
-// --model, --record-every, --help and --version.
+// --model, --record-every, --help and --version, and the scenario flags
+// (--scenario, --body, --ctrl).
 #pragma once
 
 #include <filesystem>
@@ -8,7 +9,10 @@
 #include <vector>
 #include <string_view>
 
+#include "simloop/model.hpp"
 #include "simloop/run.hpp"
+#include "simloop/scenario.hpp"
+#include "simloop/scenario_run.hpp"
 
 namespace simloop::cli {
 
@@ -24,9 +28,21 @@ struct Options {
   bool plot = false;       // --plot: trajectory.png / sweep.png
   std::filesystem::path out = "outputs/ch0.1-sim-loop";
   std::string model_path;  // empty: the embedded pusher scene
+  // Your scene, your loop (a scenario instead of the chapter's fixed run):
+  std::string scenario_path;  // --scenario FILE (TOML)
+  std::string body;           // --body NAME: the body the chapter's shove acts on ("" : box)
+  std::vector<std::pair<std::string, double>> ctrls;  // --ctrl ACTUATOR=VALUE, in order
+  bool timestep_given = false;  // --timestep was given (else the scene's or scenario's own)
+  bool steps_given = false;     // --steps or --smoke was given (else the scenario's length)
   bool rerun = true;       // accepted for the chapter's command lines; sim_loop records nothing
   bool help = false;
   bool version = false;
+
+  // True when the run is a scenario (--scenario, --body or --ctrl), not the
+  // chapter's fixed run with its exact outputs.
+  [[nodiscard]] bool is_scenario() const noexcept {
+    return !scenario_path.empty() || !body.empty() || !ctrls.empty();
+  }
 };
 
 // A bad command line. The message is one line naming the flag and the value.
@@ -39,6 +55,19 @@ class UsageError : public std::runtime_error {
 // Shared by sim_loop and `python -m simloop`, so both take the same flags and
 // refuse bad ones with the same words.
 [[nodiscard]] Options parse(int argc, const char* const* argv);
+
+// The scenario the flags describe (Options::is_scenario()): the --scenario
+// file, or the chapter's run made from the quick flags on `scene` (the
+// --model, or the chapter's): the chapter's shove on --body (default box),
+// the --ctrl values held from step 0 (default: actuator 0 at 1.0, as the
+// chapter writes ctrl[0]), recording every body on a free joint, the pushed
+// body and every actuator. The scene's own timestep unless --timestep.
+// Throws InvalidArgument (bad file: IoError) in the words of the flags.
+[[nodiscard]] Scenario scenario_from_flags(const Options& opts, const Model* scene = nullptr);
+
+// What --seed, --rng, --timestep, --steps/--smoke, --no-perturb and
+// --record-every ask of a scenario run.
+[[nodiscard]] ScenarioConfig scenario_config(const Options& opts);
 
 // --help for `program`; `recording` says what --rerun does there, `plot`
 // what --plot does.

@@ -285,6 +285,43 @@ int run_command(const simloop::cli::Options& opts, const simloop::Model& model) 
   return 0;
 }
 
+// A scenario's bad name, in the words of the flags that gave it: the quick
+// flags' scenario has the shove as disturbance[0] (--body) and the --ctrl
+// values as control[0], control[1]...
+std::string scenario_error(const simloop::cli::Options& opts, const std::string& what) {
+  if (!opts.scenario_path.empty()) return "--scenario " + opts.scenario_path + ": " + what;
+  const std::string shove = "disturbance[0]: ";
+  if (what.rfind(shove, 0) == 0) {
+    return "--body" + std::string(opts.body.empty() ? " (default box)" : "") + ": " + what.substr(shove.size());
+  }
+  if (what.rfind("control[", 0) == 0 && what.find("]: ") != std::string::npos) {
+    const size_t index = std::strtoul(what.c_str() + 8, nullptr, 10);
+    const size_t rest = what.find("]: ") + 3;
+    if (index < opts.ctrls.size()) return "--ctrl " + opts.ctrls[index].first + ": " + what.substr(rest);
+    return "actuator 0 (the chapter's ctrl; choose with --ctrl): " + what.substr(rest);
+  }
+  return what;
+}
+
+// A scenario's run (--scenario, --body, --ctrl): the same streaming and
+// committing as the chapter's, with the scenario's columns and metrics.
+int scenario_command(const simloop::cli::Options& opts, const simloop::Scenario& scenario,
+                     const simloop::Model& scene) {
+  simloop::OutputWriter writer(opts.out);
+  const simloop::ScenarioRunResult result = simloop::run_scenario(
+      scene, scenario, simloop::cli::scenario_config(opts), nullptr, &writer.trajectory(), &g_control);
+  const simloop::OutputFiles files = writer.commit(simloop::scenario_metrics_json(result), &g_control);
+  g_outputs_written = true;
+  std::fputs(simloop::scenario_summary(result).c_str(), stdout);
+  std::printf("metrics: %s\n", files.metrics.c_str());
+  std::printf("trajectory: %s (%lld rows, %zu columns)\n", files.trajectory.c_str(),
+              static_cast<long long>(result.rows), result.columns.size());
+  if (opts.rerun) {
+    std::printf("recording: none (sim_loop writes no .rrd; python -m simloop records one)\n");
+  }
+  return 0;
+}
+
 int run_main(int argc, char** argv) {
   const auto started = std::chrono::steady_clock::now();
   namespace cli = simloop::cli;
@@ -327,21 +364,50 @@ int run_main(int argc, char** argv) {
   // signal while the model loads ends the process at once: nothing is
   // half-written yet.
   std::optional<simloop::Model> model;
+  std::optional<simloop::Scenario> scenario;
   g_exit_at_once = 1;
   if (g_signal != 0) on_stop_signal(g_signal);
-  const std::string model_flag = opts.model_path.empty() ? "--model" : "--model " + opts.model_path;
+  if (!opts.scenario_path.empty()) {
+    try {
+      scenario = simloop::Scenario::from_toml_file(opts.scenario_path);
+    } catch (const simloop::Error& e) {
+      g_exit_at_once = 0;
+      return fail(kExitUsage, "--scenario: " + std::string(e.what()));
+    }
+  }
+  const std::string model_flag = scenario ? "--scenario " + opts.scenario_path
+                                 : opts.model_path.empty() ? "--model" : "--model " + opts.model_path;
   try {
-    model = opts.model_path.empty() ? simloop::Model::pusher_scene()
-                                    : simloop::Model::from_file(opts.model_path);
+    model = scenario                   ? simloop::load_scene(*scenario)
+            : opts.model_path.empty() ? simloop::Model::pusher_scene()
+                                      : simloop::Model::from_file(opts.model_path);
   } catch (const simloop::Error& e) {
     g_exit_at_once = 0;
-    return fail(opts.model_path.empty() ? kExitRunFailed : kExitUsage, "--model: " + std::string(e.what()));
+    const bool theirs = scenario ? !scenario->scene.empty() : !opts.model_path.empty();
+    return fail(theirs ? kExitUsage : kExitRunFailed, (scenario ? "--scenario: " : "--model: ") + std::string(e.what()));
   } catch (const std::bad_alloc&) {
     g_exit_at_once = 0;
     return fail(kExitRunFailed, model_flag + ": out of memory while loading the model");
   } catch (const std::exception& e) {
     g_exit_at_once = 0;
     return fail(kExitRunFailed, model_flag + ": while loading the model: " + e.what());
+  }
+  // What runs: a scenario (its names checked now, in the flags' words), or
+  // the chapter's loop, which needs the chapter's box and pusher.
+  if (opts.is_scenario()) {
+    try {
+      if (!scenario) scenario = simloop::cli::scenario_from_flags(opts, &*model);
+      (void)simloop::resolve(*scenario, model->get());
+    } catch (const simloop::Error& e) {
+      g_exit_at_once = 0;
+      return fail(kExitUsage, scenario_error(opts, e.what()));
+    }
+  } else if (!model->has_chapter_layout()) {
+    g_exit_at_once = 0;
+    return fail(kExitUsage, "--model: " + model->missing_layout() +
+                                "; for any other scene, name the body to shove (--body) or run a --scenario");
+  } else if (!opts.model_path.empty() && !opts.timestep_given) {
+    opts.run.timestep = model->timestep();  // the scene's own, as written in its file
   }
   // From here on a file may exist that must go (the output directory's
   // probe, then the temporary outputs): a signal only requests a stop.
@@ -354,7 +420,9 @@ int run_main(int argc, char** argv) {
 
   try {
     check_stop();
-    const int status = opts.command == cli::Command::kSweep ? sweep_command(opts, *model) : run_command(opts, *model);
+    const int status = opts.command == cli::Command::kSweep ? sweep_command(opts, *model)
+                       : scenario                           ? scenario_command(opts, *scenario, *model)
+                                                            : run_command(opts, *model);
     if (status != 0) return status;
   } catch (const simloop::Interrupted&) {
     return interrupted();

@@ -93,8 +93,19 @@ mjModel* load_xml(const char* filename, const mjVFS* vfs, std::string_view sourc
 
 Model Model::adopt(mjModel* raw, std::string_view source) {
   std::shared_ptr<const mjModel> owned(raw, ModelDeleter{});
-  const SceneLayout layout = resolve_layout(raw, source);
+  SceneLayout layout;
+  try {
+    layout = resolve_layout(raw, source);
+  } catch (const InvalidArgument& e) {
+    layout = SceneLayout{};
+    layout.missing = e.what();
+  }
   return Model(std::move(owned), layout);
+}
+
+const SceneLayout& Model::layout() const {
+  if (!layout_.missing.empty()) throw InvalidArgument(layout_.missing);
+  return layout_;
 }
 
 std::string_view pusher_scene_xml() noexcept { return kPusherSceneXml; }

@@ -33,24 +33,25 @@ const char* json_bool(bool b) { return b ? "true" : "false"; }
   throw IoError(path.string() + ": " + std::string(what) + " (" + std::strerror(err) + ")");
 }
 
-// The header line of trajectory.csv for rows `columns` wide.
-void append_csv_header(std::string& out, int columns) {
-  for (int c = 0; c < columns; ++c) {
+// The header line of trajectory.csv.
+void append_csv_header(std::string& out, const std::vector<Column>& columns) {
+  for (size_t c = 0; c < columns.size(); ++c) {
     if (c > 0) out += ',';
-    out += Trajectory::kColumnNames[c];
+    out += columns[c].name;
   }
   out += '\n';
 }
 
-// `count` rows of trajectory.csv, each `columns` adjacent values.
-void append_csv_rows(std::string& out, const double* rows, std::int64_t count, int columns) {
+// `count` rows of trajectory.csv, each columns.size() adjacent values.
+void append_csv_rows(std::string& out, const double* rows, std::int64_t count, const std::vector<Column>& columns) {
+  const size_t width = columns.size();
   for (std::int64_t r = 0; r < count; ++r) {
-    const double* row = rows + static_cast<size_t>(r) * static_cast<size_t>(columns);
-    for (int c = 0; c < columns; ++c) {
+    const double* row = rows + static_cast<size_t>(r) * width;
+    for (size_t c = 0; c < width; ++c) {
       if (c > 0) out += ',';
       const double v = row[c];
-      if (Trajectory::is_input_column(c) && std::isnan(v)) continue;  // final row: no inputs
-      if (Trajectory::is_integer_column(c)) {
+      if (columns[c].input && std::isnan(v)) continue;  // final row: no inputs
+      if (columns[c].integer) {
         out += std::to_string(static_cast<std::int64_t>(v));
       } else {
         append_shortest(out, v);
@@ -101,12 +102,24 @@ std::string metrics_json(const Metrics& m) {
   return out;
 }
 
-std::string trajectory_csv(const Trajectory& t) {
+std::string trajectory_csv(const Trajectory& t, const std::vector<Column>& columns) {
+  const std::vector<Column> named = columns.empty() ? chapter_columns(t.columns()) : columns;
+  if (static_cast<int>(named.size()) != t.columns()) {
+    throw InvalidArgument("trajectory.csv: " + std::to_string(t.columns()) + " columns, " +
+                          std::to_string(named.size()) + " names");
+  }
   std::string out;
   out.reserve(static_cast<size_t>(t.rows() + 1) * static_cast<size_t>(t.columns()) * 12);
-  append_csv_header(out, t.columns());
-  append_csv_rows(out, t.data(), t.rows(), t.columns());
+  append_csv_header(out, named);
+  append_csv_rows(out, t.data(), t.rows(), named);
   return out;
+}
+
+std::string warning_line(const Warning& w) {
+  std::string line = w.name.rfind("mj", 0) == 0 ? "MuJoCo" : "simloop";
+  line += " warning " + w.name + ": raised " + std::to_string(w.count) + (w.count == 1 ? " time" : " times") +
+          ", first in step " + std::to_string(w.first_step) + ": " + w.message + "\n";
+  return line;
 }
 
 std::string summary_text(const RunResult& r) {
@@ -140,12 +153,7 @@ std::string summary_text(const RunResult& r) {
     std::snprintf(line, sizeof line, "no shove (baseline run)\n");
   }
   out += line;
-  for (const Warning& w : r.warnings) {
-    std::snprintf(line, sizeof line, "%s warning %s: raised %d time%s, first in step %lld: %s\n",
-                  w.name.rfind("mj", 0) == 0 ? "MuJoCo" : "simloop", w.name.c_str(), w.count, w.count == 1 ? "" : "s", static_cast<long long>(w.first_step),
-                  w.message.c_str());
-    out += line;
-  }
+  for (const Warning& w : r.warnings) out += warning_line(w);
   if (r.config.audit_energy) {
     const EnergyTotals& e = r.energy;
     std::snprintf(line, sizeof line,
@@ -300,10 +308,14 @@ void write_file_atomically(const std::filesystem::path& path, std::string_view c
 }
 
 void TrajectoryCsvSink::start(int columns, std::int64_t /*rows*/) {
-  columns_ = columns;
+  if (columns_.empty()) columns_ = chapter_columns(columns);
+  if (static_cast<int>(columns_.size()) != columns) {
+    throw InvalidArgument("trajectory.csv: the run records " + std::to_string(columns) + " columns, the writer was given " +
+                          std::to_string(columns_.size()) + " names");
+  }
   buffer_.clear();
   buffer_.reserve(kFlushBytes + 4096);
-  append_csv_header(buffer_, columns);
+  append_csv_header(buffer_, columns_);
 }
 
 void TrajectoryCsvSink::write(const double* rows, std::int64_t count) {
@@ -313,7 +325,7 @@ void TrajectoryCsvSink::write(const double* rows, std::int64_t count) {
   while (count > 0) {
     const std::int64_t n = std::min(count, kRowsPerSlice);
     append_csv_rows(buffer_, rows, n, columns_);
-    rows += static_cast<size_t>(n) * static_cast<size_t>(columns_);
+    rows += static_cast<size_t>(n) * columns_.size();
     count -= n;
     if (buffer_.size() >= kFlushBytes) {
       file_.append(buffer_);
@@ -336,15 +348,19 @@ OutputFiles prepared(const std::filesystem::path& dir) {
 }
 }  // namespace
 
-OutputWriter::OutputWriter(const std::filesystem::path& dir)
+OutputWriter::OutputWriter(const std::filesystem::path& dir, std::vector<Column> columns)
     : files_(prepared(dir)),
       trajectory_file_(files_.trajectory),
-      csv_(trajectory_file_) {}
+      csv_(trajectory_file_, std::move(columns)) {}
 
 OutputFiles OutputWriter::commit(const Metrics& metrics, const RunControl* control) {
+  return commit(metrics_json(metrics), control);
+}
+
+OutputFiles OutputWriter::commit(std::string_view metrics_text, const RunControl* control) {
   csv_.finish();
   PendingFile metrics_file(files_.metrics);
-  metrics_file.append(metrics_json(metrics));
+  metrics_file.append(metrics_text);
   metrics_file.finish();
   commit_together({&trajectory_file_, &metrics_file}, control);
   return files_;

@@ -9,6 +9,7 @@
 #include "mujoco_guard.hpp"
 #include "run_detail.hpp"
 #include "simloop/errors.hpp"
+#include "divergence.hpp"
 #include "warning_counter.hpp"
 
 namespace simloop {
@@ -192,8 +193,16 @@ std::vector<ForceChange> force_changes(const Schedule& schedule) {
 ScenarioRunResult run_schedule(const mjModel* m, mjData* d, const ResolvedScenario& scenario,
                                const Schedule& schedule, std::int64_t record_every, RowSink* sink,
                                RunControl* control) {
-  if (record_every < 1) throw InvalidArgument("record_every must be at least 1, got " + std::to_string(record_every));
+  if (record_every < 1 || record_every > kMaxRecordEvery) {
+    throw InvalidArgument("record_every must be from 1 to " + std::to_string(kMaxRecordEvery) + ", got " +
+                          std::to_string(record_every));
+  }
+  if (schedule.steps < 1 || schedule.steps > kMaxSteps) {
+    throw InvalidArgument("steps must be from 1 to " + std::to_string(kMaxSteps) + ", got " +
+                          std::to_string(schedule.steps));
+  }
   const Recorder recorder(m, scenario, schedule);
+  if (sink == nullptr) detail::check_kept_rows(schedule.steps, record_every, recorder.width());
   const std::vector<ForceChange> forces = force_changes(schedule);
   const std::vector<Schedule::ControlChange>& controls = schedule.control_changes;
   const std::int64_t steps = schedule.steps;
@@ -206,11 +215,13 @@ ScenarioRunResult run_schedule(const mjModel* m, mjData* d, const ResolvedScenar
   result.rows = Trajectory::rows_for(steps, record_every);
   detail::KeepRows keep(result.trajectory);
   RowSink& rows = sink ? *sink : keep;
+  rows.describe(result.columns);
   rows.start(width, result.rows);
   const std::int64_t block_rows = std::min(result.rows, RunControl::kChunkSteps / record_every + 2);
   std::vector<double> block(static_cast<size_t>(block_rows) * static_cast<size_t>(width));
   std::int64_t in_block = 0;
   detail::WarningCounter warnings;
+  detail::DivergenceCheck divergence(m);
   if (control) control->add_total(steps);
 
   detail::mujoco_call([&] {
@@ -241,6 +252,7 @@ ScenarioRunResult run_schedule(const mjModel* m, mjData* d, const ResolvedScenar
         }
         mj_step(m, d);
         warnings.after_step(d, step);
+        divergence.after_step(d, step);
         if (row) recorder.after_step(row, m, d);
       }
     });
@@ -253,8 +265,10 @@ ScenarioRunResult run_schedule(const mjModel* m, mjData* d, const ResolvedScenar
   detail::mujoco_call([&] { mj_forward(m, d); });
   recorder.after_step(last, m, d);
   rows.write(last, 1);
+  result.final_row.assign(last, last + width);
 
   result.warnings = warnings.warnings();
+  if (divergence.diverged()) result.warnings.push_back(divergence.warning());
   result.sim_time = d->time;
   return result;
 }

@@ -70,6 +70,18 @@ void record_row(double* values, std::int64_t step, const mjData* d, const SceneL
 
 }  // namespace
 
+std::vector<Column> chapter_columns(int count) {
+  static constexpr const char* kUnits[Trajectory::kNumColumns] = {
+      "", "s", "", "N", "N", "N", "m", "m", "m", "", "", "", "", "m/s", "m/s", "m/s", "rad/s", "rad/s", "rad/s",
+      "m", "m/s", "", "J", "J", "J", "J", "J", "J", "J"};
+  std::vector<Column> columns;
+  for (int c = 0; c < count && c < Trajectory::kNumColumns; ++c) {
+    columns.push_back({std::string(Trajectory::kColumnNames[c]), kUnits[c], Trajectory::is_integer_column(c),
+                       Trajectory::is_input_column(c)});
+  }
+  return columns;
+}
+
 void validate(const RunConfig& config) {
   std::ostringstream msg;
   if (!(std::isfinite(config.timestep) && config.timestep > 0.0)) {
@@ -138,6 +150,19 @@ void check_kept_trajectories(const std::vector<RunConfig>& configs, std::uint64_
         << human_bytes(total) << " of trajectories in memory";
   }
   msg << " (at most " << human_bytes(budget)
+      << " allowed: half of the machine's memory or the process's limit); raise record_every, "
+         "or let sim_loop stream it to a file";
+  throw InvalidArgument(msg.str());
+}
+
+void detail::check_kept_rows(std::int64_t steps, std::int64_t record_every, int columns) {
+  const std::uint64_t budget = trajectory_memory_budget();
+  const long double bytes = static_cast<long double>(Trajectory::rows_for(steps, record_every)) * columns * sizeof(double);
+  if (bytes <= static_cast<long double>(budget)) return;
+  std::ostringstream msg;
+  msg << "steps " << steps << " with record_every " << record_every << " would keep "
+      << human_bytes(bytes >= 1.8e19L ? std::numeric_limits<std::uint64_t>::max() : static_cast<std::uint64_t>(bytes))
+      << " of trajectory (" << columns << " columns) in memory (at most " << human_bytes(budget)
       << " allowed: half of the machine's memory or the process's limit); raise record_every, "
          "or let sim_loop stream it to a file";
   throw InvalidArgument(msg.str());

@@ -22,6 +22,11 @@ class KeepRows final : public RowSink {
   std::int64_t next_ = 0;
 };
 
+// Throws InvalidArgument if a run of `steps` steps keeping every
+// `record_every`-th row of `columns` doubles would not fit the memory budget
+// (trajectory_memory_budget), saying how much it needs and what to change.
+void check_kept_rows(std::int64_t steps, std::int64_t record_every, int columns);
+
 // run() without announcing its steps to the control: a batch announces all
 // of its runs' steps up front, so progress has its true total from the start.
 [[nodiscard]] RunResult run_counted_elsewhere(const Model& model, const RunConfig& config, Data& workspace,

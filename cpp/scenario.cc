@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cerrno>
+#include <cstring>
 #include <fstream>
 #include <memory>
 #include <random>
@@ -22,10 +24,13 @@ constexpr double kChapterTimestep = 0.002;
 
 class TableReader {
  public:
-  TableReader(const toml::table& table, std::string where) : table_(table), where_(std::move(where)) {}
+  TableReader(const toml::table& table, std::string source, std::string where = "")
+      : table_(table), source_(std::move(source)), where_(std::move(where)) {}
 
+  // "file.toml: key: what", "file.toml: control[0].key: what".
   [[noreturn]] void fail(std::string_view key, const std::string& what) const {
-    throw InvalidArgument(where_ + (key.empty() ? "" : "." + std::string(key)) + ": " + what);
+    const std::string at = where_.empty() ? std::string(key) : key.empty() ? where_ : where_ + "." + std::string(key);
+    throw InvalidArgument(source_ + ": " + (at.empty() ? "" : at + ": ") + what);
   }
 
   // Refuses keys this table does not know, naming the ones it does.
@@ -136,7 +141,6 @@ class TableReader {
     return out;
   }
 
-  [[nodiscard]] const std::string& where() const { return where_; }
 
  private:
   static std::string type_name(const toml::node& node) {
@@ -151,7 +155,8 @@ class TableReader {
     }
   }
   const toml::table& table_;
-  std::string where_;
+  std::string source_;  // the file
+  std::string where_;   // the table in it: "" (the top), "control[0]", "record"
 };
 
 // A point in the run from one of `seconds_key` (s), `steps_key` (steps) or
@@ -252,24 +257,6 @@ std::int64_t When::to_steps(double timestep, std::int64_t run_steps) const {
   return static_cast<std::int64_t>(std::clamp(steps, 0.0, kFar));
 }
 
-namespace {
-
-// The chapter's draws (shove.hpp): std::mt19937_64, u = (g() >> 11) * 2^-53.
-class Mt19937Draws final : public Draws {
- public:
-  explicit Mt19937Draws(std::uint64_t seed) : generator_(seed) {}
-  double uniform(double low, double high) override { return low + (high - low) * unit(); }
-  double sign() override { return unit() < 0.5 ? -1.0 : 1.0; }
-
- private:
-  double unit() { return static_cast<double>(generator_() >> 11) * 0x1.0p-53; }
-  std::mt19937_64 generator_;
-};
-
-}  // namespace
-
-std::unique_ptr<Draws> mt19937_draws(std::uint64_t seed) { return std::make_unique<Mt19937Draws>(seed); }
-
 Scenario Scenario::chapter() {
   Scenario s;
   s.name = "ch0.1-sim-loop";
@@ -291,10 +278,10 @@ Scenario Scenario::chapter() {
 
 Scenario Scenario::from_toml_file(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw IoError("cannot read scenario file " + path.string());
+  if (!in) throw IoError(path.string() + ": cannot open (" + std::strerror(errno) + ")");
   std::ostringstream text;
   text << in.rdbuf();
-  if (in.bad()) throw IoError("cannot read scenario file " + path.string());
+  if (in.bad()) throw IoError(path.string() + ": cannot read (" + std::strerror(errno) + ")");
   Scenario s = from_toml_string(text.str(), path.string(), path.parent_path());
   if (s.name.empty()) s.name = path.stem().string();
   return s;
@@ -337,8 +324,7 @@ Scenario Scenario::from_toml_string(std::string_view text, std::string_view sour
       top.fail(key, "expected [[" + std::string(key) + "]] tables");
     }
     for (std::size_t i = 0; i < array->size(); ++i) {
-      read(TableReader(*array->get(i)->as_table(), std::string(source) + ": " + std::string(key) + "[" +
-                                                       std::to_string(i) + "]"));
+      read(TableReader(*array->get(i)->as_table(), std::string(source), std::string(key) + "[" + std::to_string(i) + "]"));
     }
   };
   each_table("control", [&](const TableReader& t) { s.controls.push_back(read_control(t)); });
@@ -346,7 +332,7 @@ Scenario Scenario::from_toml_string(std::string_view text, std::string_view sour
   if (const toml::node* node = root.get("record")) {
     const auto* table = node->as_table();
     if (table == nullptr) top.fail("record", "expected a [record] table");
-    const TableReader r(*table, std::string(source) + ": record");
+    const TableReader r(*table, std::string(source), "record");
     r.allow_only({"bodies", "joints", "actuators", "sensors", "contacts"});
     s.record.bodies = r.strings("bodies");
     s.record.joints = r.strings("joints");

@@ -166,17 +166,49 @@ std::optional<ShoveRng> parse_rng(std::string_view name) noexcept {
   return std::nullopt;
 }
 
+namespace {
+
+class NumpyDraws final : public Draws {
+ public:
+  explicit NumpyDraws(std::uint64_t seed) : generator_(seed) {}
+  double uniform(double low, double high) override { return low + (high - low) * unit_double(generator_.next64()); }
+  double sign() override {
+    const double choices[2] = {-1.0, 1.0};
+    return choices[bounded_lemire(generator_, 1)];  // choice([-1.0, 1.0])
+  }
+
+ private:
+  Pcg64 generator_;
+};
+
+class Mt19937Draws final : public Draws {
+ public:
+  explicit Mt19937Draws(std::uint64_t seed) : generator_(seed) {}
+  double uniform(double low, double high) override { return low + (high - low) * unit_double(generator_()); }
+  double sign() override { return unit_double(generator_()) < 0.5 ? -1.0 : 1.0; }
+
+ private:
+  std::mt19937_64 generator_;
+};
+
+}  // namespace
+
+std::unique_ptr<Draws> make_draws(std::uint64_t seed, ShoveRng rng) {
+  if (rng == ShoveRng::kNumpy) return std::make_unique<NumpyDraws>(seed);
+  return std::make_unique<Mt19937Draws>(seed);
+}
+
 Shove draw_shove(std::uint64_t seed, std::int64_t num_steps, ShoveRng rng) noexcept {
   Shove shove;
+  // uniform(6.0, 12.0), then the sign: numpy's choice([-1.0, 1.0]), or u < 0.5.
   if (rng == ShoveRng::kNumpy) {
-    Pcg64 generator(seed);
-    shove.newtons = 6.0 + 6.0 * unit_double(generator.next64());  // uniform(6.0, 12.0)
-    const double choices[2] = {-1.0, 1.0};
-    shove.sign = choices[bounded_lemire(generator, 1)];  // choice([-1.0, 1.0])
+    NumpyDraws draws(seed);
+    shove.newtons = draws.uniform(6.0, 12.0);
+    shove.sign = draws.sign();
   } else {
-    std::mt19937_64 generator(seed);
-    shove.newtons = 6.0 + 6.0 * unit_double(generator());
-    shove.sign = unit_double(generator()) < 0.5 ? -1.0 : 1.0;
+    Mt19937Draws draws(seed);
+    shove.newtons = draws.uniform(6.0, 12.0);
+    shove.sign = draws.sign();
   }
   shove.start_step = num_steps / 2;
   shove.num_steps = kShoveSteps;

@@ -23,7 +23,10 @@ void require_finite(double value, const char* what) {
 
 }  // namespace
 
-Sim::Sim(const Model& model) : model_(model), data_(model) { reset(); }
+Sim::Sim(const Model& model) : model_(model), data_(model) {
+  (void)model_.layout();  // the chapter's Sim reads the box and the pusher: refuse other scenes now
+  reset();
+}
 
 void Sim::reset() {
   const mjModel* m = model_.get();

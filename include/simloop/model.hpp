@@ -22,7 +22,9 @@ namespace simloop {
 // motor's ctrlrange (current MuJoCo defaults to it, so it loads on both).
 [[nodiscard]] std::string_view pusher_scene_xml() noexcept;
 
-// Where the loop finds the things it reads and writes, resolved once by name.
+// Where the chapter's loop finds the things it reads and writes, resolved
+// once by name. A scene without them still loads (scenarios run on any
+// scene); the chapter's loop then refuses it, saying what is missing.
 struct SceneLayout {
   int box_body = -1;       // body named "box"
   int box_qposadr = -1;    // its free joint: qpos[adr..adr+7) = xyz + wxyz quaternion
@@ -31,14 +33,14 @@ struct SceneLayout {
   int pusher_body = -1;    // the body that joint moves
   int pusher_qposadr = -1;
   int pusher_dofadr = -1;
+  std::string missing;     // why the scene lacks the chapter's layout ("" when it has it)
 };
 
 class Model {
  public:
   // The embedded chapter scene.
   [[nodiscard]] static Model pusher_scene();
-  // Any MJCF text; it must have a body "box" on a free joint and an actuator
-  // 0 that drives a slide or hinge joint. `source` names it in errors.
+  // Any MJCF text. `source` names it in errors.
   [[nodiscard]] static Model from_xml_string(std::string_view xml,
                                              std::string_view source = "<string>");
   // An MJCF file on disk (includes and meshes resolve relative to it).
@@ -57,7 +59,13 @@ class Model {
 
   [[nodiscard]] const mjModel* get() const noexcept { return model_.get(); }
   [[nodiscard]] double timestep() const noexcept { return model_->opt.timestep; }
-  [[nodiscard]] const SceneLayout& layout() const noexcept { return layout_; }
+  // The chapter's layout: a body "box" on a free joint and an actuator 0
+  // that drives a slide or hinge joint. Throws InvalidArgument naming what
+  // the scene lacks.
+  [[nodiscard]] const SceneLayout& layout() const;
+  [[nodiscard]] bool has_chapter_layout() const noexcept { return layout_.missing.empty(); }
+  // Why the scene lacks the chapter's layout, naming the model ("" if it has it).
+  [[nodiscard]] const std::string& missing_layout() const noexcept { return layout_.missing; }
 
  private:
   // Takes ownership of a freshly loaded model and resolves its layout.

@@ -11,6 +11,7 @@
 #include <initializer_list>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "simloop/control.hpp"
 #include "simloop/run.hpp"
@@ -21,16 +22,22 @@ namespace simloop {
 // writes for the chapter's metrics dict, byte for byte.
 [[nodiscard]] std::string metrics_json(const Metrics& metrics);
 
-// trajectory.csv: a header of Trajectory::kColumnNames, then one line per row.
-// Numbers are the shortest text that reads back as the same double; step and
-// ncon are whole numbers; the final row's input cells are empty.
-[[nodiscard]] std::string trajectory_csv(const Trajectory& trajectory);
+// trajectory.csv: a header of the column names (the chapter's,
+// Trajectory::kColumnNames, unless `columns` are given), then one line per
+// row. Numbers are the shortest text that reads back as the same double;
+// integer columns (step, ncon) are whole numbers; the final row's input cells
+// are empty.
+[[nodiscard]] std::string trajectory_csv(const Trajectory& trajectory, const std::vector<Column>& columns = {});
 
 // The chapter's closing lines: steps and sim time, where the box ended, the
 // shove and its drift (or "no shove (baseline run)"; for the steps it acted,
 // its window cut short when the run ends inside it), and any MuJoCo
 // warnings. Each line ends in "\n". Nothing in it depends on time or machine.
 [[nodiscard]] std::string summary_text(const RunResult& result);
+
+// One summary line for a warning: "MuJoCo warning mjWARN_BADQACC: raised 3
+// times, first in step 1043: ..." (or "simloop warning ..." for simloop's own).
+[[nodiscard]] std::string warning_line(const Warning& warning);
 
 // Creates `dir` (and parents) if missing and checks that files can be
 // created in it. Throws IoError naming the directory.
@@ -93,14 +100,18 @@ void write_file_atomically(const std::filesystem::path& path, std::string_view c
 class TrajectoryCsvSink final : public RowSink {
  public:
   static constexpr size_t kFlushBytes = size_t{1} << 20;
-  explicit TrajectoryCsvSink(PendingFile& file) : file_(file) {}
+  // `columns`: the header and how to write each cell; empty for the
+  // chapter's columns (as many as the run records).
+  explicit TrajectoryCsvSink(PendingFile& file, std::vector<Column> columns = {})
+      : file_(file), columns_(std::move(columns)) {}
+  void describe(const std::vector<Column>& columns) override { columns_ = columns; }
   void start(int columns, std::int64_t rows) override;
   void write(const double* rows, std::int64_t count) override;
   void finish();
 
  private:
   PendingFile& file_;
-  int columns_ = 0;
+  std::vector<Column> columns_;
   std::string buffer_;
 };
 
@@ -117,9 +128,12 @@ struct OutputFiles {
 // leaves the earlier outputs as they were.
 class OutputWriter {
  public:
-  explicit OutputWriter(const std::filesystem::path& dir);
+  // `columns` as for TrajectoryCsvSink: empty for the chapter's.
+  explicit OutputWriter(const std::filesystem::path& dir, std::vector<Column> columns = {});
   [[nodiscard]] RowSink& trajectory() noexcept { return csv_; }
   OutputFiles commit(const Metrics& metrics, const RunControl* control = nullptr);
+  // The same with metrics.json's text already made (a scenario's metrics).
+  OutputFiles commit(std::string_view metrics_text, const RunControl* control = nullptr);
 
  private:
   OutputFiles files_;

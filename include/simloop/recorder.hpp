@@ -13,14 +13,6 @@
 
 namespace simloop {
 
-// One trajectory column.
-struct Column {
-  std::string name;      // made from the scene's names: "tblock_x", "push_x_ctrl"
-  std::string unit;      // "m", "rad", "m/s", "N", "" for counts and quaternions...
-  bool integer = false;  // a whole number (written without a decimal point)
-  bool input = false;    // an input written for the step: the final row has none
-};
-
 // The columns of a resolved scenario, laid out once, and how to fill a row.
 //
 // A row holds the state entering its step and the inputs written for that
@@ -69,7 +61,13 @@ class Recorder {
 // A scenario run's outcome: the schedule it followed (the drawn forces and
 // the windows as they actually happened), the recorded rows, the warnings.
 struct ScenarioRunResult {
+  std::string name;          // the scenario's
+  std::uint64_t seed = 0;
+  std::string rng;           // the generator's name ("mt19937_64", "numpy")
+  bool perturb = true;
+  std::vector<std::string> disturbed_bodies;  // schedule.forces[i]'s body, by name
   std::vector<Column> columns;
+  std::vector<double> final_row;  // the last row, whether kept or streamed
   Trajectory trajectory;  // empty when the rows went to a RowSink
   std::int64_t rows = 0;
   Schedule schedule;

@@ -154,6 +154,17 @@ class Trajectory {
   std::vector<double> values_;
 };
 
+// One trajectory column, as the CSV writer and the bindings need it.
+struct Column {
+  std::string name;      // "box_x"; for scenarios made from the scene's names
+  std::string unit;      // "m", "rad", "m/s", "N"; "" for counts and quaternions
+  bool integer = false;  // a whole number (written without a decimal point)
+  bool input = false;    // an input written for the step: the final row has none (NaN, an empty cell)
+};
+
+// The chapter's first `count` columns (Trajectory::kColumnNames).
+[[nodiscard]] std::vector<Column> chapter_columns(int count);
+
 // Where a run's trajectory rows go as the loop makes them: kept in memory
 // (RunResult::trajectory, the default), streamed to a file by the commands,
 // or reduced on the fly. The loop hands over rows in blocks between its
@@ -162,12 +173,16 @@ class Trajectory {
 class RowSink {
  public:
   virtual ~RowSink() = default;
+  // Once, before start(), from loops whose columns are not the chapter's (a
+  // scenario's, named from its scene): what each column is.
+  virtual void describe(const std::vector<Column>& /*columns*/) {}
   // Once, before any row: the width of every row (Trajectory::kNumBaseColumns,
   // or kNumColumns with the energy audit) and how many rows will come.
   virtual void start(int columns, std::int64_t rows) = 0;
   // `count` rows, each `columns` adjacent doubles, in order.
   virtual void write(const double* rows, std::int64_t count) = 0;
 };
+
 
 // The energy audit's totals over a whole run (RunConfig::audit_energy), J.
 struct EnergyTotals {

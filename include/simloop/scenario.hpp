@@ -28,6 +28,8 @@
 
 #include <mujoco/mujoco.h>
 
+#include "simloop/shove.hpp"
+
 namespace simloop {
 
 // A point or span of a run, in steps or in simulated seconds (converted with
@@ -118,22 +120,6 @@ struct ResolvedScenario {
 // InvalidArgument: "no body named 'tblok' (did you mean 'tblock'?); bodies
 // that can move: tblock, pusher". Actuators may be given by index.
 [[nodiscard]] ResolvedScenario resolve(const Scenario& scenario, const mjModel* model);
-
-// The draws a scenario's random disturbances make, in order: one uniform per
-// random disturbance, then one sign if it has random_sign. The chapter's
-// generator (mt19937_64 with spelled-out draws, shove.hpp) is one; others
-// may be added without changing the schedule.
-class Draws {
- public:
-  virtual ~Draws() = default;
-  [[nodiscard]] virtual double uniform(double low, double high) = 0;  // [low, high)
-  [[nodiscard]] virtual double sign() = 0;                             // -1 or +1
-};
-
-// The chapter's generator: std::mt19937_64 seeded with `seed`, with the
-// draws spelled out as in shove.hpp (uniform: low + (high - low) * u; sign:
-// u < 0.5 ? -1 : +1), so the chapter's shove is the same in either form.
-[[nodiscard]] std::unique_ptr<Draws> mt19937_draws(std::uint64_t seed);
 
 // Every input of a run, decided up front. The loop only reads it.
 struct Schedule {

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string_view>
 
@@ -28,6 +29,18 @@ enum class ShoveRng {
 [[nodiscard]] std::string_view rng_description(ShoveRng rng) noexcept;
 // The generator named `name` (as rng_name spells it), or nothing.
 [[nodiscard]] std::optional<ShoveRng> parse_rng(std::string_view name) noexcept;
+
+// A run's one source of randomness: the draws a scenario's random
+// disturbances make, in order (the chapter's shove is one such disturbance).
+class Draws {
+ public:
+  virtual ~Draws() = default;
+  [[nodiscard]] virtual double uniform(double low, double high) = 0;  // [low, high): low + (high - low) * u
+  [[nodiscard]] virtual double sign() = 0;                             // -1 or +1
+};
+
+// The generator `rng` seeded with `seed`, drawing as described at draw_shove.
+[[nodiscard]] std::unique_ptr<Draws> make_draws(std::uint64_t seed, ShoveRng rng = ShoveRng::kMt19937_64);
 
 struct Shove {
   double newtons = 0.0;       // strength, uniform in [6, 12): friction resists with ~5 N

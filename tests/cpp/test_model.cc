@@ -7,6 +7,7 @@
 
 #include "simloop/errors.hpp"
 #include "simloop/model.hpp"
+#include "simloop/sim.hpp"
 #include "simloop/run.hpp"
 #include "test_util.hpp"
 
@@ -73,24 +74,32 @@ TEST(Model, DataFitsModelsOfTheSameStructureOnly) {
 }
 
 TEST(Model, MissingPiecesAreNamed) {
-  EXPECT_NE(message_of<simloop::InvalidArgument>([] {
-              (void)simloop::Model::from_xml_string(scene_with("name=\"box\"", "name=\"crate\""), "test.xml");
-            }).find("test.xml: the model has no body named \"box\""),
+  // Any scene loads (scenarios run on any scene); the chapter's loop, which
+  // reads the box and the pusher, refuses one without them, naming what is
+  // missing (once at load: layout(); again in run() and Sim).
+  const simloop::Model crate = simloop::Model::from_xml_string(scene_with("name=\"box\"", "name=\"crate\""), "test.xml");
+  EXPECT_FALSE(crate.has_chapter_layout());
+  EXPECT_NE(message_of<simloop::InvalidArgument>([&] { (void)crate.layout(); })
+                .find("test.xml: the model has no body named \"box\""),
             std::string::npos);
+  EXPECT_EQ(message_of<simloop::InvalidArgument>([&] { (void)simloop::run(crate, simloop::RunConfig{}); }),
+            crate.missing_layout());
+  EXPECT_EQ(message_of<simloop::InvalidArgument>([&] { simloop::Sim sim(crate); }), crate.missing_layout());
   EXPECT_NE(message_of<simloop::InvalidArgument>([] {
-              (void)simloop::Model::from_xml_string(scene_with("<freejoint/>", "<joint type=\"slide\"/>"));
+              (void)simloop::Model::from_xml_string(scene_with("<freejoint/>", "<joint type=\"slide\"/>")).layout();
             }).find("body \"box\" must have exactly one joint, a free joint"),
             std::string::npos);
   const std::string no_actuator = scene_with(
       "<motor name=\"push_motor\" joint=\"pusher_slide\" gear=\"10\" ctrlrange=\"-1 1\"/>", "");
   EXPECT_NE(message_of<simloop::InvalidArgument>([&] {
-              (void)simloop::Model::from_xml_string(no_actuator);
+              (void)simloop::Model::from_xml_string(no_actuator).layout();
             }).find("no actuator"),
             std::string::npos);
   const std::string ball = scene_with("type=\"slide\" axis=\"1 0 0\"", "type=\"ball\"");
-  EXPECT_NE(message_of<simloop::InvalidArgument>([&] { (void)simloop::Model::from_xml_string(ball); })
+  EXPECT_NE(message_of<simloop::InvalidArgument>([&] { (void)simloop::Model::from_xml_string(ball).layout(); })
                 .find("slide or hinge"),
             std::string::npos);
+  EXPECT_TRUE(simloop::Model::pusher_scene().has_chapter_layout());
 }
 
 TEST(Model, InvalidXmlRaisesMujocosOwnMessageAndWritesNoLog) {

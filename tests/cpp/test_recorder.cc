@@ -44,7 +44,7 @@ PushtRun run_file(const char* toml, std::uint64_t seed, std::int64_t record_ever
   r.scenario = simloop::Scenario::from_toml_file(std::string(SIMLOOP_TEST_SCENES) + "/" + toml);
   const Loaded scene = load(r.scenario.scene.filename().c_str());
   const simloop::ResolvedScenario resolved = simloop::resolve(r.scenario, scene.model.get());
-  const auto draws = simloop::mt19937_draws(seed);
+  const auto draws = simloop::make_draws(seed);
   const simloop::Schedule schedule = simloop::build_schedule(resolved, r.scenario, scene.model->opt.timestep, *draws);
   r.result = simloop::run_schedule(scene.model.get(), scene.data.get(), resolved, schedule, record_every);
   return r;
@@ -55,7 +55,7 @@ PushtRun run_pusht(std::uint64_t seed, std::int64_t record_every = 1, simloop::R
   PushtRun r;
   r.scenario = simloop::Scenario::from_toml_file(std::string(SIMLOOP_TEST_SCENES) + "/pusht.toml");
   const simloop::ResolvedScenario resolved = simloop::resolve(r.scenario, scene.model.get());
-  const auto draws = simloop::mt19937_draws(seed);
+  const auto draws = simloop::make_draws(seed);
   const simloop::Schedule schedule = simloop::build_schedule(resolved, r.scenario, scene.model->opt.timestep, *draws);
   r.result = simloop::run_schedule(scene.model.get(), scene.data.get(), resolved, schedule, record_every, sink);
   return r;

@@ -92,9 +92,9 @@ TEST(Scenario, BadFilesNameTheKeyAndWhatIsWrong) {
   const auto error = [](const std::string& text) {
     return error_of([&] { (void)Scenario::from_toml_string(text, "s.toml"); });
   };
-  EXPECT_EQ(error("timestep = -1"), "s.toml.timestep: must be a positive number of seconds, got -1.0");
+  EXPECT_EQ(error("timestep = -1"), "s.toml: timestep: must be a positive number of seconds, got -1.0");
   EXPECT_EQ(error("setps = 5"),
-            "s.toml.setps: unknown key (did you mean 'steps'?); known keys: name, scene, timestep, steps, duration, "
+            "s.toml: setps: unknown key (did you mean 'steps'?); known keys: name, scene, timestep, steps, duration, "
             "control, disturbance, record");
   EXPECT_EQ(error("steps = 5\nduration = 1.0"), "s.toml: give only one of duration, steps");
   EXPECT_EQ(error("[[control]]\nvalue = 1"), "s.toml: control[0].actuator: missing: name the actuator (or give its index)");
@@ -151,7 +151,7 @@ TEST(Schedule, TheChaptersShoveIsOneDisturbanceDrawnAsBefore) {
   const Scenario s = Scenario::chapter();
   const simloop::ResolvedScenario r = simloop::resolve(s, m);
   for (std::uint64_t seed : {0ull, 1ull, 2ull, 12345ull, ~0ull}) {
-    const auto draws = simloop::mt19937_draws(seed);
+    const auto draws = simloop::make_draws(seed);
     const simloop::Schedule schedule = simloop::build_schedule(r, s, 0.002, *draws);
     const simloop::Shove shove = simloop::draw_shove(seed, 2000);
     ASSERT_EQ(schedule.forces.size(), 1u);
@@ -173,7 +173,7 @@ TEST(Schedule, SecondsBecomeStepsAndAWindowCutShortIsReportedAsCut) {
   s.length = When::seconds(0.12);  // 60 steps of 0.002
   s.controls[0].schedule = {{When::seconds(0.0), 0.5}, {When::seconds(0.05), -1.0}, {When::seconds(10.0), 3.0}};
   const simloop::ResolvedScenario r = simloop::resolve(s, m);
-  const auto draws = simloop::mt19937_draws(0);
+  const auto draws = simloop::make_draws(0);
   const simloop::Schedule schedule = simloop::build_schedule(r, s, 0.002, *draws);
   EXPECT_EQ(schedule.steps, 60);
   ASSERT_EQ(schedule.control_changes.size(), 2u);  // the change at 10 s is past the run

@@ -1,0 +1,53 @@
+// Running a scenario: its scene compiled once, then any number of runs, each
+// scenario -> schedule (drawn from the seed) -> the loop -> what was asked
+// recorded, and what the run leaves behind (metrics.json, the summary).
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include "simloop/control.hpp"
+#include "simloop/model.hpp"
+#include "simloop/recorder.hpp"
+#include "simloop/scenario.hpp"
+#include "simloop/shove.hpp"
+
+namespace simloop {
+
+// What one run of a scenario varies; the scenario fixes the rest.
+struct ScenarioConfig {
+  std::uint64_t seed = 0;                  // seeds the random disturbances, and nothing else
+  ShoveRng rng = ShoveRng::kMt19937_64;    // the generator that draws them
+  std::optional<double> timestep;          // instead of the scenario's (or the scene's own)
+  std::optional<std::int64_t> steps;       // instead of the scenario's length
+  bool perturb = true;                     // false: no disturbances (the baseline)
+  std::int64_t record_every = 1;           // a row every K steps, and the final state
+};
+
+// The scene a scenario names, compiled: its MJCF file, or the chapter's
+// embedded scene when it names none.
+[[nodiscard]] Model load_scene(const Scenario& scenario);
+
+// Runs `scenario` on `scene` (as load_scene made it, or any Model of the
+// same scene): the timestep is config's, else the scenario's, else the
+// scene's own. Names are resolved first (InvalidArgument listing what the
+// scene has), then the schedule is drawn, then the loop runs in `workspace`
+// (a fresh Data if null). Same scenario, scene, config: the same bits.
+[[nodiscard]] ScenarioRunResult run_scenario(const Model& scene, const Scenario& scenario,
+                                             const ScenarioConfig& config, Data* workspace = nullptr,
+                                             RowSink* sink = nullptr, RunControl* control = nullptr);
+
+// metrics.json for a scenario run: byte for byte what Python's
+// json.dumps(metrics, indent=2, sort_keys=True) + "\n" writes, floats
+// rounded to 6 decimals as in the chapter's. Keys: scenario, seed, rng,
+// perturb, steps, timestep; bodies: each recorded body's final_pos (m) and
+// final_speed (m/s); disturbances: each one's body, force (N) and torque
+// (N m) as applied, start_step, steps (as they happened) and steps_asked;
+// warnings: MuJoCo's and simloop's, by name, with their counts.
+[[nodiscard]] std::string scenario_metrics_json(const ScenarioRunResult& result);
+
+// The closing lines for people, as for the chapter's run.
+[[nodiscard]] std::string scenario_summary(const ScenarioRunResult& result);
+
+}  // namespace simloop
