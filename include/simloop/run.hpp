@@ -16,6 +16,11 @@ namespace simloop {
 // --smoke: a short, fixed run so CI can compare two runs byte for byte.
 inline constexpr std::int64_t kSmokeSteps = 300;
 
+// The largest step count and record_every either face accepts (2^62-1, so
+// steps + record_every never overflows int64).
+inline constexpr std::int64_t kMaxSteps = (std::int64_t{1} << 62) - 1;
+inline constexpr std::int64_t kMaxRecordEvery = (std::int64_t{1} << 62) - 1;
+
 struct RunConfig {
   std::uint64_t seed = 0;          // seeds the shove, and nothing else
   std::int64_t steps = 2000;       // ignored when smoke is set
