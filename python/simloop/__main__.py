@@ -73,6 +73,10 @@ def _sweep(opts, model, out: Path) -> None:
 def main(argv: Optional[List[str]] = None) -> int:
     started = time.perf_counter()
     args = sys.argv[1:] if argv is None else list(argv)
+    # A path from the command line may hold bytes that are not UTF-8 (sys.argv
+    # carries them as surrogates): print it back as those bytes, as sim_loop does.
+    if hasattr(sys.stdout, "reconfigure"):
+        sys.stdout.reconfigure(errors="surrogateescape")
     if args and args[0] == "plot":
         return _plot_command(args[1:])
     from . import _core, load_model
