@@ -510,20 +510,28 @@ PYBIND11_MODULE(_core, m) {
       })
       .def(
           "step",
-          [](PySim& s, std::int64_t n, py::object progress) {
+          [](PySim& s, std::int64_t n) {
             SimLock lock(s);
-            if (n <= simloop::RunControl::kChunkSteps && progress.is_none()) {
+            if (n <= simloop::RunControl::kChunkSteps) {
               // One chunk: nothing to interrupt, so no RunControl to pay for
               // (Python checks for Ctrl-C between the calls of a tight loop).
               py::gil_scoped_release release;
               s.sim.step(n);
               return;
             }
+            Interruptible work{py::none()};
+            work.run([&](simloop::RunControl* control) { s.sim.step(n, control); });
+          },
+          "n"_a)
+      .def(
+          "step_with_progress",
+          [](PySim& s, std::int64_t n, py::object progress) {
+            SimLock lock(s);
             Interruptible work(std::move(progress));
             work.run([&](simloop::RunControl* control) { s.sim.step(n, control); });
             work.finish();
           },
-          "n"_a, "progress"_a = py::none())
+          "n"_a, "progress"_a)
       .def_property_readonly("time", locked(&simloop::Sim::time))
       .def_property_readonly("steps_taken", locked(&simloop::Sim::steps_taken))
       .def_property_readonly("box_position", [](PySim& s) {

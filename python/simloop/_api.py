@@ -265,7 +265,7 @@ class Sim:
         if progress is None:
             self._sim.step(count)
         else:
-            self._sim.step(count, progress=_check_progress(progress))
+            self._sim.step_with_progress(count, _check_progress(progress))
 
     def apply_force(self, force: Sequence[float]) -> None:
         """Pushes on the box with (fx, fy, fz) newtons, world frame, from now on.
