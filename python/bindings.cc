@@ -215,13 +215,15 @@ class Interruptible {
 
 // A Sim that any Python thread may call. Every call holds the Sim's lock for
 // its whole length, GIL released or not, so no call sees another half done
-// (a step while set_timestep swaps the model, say). The lock is taken without
-// the GIL when it is contended, so a thread waiting for it never blocks the
-// thread that holds it from getting the GIL back.
+// (a step while set_timestep swaps the model, say). The lock is waited for
+// without the GIL, so a thread waiting for it never blocks the thread that
+// holds it from getting the GIL back; and in slices, between which the waiter
+// runs Python's signal handlers, so Ctrl-C reaches a thread waiting for a Sim
+// that another thread is stepping for a long time.
 struct PySim {
   explicit PySim(const simloop::Model& model) : sim(model) {}
   simloop::Sim sim;
-  std::mutex mutex;
+  std::timed_mutex mutex;
   // The thread holding `mutex`, if any. Only the holder writes it, and a
   // thread only asks whether it is itself the holder, so relaxed order does.
   std::atomic<std::thread::id> holder{};
@@ -236,9 +238,14 @@ class SimLock {
       throw py::value_error("this Sim is in the middle of a call on this thread (a signal handler or "
                             "progress callback called it); call it after that call returns");
     }
-    if (!s.mutex.try_lock()) {
-      py::gil_scoped_release release;
-      s.mutex.lock();
+    while (!s.mutex.try_lock()) {
+      bool locked = false;
+      {
+        py::gil_scoped_release release;
+        locked = s.mutex.try_lock_for(simloop::RunControl::kPollInterval);
+      }
+      if (locked) break;
+      if (PyErr_CheckSignals() != 0) throw py::error_already_set();
     }
     s.holder.store(std::this_thread::get_id(), std::memory_order_relaxed);
   }
