@@ -7,13 +7,21 @@
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
+#include <atomic>
+#include <cstdint>
 #include <memory>
+#include <mutex>
+#include <new>
 #include <optional>
 #include <string>
+#include <system_error>
+#include <thread>
+#include <utility>
 #include <vector>
 
 #include "cli_options.hpp"
 #include "simloop/batch.hpp"
+#include "simloop/control.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/model.hpp"
 #include "simloop/number_format.hpp"
@@ -88,6 +96,206 @@ simloop::ShoveRng shove_rng(const std::string& name) {
 
 py::array vec(const double* values, size_t n) { return py::array_t<double>(static_cast<py::ssize_t>(n), values); }
 
+// Text from the C++ side that may hold a path's raw bytes (not UTF-8): as a
+// str the way Python decodes file names (os.fsdecode, surrogateescape).
+py::str fs_str(const std::string& text) {
+  PyObject* decoded = PyUnicode_DecodeFSDefaultAndSize(text.data(), static_cast<py::ssize_t>(text.size()));
+  if (!decoded) throw py::error_already_set();
+  return py::reinterpret_steal<py::str>(decoded);
+}
+
+// Sets a Python error whose message is `what` on one line (MuJoCo's own
+// messages can span several), decoded as fs_str does.
+void set_error_fs(PyObject* type, const char* what) {
+  std::string line;
+  bool line_break = false;
+  for (const char* c = what; *c; ++c) {
+    if (*c == '\n' || *c == '\r') {
+      line_break = true;
+      continue;
+    }
+    if (line_break && !line.empty() && line.back() != ' ' && *c != ' ') line += ' ';
+    line_break = false;
+    line += *c;
+  }
+  PyObject* message = PyUnicode_DecodeFSDefaultAndSize(line.data(), static_cast<py::ssize_t>(line.size()));
+  if (!message) {
+    PyErr_Clear();
+    PyErr_SetString(type, "(undecodable message)");
+    return;
+  }
+  PyErr_SetObject(type, message);
+  Py_DECREF(message);
+}
+
+// The standard library's resource failures, said with what was being done
+// (pybind11 alone would say "std::bad_alloc"). Raised as MemoryError and
+// RuntimeError.
+class OutOfMemory : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+class ResourceFailure : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+template <class Work>
+auto naming_failures(const std::string& what, Work&& work) -> decltype(work()) {
+  try {
+    return work();
+  } catch (const std::bad_alloc&) {
+    throw OutOfMemory(what + ": out of memory");
+  } catch (const std::system_error& e) {
+    throw ResourceFailure(what + ": " + e.what());
+  }
+}
+
+std::string run_call(const char* name, const simloop::RunConfig& c) {
+  return std::string(name) + "(steps=" + std::to_string(c.num_steps()) +
+         ", record_every=" + std::to_string(c.record_every) + ")";
+}
+
+// Long C++ work that Ctrl-C can stop. The work runs with the GIL released;
+// between its chunks of steps the RunControl polls (on this thread, at most
+// every 20 ms): the poll takes the GIL, runs Python's signal handlers
+// (PyErr_CheckSignals) and the caller's progress(steps_done, steps_total).
+// If either raises, the poll keeps that Python exception and requests a
+// stop; the loop throws simloop::Interrupted at its next chunk, and the
+// kept exception (KeyboardInterrupt, say) is what the caller sees. Python
+// runs signal handlers only on the main thread, so elsewhere, without a
+// progress callback, there is nothing to poll and the GIL is left alone.
+class Interruptible {
+ public:
+  explicit Interruptible(py::object progress)
+      : progress_(progress.is_none() ? py::object() : std::move(progress)),
+        control_(progress_ || on_main_thread() ? simloop::RunControl::Poll(
+                                                     [this](std::int64_t done, std::int64_t total) { poll(done, total); })
+                                               : simloop::RunControl::Poll()) {}
+
+  template <class Work>
+  auto run(Work&& work) -> decltype(work(static_cast<simloop::RunControl*>(nullptr))) {
+    try {
+      py::gil_scoped_release release;
+      return work(&control_);
+    } catch (...) {
+      // Interrupted, normally; whatever ended the work, a Ctrl-C the user
+      // pressed (or progress's exception) is what they hear about.
+      if (!error_) throw;
+      py::error_already_set error = std::move(*error_);
+      error_.reset();
+      throw error;
+    }
+  }
+
+  // After the work is done: one last progress call, at its full count.
+  void finish() {
+    if (progress_) progress_(control_.steps_done(), control_.steps_total());
+  }
+
+ private:
+  static bool on_main_thread() {
+    return py::module_::import("threading").attr("main_thread")().attr("ident").cast<unsigned long>() ==
+           PyThread_get_thread_ident();
+  }
+
+  void poll(std::int64_t done, std::int64_t total) noexcept {
+    if (control_.stop_requested()) return;
+    py::gil_scoped_acquire gil;
+    try {
+      if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+      if (progress_) progress_(done, total);
+    } catch (py::error_already_set& e) {
+      error_.emplace(std::move(e));
+      control_.request_stop();
+    } catch (...) {
+      // Not from Python (a bad_alloc, say): stop; the caller sees Interrupted.
+      control_.request_stop();
+    }
+  }
+
+  py::object progress_;
+  std::optional<py::error_already_set> error_;
+  simloop::RunControl control_;
+};
+
+// A Sim that any Python thread may call. Every call holds the Sim's lock for
+// its whole length, GIL released or not, so no call sees another half done
+// (a step while set_timestep swaps the model, say). The lock is waited for
+// without the GIL, so a thread waiting for it never blocks the thread that
+// holds it from getting the GIL back; and in slices, between which the waiter
+// runs Python's signal handlers, so Ctrl-C reaches a thread waiting for a Sim
+// that another thread is stepping for a long time.
+struct PySim {
+  explicit PySim(const simloop::Model& model) : sim(model) {}
+  simloop::Sim sim;
+  std::timed_mutex mutex;
+  // The thread holding `mutex`, if any. Only the holder writes it, and a
+  // thread only asks whether it is itself the holder, so relaxed order does.
+  std::atomic<std::thread::id> holder{};
+};
+
+class SimLock {
+ public:
+  explicit SimLock(PySim& s) : s_(s) {
+    // A signal handler or a progress callback, run from inside this Sim's own
+    // step, calling it again: refuse rather than deadlock.
+    if (s.holder.load(std::memory_order_relaxed) == std::this_thread::get_id()) {
+      throw py::value_error("this Sim is in the middle of a call on this thread (a signal handler or "
+                            "progress callback called it); call it after that call returns");
+    }
+    while (!s.mutex.try_lock()) {
+      bool locked = false;
+      {
+        py::gil_scoped_release release;
+        locked = s.mutex.try_lock_for(simloop::RunControl::kPollInterval);
+      }
+      if (locked) break;
+      if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+    }
+    s.holder.store(std::this_thread::get_id(), std::memory_order_relaxed);
+  }
+  ~SimLock() {
+    s_.holder.store(std::thread::id(), std::memory_order_relaxed);
+    s_.mutex.unlock();
+  }
+  SimLock(const SimLock&) = delete;
+  SimLock& operator=(const SimLock&) = delete;
+
+ private:
+  PySim& s_;
+};
+
+// A Sim method as a Python method that holds the Sim's lock.
+template <class R, class... Args>
+auto locked(R (simloop::Sim::*fn)(Args...)) {
+  return [fn](PySim& s, Args... args) -> R {
+    SimLock lock(s);
+    return (s.sim.*fn)(std::forward<Args>(args)...);
+  };
+}
+template <class R, class... Args>
+auto locked(R (simloop::Sim::*fn)(Args...) noexcept) {
+  return [fn](PySim& s, Args... args) -> R {
+    SimLock lock(s);
+    return (s.sim.*fn)(std::forward<Args>(args)...);
+  };
+}
+template <class R>
+auto locked(R (simloop::Sim::*fn)() const) {
+  return [fn](PySim& s) -> R {
+    SimLock lock(s);
+    return (s.sim.*fn)();
+  };
+}
+template <class R>
+auto locked(R (simloop::Sim::*fn)() const noexcept) {
+  return [fn](PySim& s) -> R {
+    SimLock lock(s);
+    return (s.sim.*fn)();
+  };
+}
+
 }  // namespace
 
 PYBIND11_MODULE(_core, m) {
@@ -99,28 +307,45 @@ PYBIND11_MODULE(_core, m) {
   m.attr("ENERGY_COLUMN_NAMES") = column_names(Trajectory::kNumBaseColumns, Trajectory::kNumColumns);
   m.attr("SMOKE_STEPS") = simloop::kSmokeSteps;
   m.attr("SHOVE_STEPS") = simloop::kShoveSteps;
+  m.attr("MAX_STEPS") = simloop::kMaxSteps;
+  m.attr("MAX_RECORD_EVERY") = simloop::kMaxRecordEvery;
 
   static py::exception<simloop::MujocoError> mujoco_error(m, "MujocoError", PyExc_RuntimeError);
   py::register_exception_translator([](std::exception_ptr p) {
     try {
       if (p) std::rethrow_exception(p);
     } catch (const simloop::MujocoError& e) {
-      py::set_error(mujoco_error, e.what());
+      set_error_fs(mujoco_error.ptr(), e.what());
     } catch (const simloop::InvalidArgument& e) {
-      py::set_error(PyExc_ValueError, e.what());
+      set_error_fs(PyExc_ValueError, e.what());
     } catch (const simloop::IoError& e) {
-      py::set_error(PyExc_OSError, e.what());
+      set_error_fs(PyExc_OSError, e.what());
     } catch (const simloop::Error& e) {
-      py::set_error(PyExc_RuntimeError, e.what());
+      set_error_fs(PyExc_RuntimeError, e.what());
+    } catch (const OutOfMemory& e) {
+      set_error_fs(PyExc_MemoryError, e.what());
+    } catch (const ResourceFailure& e) {
+      set_error_fs(PyExc_RuntimeError, e.what());
     }
   });
 
   py::class_<simloop::Model>(m, "Model", "A compiled MuJoCo world: read-only, shared by every run on it.")
       .def_static("pusher_scene", &simloop::Model::pusher_scene, "The chapter's scene.")
-      .def_static("from_xml_string", &simloop::Model::from_xml_string, "xml"_a, "source"_a = "<string>",
-                  "Compiles MJCF text; it needs a body 'box' on a free joint and an actuator 0 on a slide or "
-                  "hinge joint.")
-      .def_static("from_file", &simloop::Model::from_file, "path"_a, "Compiles an MJCF file.")
+      .def_static(
+          "from_xml_string",
+          [](std::string_view xml, std::string_view source) {
+            return naming_failures("Model.from_xml_string", [&] { return simloop::Model::from_xml_string(xml, source); });
+          },
+          "xml"_a, "source"_a = "<string>",
+          "Compiles MJCF text; it needs a body 'box' on a free joint and an actuator 0 on a slide or "
+          "hinge joint.")
+      .def_static(
+          "from_file",
+          [](const std::filesystem::path& path) {
+            return naming_failures("Model.from_file(" + path.string() + ")",
+                                   [&] { return simloop::Model::from_file(path.string()); });
+          },
+          "path"_a, "Compiles an MJCF file.")
       .def("with_timestep", &simloop::Model::with_timestep, "timestep"_a, "A copy with opt.timestep set.")
       .def_property_readonly("timestep", &simloop::Model::timestep)
       .def_property_readonly("nq", [](const simloop::Model& model) { return model.get()->nq; })
@@ -232,7 +457,7 @@ PYBIND11_MODULE(_core, m) {
         std::string text;
         {
           py::gil_scoped_release release;
-          text = simloop::trajectory_csv(r.trajectory);
+          text = naming_failures("RunResult.trajectory_csv", [&] { return simloop::trajectory_csv(r.trajectory); });
         }
         return text;
       })
@@ -241,25 +466,44 @@ PYBIND11_MODULE(_core, m) {
           "write",
           [](const RunResult& r, const std::filesystem::path& out) {
             py::gil_scoped_release release;
-            const simloop::OutputFiles files = simloop::write_outputs(r, out);
+            const simloop::OutputFiles files =
+                naming_failures("RunResult.write(" + out.string() + ")", [&] { return simloop::write_outputs(r, out); });
             return std::make_pair(files.metrics, files.trajectory);
           },
           "out"_a);
 
+  // The long calls: Ctrl-C stops them within a chunk of steps (see
+  // Interruptible); progress(steps_done, steps_total), if given, is called
+  // from this thread at most every 20 ms, and once at the end.
   m.def(
       "run",
-      [](const simloop::Model& model, const simloop::RunConfig& config) {
-        py::gil_scoped_release release;
-        return simloop::run(model, config);
+      [](const simloop::Model& model, const simloop::RunConfig& config, py::object progress) {
+        Interruptible work(std::move(progress));
+        RunResult result = work.run([&](simloop::RunControl* control) {
+          return naming_failures(run_call("run", config), [&] {
+            simloop::Data workspace(model);
+            return simloop::run(model, config, workspace, nullptr, control);
+          });
+        });
+        work.finish();
+        return result;
       },
-      "model"_a, "config"_a);
+      "model"_a, "config"_a, "progress"_a = py::none());
   m.def(
       "run_batch",
-      [](const simloop::Model& model, const std::vector<simloop::RunConfig>& configs, int threads) {
-        py::gil_scoped_release release;
-        return simloop::run_batch(model, configs, threads);
+      [](const simloop::Model& model, const std::vector<simloop::RunConfig>& configs, int threads,
+         py::object progress) {
+        Interruptible work(std::move(progress));
+        std::vector<RunResult> results = work.run([&](simloop::RunControl* control) {
+          const std::string what = configs.empty() ? std::string("run_batch")
+                                                   : run_call("run_batch", configs.front()) + " x " +
+                                                         std::to_string(configs.size()) + " runs";
+          return naming_failures(what, [&] { return simloop::run_batch(model, configs, threads, control); });
+        });
+        work.finish();
+        return results;
       },
-      "model"_a, "configs"_a, "threads"_a);
+      "model"_a, "configs"_a, "threads"_a, "progress"_a = py::none());
   m.def("batch_workers", &simloop::batch_workers, "threads"_a, "jobs"_a);
 
   py::class_<simloop::Contact>(m, "Contact")
@@ -271,27 +515,65 @@ PYBIND11_MODULE(_core, m) {
         return "Contact(" + c.geom1 + ", " + c.geom2 + ", dist=" + simloop::python_float_repr(c.dist) + ")";
       });
 
-  py::class_<simloop::Sim>(m, "Sim")
-      .def(py::init<const simloop::Model&>(), "model"_a)
-      .def("reset", &simloop::Sim::reset)
-      .def("set_timestep", &simloop::Sim::set_timestep, "timestep"_a)
-      .def_property_readonly("timestep", &simloop::Sim::timestep)
-      .def("set_ctrl", &simloop::Sim::set_ctrl, "value"_a)
-      .def_property_readonly("ctrl", &simloop::Sim::ctrl)
-      .def("apply_force", &simloop::Sim::apply_force, "force"_a)
-      .def("clear_force", &simloop::Sim::clear_force)
-      .def_property_readonly("applied_force", [](const simloop::Sim& s) { return vec(s.applied_force().data(), 3); })
-      .def("step", [](simloop::Sim& s, std::int64_t n) { s.step(n); }, "n"_a,
-           py::call_guard<py::gil_scoped_release>())
-      .def_property_readonly("time", &simloop::Sim::time)
-      .def_property_readonly("steps_taken", &simloop::Sim::steps_taken)
-      .def_property_readonly("box_position", [](const simloop::Sim& s) { return vec(s.box_position().data(), 3); })
-      .def_property_readonly("box_quaternion", [](const simloop::Sim& s) { return vec(s.box_quaternion().data(), 4); })
-      .def_property_readonly("box_velocity", [](const simloop::Sim& s) { return vec(s.box_velocity().data(), 3); })
-      .def_property_readonly("pusher_x", &simloop::Sim::pusher_x)
-      .def_property_readonly("pusher_velocity", &simloop::Sim::pusher_velocity)
-      .def_property_readonly("contacts", &simloop::Sim::contacts)
-      .def_property_readonly("warnings", &simloop::Sim::warnings);
+  // Every call holds the Sim's lock (PySim, SimLock): safe from any thread.
+  py::class_<PySim>(m, "Sim")
+      .def(py::init([](const simloop::Model& model) {
+             return naming_failures("Sim", [&] { return std::make_unique<PySim>(model); });
+           }),
+           "model"_a)
+      .def("reset", locked(&simloop::Sim::reset))
+      .def("set_timestep", locked(&simloop::Sim::set_timestep), "timestep"_a)
+      .def_property_readonly("timestep", locked(&simloop::Sim::timestep))
+      .def("set_ctrl", locked(&simloop::Sim::set_ctrl), "value"_a)
+      .def_property_readonly("ctrl", locked(&simloop::Sim::ctrl))
+      .def("apply_force", locked(&simloop::Sim::apply_force), "force"_a)
+      .def("clear_force", locked(&simloop::Sim::clear_force))
+      .def_property_readonly("applied_force", [](PySim& s) {
+        SimLock lock(s);
+        return vec(s.sim.applied_force().data(), 3);
+      })
+      .def(
+          "step",
+          [](PySim& s, std::int64_t n) {
+            SimLock lock(s);
+            if (n <= simloop::RunControl::kChunkSteps) {
+              // One chunk: nothing to interrupt, so no RunControl to pay for
+              // (Python checks for Ctrl-C between the calls of a tight loop).
+              py::gil_scoped_release release;
+              s.sim.step(n);
+              return;
+            }
+            Interruptible work{py::none()};
+            work.run([&](simloop::RunControl* control) { s.sim.step(n, control); });
+          },
+          "n"_a)
+      .def(
+          "step_with_progress",
+          [](PySim& s, std::int64_t n, py::object progress) {
+            SimLock lock(s);
+            Interruptible work(std::move(progress));
+            work.run([&](simloop::RunControl* control) { s.sim.step(n, control); });
+            work.finish();
+          },
+          "n"_a, "progress"_a)
+      .def_property_readonly("time", locked(&simloop::Sim::time))
+      .def_property_readonly("steps_taken", locked(&simloop::Sim::steps_taken))
+      .def_property_readonly("box_position", [](PySim& s) {
+        SimLock lock(s);
+        return vec(s.sim.box_position().data(), 3);
+      })
+      .def_property_readonly("box_quaternion", [](PySim& s) {
+        SimLock lock(s);
+        return vec(s.sim.box_quaternion().data(), 4);
+      })
+      .def_property_readonly("box_velocity", [](PySim& s) {
+        SimLock lock(s);
+        return vec(s.sim.box_velocity().data(), 3);
+      })
+      .def_property_readonly("pusher_x", locked(&simloop::Sim::pusher_x))
+      .def_property_readonly("pusher_velocity", locked(&simloop::Sim::pusher_velocity))
+      .def_property_readonly("contacts", locked(&simloop::Sim::contacts))
+      .def_property_readonly("warnings", locked(&simloop::Sim::warnings));
 
   m.def("pusher_track", [](const simloop::Model& model) {
     const simloop::PusherTrack t = simloop::pusher_track(model);
@@ -337,11 +619,18 @@ PYBIND11_MODULE(_core, m) {
           "out"_a, "Writes sweep.csv into out (atomically); returns its path.");
   m.def(
       "sweep",
-      [](const simloop::Model& model, const std::vector<double>& timesteps, double duration, int threads) {
-        py::gil_scoped_release release;
-        return simloop::sweep(model, timesteps, duration, threads);
+      [](const simloop::Model& model, const std::vector<double>& timesteps, double duration, int threads,
+         py::object progress) {
+        Interruptible work(std::move(progress));
+        simloop::SweepResult result = work.run([&](simloop::RunControl* control) {
+          return naming_failures("sweep(" + std::to_string(timesteps.size()) + " timesteps, duration=" +
+                                     simloop::python_float_repr(duration) + ")",
+                                 [&] { return simloop::sweep(model, timesteps, duration, threads, control); });
+        });
+        work.finish();
+        return result;
       },
-      "model"_a, "timesteps"_a, "duration"_a, "threads"_a);
+      "model"_a, "timesteps"_a, "duration"_a, "threads"_a, "progress"_a = py::none());
   m.def("log_spaced", &simloop::log_spaced, "start"_a, "stop"_a, "count"_a);
   m.def("default_sweep_timesteps", &simloop::default_sweep_timesteps,
         "The default sweep's 25 round timesteps (1, 2, 3, 4, 5, 6, 8 per decade, 0.0005 s to 1 s).");
@@ -359,18 +648,30 @@ PYBIND11_MODULE(_core, m) {
       .def_readonly("threads", &simloop::cli::Options::threads)
       .def_readonly("plot", &simloop::cli::Options::plot)
       .def_readonly("run", &simloop::cli::Options::run)
-      .def_property_readonly("out", [](const simloop::cli::Options& o) { return o.out; })
-      .def_readonly("model_path", &simloop::cli::Options::model_path)
+      // Paths as Python spells file names: undecodable bytes as surrogates.
+      .def_property_readonly("out", [](const simloop::cli::Options& o) { return fs_str(o.out.native()); })
+      .def_property_readonly("model_path", [](const simloop::cli::Options& o) { return fs_str(o.model_path); })
       .def_readonly("rerun", &simloop::cli::Options::rerun)
       .def_readonly("help", &simloop::cli::Options::help)
       .def_readonly("version", &simloop::cli::Options::version);
-  m.def("parse_command_line", [](const std::vector<std::string>& args) {
+  // args: str (sys.argv's, encoded back to the bytes the shell passed, as
+  // os.fsencode does) or bytes.
+  m.def("parse_command_line", [](const std::vector<py::object>& args) {
+    std::vector<std::string> bytes;
+    for (const py::object& a : args) {
+      PyObject* encoded = PyUnicode_Check(a.ptr()) ? PyUnicode_EncodeFSDefault(a.ptr()) : nullptr;
+      if (PyUnicode_Check(a.ptr()) && !encoded) throw py::error_already_set();
+      const py::object raw = encoded ? py::reinterpret_steal<py::object>(encoded) : a;
+      if (!PyBytes_Check(raw.ptr())) throw py::type_error("command line arguments must be str or bytes");
+      bytes.emplace_back(PyBytes_AS_STRING(raw.ptr()), static_cast<size_t>(PyBytes_GET_SIZE(raw.ptr())));
+    }
     std::vector<const char*> argv = {"simloop"};
-    for (const std::string& a : args) argv.push_back(a.c_str());
+    for (const std::string& a : bytes) argv.push_back(a.c_str());
     try {
       return simloop::cli::parse(static_cast<int>(argv.size()), argv.data());
     } catch (const simloop::cli::UsageError& e) {
-      throw py::value_error(e.what());
+      set_error_fs(PyExc_ValueError, e.what());
+      throw py::error_already_set();
     }
   });
   m.def("help_text", &simloop::cli::help_text, "program"_a, "recording"_a);

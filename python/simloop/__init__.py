@@ -13,6 +13,8 @@ from ._api import Sim, draw_shove, load_model, run, run_batch, sweep
 from ._core import (
     COLUMN_NAMES,
     ENERGY_COLUMN_NAMES,
+    MAX_RECORD_EVERY,
+    MAX_STEPS,
     MUJOCO_VERSION,
     Contact,
     Model,
@@ -28,6 +30,8 @@ from ._core import (
 __all__ = [
     "COLUMN_NAMES",
     "ENERGY_COLUMN_NAMES",
+    "MAX_RECORD_EVERY",
+    "MAX_STEPS",
     "MUJOCO_VERSION",
     "Contact",
     "Model",

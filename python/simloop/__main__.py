@@ -220,6 +220,10 @@ def _main(argv: Optional[List[str]]) -> int:
     global _outputs_written
     started = time.perf_counter()
     args = sys.argv[1:] if argv is None else list(argv)
+    # A path from the command line may hold bytes that are not UTF-8 (sys.argv
+    # carries them as surrogates): print it back as those bytes, as sim_loop does.
+    if hasattr(sys.stdout, "reconfigure"):
+        sys.stdout.reconfigure(errors="surrogateescape")
     if args and args[0] == "plot":
         return _plot_command(args[1:])
     from . import _core, load_model

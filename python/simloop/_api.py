@@ -2,7 +2,16 @@
 
 Nothing here steps physics: `run`, `run_batch` and `Sim` validate what they are
 given (raising TypeError or ValueError that names the argument and the value)
-and call the compiled core, which releases the GIL while it works.
+and call the compiled core, which releases the GIL while it works. The
+compiled classes' methods that take arguments (Model.from_file, RunResult.write,
+RunResult.column, ...) are wrapped here the same way, so a wrong type gets one
+line naming the argument, not pybind11's list of signatures.
+
+The long calls (run, run_batch, Sim.step, sweep) stop within a few
+milliseconds on Ctrl-C and raise KeyboardInterrupt; `progress=` takes a
+callable progress(steps_done, steps_total), called from the calling thread at
+most every 20 ms and once at the end (an exception it raises stops the work
+and reaches the caller).
 """
 
 from __future__ import annotations
@@ -11,19 +20,37 @@ import functools
 import math
 import numbers
 import os
-from typing import Iterable, List, Optional, Sequence, Union
+from typing import Callable, Iterable, List, Optional, Sequence, Union
 
 from . import _core
-from ._core import Model, RunResult
+from ._core import Model, RunResult, SweepResult
 
 ModelLike = Union[None, Model, str, "os.PathLike[str]"]
+PathLike = Union[str, bytes, "os.PathLike[str]"]
+Progress = Optional[Callable[[int, int], object]]
 
 _U64_MAX = 2**64 - 1
 _I64_MAX = 2**63 - 1
+# The ranges sim_loop's --steps and --record-every accept, 1 to 2**62-1
+# (simloop::kMaxSteps, kMaxRecordEvery): steps + record_every fits in int64.
+MAX_STEPS = _core.MAX_STEPS
+MAX_RECORD_EVERY = _core.MAX_RECORD_EVERY
+
+
+def _show(value: object) -> str:
+    """repr(value) for an error message: one line, at most 80 characters."""
+    try:
+        text = repr(value)
+    except Exception:  # an int past Python's digit limit, or a broken __repr__
+        if isinstance(value, int):
+            return f"an int of {value.bit_length()} bits"
+        return f"a {type(value).__name__}"
+    text = " ".join(line.strip() for line in text.splitlines())  # numpy arrays print on several lines
+    return text if len(text) <= 80 else text[:77] + "..."
 
 
 def _describe(value: object) -> str:
-    return f"{value!r} ({type(value).__name__})"
+    return f"{_show(value)} ({type(value).__name__})"
 
 
 def _check_int(name: str, value: object, minimum: int, maximum: int) -> int:
@@ -31,10 +58,14 @@ def _check_int(name: str, value: object, minimum: int, maximum: int) -> int:
         raise TypeError(f"{name} must be an int, got {_describe(value)}")
     number = int(value)
     if not minimum <= number <= maximum:
-        if maximum == _I64_MAX:  # no upper bound worth stating
-            raise ValueError(f"{name} must be at least {minimum}, got {number}")
-        raise ValueError(f"{name} must be an integer from {minimum} to {maximum}, got {number}")
+        if maximum in _CAPS:  # a bound only huge values meet: said apart
+            bound = f"at least {minimum}" if number < minimum else f"at most {maximum} (2**62-1)"
+            raise ValueError(f"{name} must be {bound}, got {_show(number)}")
+        raise ValueError(f"{name} must be an integer from {minimum} to {maximum}, got {_show(number)}")
     return number
+
+
+_CAPS = (MAX_STEPS, MAX_RECORD_EVERY)
 
 
 def _check_bool(name: str, value: object) -> bool:
@@ -46,7 +77,10 @@ def _check_bool(name: str, value: object) -> bool:
 def _check_real(name: str, value: object) -> float:
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise TypeError(f"{name} must be a number, got {_describe(value)}")
-    return float(value)
+    try:
+        return float(value)
+    except OverflowError:  # an int beyond any float
+        raise ValueError(f"{name} must be a number a float can hold, got {_show(value)}") from None
 
 
 def _check_timestep(value: object, name: str = "timestep") -> float:
@@ -54,6 +88,36 @@ def _check_timestep(value: object, name: str = "timestep") -> float:
     if not (math.isfinite(timestep) and timestep > 0.0):
         raise ValueError(f"{name} must be a positive, finite number of seconds, got {timestep!r}")
     return timestep
+
+
+def _check_path(name: str, value: object, what: str) -> str:
+    """A path as str (bytes decoded as os.fsdecode does: undecodable bytes
+    become surrogates, which the core encodes back to the same bytes)."""
+    if isinstance(value, (str, bytes, os.PathLike)):
+        try:
+            value = os.fsdecode(value)
+        except TypeError:  # an os.PathLike whose __fspath__ returns neither
+            pass
+    if not isinstance(value, str):
+        raise TypeError(f"{name} must be a path (str, bytes or os.PathLike), got {_describe(value)}")
+    if not value:
+        raise ValueError(f"{name} must name {what}, got ''")
+    if "\0" in value:
+        raise ValueError(f"{name} must not contain a NUL character, got {_show(value)}")
+    return value
+
+
+def _check_text(name: str, value: object) -> bytes:
+    """str or bytes as the bytes the core reads (str as UTF-8)."""
+    if isinstance(value, str):
+        try:
+            return value.encode("utf-8")
+        except UnicodeEncodeError as e:
+            raise ValueError(f"{name} must be text that UTF-8 can encode, got {value[e.start:e.end]!r} "
+                             f"at index {e.start}") from None
+    if isinstance(value, bytes):
+        return value
+    raise TypeError(f"{name} must be a str or bytes, got {_describe(value)}")
 
 
 @functools.lru_cache(maxsize=1)
@@ -72,8 +136,8 @@ def load_model(model: ModelLike = None) -> Model:
         return _pusher_scene()
     if isinstance(model, Model):
         return model
-    if isinstance(model, (str, os.PathLike)):
-        return Model.from_file(os.fspath(model))
+    if isinstance(model, (str, bytes, os.PathLike)):
+        return Model.from_file(_check_path("model", model, "an MJCF file"))
     raise TypeError(f"model must be None, a simloop.Model or a path to an MJCF file, got {_describe(model)}")
 
 
@@ -92,34 +156,43 @@ def _config(seed: object, steps: object, timestep: object, perturb: object, smok
             record_every: object, audit_energy: object = False, rng: object = "mt19937_64") -> _core.RunConfig:
     return _core.RunConfig(
         seed=_check_int("seed", seed, 0, _U64_MAX),
-        steps=_check_int("steps", steps, 1, _I64_MAX),
+        steps=_check_int("steps", steps, 1, MAX_STEPS),
         timestep=_check_timestep(timestep),
         perturb=_check_bool("perturb", perturb),
         smoke=_check_bool("smoke", smoke),
-        record_every=_check_int("record_every", record_every, 1, _I64_MAX),
+        record_every=_check_int("record_every", record_every, 1, MAX_RECORD_EVERY),
         audit_energy=_check_bool("audit_energy", audit_energy),
         rng=_check_rng(rng),
     )
 
 
+def _check_progress(progress: object) -> object:
+    if progress is not None and not callable(progress):
+        raise TypeError(f"progress must be None or a callable progress(steps_done, steps_total), got {_describe(progress)}")
+    return progress
+
+
 def run(seed: int = 0, steps: int = 2000, timestep: float = 0.002, perturb: bool = True, smoke: bool = False,
         model: ModelLike = None, record_every: int = 1, audit_energy: bool = False,
-        rng: str = "mt19937_64") -> RunResult:
+        rng: str = "mt19937_64", *, progress: Progress = None) -> RunResult:
     """Runs the chapter's loop once and returns what happened.
 
     seed: seeds the shove (0 to 2**64-1), and nothing else.
-    steps: steps to run (ignored with smoke=True, which runs a fixed 300).
+    steps: steps to run, 1 to 2**62-1 as sim_loop's --steps (ignored with
+        smoke=True, which runs a fixed 300).
     timestep: sim seconds per mj_step, written into a copy of the model.
     perturb: False skips the shove (the baseline run).
     model: None (the chapter's scene), a simloop.Model, or an MJCF path.
     record_every: keep every K-th step in the trajectory (the final state is
-        always kept).
+        always kept), 1 to 2**62-1 as sim_loop's --record-every.
     audit_energy: account for every joule: the trajectory gains the
         ENERGY_COLUMN_NAMES columns and .energy holds the totals.
     rng: the generator that draws the shove from the seed: "mt19937_64"
         (std::mt19937_64, the default) or "numpy" (the chapter's
         np.random.default_rng(seed), PCG64, reproduced in C++ bit for bit;
         seed 0 shoves +9.82 N).
+    progress: None, or progress(steps_done, steps_total), called at most
+        every 20 ms and at the end; Ctrl-C raises KeyboardInterrupt promptly.
 
     The result has .metrics (the dict metrics.json holds), .trajectory (a
     read-only (rows, 22) float64 view, no copy) and .columns / .column(name),
@@ -127,7 +200,7 @@ def run(seed: int = 0, steps: int = 2000, timestep: float = 0.002, perturb: bool
     trajectory.csv, byte-identical to `sim_loop` with the same flags.
     """
     config = _config(seed, steps, timestep, perturb, smoke, record_every, audit_energy, rng)
-    return _core.run(load_model(model), config)
+    return _core.run(load_model(model), config, progress=_check_progress(progress))
 
 
 def draw_shove(seed: int = 0, steps: int = 2000, rng: str = "mt19937_64") -> "_core.Shove":
@@ -148,20 +221,22 @@ def _sequence(name: str, values: object) -> list:
 
 def run_batch(seeds: Iterable[int] = (0,), timesteps: Iterable[float] = (0.002,), *, steps: int = 2000,
               perturb: bool = True, smoke: bool = False, model: ModelLike = None, record_every: int = 1,
-              audit_energy: bool = False, threads: Optional[int] = None, rng: str = "mt19937_64") -> List[RunResult]:
+              audit_energy: bool = False, threads: Optional[int] = None, rng: str = "mt19937_64", *,
+              progress: Progress = None) -> List[RunResult]:
     """Runs every (seed, timestep) pair over one compiled model, in parallel.
 
     Results come in the order of itertools.product(seeds, timesteps), and each
     is bitwise identical to run() with the same arguments, whatever `threads`
     is (None: one worker per core). Each worker steps its own MuJoCo data;
     the model is shared. Every argument is checked before any run starts.
+    progress: as for run(), over the steps of all the runs.
     """
     seed_list = [_check_int("seeds[%d]" % i, s, 0, _U64_MAX) for i, s in enumerate(_sequence("seeds", seeds))]
     timestep_list = [_check_timestep(t, "timesteps[%d]" % i) for i, t in enumerate(_sequence("timesteps", timesteps))]
     workers = 0 if threads is None else _check_int("threads", threads, 1, 4096)
     configs = [_config(s, steps, t, perturb, smoke, record_every, audit_energy, rng)
                for s in seed_list for t in timestep_list]
-    return _core.run_batch(load_model(model), configs, workers)
+    return _core.run_batch(load_model(model), configs, workers, progress=_check_progress(progress))
 
 
 class Sim:
@@ -174,6 +249,9 @@ class Sim:
     PERSISTS. MuJoCo never clears it: it pushes on every following step until
     you call clear_force(). ctrl persists the same way. Forgetting this is the
     chapter's classic bug (exercise 2).
+
+    Any thread may call a Sim: each call (a step, a read, a timestep change)
+    holds the Sim's own lock, so calls from several threads take turns.
     """
 
     def __init__(self, model: ModelLike = None, timestep: Optional[float] = None) -> None:
@@ -202,12 +280,19 @@ class Sim:
             raise ValueError(f"ctrl must be finite, got {number!r}")
         self._sim.set_ctrl(number)
 
-    def step(self, n: int = 1, ctrl: Optional[float] = None) -> None:
-        """Advances n steps; with ctrl given, writes it first (it then persists)."""
-        count = _check_int("n", n, 1, _I64_MAX)
+    def step(self, n: int = 1, ctrl: Optional[float] = None, *, progress: Progress = None) -> None:
+        """Advances n steps (1 to 2**62-1); with ctrl given, writes it first (it then persists).
+
+        Ctrl-C stops a long step promptly (KeyboardInterrupt; the steps taken
+        stay taken). progress: as for run().
+        """
+        count = _check_int("n", n, 1, MAX_STEPS)
         if ctrl is not None:
             self.ctrl = ctrl
-        self._sim.step(count)
+        if progress is None:
+            self._sim.step(count)
+        else:
+            self._sim.step_with_progress(count, _check_progress(progress))
 
     def apply_force(self, force: Sequence[float]) -> None:
         """Pushes on the box with (fx, fy, fz) newtons, world frame, from now on.
@@ -283,7 +368,7 @@ class Sim:
 
 
 def sweep(timesteps: Optional[Iterable[float]] = None, duration: float = 4.0, threads: Optional[int] = None,
-          model: ModelLike = None) -> "_core.SweepResult":
+          model: ModelLike = None, *, progress: Progress = None) -> SweepResult:
     """The baseline (no shove) at many timesteps over the same span of sim time.
 
     timesteps: None for the default: 25 round timesteps (1, 2, 3, 4, 5, 6 and
@@ -297,6 +382,7 @@ def sweep(timesteps: Optional[Iterable[float]] = None, duration: float = 4.0, th
     is the largest timestep below which all are stable; .summary() the table,
     .write(out) sweep.csv. The criterion: the box rises at most 5 mm above
     rest, ends at most 1 mm below rest, and MuJoCo raised no warning.
+    progress: as for run(), over the steps of all the timesteps.
     """
     if timesteps is None:
         values = _core.default_sweep_timesteps()
@@ -306,4 +392,82 @@ def sweep(timesteps: Optional[Iterable[float]] = None, duration: float = 4.0, th
             raise ValueError("timesteps must not be empty")
     span = _check_timestep(duration, "duration")
     workers = 0 if threads is None else _check_int("threads", threads, 1, 4096)
-    return _core.sweep(load_model(model), values, span, workers)
+    return _core.sweep(load_model(model), values, span, workers, progress=_check_progress(progress))
+
+
+# The compiled classes' methods, checked in Python's words. pybind11 answers a
+# wrong argument type with its four-line list of signatures; these answer with
+# one line naming the argument. Defined in Python, so a wrong argument count
+# gets Python's own one-line message too.
+
+def _install_checked_methods() -> None:
+    def from_file(path: PathLike) -> Model:
+        return compiled_from_file(_check_path("path", path, "an MJCF file"))
+
+    def from_xml_string(xml: Union[str, bytes], source: str = "<string>") -> Model:
+        return compiled_from_xml_string(_check_text("xml", xml), _check_text("source", source))
+
+    def pusher_scene() -> Model:
+        return compiled_pusher_scene()
+
+    compiled_from_file = Model.from_file
+    compiled_from_xml_string = Model.from_xml_string
+    compiled_pusher_scene = Model.pusher_scene
+    for function, doc in (
+            (from_file, "Compiles an MJCF file: OSError if it cannot be read, simloop.MujocoError if MuJoCo "
+                        "rejects it, ValueError if it lacks a body 'box' on a free joint or an actuator 0 on a "
+                        "slide or hinge joint."),
+            (from_xml_string, "Compiles MJCF text (str or UTF-8 bytes); it needs a body 'box' on a free joint "
+                              "and an actuator 0 on a slide or hinge joint. source names it in errors."),
+            (pusher_scene, "The chapter's scene.")):
+        function.__qualname__ = f"Model.{function.__name__}"
+        function.__doc__ = doc
+        setattr(Model, function.__name__, staticmethod(function))
+
+    compiled = {(cls, name): getattr(cls, name) for cls, name in (
+        (Model, "with_timestep"), (RunResult, "column"), (RunResult, "write"), (RunResult, "metrics_json"),
+        (RunResult, "trajectory_csv"), (RunResult, "summary"), (SweepResult, "write"), (SweepResult, "csv"),
+        (SweepResult, "summary"))}
+
+    def with_timestep(self, timestep: float) -> Model:
+        return compiled[Model, "with_timestep"](self, _check_timestep(timestep))
+
+    def column(self, name: str):
+        if not isinstance(name, str):
+            raise TypeError(f"name must be a str (a column name), got {_describe(name)}")
+        if name not in self.column_names:
+            raise KeyError(f"no trajectory column named {_show(name)}; see result.column_names")
+        return compiled[RunResult, "column"](self, name)
+
+    def write_run(self, out: PathLike):
+        return compiled[RunResult, "write"](self, _check_path("out", out, "a directory"))
+
+    def write_sweep(self, out: PathLike):
+        return compiled[SweepResult, "write"](self, _check_path("out", out, "a directory"))
+
+    def no_arguments(cls: type, name: str):
+        def method(self):
+            return compiled[cls, name](self)
+        return method
+
+    methods = [
+        (Model, "with_timestep", with_timestep, "A copy with opt.timestep set (a positive, finite number)."),
+        (RunResult, "column", column, "One trajectory column as a read-only (strided) view (no copy); "
+                                      "KeyError if the result has no such column."),
+        (RunResult, "write", write_run, "Writes metrics.json and trajectory.csv into out (a directory, made if "
+                                        "missing), the bytes sim_loop writes; returns their paths."),
+        (SweepResult, "write", write_sweep, "Writes sweep.csv into out (atomically); returns its path."),
+        (RunResult, "metrics_json", no_arguments(RunResult, "metrics_json"), "metrics.json's text."),
+        (RunResult, "trajectory_csv", no_arguments(RunResult, "trajectory_csv"), "trajectory.csv's text."),
+        (RunResult, "summary", no_arguments(RunResult, "summary"), "The lines sim_loop prints about the run."),
+        (SweepResult, "csv", no_arguments(SweepResult, "csv"), "sweep.csv's text."),
+        (SweepResult, "summary", no_arguments(SweepResult, "summary"), "The sweep's table, edge and criterion."),
+    ]
+    for cls, name, function, doc in methods:
+        function.__name__ = name
+        function.__qualname__ = f"{cls.__name__}.{name}"
+        function.__doc__ = doc
+        setattr(cls, name, function)
+
+
+_install_checked_methods()

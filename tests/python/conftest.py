@@ -5,6 +5,7 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+import textwrap
 from pathlib import Path
 
 import pytest
@@ -33,3 +34,9 @@ def without_wall_clock(stdout: str) -> str:
 def snapshot(directory: Path) -> dict:
     """Every file under directory: bytes and modification time."""
     return {p: (p.read_bytes(), p.stat().st_mtime_ns) for p in sorted(directory.rglob("*")) if p.is_file()}
+
+
+def run_python(code: str, timeout: float = 120) -> subprocess.CompletedProcess:
+    """`python -c CODE` (dedented) in a child process, so a crash is a result, not the end of pytest."""
+    return subprocess.run([sys.executable, "-c", textwrap.dedent(code)], capture_output=True, text=True,
+                          stdin=subprocess.DEVNULL, timeout=timeout)

@@ -1,0 +1,90 @@
+"""One Sim, many Python threads: calls take turns, never a crash.
+
+Each check runs in a subprocess, so a crash of the interpreter is a test
+failure rather than the end of pytest."""
+
+import pytest
+
+import simloop
+from conftest import run_python
+
+
+def test_threads_stepping_reading_and_changing_one_sim_do_not_crash():
+    proc = run_python("""
+        import threading
+        import simloop
+
+        sim = simloop.Sim()
+
+        def stepper(n):
+            for _ in range(150):
+                sim.step(n)
+                sim.box_position, sim.contacts, sim.warnings, sim.time
+
+        def changer():
+            for i in range(150):
+                sim.timestep = 0.001 if i % 2 else 0.002
+                sim.apply_force([0.0, float(i % 5), 0.0])
+                sim.ctrl = 0.5
+                if i % 10 == 0:
+                    sim.reset()
+
+        threads = [threading.Thread(target=stepper, args=(n,)) for n in (1, 20, 100)]
+        threads.append(threading.Thread(target=changer))
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join()
+        print("survived")
+    """)
+    assert proc.returncode == 0, f"exit {proc.returncode}: {proc.stderr[-2000:]}"
+    assert proc.stdout == "survived\n"
+
+
+def test_steps_from_many_threads_add_up_to_the_same_state_as_one_thread():
+    # Each step call holds the Sim for its whole length, so N steps taken from
+    # four threads in any interleaving are N steps of the one trajectory.
+    proc = run_python("""
+        import threading
+        import simloop
+
+        shared, alone = simloop.Sim(), simloop.Sim()
+        shared.ctrl = alone.ctrl = 1.0
+        calls = [(1, 400), (7, 60), (64, 10), (150, 4)]  # (n, calls): 420 + 640 + 600 = 2060 steps
+
+        def stepper(n, count):
+            for _ in range(count):
+                shared.step(n)
+
+        threads = [threading.Thread(target=stepper, args=c) for c in calls]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join()
+        total = sum(n * count for n, count in calls)
+        alone.step(total)
+        print(shared.steps_taken == total, shared.time == alone.time,
+              list(shared.box_position) == list(alone.box_position),
+              list(shared.box_velocity) == list(alone.box_velocity))
+    """)
+    assert proc.returncode == 0, f"exit {proc.returncode}: {proc.stderr[-2000:]}"
+    assert proc.stdout == "True True True True\n"
+
+
+def test_a_sim_called_from_inside_its_own_step_refuses_instead_of_deadlocking():
+    sim = simloop.Sim()
+    seen = []
+
+    def progress(done, total):
+        seen.append(done)
+        sim.box_position  # the Sim is mid-step on this very thread
+
+    with pytest.raises(ValueError) as caught:
+        sim.step(200_000, progress=progress)
+    assert "this Sim is in the middle of a call on this thread" in str(caught.value)
+    assert "\n" not in str(caught.value)
+    assert len(seen) == 1 and 0 < seen[0] < 200_000
+    # The steps taken stay taken (the poll came after them) and the Sim works on.
+    assert sim.steps_taken == seen[0]
+    sim.step(1)
+    assert sim.steps_taken == seen[0] + 1
