@@ -221,7 +221,7 @@ def _sequence(name: str, values: object) -> list:
 
 def run_batch(seeds: Iterable[int] = (0,), timesteps: Iterable[float] = (0.002,), *, steps: int = 2000,
               perturb: bool = True, smoke: bool = False, model: ModelLike = None, record_every: int = 1,
-              audit_energy: bool = False, threads: Optional[int] = None, rng: str = "mt19937_64", *,
+              audit_energy: bool = False, threads: Optional[int] = None, rng: str = "mt19937_64",
               progress: Progress = None) -> List[RunResult]:
     """Runs every (seed, timestep) pair over one compiled model, in parallel.
 
