@@ -62,7 +62,7 @@ def main():
     seed, calls = int(sys.argv[1]), int(sys.argv[2])
     rng = random.Random(seed)
     result = simloop.run(steps=10)
-    sweep = simloop.sweep(timesteps=[0.5], duration=1.0, threads=1)
+    sweep = simloop.sweep(timesteps=[0.25], duration=1.0, threads=1)
     model = simloop.Model.pusher_scene()
     sim = simloop.Sim()
 
@@ -88,8 +88,8 @@ def main():
         ("run_batch", "seeds[0]", lambda v: simloop.run_batch(seeds=[v], steps=20, threads=1)),
         ("sweep", "timesteps", lambda v: simloop.sweep(timesteps=v, duration=1.0, threads=1)),
         ("sweep", "timesteps[0]", lambda v: simloop.sweep(timesteps=[v], duration=1.0, threads=1)),
-        ("sweep", "duration", lambda v: simloop.sweep(timesteps=[0.5], duration=v, threads=1)),
-        ("sweep", "threads", lambda v: simloop.sweep(timesteps=[0.5], duration=1.0, threads=v)),
+        ("sweep", "duration", lambda v: simloop.sweep(timesteps=[0.25], duration=v, threads=1)),
+        ("sweep", "threads", lambda v: simloop.sweep(timesteps=[0.25], duration=1.0, threads=v)),
         ("load_model", "model", simloop.load_model),
         ("Model.from_file", "path", simloop.Model.from_file),
         ("Model.from_xml_string", "xml", simloop.Model.from_xml_string),

@@ -56,7 +56,7 @@ def test_python_takes_the_commands_ranges():
 # argument, not pybind11's four-line "incompatible function arguments".
 @pytest.fixture(scope="module")
 def results():
-    return simloop.run(steps=10), simloop.sweep(timesteps=[0.5], duration=1.0, threads=1)
+    return simloop.run(steps=10), simloop.sweep(timesteps=[0.25], duration=1.0, threads=1)
 
 
 WRONG_TYPES = [

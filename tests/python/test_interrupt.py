@@ -95,8 +95,8 @@ def test_progress_reports_to_the_end():
     sim.step(100, progress=lambda d, t: stepped.append((d, t)))
     assert stepped[-1] == (100, 100)
     swept = []
-    simloop.sweep(timesteps=[0.5, 0.25], duration=1.0, threads=1, progress=lambda d, t: swept.append((d, t)))
-    assert swept[-1] == (6, 6)
+    simloop.sweep(timesteps=[0.25, 0.125], duration=1.0, threads=1, progress=lambda d, t: swept.append((d, t)))
+    assert swept[-1] == (12, 12)  # 4 + 8 steps
 
 
 class Stop(Exception):
