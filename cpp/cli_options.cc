@@ -8,6 +8,7 @@
 #include <optional>
 #include <string_view>
 
+#include "simloop/errors.hpp"
 #include "simloop/sweep.hpp"
 
 namespace simloop::cli {
@@ -324,6 +325,44 @@ Scenario scenario_from_flags(const Options& opts, const Model* scene) {
     for (int a = 0; a < m->nu; ++a) s.record.actuators.push_back(std::to_string(a));
   }
   return s;
+}
+
+namespace {
+
+// A scenario's bad name, in the words of the flags that gave it: the quick
+// flags' scenario has the shove as disturbance[0] (--body) and the --ctrl
+// values as control[0], control[1]...
+std::string scenario_error(const Options& opts, const std::string& what) {
+  if (!opts.scenario_path.empty()) return "--scenario " + opts.scenario_path + ": " + what;
+  const std::string shove = "disturbance[0]: ";
+  if (what.rfind(shove, 0) == 0) {
+    return "--body" + std::string(opts.body.empty() ? " (default box)" : "") + ": " + what.substr(shove.size());
+  }
+  if (what.rfind("control[", 0) == 0 && what.find("]: ") != std::string::npos) {
+    const size_t index = std::strtoul(what.c_str() + 8, nullptr, 10);
+    const size_t rest = what.find("]: ") + 3;
+    if (index < opts.ctrls.size()) return "--ctrl " + opts.ctrls[index].first + ": " + what.substr(rest);
+    return "actuator 0 (the chapter's ctrl; choose with --ctrl): " + what.substr(rest);
+  }
+  return what;
+}
+
+}  // namespace
+
+void check_run_inputs(Options& opts, const Model& scene, const Scenario* scenario) {
+  if (scenario != nullptr) {
+    try {
+      (void)resolve(*scenario, scene.get());
+    } catch (const Error& e) {
+      throw UsageError(scenario_error(opts, e.what()));
+    }
+    return;
+  }
+  if (!scene.has_chapter_layout()) {
+    throw UsageError("--model: " + scene.missing_layout() +
+                     "; for any other scene, name the body to shove (--body) or run a --scenario");
+  }
+  if (!opts.model_path.empty() && !opts.timestep_given) opts.run.timestep = scene.timestep();  // the scene's own
 }
 
 ScenarioConfig scenario_config(const Options& opts) {

@@ -65,6 +65,13 @@ class UsageError : public std::runtime_error {
 // Throws InvalidArgument (bad file: IoError) in the words of the flags.
 [[nodiscard]] Scenario scenario_from_flags(const Options& opts, const Model* scene = nullptr);
 
+// Checks what is about to run against its scene, in the words of the flags
+// (UsageError): a scenario's names (with did-you-mean, and what the scene
+// has), or, for the chapter's run, that the scene has the chapter's box and
+// pusher. The chapter's run on a --model keeps the scene's own timestep
+// unless --timestep was given (written into opts.run).
+void check_run_inputs(Options& opts, const Model& scene, const Scenario* scenario);
+
 // What --seed, --rng, --timestep, --steps/--smoke, --no-perturb and
 // --record-every ask of a scenario run.
 [[nodiscard]] ScenarioConfig scenario_config(const Options& opts);

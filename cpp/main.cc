@@ -285,24 +285,6 @@ int run_command(const simloop::cli::Options& opts, const simloop::Model& model) 
   return 0;
 }
 
-// A scenario's bad name, in the words of the flags that gave it: the quick
-// flags' scenario has the shove as disturbance[0] (--body) and the --ctrl
-// values as control[0], control[1]...
-std::string scenario_error(const simloop::cli::Options& opts, const std::string& what) {
-  if (!opts.scenario_path.empty()) return "--scenario " + opts.scenario_path + ": " + what;
-  const std::string shove = "disturbance[0]: ";
-  if (what.rfind(shove, 0) == 0) {
-    return "--body" + std::string(opts.body.empty() ? " (default box)" : "") + ": " + what.substr(shove.size());
-  }
-  if (what.rfind("control[", 0) == 0 && what.find("]: ") != std::string::npos) {
-    const size_t index = std::strtoul(what.c_str() + 8, nullptr, 10);
-    const size_t rest = what.find("]: ") + 3;
-    if (index < opts.ctrls.size()) return "--ctrl " + opts.ctrls[index].first + ": " + what.substr(rest);
-    return "actuator 0 (the chapter's ctrl; choose with --ctrl): " + what.substr(rest);
-  }
-  return what;
-}
-
 // A scenario's run (--scenario, --body, --ctrl): the same streaming and
 // committing as the chapter's, with the scenario's columns and metrics.
 int scenario_command(const simloop::cli::Options& opts, const simloop::Scenario& scenario,
@@ -394,20 +376,12 @@ int run_main(int argc, char** argv) {
   }
   // What runs: a scenario (its names checked now, in the flags' words), or
   // the chapter's loop, which needs the chapter's box and pusher.
-  if (opts.is_scenario()) {
-    try {
-      if (!scenario) scenario = simloop::cli::scenario_from_flags(opts, &*model);
-      (void)simloop::resolve(*scenario, model->get());
-    } catch (const simloop::Error& e) {
-      g_exit_at_once = 0;
-      return fail(kExitUsage, scenario_error(opts, e.what()));
-    }
-  } else if (!model->has_chapter_layout()) {
+  try {
+    if (opts.is_scenario() && !scenario) scenario = simloop::cli::scenario_from_flags(opts, &*model);
+    simloop::cli::check_run_inputs(opts, *model, scenario ? &*scenario : nullptr);
+  } catch (const std::exception& e) {
     g_exit_at_once = 0;
-    return fail(kExitUsage, "--model: " + model->missing_layout() +
-                                "; for any other scene, name the body to shove (--body) or run a --scenario");
-  } else if (!opts.model_path.empty() && !opts.timestep_given) {
-    opts.run.timestep = model->timestep();  // the scene's own, as written in its file
+    return fail(kExitUsage, e.what());
   }
   // From here on a file may exist that must go (the output directory's
   // probe, then the temporary outputs): a signal only requests a stop.

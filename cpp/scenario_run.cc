@@ -238,4 +238,15 @@ std::string scenario_summary(const ScenarioRunResult& r) {
   return out;
 }
 
+OutputFiles write_scenario_outputs(const ScenarioRunResult& r, const std::filesystem::path& dir) {
+  const Trajectory& t = r.trajectory;
+  if (t.rows() != r.rows) {
+    throw InvalidArgument("this result's rows went to a RowSink when it ran; there are none to write");
+  }
+  OutputWriter writer(dir, r.columns);
+  writer.trajectory().start(t.columns(), t.rows());
+  writer.trajectory().write(t.data(), t.rows());
+  return writer.commit(scenario_metrics_json(r));
+}
+
 }  // namespace simloop

@@ -27,6 +27,9 @@
 #include "simloop/number_format.hpp"
 #include "simloop/output.hpp"
 #include "simloop/run.hpp"
+#include "simloop/scenario.hpp"
+#include "simloop/scenario_run.hpp"
+#include "simloop/scene_geometry.hpp"
 #include "simloop/sim.hpp"
 #include "simloop/sweep.hpp"
 #include "simloop/version.hpp"
@@ -54,8 +57,7 @@ py::dict metrics_dict(const simloop::Metrics& m) {
 
 // The trajectory as a (rows, columns) read-only view of the result's own
 // row-major buffer. No copy.
-py::array trajectory_view(const py::object& owner) {
-  const Trajectory& t = owner.cast<const RunResult&>().trajectory;
+py::array trajectory_view(const py::object& owner, const Trajectory& t) {
   const auto rows = static_cast<py::ssize_t>(t.rows());
   py::array view(py::dtype::of<double>(), {rows, static_cast<py::ssize_t>(t.columns())},
                  {static_cast<py::ssize_t>(sizeof(double)) * t.columns(),
@@ -65,8 +67,7 @@ py::array trajectory_view(const py::object& owner) {
   return view;
 }
 
-py::array column_view(const py::object& owner, int column) {
-  const Trajectory& t = owner.cast<const RunResult&>().trajectory;
+py::array column_view(const py::object& owner, const Trajectory& t, int column) {
   py::array view(py::dtype::of<double>(), {static_cast<py::ssize_t>(t.rows())},
                  {static_cast<py::ssize_t>(sizeof(double)) * t.columns()}, t.data() + column, owner);
   py::detail::array_proxy(view.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
@@ -406,12 +407,13 @@ PYBIND11_MODULE(_core, m) {
   py::class_<RunResult>(m, "RunResult", "What one run did: metrics, trajectory, shove, warnings.")
       .def_property_readonly("metrics", [](const RunResult& r) { return metrics_dict(r.metrics); },
                              "The dict metrics.json holds (floats rounded to 6 decimals).")
-      .def_property_readonly("trajectory", [](const py::object& self) { return trajectory_view(self); },
+      .def_property_readonly("trajectory", [](const py::object& self) { return trajectory_view(self, self.cast<const RunResult&>().trajectory); },
                              "(rows, columns) read-only float64 view; columns as in COLUMN_NAMES.")
       .def(
           "column",
           [](const py::object& self, const std::string& name) {
-            return column_view(self, column_index(self.cast<const RunResult&>().trajectory, name));
+            const Trajectory& t = self.cast<const RunResult&>().trajectory;
+            return column_view(self, t, column_index(t, name));
           },
           "name"_a, "One trajectory column as a read-only (strided) view (no copy).")
       .def_property_readonly(
@@ -419,7 +421,8 @@ PYBIND11_MODULE(_core, m) {
           [](const py::object& self) {
             py::dict columns;
             for (int c = 0; c < self.cast<const RunResult&>().trajectory.columns(); ++c) {
-              columns[py::str(std::string(Trajectory::kColumnNames[c]))] = column_view(self, c);
+              columns[py::str(std::string(Trajectory::kColumnNames[c]))] =
+                  column_view(self, self.cast<const RunResult&>().trajectory, c);
             }
             return columns;
           },
@@ -505,6 +508,143 @@ PYBIND11_MODULE(_core, m) {
       },
       "model"_a, "configs"_a, "threads"_a, "progress"_a = py::none());
   m.def("batch_workers", &simloop::batch_workers, "threads"_a, "jobs"_a);
+
+  // Scenarios: the chapter's loop on any scene, as data (one parser: the
+  // C++ one reads the TOML for both faces).
+  py::class_<simloop::Scenario>(m, "Scenario", "A scenario: scene, timestep, length, controls, disturbances, recording.")
+      .def_static("chapter", &simloop::Scenario::chapter, "The chapter's run as a scenario.")
+      .def_static(
+          "from_file", [](const std::string& path) { return simloop::Scenario::from_toml_file(path); }, "path"_a)
+      .def_static(
+          "from_toml",
+          [](const std::string& text, const std::string& source, const std::string& base) {
+            return simloop::Scenario::from_toml_string(text, source, base);
+          },
+          "text"_a, "source"_a = "<string>", "base"_a = "")
+      .def_readonly("name", &simloop::Scenario::name)
+      .def_property_readonly("scene", [](const simloop::Scenario& s) { return fs_str(s.scene.native()); })
+      .def_readonly("timestep", &simloop::Scenario::timestep)
+      .def_property_readonly("body_names", [](const simloop::Scenario& s) { return s.record.bodies; })
+      .def("__repr__", [](const simloop::Scenario& s) {
+        return "<simloop.Scenario " + (s.name.empty() ? std::string("(unnamed)") : s.name) + ": " +
+               std::to_string(s.controls.size()) + " controls, " + std::to_string(s.disturbances.size()) +
+               " disturbances, scene " + (s.scene.empty() ? std::string("the chapter's") : s.scene.string()) + ">";
+      });
+  m.def("load_scene", &simloop::load_scene, "scenario"_a);
+  m.def(
+      "check_scenario_names",
+      [](const simloop::Scenario& s, const simloop::Model& model) { (void)simloop::resolve(s, model.get()); },
+      "scenario"_a, "model"_a);
+  m.def("scenario_from_flags", &simloop::cli::scenario_from_flags, "options"_a, "scene"_a);
+  m.def(
+      "check_run_inputs",
+      [](simloop::cli::Options& opts, const simloop::Model& scene, const simloop::Scenario* scenario) {
+        try {
+          simloop::cli::check_run_inputs(opts, scene, scenario);
+        } catch (const simloop::cli::UsageError& e) {
+          throw py::value_error(e.what());
+        }
+      },
+      "options"_a, "scene"_a, "scenario"_a = nullptr);
+  m.def("scenario_config_from_flags", &simloop::cli::scenario_config, "options"_a);
+
+  py::class_<simloop::ScenarioConfig>(m, "ScenarioConfig")
+      .def(py::init([](std::uint64_t seed, const std::string& rng, std::optional<double> timestep,
+                       std::optional<std::int64_t> steps, bool perturb, std::int64_t record_every) {
+             const std::optional<simloop::ShoveRng> generator = simloop::parse_rng(rng);
+             if (!generator) throw py::value_error("rng must be 'mt19937_64' or 'numpy', got '" + rng + "'");
+             return simloop::ScenarioConfig{seed, *generator, timestep, steps, perturb, record_every};
+           }),
+           "seed"_a, "rng"_a, "timestep"_a, "steps"_a, "perturb"_a, "record_every"_a);
+
+  py::class_<simloop::ScenarioRunResult>(m, "ScenarioResult", "What one run of a scenario did.")
+      .def_readonly("name", &simloop::ScenarioRunResult::name)
+      .def_readonly("seed", &simloop::ScenarioRunResult::seed)
+      .def_readonly("rows", &simloop::ScenarioRunResult::rows)
+      .def_readonly("timestep", &simloop::ScenarioRunResult::timestep)
+      .def_readonly("sim_time", &simloop::ScenarioRunResult::sim_time)
+      .def_readonly("warnings", &simloop::ScenarioRunResult::warnings)
+      .def_property_readonly("steps", [](const simloop::ScenarioRunResult& r) { return r.schedule.steps; })
+      .def_property_readonly("column_names",
+                             [](const simloop::ScenarioRunResult& r) {
+                               py::tuple names(r.columns.size());
+                               for (size_t i = 0; i < r.columns.size(); ++i) names[i] = py::str(r.columns[i].name);
+                               return names;
+                             })
+      .def_property_readonly("column_units",
+                             [](const simloop::ScenarioRunResult& r) {
+                               py::dict units;
+                               for (const simloop::Column& c : r.columns) units[py::str(c.name)] = c.unit;
+                               return units;
+                             })
+      .def_property_readonly(
+          "trajectory",
+          [](const py::object& self) {
+            return trajectory_view(self, self.cast<const simloop::ScenarioRunResult&>().trajectory);
+          },
+          "(rows, columns) read-only float64 view; columns as in column_names.")
+      .def(
+          "column",
+          [](const py::object& self, const std::string& name) {
+            const auto& r = self.cast<const simloop::ScenarioRunResult&>();
+            for (size_t c = 0; c < r.columns.size(); ++c) {
+              if (r.columns[c].name == name) return column_view(self, r.trajectory, static_cast<int>(c));
+            }
+            throw py::key_error("no trajectory column named '" + name + "'; see result.column_names");
+          },
+          "name"_a)
+      .def_property_readonly("disturbances",
+                             [](const simloop::ScenarioRunResult& r) {
+                               py::list out;
+                               for (size_t i = 0; i < r.schedule.forces.size(); ++i) {
+                                 const simloop::Schedule::Force& f = r.schedule.forces[i];
+                                 out.append(py::dict("body"_a = r.disturbed_bodies[i],
+                                                     "force"_a = vec(f.wrench.data(), 3),
+                                                     "torque"_a = vec(f.wrench.data() + 3, 3),
+                                                     "start_step"_a = f.start, "end_step"_a = f.end,
+                                                     "asked_end_step"_a = f.asked_end));
+                               }
+                               return out;
+                             })
+      .def("metrics_json", &simloop::scenario_metrics_json)
+      .def("summary", &simloop::scenario_summary)
+      .def(
+          "write",
+          [](const simloop::ScenarioRunResult& r, const std::filesystem::path& out) {
+            py::gil_scoped_release release;
+            const simloop::OutputFiles files = simloop::write_scenario_outputs(r, out);
+            return std::make_pair(files.metrics, files.trajectory);
+          },
+          "out"_a);
+  m.def(
+      "run_scenario",
+      [](const simloop::Model& scene, const simloop::Scenario& scenario, const simloop::ScenarioConfig& config,
+         py::object progress) {
+        Interruptible work(std::move(progress));
+        simloop::ScenarioRunResult result = work.run([&](simloop::RunControl* control) {
+          return naming_failures("run_scenario(" + scenario.name + ")", [&] {
+            return simloop::run_scenario(scene, scenario, config, nullptr, nullptr, control);
+          });
+        });
+        work.finish();
+        return result;
+      },
+      "scene"_a, "scenario"_a, "config"_a, "progress"_a = py::none());
+  m.def(
+      "scene_geometry",
+      [](const simloop::Model& model) {
+        static constexpr const char* kKinds[] = {"plane", "sphere", "capsule", "ellipsoid", "cylinder", "box", "mesh", "other"};
+        py::list out;
+        for (const simloop::GeomShape& g : simloop::scene_geometry(model.get())) {
+          out.append(py::dict("name"_a = g.name, "body"_a = g.body, "body_id"_a = g.body_id,
+                              "kind"_a = kKinds[static_cast<int>(g.kind)], "half_size"_a = vec(g.half_size.data(), 3),
+                              "mesh_center"_a = vec(g.mesh_center.data(), 3), "pos"_a = vec(g.pos.data(), 3),
+                              "quat"_a = vec(g.quat.data(), 4),
+                              "rgba"_a = py::make_tuple(g.rgba[0], g.rgba[1], g.rgba[2], g.rgba[3])));
+        }
+        return out;
+      },
+      "model"_a, "Every visible geom: its shape, its pose on its body, its colour.");
 
   py::class_<simloop::Contact>(m, "Contact")
       .def_readonly("geom1", &simloop::Contact::geom1)
@@ -652,6 +792,8 @@ PYBIND11_MODULE(_core, m) {
       .def_property_readonly("out", [](const simloop::cli::Options& o) { return fs_str(o.out.native()); })
       .def_property_readonly("model_path", [](const simloop::cli::Options& o) { return fs_str(o.model_path); })
       .def_readonly("rerun", &simloop::cli::Options::rerun)
+      .def_property_readonly("is_scenario", &simloop::cli::Options::is_scenario)
+      .def_property_readonly("scenario_path", [](const simloop::cli::Options& o) { return fs_str(o.scenario_path); })
       .def_readonly("help", &simloop::cli::Options::help)
       .def_readonly("version", &simloop::cli::Options::version);
   // args: str (sys.argv's, encoded back to the bytes the shell passed, as

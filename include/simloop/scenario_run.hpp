@@ -9,6 +9,7 @@
 
 #include "simloop/control.hpp"
 #include "simloop/model.hpp"
+#include "simloop/output.hpp"
 #include "simloop/recorder.hpp"
 #include "simloop/scenario.hpp"
 #include "simloop/shove.hpp"
@@ -49,5 +50,9 @@ struct ScenarioConfig {
 
 // The closing lines for people, as for the chapter's run.
 [[nodiscard]] std::string scenario_summary(const ScenarioRunResult& result);
+
+// Writes an in-memory scenario result's metrics.json and trajectory.csv into
+// `dir`, both or neither (as write_outputs does for the chapter's run).
+OutputFiles write_scenario_outputs(const ScenarioRunResult& result, const std::filesystem::path& dir);
 
 }  // namespace simloop

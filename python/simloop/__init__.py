@@ -10,6 +10,7 @@ numpy views of the trajectory, and writes the rerun recording.
 """
 
 from ._api import Sim, draw_shove, load_model, run, run_batch, sweep
+from .scenario import Scenario, ScenarioResult, run_scenario
 from ._core import (
     COLUMN_NAMES,
     ENERGY_COLUMN_NAMES,
@@ -38,6 +39,8 @@ __all__ = [
     "MujocoError",
     "MujocoWarning",
     "RunResult",
+    "Scenario",
+    "ScenarioResult",
     "Shove",
     "Sim",
     "SweepPoint",
@@ -47,5 +50,6 @@ __all__ = [
     "load_model",
     "run",
     "run_batch",
+    "run_scenario",
     "sweep",
 ]

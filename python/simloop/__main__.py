@@ -216,6 +216,31 @@ def main(argv: Optional[List[str]] = None) -> int:
     return _finish_stdout(code)
 
 
+def _scenario(opts, scenario, model, out: Path, started: float) -> int:
+    """A scenario's run (--scenario, --body, --ctrl): its outputs, summary and recording."""
+    global _outputs_written
+    from . import _core
+
+    try:
+        result = _core.run_scenario(model, scenario, _core.scenario_config_from_flags(opts))
+        metrics_path, trajectory_path = result.write(out)
+        _outputs_written = True
+        print(result.summary(), end="")
+        print(f"metrics: {metrics_path}")
+        print(f"trajectory: {trajectory_path} ({result.rows} rows, {len(result.column_names)} columns)")
+        if opts.rerun:
+            from .scenario_recording import record_scenario
+
+            rrd = record_scenario(result, model, out / "sim_loop.rrd")
+            print(f"recording: {rrd} -- open it with: {_viewer()} {rrd}")
+    except (OSError, _core.MujocoError, ValueError) as e:
+        return _fail(EXIT_RUN_FAILED, str(e))
+    except ImportError as e:  # rerun for the recording
+        return _fail(EXIT_RUN_FAILED, f"{e} (metrics.json and trajectory.csv were written)")
+    print(f"wall-clock: {(time.perf_counter() - started) * 1e3:.1f} ms, peak memory: {_peak_memory_mib():.1f} MiB")
+    return 0
+
+
 def _main(argv: Optional[List[str]]) -> int:
     global _outputs_written
     started = time.perf_counter()
@@ -244,10 +269,24 @@ def _main(argv: Optional[List[str]]) -> int:
         return 0
 
     print(f"ch0.1-sim-loop | tier: cpu | {_core.MUJOCO_VERSION} | simloop {_core.__version__}", flush=True)
+    scenario = None
+    if opts.scenario_path:
+        try:
+            scenario = _core.Scenario.from_file(opts.scenario_path)
+        except (OSError, ValueError) as e:
+            return _fail(EXIT_USAGE, f"--scenario: {e}")
     try:
-        model = load_model(opts.model_path or None)
+        model = _core.load_scene(scenario) if scenario is not None else load_model(opts.model_path or None)
     except (OSError, ValueError, _core.MujocoError) as e:
-        return _fail(EXIT_USAGE if opts.model_path else EXIT_RUN_FAILED, f"--model: {e}")
+        theirs = bool(scenario.scene) if scenario is not None else bool(opts.model_path)
+        flag = "--scenario" if scenario is not None else "--model"
+        return _fail(EXIT_USAGE if theirs else EXIT_RUN_FAILED, f"{flag}: {e}")
+    try:
+        if opts.is_scenario and scenario is None:
+            scenario = _core.scenario_from_flags(opts, model)
+        _core.check_run_inputs(opts, model, scenario)
+    except (OSError, ValueError) as e:
+        return _fail(EXIT_USAGE, str(e))
     out = Path(opts.out)
     try:
         _core.prepare_output_dir(out)
@@ -264,6 +303,8 @@ def _main(argv: Optional[List[str]]) -> int:
         print(f"wall-clock: {(time.perf_counter() - started) * 1e3:.1f} ms, peak memory: {_peak_memory_mib():.1f} MiB")
         return 0
 
+    if scenario is not None:
+        return _scenario(opts, scenario, model, out, started)
     try:
         result = _core.run(model, opts.run)
         metrics_path, trajectory_path = result.write(out)

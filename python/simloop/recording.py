@@ -43,13 +43,14 @@ connection is made.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import os
 import tempfile
 import uuid
 from pathlib import Path
-from typing import Union
+from typing import Iterator, Union
 
 from . import _core
 from ._api import ModelLike, _pusher_scene, load_model
@@ -233,6 +234,21 @@ def z_axis_range(z) -> tuple:
     return (low, high)
 
 
+@contextlib.contextmanager
+def replacing(target: Path) -> Iterator[str]:
+    """A temporary file's name beside `target`, renamed onto it when the block
+    succeeds and removed when it fails: a failure leaves any earlier file as it was."""
+    fd, temp_name = tempfile.mkstemp(prefix="." + target.name + ".", suffix=".tmp", dir=target.parent)
+    os.close(fd)
+    try:
+        yield temp_name
+        os.chmod(temp_name, 0o644)
+        os.replace(temp_name, target)
+    except BaseException:
+        Path(temp_name).unlink(missing_ok=True)
+        raise
+
+
 def record(result: _core.RunResult, path: Union[str, "os.PathLike[str]"], model: ModelLike = None) -> Path:
     """Writes the run to `path` as an .rrd recording and returns the path.
 
@@ -247,9 +263,7 @@ def record(result: _core.RunResult, path: Union[str, "os.PathLike[str]"], model:
     target = Path(path)
     data = frames(result, model)
     energy = result.config.audit_energy
-    fd, temp_name = tempfile.mkstemp(prefix="." + target.name + ".", suffix=".tmp", dir=target.parent)
-    os.close(fd)
-    try:
+    with replacing(target) as temp_name:
         rec = rr.RecordingStream(APPLICATION_ID, recording_id=recording_id(result, model), send_properties=False)
         rec.save(temp_name, default_blueprint=blueprint(energy, z_axis_range(data["series"]["box/z"])))
         rec.send_recording_name(recording_name(result))
@@ -276,9 +290,4 @@ def record(result: _core.RunResult, path: Union[str, "os.PathLike[str]"], model:
             rec.send_columns("plots/" + name, indexes=times, columns=rr.Scalars.columns(scalars=values))
         rec.flush()
         rec.disconnect()
-        os.chmod(temp_name, 0o644)
-        os.replace(temp_name, target)
-    except BaseException:
-        Path(temp_name).unlink(missing_ok=True)
-        raise
     return target

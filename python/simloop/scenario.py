@@ -1,0 +1,172 @@
+"""Scenarios from Python: the chapter's loop on any scene, as data.
+
+A scenario says what to run: the scene (an MJCF file, or the chapter's), the
+timestep (the scene's own unless given), the length, the controls (intent),
+the disturbances (interference) and what is recorded. It comes from a TOML
+file, the same files sim_loop --scenario reads, or from keyword arguments,
+which are written as such a file and read by the same (C++) parser, so both
+are checked alike:
+
+    >>> import simloop
+    >>> s = simloop.Scenario(scene="tests/scenes/pusht.xml", steps=500,
+    ...                      controls={"push_x": 0.8, "push_y": [(0.0, 0.0), (0.5, 0.4)]},
+    ...                      disturbances=[dict(body="tblock", force=[0, 1, 0], start=0.6, duration=0.1)])
+    >>> result = simloop.run_scenario(s, seed=0)
+    >>> result.column("tblock_x")[-1]
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from typing import Any, Dict, Iterable, Mapping, Optional, Sequence, Union
+
+from . import _core
+from ._api import Progress, _check_bool, _check_int, _check_progress, _check_timestep, _describe, _U64_MAX, RNGS
+
+ScenarioResult = _core.ScenarioResult
+
+
+def _toml_value(name: str, value: object) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, int):
+        return str(value)
+    if isinstance(value, float):
+        if not math.isfinite(value):
+            raise ValueError(f"{name} must be finite, got {value!r}")
+        return repr(value)
+    if isinstance(value, (str, os.PathLike)):
+        return json.dumps(os.fspath(value))  # a TOML basic string: JSON's escapes
+    if isinstance(value, Sequence):
+        return "[" + ", ".join(_toml_value(name, v) for v in value) + "]"
+    if hasattr(value, "tolist"):  # numpy scalars and arrays
+        return _toml_value(name, value.tolist())
+    raise TypeError(f"{name} must be a number, a string or a list of them, got {_describe(value)}")
+
+
+def _toml_table(header: str, items: Mapping[str, object]) -> str:
+    lines = [header] if header else []
+    for key, value in items.items():
+        if value is None:
+            continue
+        if not isinstance(key, str):
+            raise TypeError(f"keys must be strings, got {_describe(key)}")
+        lines.append(f"{json.dumps(key)} = {_toml_value(key, value)}")
+    return "\n".join(lines) + "\n"
+
+
+class Scenario:
+    """A scenario. Scenario(...) builds one from keyword arguments;
+    Scenario.from_file(path) reads a TOML file; Scenario.chapter() is the
+    chapter's run.
+
+    scene: an MJCF file (None: the chapter's scene). timestep: seconds per
+    step (None: the scene's own). steps or duration (seconds): the length.
+    controls: {actuator: value} for a constant, or {actuator: [(seconds,
+    value), ...]} for a piecewise-constant schedule; an actuator by name or
+    index. disturbances: a list of dicts with the scenario file's keys (body,
+    force, torque, newtons, direction, random_sign, start, start_step,
+    start_fraction, duration, steps). record: a dict with bodies, joints,
+    actuators, sensors (lists of names) and contacts (bool).
+    """
+
+    def __init__(self, scene: Union[str, os.PathLike, None] = None, *, name: str = "",
+                 timestep: Optional[float] = None, steps: Optional[int] = None, duration: Optional[float] = None,
+                 controls: Optional[Mapping[Union[str, int], Any]] = None,
+                 disturbances: Iterable[Mapping[str, Any]] = (),
+                 record: Optional[Mapping[str, Any]] = None) -> None:
+        text = _toml_table("", {"name": name or None, "scene": scene, "timestep": timestep, "steps": steps,
+                                "duration": duration})
+        for actuator, value in (controls or {}).items():
+            entry: Dict[str, object] = {"actuator": actuator}
+            if isinstance(value, (int, float)) and not isinstance(value, bool):
+                entry["value"] = float(value)
+            else:
+                entry["schedule"] = [[float(t), float(v)] for t, v in value]
+            text += "\n" + _toml_table("[[control]]", entry)
+        for d in disturbances:
+            if not isinstance(d, Mapping):
+                raise TypeError(f"each disturbance must be a dict, got {_describe(d)}")
+            text += "\n" + _toml_table("[[disturbance]]", d)
+        if record is not None:
+            text += "\n" + _toml_table("[record]", record)
+        self._core = _core.Scenario.from_toml(text, "Scenario(...)", os.getcwd())
+        self.toml = text
+
+    @classmethod
+    def from_file(cls, path: Union[str, os.PathLike]) -> "Scenario":
+        """Reads a scenario file (TOML); a relative scene resolves against its folder."""
+        self = cls.__new__(cls)
+        self._core = _core.Scenario.from_file(os.fspath(path))
+        with open(path, encoding="utf-8") as f:
+            self.toml = f.read()
+        return self
+
+    @classmethod
+    def chapter(cls) -> "Scenario":
+        """The chapter's run: its scene, push_motor at 1.0, the shove on the box."""
+        self = cls.__new__(cls)
+        self._core = _core.Scenario.chapter()
+        self.toml = ""
+        return self
+
+    @property
+    def name(self) -> str:
+        return self._core.name
+
+    @property
+    def scene(self) -> str:
+        """The scene's MJCF file ("" for the chapter's embedded scene)."""
+        return self._core.scene
+
+    @property
+    def timestep(self) -> Optional[float]:
+        return self._core.timestep
+
+    def model(self) -> _core.Model:
+        """The scene, compiled."""
+        return _core.load_scene(self._core)
+
+    def __repr__(self) -> str:
+        return repr(self._core)
+
+
+def run_scenario(scenario: Union[Scenario, str, os.PathLike], *, seed: int = 0, rng: str = "mt19937_64",
+                 timestep: Optional[float] = None, steps: Optional[int] = None, perturb: bool = True,
+                 record_every: int = 1, model: Optional[_core.Model] = None,
+                 progress: Progress = None) -> ScenarioResult:
+    """Runs a scenario (a Scenario or a scenario file's path) once.
+
+    seed draws its random disturbances and nothing else; rng is "mt19937_64"
+    or "numpy" as for run(). timestep and steps override the scenario's;
+    perturb=False drops its disturbances. model: the scene already compiled
+    (scenario.model()), to compile it once for many runs. Returns a
+    ScenarioResult: column_names, trajectory (a read-only numpy view),
+    column(name), metrics (a dict), disturbances, warnings, summary(),
+    write(out). Unknown names raise ValueError listing what the scene has.
+    """
+    if isinstance(scenario, (str, os.PathLike)):
+        scenario = Scenario.from_file(scenario)
+    if not isinstance(scenario, Scenario):
+        raise TypeError(f"scenario must be a simloop.Scenario or a scenario file's path, got {_describe(scenario)}")
+    if rng not in RNGS:
+        raise ValueError(f"rng must be 'mt19937_64' or 'numpy', got {rng!r}")
+    config = _core.ScenarioConfig(
+        _check_int("seed", seed, 0, _U64_MAX), rng,
+        None if timestep is None else _check_timestep(timestep),
+        None if steps is None else _check_int("steps", steps, 1, _core.MAX_STEPS),
+        _check_bool("perturb", perturb), _check_int("record_every", record_every, 1, _core.MAX_RECORD_EVERY))
+    scene = scenario.model() if model is None else model
+    if not isinstance(scene, _core.Model):
+        raise TypeError(f"model must be a simloop.Model, got {_describe(scene)}")
+    return _core.run_scenario(scene, scenario._core, config, progress=_check_progress(progress))
+
+
+def _metrics(result: ScenarioResult) -> dict:
+    return json.loads(result.metrics_json())
+
+
+# The result's metrics as the dict metrics.json holds.
+ScenarioResult.metrics = property(_metrics, doc="The dict metrics.json holds (floats rounded to 6 decimals).")

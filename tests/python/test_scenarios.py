@@ -1,0 +1,156 @@
+"""Scenarios: the chapter's loop on scenes written here (a PushT scene, a
+puck on two slides pushed by a two-link arm, a four-motor walker), from both
+commands and from Python: the same bytes, twice, and a recording of the
+scene's own shapes."""
+
+import json
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import simloop
+from conftest import ROOT, run_command, sim_loop_exe
+from test_recording import load_chunks
+
+SCENES = ROOT / "tests" / "scenes"
+SCENARIOS = ["pusht.toml", "arm_push.toml", "walker.toml"]
+
+
+def outputs(directory: Path) -> tuple:
+    return (directory / "metrics.json").read_bytes(), (directory / "trajectory.csv").read_bytes()
+
+
+@pytest.mark.parametrize("name", SCENARIOS)
+def test_both_commands_and_python_write_the_same_bytes_twice(tmp_path, name):
+    scenario = SCENES / name
+    runs = {}
+    for label, python in (("cpp1", False), ("cpp2", False), ("py", True)):
+        proc = run_command(["--scenario", str(scenario), "--no-rerun", "--out", label], tmp_path, python=python)
+        assert proc.returncode == 0, proc.stderr
+        assert proc.stderr == ""
+        runs[label] = outputs(tmp_path / label)
+    result = simloop.run_scenario(scenario)
+    result.write(tmp_path / "api")
+    runs["api"] = outputs(tmp_path / "api")
+    assert runs["cpp1"] == runs["cpp2"] == runs["py"] == runs["api"]
+    metrics_text = runs["api"][0].decode()
+    # byte for byte what Python's json module writes for the same dict
+    assert metrics_text == json.dumps(json.loads(metrics_text), indent=2, sort_keys=True) + "\n"
+    header = runs["api"][1].decode().splitlines()[0].split(",")
+    assert header == list(result.column_names)
+    assert result.trajectory.shape == (result.rows, len(header))
+
+
+def test_the_python_result_holds_what_the_scenario_asked():
+    result = simloop.run_scenario(simloop.Scenario.from_file(SCENES / "pusht.toml"), seed=3)
+    assert result.timestep == 0.002 and result.steps == 1000 and result.rows == 1001
+    push_y = result.column("push_y_ctrl")
+    assert push_y[249] == 0.0 and push_y[250] == 0.4 and push_y[500] == 1.0  # 2.0 asked, clamped to ctrlrange
+    assert np.isnan(push_y[-1])
+    (bump,) = result.disturbances
+    fy = result.column("tblock_fy")
+    assert bump["body"] == "tblock" and bump["start_step"] == 600 and bump["end_step"] == 650
+    assert fy[600] == bump["force"][1] != 0.0 and fy[599] == 0.0 and fy[650] == 0.0
+    assert 0.5 <= abs(bump["force"][1]) < 1.5
+    assert result.metrics["bodies"]["tblock"]["final_pos"] == [round(v, 6) for v in
+                                                               (result.column("tblock_x")[-1],
+                                                                result.column("tblock_y")[-1],
+                                                                result.column("tblock_z")[-1])]
+    assert result.column_units["tblock_x"] == "m"
+    # the seed draws the bump and nothing else
+    other = simloop.run_scenario(SCENES / "pusht.toml", seed=4)
+    assert other.disturbances[0]["force"][1] != bump["force"][1]
+    np.testing.assert_array_equal(other.trajectory[:600], result.trajectory[:600])
+
+
+def test_keyword_scenarios_read_like_files(tmp_path):
+    built = simloop.Scenario(
+        scene=SCENES / "pusht.xml", name="pusht", duration=2.0,
+        controls={"push_x": 0.8, "push_y": [(0.0, 0.0), (0.5, 0.4), (1.0, 2.0)]},
+        disturbances=[dict(body="tblock", newtons=[0.5, 1.5], direction=[0, 1, 0], random_sign=True,
+                           start=1.2, duration=0.1)],
+        record=dict(bodies=["tblock", "pusher"], joints=["slide_x", "slide_y"], actuators=["push_x", "push_y"],
+                    sensors=["tblock_pos", "tip_x"]))
+    from_file = simloop.run_scenario(SCENES / "pusht.toml", seed=5)
+    from_keywords = simloop.run_scenario(built, seed=5)
+    assert from_keywords.column_names == from_file.column_names
+    np.testing.assert_array_equal(from_keywords.trajectory, from_file.trajectory)
+    with pytest.raises(ValueError, match=r"no body named 'tblok' \(did you mean 'tblock'\?\); "
+                                         r"bodies that can move: tblock, pusher"):
+        simloop.run_scenario(simloop.Scenario(scene=SCENES / "pusht.xml", steps=10,
+                                              disturbances=[dict(body="tblok", force=[1, 0, 0])]))
+    with pytest.raises(ValueError, match="setps: unknown key"):
+        simloop.Scenario.from_file(_write(tmp_path / "bad.toml", "setps = 3\n"))
+
+
+def _write(path: Path, text: str) -> Path:
+    path.write_text(text)
+    return path
+
+
+def test_quick_flags_on_any_scene(tmp_path):
+    walker = str(SCENES / "walker.xml")
+    proc = run_command(["--model", walker, "--body", "torso", "--ctrl", "hip_left=0.5", "--ctrl", "3=-0.2",
+                        "--no-rerun", "--out", "w"], tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    metrics = json.loads((tmp_path / "w" / "metrics.json").read_text())
+    assert metrics["timestep"] == 0.004  # the scene's own, not the chapter's 0.002
+    assert metrics["disturbances"][0]["body"] == "torso"
+    header = (tmp_path / "w" / "trajectory.csv").read_text().splitlines()[0].split(",")
+    assert header[:4] == ["step", "time", "hip_left_ctrl", "knee_left_ctrl"]
+    # Errors name the flag, what the scene has, and a likely typo; nothing is written.
+    for args, message in [
+        (["--model", walker], '--model: {}: the model has no body named "box"; for any other scene, name the body'
+                              ' to shove (--body) or run a --scenario'.format(walker)),
+        (["--model", walker, "--body", "torsoo"], "--body: no body named 'torsoo' (did you mean 'torso'?); bodies "
+                                                  "that can move: torso, thigh_left, shin_left, thigh_right, shin_right"),
+        (["--model", walker, "--body", "torso", "--ctrl", "hip=1"], "--ctrl hip: no actuator named 'hip'; its "
+                                                                    "actuators: hip_left, knee_left, hip_right, knee_right"),
+        (["--ctrl", "push_motor=fast"], "--ctrl must be ACTUATOR=VALUE (an actuator's name or index, a finite number), "
+                                        "got 'push_motor=fast'"),
+        (["--scenario", str(SCENES / "pusht.toml"), "--energy-audit"],
+         "--energy-audit accounts for the chapter's box and pusher only (not with --scenario, --body or --ctrl)"),
+    ]:
+        for python in (False, True):
+            proc = run_command([*args, "--out", "bad"], tmp_path, python=python)
+            assert proc.returncode == 2, (args, proc.stderr)
+            assert proc.stderr.splitlines() == [f"{'sim-loop' if python else 'sim_loop'}: {message}"], proc.stderr
+            assert not (tmp_path / "bad" / "metrics.json").exists()
+
+
+def test_a_cut_window_and_the_numpy_generator(tmp_path):
+    proc = subprocess.run([str(sim_loop_exe()), "--body", "box", "--steps", "1030", "--rng", "numpy", "--out", "o"],
+                          cwd=tmp_path, capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    metrics = json.loads((tmp_path / "o" / "metrics.json").read_text())
+    (shove,) = metrics["disturbances"]
+    # the chapter's shove on the box, drawn by numpy's default_rng(0): +9.82 N
+    assert shove["force"][1] == round(simloop.draw_shove(0, 1030, rng="numpy").force_y, 6)
+    assert shove["start_step"] == 515 and shove["steps"] == 50
+    short = simloop.run_scenario(simloop.Scenario(steps=1030, disturbances=[dict(body="box", force=[0, 5, 0],
+                                                                                 start_step=1000, steps=50)]))
+    (cut,) = short.disturbances
+    assert cut["end_step"] == 1030 and cut["asked_end_step"] == 1050
+    assert "30 steps from step 1000 (of 50: the run ended first)" in short.summary()
+
+
+def test_the_recording_draws_the_scene(tmp_path):
+    proc = run_command(["--scenario", str(SCENES / "pusht.toml"), "--out", "r"], tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    chunks = load_chunks(tmp_path / "r" / "sim_loop.rrd")
+    entities = {path for path, _ in chunks}
+    for entity in ["/world/static/floor", "/world/static/goal", "/world/bodies/tblock/t_bar",
+                   "/world/bodies/tblock/t_stem", "/world/bodies/pusher/tip", "/world/bodies/tblock",
+                   "/plots/tblock_z", "/plots/push_y_ctrl", "/plots/ncon"]:
+        assert entity in entities, sorted(entities)
+    result = simloop.run_scenario(SCENES / "pusht.toml")
+    z = np.array([v[0] for v in chunks[("/plots/tblock_z", False)]["Scalars:scalars"]])
+    np.testing.assert_array_equal(z, result.column("tblock_z"))  # every row, exactly
+    translations = chunks[("/world/bodies/tblock", False)]["Transform3D:translation"]
+    assert len(translations) == result.rows
+    assert translations[-1][0] == pytest.approx([result.column("tblock_" + a)[-1] for a in "xyz"])
+    bar = chunks[("/world/bodies/tblock/t_bar", True)]
+    assert bar["Boxes3D:half_sizes"][0][0] == pytest.approx([0.08, 0.02, 0.02])
+    assert bar["Transform3D:translation"][0][0] == pytest.approx([0.0, 0.03, 0.0])  # its place on the body
