@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cctype>
 #include <cerrno>
 #include <cstring>
 #include <fstream>
@@ -26,6 +27,11 @@ class TableReader {
  public:
   TableReader(const toml::table& table, std::string source, std::string where = "")
       : table_(table), source_(std::move(source)), where_(std::move(where)) {}
+
+  // "file.toml: control[0].key": where a value came from, for messages.
+  [[nodiscard]] std::string where_text(std::string_view key) const {
+    return source_ + ": " + (where_.empty() ? std::string(key) : where_ + "." + std::string(key));
+  }
 
   // "file.toml: key: what", "file.toml: control[0].key: what".
   [[noreturn]] void fail(std::string_view key, const std::string& what) const {
@@ -188,8 +194,60 @@ std::optional<When> read_when(const TableReader& t, std::string_view seconds_key
   return when;
 }
 
-ControlSpec read_control(const TableReader& t) {
-  t.allow_only({"actuator", "value", "schedule", "schedule_steps"});
+// One value per step from a CSV file: a header row, then a row per step
+// (step 0 first). The column is `column`, or the only one. Only the steps
+// where the value changes become schedule entries; after the last row the
+// last value holds.
+std::vector<std::pair<When, double>> read_csv_schedule(const std::filesystem::path& file, const std::string& column,
+                                                       const std::string& where) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw IoError(where + ": " + file.string() + ": cannot open (" + std::strerror(errno) + ")");
+  const auto cells = [](const std::string& line) {
+    std::vector<std::string> out(1);
+    for (char c : line) {
+      if (c == ',') {
+        out.emplace_back();
+      } else if (c != '\r') {
+        out.back() += c;
+      }
+    }
+    return out;
+  };
+  std::string line;
+  if (!std::getline(in, line)) throw InvalidArgument(where + ": " + file.string() + ": empty (it needs a header row)");
+  const std::vector<std::string> header = cells(line);
+  std::size_t index = 0;
+  if (!column.empty()) {
+    const auto it = std::find(header.begin(), header.end(), column);
+    if (it == header.end()) {
+      std::string names;
+      for (const std::string& h : header) names += (names.empty() ? "" : ", ") + h;
+      throw InvalidArgument(where + ": " + file.string() + " has no column '" + column + "'; its columns: " + names);
+    }
+    index = static_cast<std::size_t>(it - header.begin());
+  } else if (header.size() != 1) {
+    throw InvalidArgument(where + ": " + file.string() + " has " + std::to_string(header.size()) +
+                          " columns: name the one to use (column = \"...\")");
+  }
+  std::vector<std::pair<When, double>> schedule;
+  std::int64_t step = 0;
+  for (std::int64_t line_number = 2; std::getline(in, line); ++line_number, ++step) {
+    const std::vector<std::string> row = cells(line);
+    const std::string cell = index < row.size() ? row[index] : std::string();
+    char* end = nullptr;
+    const double value = std::strtod(cell.c_str(), &end);
+    if (cell.empty() || end != cell.c_str() + cell.size() || !std::isfinite(value) || std::isspace(static_cast<unsigned char>(cell[0]))) {
+      throw InvalidArgument(where + ": " + file.string() + ":" + std::to_string(line_number) +
+                            ": expected a finite number, got '" + cell + "'");
+    }
+    if (schedule.empty() || value != schedule.back().second) schedule.emplace_back(When::steps(step), value);
+  }
+  if (schedule.empty()) throw InvalidArgument(where + ": " + file.string() + ": no rows after the header");
+  return schedule;
+}
+
+ControlSpec read_control(const TableReader& t, const std::filesystem::path& base) {
+  t.allow_only({"actuator", "value", "schedule", "schedule_steps", "csv", "column"});
   ControlSpec c;
   if (!t.has("actuator")) t.fail("actuator", "missing: name the actuator (or give its index)");
   if (t.is_integer("actuator")) {
@@ -197,8 +255,16 @@ ControlSpec read_control(const TableReader& t) {
   } else {
     c.actuator = *t.string("actuator");
   }
-  const int forms = t.has("value") + t.has("schedule") + t.has("schedule_steps");
-  if (forms != 1) t.fail("", "give exactly one of value, schedule ([seconds, value] pairs), schedule_steps");
+  const int forms = t.has("value") + t.has("schedule") + t.has("schedule_steps") + t.has("csv");
+  if (forms != 1) {
+    t.fail("", "give exactly one of value, schedule ([seconds, value] pairs), schedule_steps, csv (a value per step)");
+  }
+  if (t.has("column") && !t.has("csv")) t.fail("column", "only with csv");
+  if (const auto file = t.string("csv")) {
+    const std::filesystem::path p(*file);
+    c.schedule = read_csv_schedule(p.is_absolute() || base.empty() ? p : base / p, t.string("column").value_or(""),
+                                   t.where_text("csv"));
+  }
   if (const auto v = t.number("value")) c.schedule.emplace_back(When::steps(0), *v);
   if (t.has("schedule")) {
     for (const auto& [s, v] : t.pairs("schedule")) {
@@ -327,7 +393,7 @@ Scenario Scenario::from_toml_string(std::string_view text, std::string_view sour
       read(TableReader(*array->get(i)->as_table(), std::string(source), std::string(key) + "[" + std::to_string(i) + "]"));
     }
   };
-  each_table("control", [&](const TableReader& t) { s.controls.push_back(read_control(t)); });
+  each_table("control", [&](const TableReader& t) { s.controls.push_back(read_control(t, base)); });
   each_table("disturbance", [&](const TableReader& t) { s.disturbances.push_back(read_disturbance(t)); });
   if (const toml::node* node = root.get("record")) {
     const auto* table = node->as_table();

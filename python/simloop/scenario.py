@@ -64,9 +64,10 @@ class Scenario:
 
     scene: an MJCF file (None: the chapter's scene). timestep: seconds per
     step (None: the scene's own). steps or duration (seconds): the length.
-    controls: {actuator: value} for a constant, or {actuator: [(seconds,
-    value), ...]} for a piecewise-constant schedule; an actuator by name or
-    index. disturbances: a list of dicts with the scenario file's keys (body,
+    controls: {actuator: value} for a constant, {actuator: [(seconds,
+    value), ...]} for a piecewise-constant schedule, or {actuator: "u.csv"}
+    for a value per step from a CSV file's only column ({actuator: {"csv":
+    ..., "column": ...}} to pick one); an actuator by name or index. disturbances: a list of dicts with the scenario file's keys (body,
     force, torque, newtons, direction, random_sign, start, start_step,
     start_fraction, duration, steps). record: a dict with bodies, joints,
     actuators, sensors (lists of names) and contacts (bool).
@@ -83,6 +84,10 @@ class Scenario:
             entry: Dict[str, object] = {"actuator": actuator}
             if isinstance(value, (int, float)) and not isinstance(value, bool):
                 entry["value"] = float(value)
+            elif isinstance(value, (str, os.PathLike)):
+                entry["csv"] = value  # a value per step, one row each
+            elif isinstance(value, Mapping):
+                entry.update(value)  # the file's keys: {"csv": ..., "column": ...}
             else:
                 entry["schedule"] = [[float(t), float(v)] for t, v in value]
             text += "\n" + _toml_table("[[control]]", entry)

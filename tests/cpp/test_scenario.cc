@@ -194,3 +194,46 @@ TEST(DidYouMean, SuggestsOnlyLikelyTypos) {
 }
 
 }  // namespace
+
+#include "test_util.hpp"
+
+namespace {
+
+TEST(Scenario, AControlMayComeFromACsvWithARowPerStep) {
+  test::TempDir dir;
+  test::write_text(dir.path() / "drive.csv", "push_x,other\n0.5,9\n0.5,9\n-0.25,9\n1e-1,9\n");
+  test::write_text(dir.path() / "one.csv", "u\n1\n2\n");
+  const std::string toml = "steps = 6\n[[control]]\nactuator = 'push_motor'\ncsv = 'drive.csv'\ncolumn = 'push_x'\n";
+  const simloop::Scenario s = Scenario::from_toml_string(toml, "s.toml", dir.path());
+  ASSERT_EQ(s.controls.size(), 1u);
+  const auto& schedule = s.controls[0].schedule;  // only where the value changes
+  ASSERT_EQ(schedule.size(), 3u);
+  EXPECT_EQ(schedule[0].first.to_steps(0.002, 6), 0);
+  EXPECT_EQ(schedule[0].second, 0.5);
+  EXPECT_EQ(schedule[1].first.to_steps(0.002, 6), 2);
+  EXPECT_EQ(schedule[1].second, -0.25);
+  EXPECT_EQ(schedule[2].second, 0.1);
+  // Run: rows past the file hold its last value.
+  const simloop::ResolvedScenario r = simloop::resolve(s, chapter_model());
+  const auto draws = simloop::make_draws(0);
+  const simloop::Schedule built = simloop::build_schedule(r, s, 0.002, *draws);
+  ASSERT_EQ(built.control_changes.size(), 3u);
+  EXPECT_EQ(built.control_changes[2].step, 3);
+
+  EXPECT_EQ(Scenario::from_toml_string("[[control]]\nactuator = 0\ncsv = 'one.csv'\n", "s.toml", dir.path())
+                .controls[0].schedule.size(), 2u);
+  const auto error = [&](const std::string& text) {
+    return error_of([&] { (void)Scenario::from_toml_string(text, "s.toml", dir.path()); });
+  };
+  EXPECT_EQ(error("[[control]]\nactuator = 0\ncsv = 'drive.csv'\n"),
+            "s.toml: control[0].csv: " + (dir.path() / "drive.csv").string() +
+                " has 2 columns: name the one to use (column = \"...\")");
+  EXPECT_EQ(error("[[control]]\nactuator = 0\ncsv = 'drive.csv'\ncolumn = 'y'\n"),
+            "s.toml: control[0].csv: " + (dir.path() / "drive.csv").string() + " has no column 'y'; its columns: push_x, other");
+  test::write_text(dir.path() / "bad.csv", "u\n1\n 2\n");
+  EXPECT_EQ(error("[[control]]\nactuator = 0\ncsv = 'bad.csv'\n"),
+            "s.toml: control[0].csv: " + (dir.path() / "bad.csv").string() + ":3: expected a finite number, got ' 2'");
+  EXPECT_EQ(error("[[control]]\nactuator = 0\nvalue = 1\ncolumn = 'u'\n"), "s.toml: control[0].column: only with csv");
+}
+
+}  // namespace

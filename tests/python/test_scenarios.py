@@ -154,3 +154,12 @@ def test_the_recording_draws_the_scene(tmp_path):
     bar = chunks[("/world/bodies/tblock/t_bar", True)]
     assert bar["Boxes3D:half_sizes"][0][0] == pytest.approx([0.08, 0.02, 0.02])
     assert bar["Transform3D:translation"][0][0] == pytest.approx([0.0, 0.03, 0.0])  # its place on the body
+
+
+def test_a_control_from_a_csv_file(tmp_path):
+    values = [0.1 * (k % 7) - 0.3 for k in range(40)]
+    (tmp_path / "u.csv").write_text("push_x\n" + "".join(f"{v!r}\n" for v in values))
+    s = simloop.Scenario(scene=SCENES / "pusht.xml", steps=60, controls={"push_x": tmp_path / "u.csv"})
+    applied = simloop.run_scenario(s).column("push_x_ctrl")
+    np.testing.assert_array_equal(applied[:40], values)        # step by step, as written (inside ctrlrange)
+    np.testing.assert_array_equal(applied[40:60], values[-1])  # then the last value holds
