@@ -163,7 +163,9 @@ std::string summary_text(const RunResult& r) {
                   e.work_constraint_positive, e.unexplained);
     out += line;
   }
-  if (!r.warnings.empty()) {
+  const bool mujoco_warned = std::any_of(r.warnings.begin(), r.warnings.end(),
+                                         [](const Warning& w) { return w.name.rfind("mj", 0) == 0; });
+  if (mujoco_warned) {
     out += "  (after a bad-value warning MuJoCo resets the state and carries on: "
            "the numbers above are not one continuous simulation)\n";
   }

@@ -185,6 +185,23 @@ TEST(Summary, SaysWhatTheChapterSays) {
   EXPECT_EQ(baseline.find("warning"), std::string::npos) << baseline;
 }
 
+TEST(Summary, OnlyMujocosBadValueWarningsGetTheResetNote) {
+  // MuJoCo resets the state after its bad-value warnings; simloop's own
+  // divergence warning is no such reset, and must not claim one.
+  simloop::RunConfig config;
+  config.steps = 100;
+  simloop::RunResult result = simloop::run(simloop::Model::pusher_scene(), config);
+  result.warnings = {simloop::Warning{"simloop_DIVERGED", 3, 40, "body \"box\" went through the floor"}};
+  std::string text = simloop::summary_text(result);
+  EXPECT_NE(text.find("simloop warning simloop_DIVERGED: raised 3 times, first in step 40: body"), std::string::npos)
+      << text;
+  EXPECT_EQ(text.find("MuJoCo resets the state"), std::string::npos) << text;
+  result.warnings.push_back(simloop::Warning{"mjWARN_BADQACC", 1, 41, "Nan, Inf or huge value in QACC"});
+  text = simloop::summary_text(result);
+  EXPECT_NE(text.find("MuJoCo warning mjWARN_BADQACC: raised 1 time, first in step 41"), std::string::npos) << text;
+  EXPECT_NE(text.find("MuJoCo resets the state and carries on"), std::string::npos) << text;
+}
+
 TEST(Summary, ACutShortShoveSaysHowManyStepsItActed) {
   const simloop::Model model = simloop::Model::pusher_scene();
   simloop::RunConfig config;
