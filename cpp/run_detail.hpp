@@ -2,6 +2,9 @@
 #pragma once
 
 #include <algorithm>
+#include <cstddef>
+#include <cstdint>
+#include <functional>
 
 #include "simloop/run.hpp"
 
@@ -31,6 +34,18 @@ void check_kept_rows(std::int64_t steps, std::int64_t record_every, int columns)
 // of its runs' steps up front, so progress has its true total from the start.
 [[nodiscard]] RunResult run_counted_elsewhere(const Model& model, const RunConfig& config, Data& workspace,
                                               RowSink* sink, RunControl* control);
+
+// The batches' worker pool: job(i, data, control) for every i in [0, jobs),
+// taken in order from one atomic index by batch_workers(threads, jobs)
+// workers, each with its own Data made for `model` (the calling thread is
+// worker 0). `steps`, the steps of all the jobs, is announced to the control
+// (`control`, or one of its own) up front. If threads cannot be started,
+// fewer workers do the work. While the others finish, the calling thread
+// keeps polling the control. Once a job throws, no new job starts; after all
+// workers have stopped, a requested stop throws Interrupted, else the
+// failure of the lowest index is rethrown.
+void run_jobs(const Model& model, std::size_t jobs, int threads, std::int64_t steps, RunControl* control,
+              const std::function<void(std::size_t job, Data& data, RunControl& control)>& job);
 
 // Tests only: from now on run_batch can start at most `threads` more threads
 // (as under a process limit, RLIMIT_NPROC); a negative count lifts the limit.
