@@ -2,10 +2,13 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <vector>
 
+#include "simloop/recorder.hpp"
 #include "simloop/run.hpp"
 
 namespace simloop::detail {
@@ -29,6 +32,21 @@ class KeepRows final : public RowSink {
 // `record_every`-th row of `columns` doubles would not fit the memory budget
 // (trajectory_memory_budget), saying how much it needs and what to change.
 void check_kept_rows(std::int64_t steps, std::int64_t record_every, int columns);
+
+// The same for several runs kept in memory together (a batch): each entry
+// is one run's {steps, record_every, columns}; the message names the largest.
+void check_kept_rows(const std::vector<std::array<std::int64_t, 3>>& runs);
+
+// Throws InvalidArgument unless steps and record_every are each from 1 to
+// kMaxSteps / kMaxRecordEvery (run_schedule's own check).
+void check_schedule_run(std::int64_t steps, std::int64_t record_every);
+
+// run_schedule() without announcing its steps to the control (a batch
+// announces all of its runs' steps up front).
+[[nodiscard]] ScenarioRunResult run_schedule_counted_elsewhere(const mjModel* m, mjData* d,
+                                                               const ResolvedScenario& scenario,
+                                                               const Schedule& schedule, std::int64_t record_every,
+                                                               RowSink* sink, RunControl* control);
 
 // run() without announcing its steps to the control: a batch announces all
 // of its runs' steps up front, so progress has its true total from the start.
