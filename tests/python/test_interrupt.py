@@ -18,6 +18,7 @@ LONG_CALLS = {
     "run_batch": "simloop.run_batch(seeds=range(4), steps=10**8, record_every=10**6, threads=2)",
     "Sim.step": "sim.step(10**8)",
     "sweep": "simloop.sweep(timesteps=[0.02, 0.04], duration=10000.0, threads=2)",
+    "run_scenario": "simloop.run_scenario(simloop.Scenario.chapter(), steps=10**8, record_every=10**6)",
     "run_scenario_batch": "simloop.run_scenario_batch(simloop.Scenario.chapter(), seeds=range(4), steps=10**8, "
                           "record_every=10**6, threads=2)",
 }
