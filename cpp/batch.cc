@@ -36,7 +36,8 @@ int batch_workers(int threads, std::size_t jobs) noexcept {
   return static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(wanted), std::max<std::size_t>(jobs, 1)));
 }
 
-void detail::run_jobs(const Model& model, std::size_t jobs, int threads, std::int64_t steps, RunControl* control,
+void detail::run_jobs(const Model& model, std::size_t jobs, int threads, const std::vector<std::int64_t>& steps,
+                      RunControl* control,
                       const std::function<void(std::size_t job, Data& data, RunControl& control)>& job) {
   const int workers = batch_workers(threads, jobs);
   std::vector<Data> datas;
@@ -44,7 +45,7 @@ void detail::run_jobs(const Model& model, std::size_t jobs, int threads, std::in
   for (int w = 0; w < workers; ++w) datas.emplace_back(model);
   RunControl own_control;
   RunControl& ctl = control ? *control : own_control;
-  ctl.add_total(steps);
+  for (const std::int64_t s : steps) ctl.add_total(s);
   std::vector<std::exception_ptr> errors(jobs);
   // Workers stop taking jobs once any job failed or a stop was requested.
   std::atomic<std::size_t> next{0};
@@ -127,8 +128,8 @@ std::vector<RunResult> run_batch(const Model& model, const std::vector<RunConfig
   }
 
   std::vector<RunResult> results(configs.size());
-  std::int64_t steps = 0;
-  for (const RunConfig& c : configs) steps += c.num_steps();
+  std::vector<std::int64_t> steps;
+  for (const RunConfig& c : configs) steps.push_back(c.num_steps());
   detail::run_jobs(model, configs.size(), threads, steps, control, [&](std::size_t i, Data& data, RunControl& ctl) {
     results[i] = detail::run_counted_elsewhere(*model_of[i], configs[i], data, sinks.empty() ? nullptr : sinks[i], &ctl);
   });

@@ -56,13 +56,14 @@ void check_schedule_run(std::int64_t steps, std::int64_t record_every);
 // The batches' worker pool: job(i, data, control) for every i in [0, jobs),
 // taken in order from one atomic index by batch_workers(threads, jobs)
 // workers, each with its own Data made for `model` (the calling thread is
-// worker 0). `steps`, the steps of all the jobs, is announced to the control
+// worker 0). steps[i], job i's steps, are announced to the control
 // (`control`, or one of its own) up front. If threads cannot be started,
 // fewer workers do the work. While the others finish, the calling thread
 // keeps polling the control. Once a job throws, no new job starts; after all
 // workers have stopped, a requested stop throws Interrupted, else the
 // failure of the lowest index is rethrown.
-void run_jobs(const Model& model, std::size_t jobs, int threads, std::int64_t steps, RunControl* control,
+void run_jobs(const Model& model, std::size_t jobs, int threads, const std::vector<std::int64_t>& steps,
+              RunControl* control,
               const std::function<void(std::size_t job, Data& data, RunControl& control)>& job);
 
 // Tests only: from now on run_batch can start at most `threads` more threads

@@ -23,12 +23,10 @@ Model load_scene(const Scenario& scenario) {
 namespace {
 
 // A run of a scenario, made ready on its model: names resolved, inputs
-// drawn, columns laid out. Everything that can be wrong with a run's
-// arguments is found here, before it steps.
+// drawn.
 struct PreparedRun {
   ResolvedScenario resolved;
   Schedule schedule;
-  int columns = 0;
 };
 
 PreparedRun prepare(const Model& model, const Scenario& scenario, const ScenarioConfig& config) {
@@ -95,8 +93,8 @@ std::vector<ScenarioRunResult> run_scenario_batch(const Model& scene, const Scen
       model_of.push_back(&it->second);
       runs.push_back(prepare(it->second, scenario, config));
       detail::check_schedule_run(runs.back().schedule.steps, config.record_every);
-      runs.back().columns = Recorder(it->second.get(), runs.back().resolved, runs.back().schedule).width();
-      kept.push_back({runs.back().schedule.steps, config.record_every, runs.back().columns});
+      const Recorder columns(it->second.get(), runs.back().resolved, runs.back().schedule);
+      kept.push_back({runs.back().schedule.steps, config.record_every, columns.width()});
     } catch (const InvalidArgument& e) {
       throw InvalidArgument("run " + std::to_string(i) + ": " + e.what());
     }
@@ -104,8 +102,8 @@ std::vector<ScenarioRunResult> run_scenario_batch(const Model& scene, const Scen
   if (!configs.empty()) detail::check_kept_rows(kept);
 
   std::vector<ScenarioRunResult> results(configs.size());
-  std::int64_t steps = 0;
-  for (const PreparedRun& r : runs) steps += r.schedule.steps;
+  std::vector<std::int64_t> steps;
+  for (const PreparedRun& r : runs) steps.push_back(r.schedule.steps);
   detail::run_jobs(scene, configs.size(), threads, steps, control, [&](std::size_t i, Data& data, RunControl& ctl) {
     const mjModel* m = model_of[i]->get();
     results[i] = labelled(detail::run_schedule_counted_elsewhere(m, data.get(), runs[i].resolved, runs[i].schedule,
