@@ -36,6 +36,63 @@ int batch_workers(int threads, std::size_t jobs) noexcept {
   return static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(wanted), std::max<std::size_t>(jobs, 1)));
 }
 
+void detail::run_jobs(const Model& model, std::size_t jobs, int threads, const std::vector<std::int64_t>& steps,
+                      RunControl* control,
+                      const std::function<void(std::size_t job, Data& data, RunControl& control)>& job) {
+  const int workers = batch_workers(threads, jobs);
+  std::vector<Data> datas;
+  datas.reserve(static_cast<std::size_t>(workers));
+  for (int w = 0; w < workers; ++w) datas.emplace_back(model);
+  RunControl own_control;
+  RunControl& ctl = control ? *control : own_control;
+  for (const std::int64_t s : steps) ctl.add_total(s);
+  std::vector<std::exception_ptr> errors(jobs);
+  // Workers stop taking jobs once any job failed or a stop was requested.
+  std::atomic<std::size_t> next{0};
+  std::atomic<int> running{0};
+  const auto work = [&](int worker) noexcept {
+    for (std::size_t i; (i = next.fetch_add(1)) < jobs;) {
+      try {
+        job(i, datas[static_cast<std::size_t>(worker)], ctl);
+      } catch (...) {
+        errors[i] = std::current_exception();
+        next.store(jobs);
+      }
+    }
+    running.fetch_sub(1);
+  };
+  std::vector<std::thread> pool;
+  pool.reserve(static_cast<std::size_t>(std::max(workers - 1, 0)));
+  running.store(1);
+  for (int w = 1; w < workers; ++w) {
+    running.fetch_add(1);
+    try {
+      pool.push_back(start_thread([&work, w] { work(w); }));
+    } catch (const std::system_error&) {
+      // No more threads to be had (a process limit): the ones running share
+      // the work, which gives the same results with fewer workers.
+      running.fetch_sub(1);
+      break;
+    }
+  }
+  work(0);  // the calling thread is worker 0
+  // Worker 0 is the control's thread: while the others finish, it keeps
+  // polling, so a stop still takes effect promptly.
+  while (running.load() > 0) {
+    try {
+      ctl.check();
+    } catch (const Interrupted&) {
+      // Every worker sees the stop at its next chunk; wait for them.
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  for (std::thread& t : pool) t.join();
+  if (ctl.stop_requested()) throw Interrupted("interrupted");
+  for (const std::exception_ptr& e : errors) {
+    if (e) std::rethrow_exception(e);
+  }
+}
+
 std::vector<RunResult> run_batch(const Model& model, const std::vector<RunConfig>& configs, int threads,
                                  RunControl* control) {
   return run_batch(model, configs, {}, threads, control);
@@ -70,62 +127,12 @@ std::vector<RunResult> run_batch(const Model& model, const std::vector<RunConfig
     model_of[i] = &it->second;
   }
 
-  const int workers = batch_workers(threads, configs.size());
-  std::vector<Data> datas;
-  datas.reserve(static_cast<std::size_t>(workers));
-  for (int w = 0; w < workers; ++w) datas.emplace_back(model);
-
   std::vector<RunResult> results(configs.size());
-  std::vector<std::exception_ptr> errors(configs.size());
-  // Workers stop taking runs once any run failed or a stop was requested.
-  RunControl own_control;
-  RunControl& ctl = control ? *control : own_control;
-  for (const RunConfig& c : configs) ctl.add_total(c.num_steps());
-  std::atomic<std::size_t> next{0};
-  std::atomic<int> running{0};
-  const auto work = [&](Data& data) noexcept {
-    for (std::size_t i; (i = next.fetch_add(1)) < configs.size();) {
-      try {
-        results[i] = detail::run_counted_elsewhere(*model_of[i], configs[i], data,
-                                                   sinks.empty() ? nullptr : sinks[i], &ctl);
-      } catch (...) {
-        errors[i] = std::current_exception();
-        next.store(configs.size());
-      }
-    }
-    running.fetch_sub(1);
-  };
-  std::vector<std::thread> pool;
-  pool.reserve(static_cast<std::size_t>(workers - 1));
-  running.store(1);
-  for (int w = 1; w < workers; ++w) {
-    running.fetch_add(1);
-    try {
-      Data& data = datas[static_cast<std::size_t>(w)];
-      pool.push_back(start_thread([&work, &data] { work(data); }));
-    } catch (const std::system_error&) {
-      // No more threads to be had (a process limit): the ones running share
-      // the work, which gives the same results with fewer workers.
-      running.fetch_sub(1);
-      break;
-    }
-  }
-  work(datas[0]);  // the calling thread is worker 0
-  // Worker 0 is the control's thread: while the others finish, it keeps
-  // polling, so a stop still takes effect promptly.
-  while (running.load() > 0) {
-    try {
-      ctl.check();
-    } catch (const Interrupted&) {
-      // Every worker sees the stop at its next chunk; wait for them.
-    }
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  }
-  for (std::thread& t : pool) t.join();
-  if (ctl.stop_requested()) throw Interrupted("interrupted");
-  for (const std::exception_ptr& e : errors) {
-    if (e) std::rethrow_exception(e);
-  }
+  std::vector<std::int64_t> steps;
+  for (const RunConfig& c : configs) steps.push_back(c.num_steps());
+  detail::run_jobs(model, configs.size(), threads, steps, control, [&](std::size_t i, Data& data, RunControl& ctl) {
+    results[i] = detail::run_counted_elsewhere(*model_of[i], configs[i], data, sinks.empty() ? nullptr : sinks[i], &ctl);
+  });
   return results;
 }
 

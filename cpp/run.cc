@@ -168,6 +168,30 @@ void detail::check_kept_rows(std::int64_t steps, std::int64_t record_every, int 
   throw InvalidArgument(msg.str());
 }
 
+void detail::check_kept_rows(const std::vector<std::array<std::int64_t, 3>>& runs) {
+  if (runs.size() == 1) return check_kept_rows(runs[0][0], runs[0][1], static_cast<int>(runs[0][2]));
+  const std::uint64_t budget = trajectory_memory_budget();
+  long double total = 0.0L, largest_bytes = -1.0L;
+  std::size_t largest = 0;
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    const long double bytes =
+        static_cast<long double>(Trajectory::rows_for(runs[i][0], runs[i][1])) * runs[i][2] * sizeof(double);
+    total += bytes;
+    if (bytes > largest_bytes) {
+      largest = i;
+      largest_bytes = bytes;
+    }
+  }
+  if (total <= static_cast<long double>(budget)) return;
+  std::ostringstream msg;
+  msg << "steps " << runs[largest][0] << " with record_every " << runs[largest][1] << " (run " << largest
+      << ", the largest of " << runs.size() << " runs) and the others would keep "
+      << human_bytes(total >= 1.8e19L ? std::numeric_limits<std::uint64_t>::max() : static_cast<std::uint64_t>(total))
+      << " of trajectories in memory (at most " << human_bytes(budget)
+      << " allowed: half of the machine's memory or the process's limit); raise record_every";
+  throw InvalidArgument(msg.str());
+}
+
 RunResult run(const Model& model, const RunConfig& config) {
   validate(config);
   check_kept_trajectories({config});  // before allocating anything

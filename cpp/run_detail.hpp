@@ -2,7 +2,13 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <vector>
 
+#include "simloop/recorder.hpp"
 #include "simloop/run.hpp"
 
 namespace simloop::detail {
@@ -27,10 +33,38 @@ class KeepRows final : public RowSink {
 // (trajectory_memory_budget), saying how much it needs and what to change.
 void check_kept_rows(std::int64_t steps, std::int64_t record_every, int columns);
 
+// The same for several runs kept in memory together (a batch): each entry
+// is one run's {steps, record_every, columns}; the message names the largest.
+void check_kept_rows(const std::vector<std::array<std::int64_t, 3>>& runs);
+
+// Throws InvalidArgument unless steps and record_every are each from 1 to
+// kMaxSteps / kMaxRecordEvery (run_schedule's own check).
+void check_schedule_run(std::int64_t steps, std::int64_t record_every);
+
+// run_schedule() without announcing its steps to the control (a batch
+// announces all of its runs' steps up front).
+[[nodiscard]] ScenarioRunResult run_schedule_counted_elsewhere(const mjModel* m, mjData* d,
+                                                               const ResolvedScenario& scenario,
+                                                               const Schedule& schedule, std::int64_t record_every,
+                                                               RowSink* sink, RunControl* control);
+
 // run() without announcing its steps to the control: a batch announces all
 // of its runs' steps up front, so progress has its true total from the start.
 [[nodiscard]] RunResult run_counted_elsewhere(const Model& model, const RunConfig& config, Data& workspace,
                                               RowSink* sink, RunControl* control);
+
+// The batches' worker pool: job(i, data, control) for every i in [0, jobs),
+// taken in order from one atomic index by batch_workers(threads, jobs)
+// workers, each with its own Data made for `model` (the calling thread is
+// worker 0). steps[i], job i's steps, are announced to the control
+// (`control`, or one of its own) up front. If threads cannot be started,
+// fewer workers do the work. While the others finish, the calling thread
+// keeps polling the control. Once a job throws, no new job starts; after all
+// workers have stopped, a requested stop throws Interrupted, else the
+// failure of the lowest index is rethrown.
+void run_jobs(const Model& model, std::size_t jobs, int threads, const std::vector<std::int64_t>& steps,
+              RunControl* control,
+              const std::function<void(std::size_t job, Data& data, RunControl& control)>& job);
 
 // Tests only: from now on run_batch can start at most `threads` more threads
 // (as under a process limit, RLIMIT_NPROC); a negative count lifts the limit.

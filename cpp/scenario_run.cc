@@ -1,11 +1,14 @@
 #include "simloop/scenario_run.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
+#include <list>
 #include <map>
 #include <variant>
 
+#include "run_detail.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/number_format.hpp"
 #include "simloop/output.hpp"
@@ -17,31 +20,97 @@ Model load_scene(const Scenario& scenario) {
   return Model::from_file(scenario.scene.string());
 }
 
-ScenarioRunResult run_scenario(const Model& scene, const Scenario& scenario, const ScenarioConfig& config,
-                               Data* workspace, RowSink* sink, RunControl* control) {
-  const double timestep = config.timestep.value_or(scenario.timestep.value_or(scene.timestep()));
-  const Model model = scene.for_run(timestep, false);
-  std::optional<Data> own;
-  if (workspace == nullptr) workspace = &own.emplace(model);
-  if (!workspace->fits(model)) throw InvalidArgument("workspace Data was made for a model of another size");
+namespace {
 
+// A run of a scenario, made ready on its model: names resolved, inputs
+// drawn.
+struct PreparedRun {
+  ResolvedScenario resolved;
+  Schedule schedule;
+};
+
+PreparedRun prepare(const Model& model, const Scenario& scenario, const ScenarioConfig& config) {
   Scenario effective = scenario;
   if (config.steps) effective.length = When::steps(*config.steps);
   if (!config.perturb) effective.disturbances.clear();
-  const ResolvedScenario resolved = resolve(effective, model.get());
+  PreparedRun run;
+  run.resolved = resolve(effective, model.get());
   const std::unique_ptr<Draws> draws = make_draws(config.seed, config.rng);
-  const Schedule schedule = build_schedule(resolved, effective, timestep, *draws);
-  ScenarioRunResult result =
-      run_schedule(model.get(), workspace->get(), resolved, schedule, config.record_every, sink, control);
+  run.schedule = build_schedule(run.resolved, effective, model.timestep(), *draws);
+  return run;
+}
+
+ScenarioRunResult labelled(ScenarioRunResult result, const mjModel* m, const Scenario& scenario,
+                           const ScenarioConfig& config) {
   result.name = scenario.name;
   result.seed = config.seed;
   result.rng = std::string(rng_name(config.rng));
   result.perturb = config.perturb;
-  for (const Schedule::Force& f : schedule.forces) {
-    const char* name = mj_id2name(model.get(), mjOBJ_BODY, f.body);
+  for (const Schedule::Force& f : result.schedule.forces) {
+    const char* name = mj_id2name(m, mjOBJ_BODY, f.body);
     result.disturbed_bodies.push_back(name ? name : "body" + std::to_string(f.body));
   }
   return result;
+}
+
+double run_timestep(const Model& scene, const Scenario& scenario, const ScenarioConfig& config) {
+  return config.timestep.value_or(scenario.timestep.value_or(scene.timestep()));
+}
+
+}  // namespace
+
+ScenarioRunResult run_scenario(const Model& scene, const Scenario& scenario, const ScenarioConfig& config,
+                               Data* workspace, RowSink* sink, RunControl* control) {
+  const Model model = scene.for_run(run_timestep(scene, scenario, config), false);
+  std::optional<Data> own;
+  if (workspace == nullptr) workspace = &own.emplace(model);
+  if (!workspace->fits(model)) throw InvalidArgument("workspace Data was made for a model of another size");
+  const PreparedRun run = prepare(model, scenario, config);
+  return labelled(
+      run_schedule(model.get(), workspace->get(), run.resolved, run.schedule, config.record_every, sink, control),
+      model.get(), scenario, config);
+}
+
+std::vector<ScenarioRunResult> run_scenario_batch(const Model& scene, const Scenario& scenario,
+                                                  const std::vector<ScenarioConfig>& configs, int threads,
+                                                  RunControl* control) {
+  if (threads < 0) {
+    throw InvalidArgument("threads must be at least 1, or 0 for one per core, got " + std::to_string(threads));
+  }
+  // Up front, on this thread: one model per distinct timestep (the model is
+  // frozen while the workers share it), every run's names, inputs and
+  // columns, and the memory all the kept rows will take together.
+  std::list<std::pair<double, Model>> models;  // stable addresses for model_of
+  std::vector<const Model*> model_of;
+  std::vector<PreparedRun> runs;
+  std::vector<std::array<std::int64_t, 3>> kept;
+  for (std::size_t i = 0; i < configs.size(); ++i) {
+    const ScenarioConfig& config = configs[i];
+    try {
+      const double timestep = run_timestep(scene, scenario, config);
+      auto it = std::find_if(models.begin(), models.end(), [&](const auto& m) { return m.first == timestep; });
+      if (it == models.end()) it = models.emplace(models.end(), timestep, scene.for_run(timestep, false));
+      model_of.push_back(&it->second);
+      runs.push_back(prepare(it->second, scenario, config));
+      detail::check_schedule_run(runs.back().schedule.steps, config.record_every);
+      const Recorder columns(it->second.get(), runs.back().resolved, runs.back().schedule);
+      kept.push_back({runs.back().schedule.steps, config.record_every, columns.width()});
+    } catch (const InvalidArgument& e) {
+      throw InvalidArgument("run " + std::to_string(i) + ": " + e.what());
+    }
+  }
+  if (!configs.empty()) detail::check_kept_rows(kept);
+
+  std::vector<ScenarioRunResult> results(configs.size());
+  std::vector<std::int64_t> steps;
+  for (const PreparedRun& r : runs) steps.push_back(r.schedule.steps);
+  detail::run_jobs(scene, configs.size(), threads, steps, control, [&](std::size_t i, Data& data, RunControl& ctl) {
+    const mjModel* m = model_of[i]->get();
+    results[i] = labelled(detail::run_schedule_counted_elsewhere(m, data.get(), runs[i].resolved, runs[i].schedule,
+                                                                 configs[i].record_every, nullptr, &ctl),
+                          m, scenario, configs[i]);
+  });
+  return results;
 }
 
 namespace {

@@ -631,6 +631,20 @@ PYBIND11_MODULE(_core, m) {
       },
       "scene"_a, "scenario"_a, "config"_a, "progress"_a = py::none());
   m.def(
+      "run_scenario_batch",
+      [](const simloop::Model& scene, const simloop::Scenario& scenario,
+         const std::vector<simloop::ScenarioConfig>& configs, int threads, py::object progress) {
+        Interruptible work(std::move(progress));
+        std::vector<simloop::ScenarioRunResult> results = work.run([&](simloop::RunControl* control) {
+          return naming_failures("run_scenario_batch(" + scenario.name + ") x " + std::to_string(configs.size()) +
+                                     " runs",
+                                 [&] { return simloop::run_scenario_batch(scene, scenario, configs, threads, control); });
+        });
+        work.finish();
+        return results;
+      },
+      "scene"_a, "scenario"_a, "configs"_a, "threads"_a, "progress"_a = py::none());
+  m.def(
       "scene_geometry",
       [](const simloop::Model& model) {
         static constexpr const char* kKinds[] = {"plane", "sphere", "capsule", "ellipsoid", "cylinder", "box", "mesh", "other"};

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "simloop/control.hpp"
 #include "simloop/model.hpp"
@@ -38,6 +39,19 @@ struct ScenarioConfig {
 [[nodiscard]] ScenarioRunResult run_scenario(const Model& scene, const Scenario& scenario,
                                              const ScenarioConfig& config, Data* workspace = nullptr,
                                              RowSink* sink = nullptr, RunControl* control = nullptr);
+
+// Runs `scenario` once per config over one scene, with `threads` workers (0:
+// one per core), each stepping its own Data; the scene is compiled once per
+// distinct timestep, before any worker starts, and shared read-only. Result
+// i is bitwise identical to run_scenario(scene, scenario, configs[i]),
+// whatever the thread count. Every run is checked before any starts
+// (InvalidArgument naming its index: a bad timestep, an unknown name, steps
+// or record_every out of range, or kept rows that together would not fit in
+// memory). Failures, fewer threads, stopping and watching through `control`:
+// as for run_batch (batch.hpp).
+[[nodiscard]] std::vector<ScenarioRunResult> run_scenario_batch(const Model& scene, const Scenario& scenario,
+                                                                const std::vector<ScenarioConfig>& configs,
+                                                                int threads = 0, RunControl* control = nullptr);
 
 // metrics.json for a scenario run: byte for byte what Python's
 // json.dumps(metrics, indent=2, sort_keys=True) + "\n" writes, floats

@@ -10,7 +10,7 @@ numpy views of the trajectory, and writes the rerun recording.
 """
 
 from ._api import Sim, draw_shove, load_model, run, run_batch, sweep
-from .scenario import Scenario, ScenarioResult, run_scenario
+from .scenario import Scenario, ScenarioResult, run_scenario, run_scenario_batch
 from ._core import (
     COLUMN_NAMES,
     ENERGY_COLUMN_NAMES,
@@ -51,5 +51,6 @@ __all__ = [
     "run",
     "run_batch",
     "run_scenario",
+    "run_scenario_batch",
     "sweep",
 ]

@@ -20,10 +20,10 @@ from __future__ import annotations
 import json
 import math
 import os
-from typing import Any, Dict, Iterable, Mapping, Optional, Sequence, Union
+from typing import Any, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple, Union
 
 from . import _core
-from ._api import Progress, _check_bool, _check_int, _check_progress, _check_timestep, _describe, _U64_MAX, RNGS
+from ._api import Progress, _check_bool, _sequence, _check_int, _check_progress, _check_timestep, _describe, _U64_MAX, RNGS
 
 ScenarioResult = _core.ScenarioResult
 
@@ -138,6 +138,18 @@ class Scenario:
         return repr(self._core)
 
 
+def _scenario_and_scene(scenario: Union[Scenario, str, os.PathLike],
+                        model: Optional[_core.Model]) -> Tuple[Scenario, _core.Model]:
+    if isinstance(scenario, (str, os.PathLike)):
+        scenario = Scenario.from_file(scenario)
+    if not isinstance(scenario, Scenario):
+        raise TypeError(f"scenario must be a simloop.Scenario or a scenario file's path, got {_describe(scenario)}")
+    scene = scenario.model() if model is None else model
+    if not isinstance(scene, _core.Model):
+        raise TypeError(f"model must be a simloop.Model, got {_describe(scene)}")
+    return scenario, scene
+
+
 def run_scenario(scenario: Union[Scenario, str, os.PathLike], *, seed: int = 0, rng: str = "mt19937_64",
                  timestep: Optional[float] = None, steps: Optional[int] = None, perturb: bool = True,
                  record_every: int = 1, model: Optional[_core.Model] = None,
@@ -152,10 +164,7 @@ def run_scenario(scenario: Union[Scenario, str, os.PathLike], *, seed: int = 0, 
     column(name), metrics (a dict), disturbances, warnings, summary(),
     write(out). Unknown names raise ValueError listing what the scene has.
     """
-    if isinstance(scenario, (str, os.PathLike)):
-        scenario = Scenario.from_file(scenario)
-    if not isinstance(scenario, Scenario):
-        raise TypeError(f"scenario must be a simloop.Scenario or a scenario file's path, got {_describe(scenario)}")
+    scenario, scene = _scenario_and_scene(scenario, model)
     if rng not in RNGS:
         raise ValueError(f"rng must be 'mt19937_64' or 'numpy', got {rng!r}")
     config = _core.ScenarioConfig(
@@ -163,10 +172,36 @@ def run_scenario(scenario: Union[Scenario, str, os.PathLike], *, seed: int = 0, 
         None if timestep is None else _check_timestep(timestep),
         None if steps is None else _check_int("steps", steps, 1, _core.MAX_STEPS),
         _check_bool("perturb", perturb), _check_int("record_every", record_every, 1, _core.MAX_RECORD_EVERY))
-    scene = scenario.model() if model is None else model
-    if not isinstance(scene, _core.Model):
-        raise TypeError(f"model must be a simloop.Model, got {_describe(scene)}")
     return _core.run_scenario(scene, scenario._core, config, progress=_check_progress(progress))
+
+
+def run_scenario_batch(scenario: Union[Scenario, str, os.PathLike], seeds: Iterable[int] = (0,),
+                       timesteps: Iterable[Optional[float]] = (None,), *, rng: str = "mt19937_64",
+                       steps: Optional[int] = None, perturb: bool = True, record_every: int = 1,
+                       model: Optional[_core.Model] = None, threads: Optional[int] = None,
+                       progress: Progress = None) -> List[ScenarioResult]:
+    """Runs a scenario once per (seed, timestep) pair, in parallel over one scene.
+
+    Results come in the order of itertools.product(seeds, timesteps), and each
+    is bitwise identical to run_scenario() with the same arguments, whatever
+    `threads` is (None: one worker per core). A timestep of None is the
+    scenario's own (or the scene's). The scene is compiled once per distinct
+    timestep and shared; each worker steps its own MuJoCo data. Every run is
+    checked before any starts, and so is the memory all the kept trajectories
+    take together. progress: as for run(), over the steps of all the runs.
+    """
+    scenario, scene = _scenario_and_scene(scenario, model)
+    if rng not in RNGS:
+        raise ValueError(f"rng must be 'mt19937_64' or 'numpy', got {rng!r}")
+    seed_list = [_check_int("seeds[%d]" % i, s, 0, _U64_MAX) for i, s in enumerate(_sequence("seeds", seeds))]
+    timestep_list = [None if t is None else _check_timestep(t, "timesteps[%d]" % i)
+                     for i, t in enumerate(_sequence("timesteps", timesteps))]
+    workers = 0 if threads is None else _check_int("threads", threads, 1, 4096)
+    step_count = None if steps is None else _check_int("steps", steps, 1, _core.MAX_STEPS)
+    perturb = _check_bool("perturb", perturb)
+    every = _check_int("record_every", record_every, 1, _core.MAX_RECORD_EVERY)
+    configs = [_core.ScenarioConfig(s, rng, t, step_count, perturb, every) for s in seed_list for t in timestep_list]
+    return _core.run_scenario_batch(scene, scenario._core, configs, workers, progress=_check_progress(progress))
 
 
 def _metrics(result: ScenarioResult) -> dict:

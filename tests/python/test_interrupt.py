@@ -18,6 +18,9 @@ LONG_CALLS = {
     "run_batch": "simloop.run_batch(seeds=range(4), steps=10**8, record_every=10**6, threads=2)",
     "Sim.step": "sim.step(10**8)",
     "sweep": "simloop.sweep(timesteps=[0.02, 0.04], duration=10000.0, threads=2)",
+    "run_scenario": "simloop.run_scenario(simloop.Scenario.chapter(), steps=10**8, record_every=10**6)",
+    "run_scenario_batch": "simloop.run_scenario_batch(simloop.Scenario.chapter(), seeds=range(4), steps=10**8, "
+                          "record_every=10**6, threads=2)",
 }
 
 # The child: signals it is about to call, calls, and reports when the
@@ -107,7 +110,9 @@ class Stop(Exception):
     lambda progress: simloop.run(steps=10**8, record_every=10**6, progress=progress),
     lambda progress: simloop.run_batch(seeds=[0, 1], steps=10**8, record_every=10**6, threads=2, progress=progress),
     lambda progress: simloop.Sim().step(10**8, progress=progress),
-], ids=["run", "run_batch", "Sim.step"])
+    lambda progress: simloop.run_scenario_batch(simloop.Scenario.chapter(), seeds=[0, 1], steps=10**8,
+                                                record_every=10**6, threads=2, progress=progress),
+], ids=["run", "run_batch", "Sim.step", "run_scenario_batch"])
 def test_an_exception_from_progress_stops_the_work_and_reaches_the_caller(call):
     def progress(done, total):
         if done > 0:

@@ -1,0 +1,140 @@
+// Batches of scenario runs: one scene, one Data per worker, the same bits as
+// running each config alone.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "run_detail.hpp"
+#include "simloop/errors.hpp"
+#include "simloop/scenario_run.hpp"
+
+namespace {
+
+simloop::Scenario scene_file(const char* name) {
+  return simloop::Scenario::from_toml_file(std::string(SIMLOOP_TEST_SCENES) + "/" + name);
+}
+
+bool same_bits(const simloop::ScenarioRunResult& a, const simloop::ScenarioRunResult& b) {
+  const simloop::Trajectory& x = a.trajectory;
+  const simloop::Trajectory& y = b.trajectory;
+  // memcmp, not ==: the final row's input columns hold NaN.
+  return x.rows() == y.rows() && x.columns() == y.columns() && a.final_row.size() == b.final_row.size() &&
+         std::memcmp(a.final_row.data(), b.final_row.data(), sizeof(double) * a.final_row.size()) == 0 &&
+         std::memcmp(x.data(), y.data(), sizeof(double) * static_cast<size_t>(x.rows()) * static_cast<size_t>(x.columns())) == 0;
+}
+
+// Seeds and timesteps, as Python's itertools.product(seeds, timesteps).
+std::vector<simloop::ScenarioConfig> configs(std::initializer_list<std::uint64_t> seeds,
+                                             std::initializer_list<double> timesteps) {
+  std::vector<simloop::ScenarioConfig> out;
+  for (std::uint64_t seed : seeds) {
+    for (double dt : timesteps) {
+      simloop::ScenarioConfig c;
+      c.seed = seed;
+      c.timestep = dt;
+      c.perturb = seed != 2;  // one baseline among them: fewer columns
+      out.push_back(c);
+    }
+  }
+  return out;
+}
+
+void expect_equal_to_sequential(const char* file, const std::vector<simloop::ScenarioConfig>& cs) {
+  const simloop::Scenario scenario = scene_file(file);
+  const simloop::Model scene = simloop::load_scene(scenario);
+  std::vector<simloop::ScenarioRunResult> alone;
+  for (const auto& c : cs) alone.push_back(simloop::run_scenario(scene, scenario, c));
+  for (int threads : {1, 2, 7}) {
+    const auto batch = simloop::run_scenario_batch(scene, scenario, cs, threads);
+    ASSERT_EQ(batch.size(), cs.size());
+    for (size_t i = 0; i < cs.size(); ++i) {
+      EXPECT_TRUE(same_bits(batch[i], alone[i])) << file << " run " << i << ", " << threads << " threads";
+      EXPECT_EQ(simloop::scenario_metrics_json(batch[i]), simloop::scenario_metrics_json(alone[i]));
+      EXPECT_EQ(simloop::scenario_summary(batch[i]), simloop::scenario_summary(alone[i]));
+    }
+  }
+}
+
+TEST(ScenarioBatch, PushTEqualsSequentialRunsWhateverTheThreadCount) {
+  expect_equal_to_sequential("pusht.toml", configs({0, 1, 2, 3}, {0.002, 0.004}));
+}
+
+TEST(ScenarioBatch, WalkerEqualsSequentialRunsWhateverTheThreadCount) {
+  expect_equal_to_sequential("walker.toml", configs({0, 2}, {0.002, 0.005, 0.001}));
+}
+
+TEST(ScenarioBatch, RefusesBadConfigsBeforeRunningAny) {
+  const simloop::Scenario scenario = scene_file("pusht.toml");
+  const simloop::Model scene = simloop::load_scene(scenario);
+  auto cs = configs({0, 1}, {0.002, 0.004});
+  cs[3].timestep = -1.0;
+  try {
+    (void)simloop::run_scenario_batch(scene, scenario, cs, 2);
+    FAIL() << "accepted";
+  } catch (const simloop::InvalidArgument& e) {
+    EXPECT_STREQ(e.what(), "run 3: timestep must be a positive, finite number of seconds, got -1");
+  }
+  cs = configs({0, 1}, {0.002});
+  cs[1].record_every = 0;
+  try {
+    (void)simloop::run_scenario_batch(scene, scenario, cs, 2);
+    FAIL() << "accepted";
+  } catch (const simloop::InvalidArgument& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("run 1: record_every must be from 1 to ", 0), 0u) << e.what();
+  }
+  EXPECT_THROW((void)simloop::run_scenario_batch(scene, scenario, configs({0}, {0.002}), -1),
+               simloop::InvalidArgument);
+  EXPECT_TRUE(simloop::run_scenario_batch(scene, scenario, {}, 2).empty());
+}
+
+TEST(ScenarioBatch, RefusesKeptRowsThatTogetherWouldNotFit) {
+  // Each run alone fits the budget; the batch of them does not.
+  const simloop::Scenario scenario = scene_file("pusht.toml");
+  const simloop::Model scene = simloop::load_scene(scenario);
+  const std::uint64_t budget = simloop::trajectory_memory_budget();
+  simloop::ScenarioConfig c;
+  const auto one = simloop::run_scenario(scene, scenario, [] {
+    simloop::ScenarioConfig s;
+    s.steps = 1;
+    return s;
+  }());
+  const auto width = static_cast<std::uint64_t>(one.columns.size());
+  c.steps = static_cast<std::int64_t>(budget / (width * sizeof(double)) / 2 + 1);  // a little over half
+  std::vector<simloop::ScenarioConfig> cs(3, c);
+  try {
+    (void)simloop::run_scenario_batch(scene, scenario, cs, 2);
+    FAIL() << "accepted";
+  } catch (const simloop::InvalidArgument& e) {
+    const std::string message = e.what();
+    EXPECT_NE(message.find("(run 0, the largest of 3 runs) and the others would keep"), std::string::npos) << message;
+    EXPECT_NE(message.find("raise record_every"), std::string::npos) << message;
+  }
+}
+
+TEST(ScenarioBatch, AFailedThreadStartLeavesFewerWorkersAndTheSameResults) {
+  const simloop::Scenario scenario = scene_file("pusht.toml");
+  const simloop::Model scene = simloop::load_scene(scenario);
+  const auto cs = configs({0, 1, 3}, {0.002});
+  const auto full = simloop::run_scenario_batch(scene, scenario, cs, 3);
+  simloop::detail::limit_thread_starts_for_testing(1);
+  const auto fewer = simloop::run_scenario_batch(scene, scenario, cs, 3);
+  simloop::detail::limit_thread_starts_for_testing(-1);
+  for (size_t i = 0; i < cs.size(); ++i) EXPECT_TRUE(same_bits(full[i], fewer[i])) << "run " << i;
+}
+
+TEST(ScenarioBatch, AStopEndsTheBatchAndProgressCountsEveryRun) {
+  const simloop::Scenario scenario = scene_file("pusht.toml");
+  const simloop::Model scene = simloop::load_scene(scenario);
+  const auto cs = configs({0, 1, 3}, {0.002});
+  simloop::RunControl watched;
+  (void)simloop::run_scenario_batch(scene, scenario, cs, 2, &watched);
+  EXPECT_EQ(watched.steps_total(), 3 * 1000);
+  EXPECT_EQ(watched.steps_done(), 3 * 1000);
+  simloop::RunControl stopped;
+  stopped.request_stop();
+  EXPECT_THROW((void)simloop::run_scenario_batch(scene, scenario, cs, 2, &stopped), simloop::Interrupted);
+}
+
+}  // namespace
