@@ -209,7 +209,8 @@ ControlSpec read_control(const TableReader& t) {
   if (t.has("schedule_steps")) {
     for (const auto& [s, v] : t.pairs("schedule_steps")) {
       if (s < 0 || s != std::floor(s)) t.fail("schedule_steps", "steps must be whole and not negative, got " + python_float_repr(s));
-      c.schedule.emplace_back(When::steps(static_cast<std::int64_t>(s)), v);
+      // Past any run (2^62 steps) it never acts; the clamp keeps the cast defined.
+      c.schedule.emplace_back(When::steps(static_cast<std::int64_t>(std::min(s, 0x1p62))), v);
     }
   }
   return c;

@@ -186,6 +186,22 @@ TEST(Schedule, SecondsBecomeStepsAndAWindowCutShortIsReportedAsCut) {
             "the run's length (0.0009 s) is less than one step of 0.002 s");
 }
 
+TEST(Schedule, AStepFarPastTheRunNeverActs) {
+  // schedule_steps holds numbers; one beyond any int64 used to be cast
+  // (undefined behaviour) to INT64_MIN, which clamped to step 0.
+  const Scenario s = Scenario::from_toml_string(R"(
+steps = 5
+[[control]]
+actuator = "push_motor"
+schedule_steps = [[0, 0.1], [1e300, 0.9]]
+)");
+  const simloop::ResolvedScenario r = simloop::resolve(s, chapter_model());
+  const auto draws = simloop::make_draws(0);
+  const simloop::Schedule schedule = simloop::build_schedule(r, s, 0.002, *draws);
+  ASSERT_EQ(schedule.control_changes.size(), 1u);
+  EXPECT_EQ(schedule.control_changes[0].value, 0.1);
+}
+
 TEST(DidYouMean, SuggestsOnlyLikelyTypos) {
   EXPECT_EQ(simloop::did_you_mean("tblok", {"tblock", "pusher"}), "tblock");
   EXPECT_EQ(simloop::did_you_mean("PUSHER", {"tblock", "pusher"}), "pusher");
