@@ -250,11 +250,11 @@ DisturbanceSpec read_disturbance(const TableReader& t) {
 }  // namespace
 
 std::int64_t When::to_steps(double timestep, std::int64_t run_steps) const {
-  double steps = value;
-  if (unit == Unit::kSeconds) steps = std::nearbyint(value / timestep);
-  if (unit == Unit::kFractionOfRun) steps = std::floor(value * static_cast<double>(run_steps));
   // Beyond any run a scenario can ask for; keeps the conversion defined.
   constexpr double kFar = 0x1p62;
+  if (unit == Unit::kSteps) return std::clamp<std::int64_t>(count, 0, static_cast<std::int64_t>(kFar));
+  const double steps = unit == Unit::kSeconds ? std::nearbyint(value / timestep)
+                                              : std::floor(value * static_cast<double>(run_steps));
   return static_cast<std::int64_t>(std::clamp(steps, 0.0, kFar));
 }
 

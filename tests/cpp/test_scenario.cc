@@ -6,6 +6,7 @@
 
 #include "simloop/errors.hpp"
 #include "simloop/model.hpp"
+#include "simloop/run.hpp"
 #include "simloop/scenario.hpp"
 #include "simloop/shove.hpp"
 
@@ -200,6 +201,13 @@ schedule_steps = [[0, 0.1], [1e300, 0.9]]
   const simloop::Schedule schedule = simloop::build_schedule(r, s, 0.002, *draws);
   ASSERT_EQ(schedule.control_changes.size(), 1u);
   EXPECT_EQ(schedule.control_changes[0].value, 0.1);
+}
+
+TEST(Schedule, StepCountsKeepEveryDigit) {
+  // Steps were kept as a double: --steps 2^62-1 became 2^62, past kMaxSteps,
+  // and the run failed with "steps must be from 1 to ..., got 4611686018427387904".
+  EXPECT_EQ(When::steps(simloop::kMaxSteps).to_steps(0.002, 0), simloop::kMaxSteps);
+  EXPECT_EQ(When::steps((std::int64_t{1} << 53) + 1).to_steps(0.002, 0), (std::int64_t{1} << 53) + 1);
 }
 
 TEST(DidYouMean, SuggestsOnlyLikelyTypos) {
