@@ -278,6 +278,10 @@ Scenario Scenario::chapter() {
 }
 
 Scenario Scenario::from_toml_file(const std::filesystem::path& path) {
+  std::error_code error;
+  if (std::filesystem::is_directory(path, error)) {
+    throw IoError(path.string() + ": is a directory, not a scenario file");
+  }
   std::ifstream in(path, std::ios::binary);
   if (!in) throw IoError(path.string() + ": cannot open (" + std::strerror(errno) + ")");
   std::ostringstream text;

@@ -2,6 +2,7 @@
 // errors that say what the scene has, and the schedule drawn up front.
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <string>
 
 #include "simloop/errors.hpp"
@@ -208,6 +209,12 @@ TEST(Schedule, StepCountsKeepEveryDigit) {
   // and the run failed with "steps must be from 1 to ..., got 4611686018427387904".
   EXPECT_EQ(When::steps(simloop::kMaxSteps).to_steps(0.002, 0), simloop::kMaxSteps);
   EXPECT_EQ(When::steps((std::int64_t{1} << 53) + 1).to_steps(0.002, 0), (std::int64_t{1} << 53) + 1);
+}
+
+TEST(Scenario, ADirectoryIsNotAScenarioFile) {
+  // std::ifstream opens a directory and reads nothing: `--scenario DIR` ran
+  // an empty scenario on the chapter's scene and exited 0.
+  EXPECT_THROW((void)Scenario::from_toml_file(std::filesystem::temp_directory_path()), simloop::IoError);
 }
 
 TEST(DidYouMean, SuggestsOnlyLikelyTypos) {
