@@ -190,17 +190,20 @@ std::vector<ForceChange> force_changes(const Schedule& schedule) {
 
 }  // namespace
 
-ScenarioRunResult run_schedule(const mjModel* m, mjData* d, const ResolvedScenario& scenario,
-                               const Schedule& schedule, std::int64_t record_every, RowSink* sink,
-                               RunControl* control) {
+void check_run_length(std::int64_t steps, std::int64_t record_every) {
   if (record_every < 1 || record_every > kMaxRecordEvery) {
     throw InvalidArgument("record_every must be from 1 to " + std::to_string(kMaxRecordEvery) + ", got " +
                           std::to_string(record_every));
   }
-  if (schedule.steps < 1 || schedule.steps > kMaxSteps) {
-    throw InvalidArgument("steps must be from 1 to " + std::to_string(kMaxSteps) + ", got " +
-                          std::to_string(schedule.steps));
+  if (steps < 1 || steps > kMaxSteps) {
+    throw InvalidArgument("steps must be from 1 to " + std::to_string(kMaxSteps) + ", got " + std::to_string(steps));
   }
+}
+
+ScenarioRunResult run_schedule(const mjModel* m, mjData* d, const ResolvedScenario& scenario,
+                               const Schedule& schedule, std::int64_t record_every, RowSink* sink,
+                               RunControl* control) {
+  check_run_length(schedule.steps, record_every);
   const Recorder recorder(m, scenario, schedule);
   if (sink == nullptr) detail::check_kept_rows(schedule.steps, record_every, recorder.width());
   const std::vector<ForceChange> forces = force_changes(schedule);

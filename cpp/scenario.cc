@@ -14,6 +14,7 @@
 
 #include "simloop/errors.hpp"
 #include "simloop/number_format.hpp"
+#include "simloop/run.hpp"
 
 namespace simloop {
 namespace {
@@ -471,6 +472,11 @@ Schedule build_schedule(const ResolvedScenario& scenario, const Scenario& spec, 
     throw InvalidArgument("the run's length (" + python_float_repr(spec.length.value) +
                           (spec.length.unit == When::Unit::kSeconds ? " s" : " steps") + ") is less than one step of " +
                           python_float_repr(timestep) + " s");
+  }
+  if (s.steps > kMaxSteps) {
+    throw InvalidArgument("the run's length (" + python_float_repr(spec.length.value) +
+                          (spec.length.unit == When::Unit::kSeconds ? " s" : " steps") + ") is more than " +
+                          std::to_string(kMaxSteps) + " steps of " + python_float_repr(timestep) + " s");
   }
   for (const ResolvedScenario::Control& c : scenario.controls) {
     for (const auto& [when, value] : c.schedule) {

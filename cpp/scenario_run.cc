@@ -17,20 +17,46 @@ Model load_scene(const Scenario& scenario) {
   return Model::from_file(scenario.scene.string());
 }
 
-ScenarioRunResult run_scenario(const Model& scene, const Scenario& scenario, const ScenarioConfig& config,
-                               Data* workspace, RowSink* sink, RunControl* control) {
-  const double timestep = config.timestep.value_or(scenario.timestep.value_or(scene.timestep()));
-  const Model model = scene.for_run(timestep, false);
-  std::optional<Data> own;
-  if (workspace == nullptr) workspace = &own.emplace(model);
-  if (!workspace->fits(model)) throw InvalidArgument("workspace Data was made for a model of another size");
+namespace {
 
+// What a run decides before its first step: the model at the run's
+// timestep, the names resolved, the inputs drawn. Throws InvalidArgument
+// for a bad input, so check_scenario() and run_scenario() refuse alike.
+struct PreparedRun {
+  Model model;
+  ResolvedScenario resolved;
+  Schedule schedule;
+};
+
+PreparedRun prepare_run(const Model& scene, const Scenario& scenario, const ScenarioConfig& config) {
+  const double timestep = config.timestep.value_or(scenario.timestep.value_or(scene.timestep()));
+  Model model = scene.for_run(timestep, false);
   Scenario effective = scenario;
   if (config.steps) effective.length = When::steps(*config.steps);
   if (!config.perturb) effective.disturbances.clear();
-  const ResolvedScenario resolved = resolve(effective, model.get());
+  ResolvedScenario resolved = resolve(effective, model.get());
   const std::unique_ptr<Draws> draws = make_draws(config.seed, config.rng);
-  const Schedule schedule = build_schedule(resolved, effective, timestep, *draws);
+  Schedule schedule = build_schedule(resolved, effective, timestep, *draws);
+  return {std::move(model), std::move(resolved), std::move(schedule)};
+}
+
+}  // namespace
+
+void check_scenario(const Model& scene, const Scenario& scenario, const ScenarioConfig& config) {
+  const PreparedRun run = prepare_run(scene, scenario, config);
+  check_run_length(run.schedule.steps, config.record_every);
+  (void)Recorder(run.model.get(), run.resolved, run.schedule);  // its columns' names
+}
+
+ScenarioRunResult run_scenario(const Model& scene, const Scenario& scenario, const ScenarioConfig& config,
+                               Data* workspace, RowSink* sink, RunControl* control) {
+  const PreparedRun run = prepare_run(scene, scenario, config);
+  const Model& model = run.model;
+  std::optional<Data> own;
+  if (workspace == nullptr) workspace = &own.emplace(model);
+  if (!workspace->fits(model)) throw InvalidArgument("workspace Data was made for a model of another size");
+  const ResolvedScenario& resolved = run.resolved;
+  const Schedule& schedule = run.schedule;
   ScenarioRunResult result =
       run_schedule(model.get(), workspace->get(), resolved, schedule, config.record_every, sink, control);
   result.name = scenario.name;

@@ -76,6 +76,10 @@ struct ScenarioRunResult {
   double sim_time = 0.0;
 };
 
+// Throws InvalidArgument unless 1 <= steps <= kMaxSteps and
+// 1 <= record_every <= kMaxRecordEvery (run_schedule's own check).
+void check_run_length(std::int64_t steps, std::int64_t record_every);
+
 // The loop: reset, mj_forward, then for each step write the schedule's
 // inputs (ctrl changes, forces, explicit zeros when a window closes), record,
 // mj_step. `m` and `d` must belong together; `d` is reset first.

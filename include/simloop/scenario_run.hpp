@@ -39,6 +39,11 @@ struct ScenarioConfig {
                                              const ScenarioConfig& config, Data* workspace = nullptr,
                                              RowSink* sink = nullptr, RunControl* control = nullptr);
 
+// Everything run_scenario() checks before its first step (the names, the
+// length, the recorded columns), without running: throws InvalidArgument as
+// run_scenario() would. The commands call it before touching --out.
+void check_scenario(const Model& scene, const Scenario& scenario, const ScenarioConfig& config);
+
 // metrics.json for a scenario run: byte for byte what Python's
 // json.dumps(metrics, indent=2, sort_keys=True) + "\n" writes, floats
 // rounded to 6 decimals as in the chapter's. Keys: scenario, seed, rng,

@@ -154,3 +154,25 @@ def test_the_recording_draws_the_scene(tmp_path):
     bar = chunks[("/world/bodies/tblock/t_bar", True)]
     assert bar["Boxes3D:half_sizes"][0][0] == pytest.approx([0.08, 0.02, 0.02])
     assert bar["Transform3D:translation"][0][0] == pytest.approx([0.0, 0.03, 0.0])  # its place on the body
+
+
+def test_a_scenario_the_run_would_refuse_is_bad_input(tmp_path):
+    # The length and the recorded columns were checked only once the run
+    # began: exit 1, in words that named no flag, file or key.
+    pusht = str(SCENES / "pusht.xml")
+    cases = [
+        ("short.toml", f'scene = "{pusht}"\nduration = 0.0001\n',
+         "the run's length (0.0001 s) is less than one step of 0.002 s"),
+        ("long.toml", f'scene = "{pusht}"\nduration = 1e30\n',
+         "the run's length (1e+30 s) is more than 4611686018427387903 steps of 0.002 s"),
+        ("twice.toml", f'scene = "{pusht}"\nsteps = 10\n[record]\nbodies = ["tblock", "tblock"]\n',
+         "two recorded columns would both be named 'tblock_x': rename one of the scene's elements, or record fewer"),
+    ]
+    for name, text, message in cases:
+        path = _write(tmp_path / name, text)
+        for python in (False, True):
+            proc = run_command(["--scenario", str(path), "--out", "bad"], tmp_path, python=python)
+            assert proc.returncode == 2, (name, proc.stderr)
+            program = "sim-loop" if python else "sim_loop"
+            assert proc.stderr.splitlines() == [f"{program}: --scenario {path}: {message}"], proc.stderr
+            assert not (tmp_path / "bad").exists()
