@@ -176,3 +176,22 @@ def test_a_scenario_the_run_would_refuse_is_bad_input(tmp_path):
             program = "sim-loop" if python else "sim_loop"
             assert proc.stderr.splitlines() == [f"{program}: --scenario {path}: {message}"], proc.stderr
             assert not (tmp_path / "bad").exists()
+
+
+def test_keyword_scenarios_refuse_odd_values_in_one_line_naming_them():
+    # These raised Python's own words ("'bool' object is not iterable",
+    # "not enough values to unpack") or a TOML error about the generated text.
+    pusht = str(SCENES / "pusht.xml")
+    for controls in ({"push_x": "1"}, {"push_x": True}, {"push_x": None}, {"push_x": [(0.0, 1.0, 2.0)]},
+                     {"push_x": [("a", 1.0)]}, {"push_x": 10 ** 400}):
+        with pytest.raises((TypeError, ValueError)) as error:
+            simloop.Scenario(scene=pusht, controls=controls)
+        assert str(error.value).startswith("controls['push_x'] must be"), str(error.value)
+        assert "\n" not in str(error.value)
+    s = simloop.Scenario(scene=pusht, steps=10, controls={"push_x": np.int64(1), 1: np.float32(0.5)})
+    assert s.toml.count('"value" = ') == 2
+    # Names outside the Basic Multilingual Plane are written as TOML escapes.
+    with pytest.raises(ValueError, match="disturbance\\[0\\]: no body named 't\U0001F600'"):
+        simloop.run_scenario(simloop.Scenario(scene=pusht, disturbances=[dict(body="t\U0001F600", force=[0, 1, 0])]))
+    with pytest.raises(ValueError, match="^scene must be text"):
+        simloop.Scenario(scene="tests/\udcffx.xml")
