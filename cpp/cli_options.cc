@@ -352,7 +352,7 @@ std::string scenario_error(const Options& opts, const std::string& what) {
 void check_run_inputs(Options& opts, const Model& scene, const Scenario* scenario) {
   if (scenario != nullptr) {
     try {
-      (void)resolve(*scenario, scene.get());
+      check_scenario(scene, *scenario, scenario_config(opts));
     } catch (const Error& e) {
       throw UsageError(scenario_error(opts, e.what()));
     }

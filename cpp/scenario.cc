@@ -15,6 +15,7 @@
 
 #include "simloop/errors.hpp"
 #include "simloop/number_format.hpp"
+#include "simloop/run.hpp"
 
 namespace simloop {
 namespace {
@@ -275,7 +276,8 @@ ControlSpec read_control(const TableReader& t, const std::filesystem::path& base
   if (t.has("schedule_steps")) {
     for (const auto& [s, v] : t.pairs("schedule_steps")) {
       if (s < 0 || s != std::floor(s)) t.fail("schedule_steps", "steps must be whole and not negative, got " + python_float_repr(s));
-      c.schedule.emplace_back(When::steps(static_cast<std::int64_t>(s)), v);
+      // Past any run (2^62 steps) it never acts; the clamp keeps the cast defined.
+      c.schedule.emplace_back(When::steps(static_cast<std::int64_t>(std::min(s, 0x1p62))), v);
     }
   }
   return c;
@@ -315,11 +317,11 @@ DisturbanceSpec read_disturbance(const TableReader& t) {
 }  // namespace
 
 std::int64_t When::to_steps(double timestep, std::int64_t run_steps) const {
-  double steps = value;
-  if (unit == Unit::kSeconds) steps = std::nearbyint(value / timestep);
-  if (unit == Unit::kFractionOfRun) steps = std::floor(value * static_cast<double>(run_steps));
   // Beyond any run a scenario can ask for; keeps the conversion defined.
   constexpr double kFar = 0x1p62;
+  if (unit == Unit::kSteps) return std::clamp<std::int64_t>(count, 0, static_cast<std::int64_t>(kFar));
+  const double steps = unit == Unit::kSeconds ? std::nearbyint(value / timestep)
+                                              : std::floor(value * static_cast<double>(run_steps));
   return static_cast<std::int64_t>(std::clamp(steps, 0.0, kFar));
 }
 
@@ -343,6 +345,10 @@ Scenario Scenario::chapter() {
 }
 
 Scenario Scenario::from_toml_file(const std::filesystem::path& path) {
+  std::error_code error;
+  if (std::filesystem::is_directory(path, error)) {
+    throw IoError(path.string() + ": is a directory, not a scenario file");
+  }
   std::ifstream in(path, std::ios::binary);
   if (!in) throw IoError(path.string() + ": cannot open (" + std::strerror(errno) + ")");
   std::ostringstream text;
@@ -532,6 +538,11 @@ Schedule build_schedule(const ResolvedScenario& scenario, const Scenario& spec, 
     throw InvalidArgument("the run's length (" + python_float_repr(spec.length.value) +
                           (spec.length.unit == When::Unit::kSeconds ? " s" : " steps") + ") is less than one step of " +
                           python_float_repr(timestep) + " s");
+  }
+  if (s.steps > kMaxSteps) {
+    throw InvalidArgument("the run's length (" + python_float_repr(spec.length.value) +
+                          (spec.length.unit == When::Unit::kSeconds ? " s" : " steps") + ") is more than " +
+                          std::to_string(kMaxSteps) + " steps of " + python_float_repr(timestep) + " s");
   }
   for (const ResolvedScenario::Control& c : scenario.controls) {
     for (const auto& [when, value] : c.schedule) {

@@ -59,6 +59,13 @@ double run_timestep(const Model& scene, const Scenario& scenario, const Scenario
 
 }  // namespace
 
+void check_scenario(const Model& scene, const Scenario& scenario, const ScenarioConfig& config) {
+  const Model model = scene.for_run(run_timestep(scene, scenario, config), false);
+  const PreparedRun run = prepare(model, scenario, config);
+  detail::check_schedule_run(run.schedule.steps, config.record_every);
+  (void)Recorder(model.get(), run.resolved, run.schedule);  // its columns' names
+}
+
 ScenarioRunResult run_scenario(const Model& scene, const Scenario& scenario, const ScenarioConfig& config,
                                Data* workspace, RowSink* sink, RunControl* control) {
   const Model model = scene.for_run(run_timestep(scene, scenario, config), false);

@@ -38,11 +38,12 @@ struct When {
   enum class Unit { kSteps, kSeconds, kFractionOfRun };
   double value = 0.0;
   Unit unit = Unit::kSteps;
+  std::int64_t count = 0;  // kSteps: the exact number (value, a double, rounds it above 2^53)
 
-  [[nodiscard]] static When steps(std::int64_t n) { return {static_cast<double>(n), Unit::kSteps}; }
-  [[nodiscard]] static When seconds(double s) { return {s, Unit::kSeconds}; }
+  [[nodiscard]] static When steps(std::int64_t n) { return {static_cast<double>(n), Unit::kSteps, n}; }
+  [[nodiscard]] static When seconds(double s) { return {s, Unit::kSeconds, 0}; }
   // A fraction of the run's length: the chapter shoves at steps // 2 (0.5).
-  [[nodiscard]] static When fraction(double f) { return {f, Unit::kFractionOfRun}; }
+  [[nodiscard]] static When fraction(double f) { return {f, Unit::kFractionOfRun, 0}; }
   // The step this names in a run of `run_steps` steps of `timestep` seconds.
   [[nodiscard]] std::int64_t to_steps(double timestep, std::int64_t run_steps) const;
 };

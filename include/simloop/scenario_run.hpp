@@ -49,6 +49,11 @@ struct ScenarioConfig {
 // or record_every out of range, or kept rows that together would not fit in
 // memory). Failures, fewer threads, stopping and watching through `control`:
 // as for run_batch (batch.hpp).
+// Everything run_scenario() checks before its first step (the names, the
+// length, the recorded columns), without running: throws InvalidArgument as
+// run_scenario() would. The commands call it before touching --out.
+void check_scenario(const Model& scene, const Scenario& scenario, const ScenarioConfig& config);
+
 [[nodiscard]] std::vector<ScenarioRunResult> run_scenario_batch(const Model& scene, const Scenario& scenario,
                                                                 const std::vector<ScenarioConfig>& configs,
                                                                 int threads = 0, RunControl* control = nullptr);

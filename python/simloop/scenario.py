@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import json
 import math
+import numbers
 import os
 from typing import Any, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple, Union
 
@@ -26,6 +27,59 @@ from . import _core
 from ._api import Progress, _check_bool, _sequence, _check_int, _check_progress, _check_timestep, _describe, _U64_MAX, RNGS
 
 ScenarioResult = _core.ScenarioResult
+
+
+def _toml_string(name: str, text: str) -> str:
+    """A TOML basic string. JSON's escapes are not all TOML's: JSON writes a
+    character beyond U+FFFF as a surrogate pair, which TOML refuses."""
+    out = ['"']
+    for ch in text:
+        code = ord(ch)
+        if 0xD800 <= code <= 0xDFFF:  # a byte that was not UTF-8 (os.fsdecode's surrogateescape)
+            raise ValueError(f"{name} must be text (UTF-8; a scenario file cannot hold other bytes), got {text!r}")
+        if ch in '"\\':
+            out.append("\\" + ch)
+        elif code < 0x20 or code == 0x7F:
+            out.append(f"\\u{code:04x}")
+        else:
+            out.append(ch)
+    return "".join(out) + '"'
+
+
+def _number(name: str, value: object) -> float:
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise TypeError(f"{name} must be a number, got {_describe(value)}")
+    try:
+        return float(value)
+    except OverflowError:
+        raise ValueError(f"{name} must be a finite number, got {_describe(value)}") from None
+
+
+def _control_entry(actuator: object, value: object) -> Dict[str, object]:
+    """{actuator, value} for a number, {actuator, schedule} for (seconds, value)
+    pairs, {actuator, csv} for a CSV file (a path object), or the file's own
+    keys from a dict ({"csv": ..., "column": ...})."""
+    name = f"controls[{actuator!r}]"
+    if isinstance(value, numbers.Real) and not isinstance(value, bool):
+        return {"actuator": actuator, "value": _number(name, value)}
+    if isinstance(value, os.PathLike):
+        return {"actuator": actuator, "csv": value}  # a value per step, one row each
+    if isinstance(value, Mapping):
+        return {"actuator": actuator, **value}
+    shape = (f"{name} must be a number, a list of (seconds, value) pairs, a path object naming a CSV file, "
+             f"or {{'csv': ..., 'column': ...}}, got {_describe(value)}")
+    if isinstance(value, (str, bytes)) or not isinstance(value, Iterable):
+        raise TypeError(shape)
+    pairs = []
+    for pair in value:
+        try:
+            if isinstance(pair, (str, bytes)):
+                raise TypeError
+            seconds, ctrl = pair  # a tuple, a list, a numpy row
+        except (TypeError, ValueError):
+            raise TypeError(shape) from None
+        pairs.append([_number(name, seconds), _number(name, ctrl)])
+    return {"actuator": actuator, "schedule": pairs}
 
 
 def _toml_value(name: str, value: object) -> str:
@@ -37,8 +91,8 @@ def _toml_value(name: str, value: object) -> str:
         if not math.isfinite(value):
             raise ValueError(f"{name} must be finite, got {value!r}")
         return repr(value)
-    if isinstance(value, (str, os.PathLike)):
-        return json.dumps(os.fspath(value))  # a TOML basic string: JSON's escapes
+    if isinstance(value, (str, bytes, os.PathLike)):
+        return _toml_string(name, os.fsdecode(value))
     if isinstance(value, Sequence):
         return "[" + ", ".join(_toml_value(name, v) for v in value) + "]"
     if hasattr(value, "tolist"):  # numpy scalars and arrays
@@ -53,7 +107,7 @@ def _toml_table(header: str, items: Mapping[str, object]) -> str:
             continue
         if not isinstance(key, str):
             raise TypeError(f"keys must be strings, got {_describe(key)}")
-        lines.append(f"{json.dumps(key)} = {_toml_value(key, value)}")
+        lines.append(f"{_toml_string(key, key)} = {_toml_value(key, value)}")
     return "\n".join(lines) + "\n"
 
 
@@ -65,9 +119,10 @@ class Scenario:
     scene: an MJCF file (None: the chapter's scene). timestep: seconds per
     step (None: the scene's own). steps or duration (seconds): the length.
     controls: {actuator: value} for a constant, {actuator: [(seconds,
-    value), ...]} for a piecewise-constant schedule, or {actuator: "u.csv"}
-    for a value per step from a CSV file's only column ({actuator: {"csv":
-    ..., "column": ...}} to pick one); an actuator by name or index. disturbances: a list of dicts with the scenario file's keys (body,
+    value), ...]} for a piecewise-constant schedule, or {actuator:
+    Path("u.csv")} for a value per step from a CSV file's only column
+    ({actuator: {"csv": ..., "column": ...}} to pick one); an actuator by
+    name or index. disturbances: a list of dicts with the scenario file's keys (body,
     force, torque, newtons, direction, random_sign, start, start_step,
     start_fraction, duration, steps). record: a dict with bodies, joints,
     actuators, sensors (lists of names) and contacts (bool).
@@ -81,16 +136,7 @@ class Scenario:
         text = _toml_table("", {"name": name or None, "scene": scene, "timestep": timestep, "steps": steps,
                                 "duration": duration})
         for actuator, value in (controls or {}).items():
-            entry: Dict[str, object] = {"actuator": actuator}
-            if isinstance(value, (int, float)) and not isinstance(value, bool):
-                entry["value"] = float(value)
-            elif isinstance(value, (str, os.PathLike)):
-                entry["csv"] = value  # a value per step, one row each
-            elif isinstance(value, Mapping):
-                entry.update(value)  # the file's keys: {"csv": ..., "column": ...}
-            else:
-                entry["schedule"] = [[float(t), float(v)] for t, v in value]
-            text += "\n" + _toml_table("[[control]]", entry)
+            text += "\n" + _toml_table("[[control]]", _control_entry(actuator, value))
         for d in disturbances:
             if not isinstance(d, Mapping):
                 raise TypeError(f"each disturbance must be a dict, got {_describe(d)}")

@@ -2,10 +2,12 @@
 // errors that say what the scene has, and the schedule drawn up front.
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <string>
 
 #include "simloop/errors.hpp"
 #include "simloop/model.hpp"
+#include "simloop/run.hpp"
 #include "simloop/scenario.hpp"
 #include "simloop/shove.hpp"
 
@@ -184,6 +186,35 @@ TEST(Schedule, SecondsBecomeStepsAndAWindowCutShortIsReportedAsCut) {
   s.length = When::seconds(0.0009);
   EXPECT_EQ(error_of([&] { (void)simloop::build_schedule(r, s, 0.002, *draws); }),
             "the run's length (0.0009 s) is less than one step of 0.002 s");
+}
+
+TEST(Schedule, AStepFarPastTheRunNeverActs) {
+  // schedule_steps holds numbers; one beyond any int64 used to be cast
+  // (undefined behaviour) to INT64_MIN, which clamped to step 0.
+  const Scenario s = Scenario::from_toml_string(R"(
+steps = 5
+[[control]]
+actuator = "push_motor"
+schedule_steps = [[0, 0.1], [1e300, 0.9]]
+)");
+  const simloop::ResolvedScenario r = simloop::resolve(s, chapter_model());
+  const auto draws = simloop::make_draws(0);
+  const simloop::Schedule schedule = simloop::build_schedule(r, s, 0.002, *draws);
+  ASSERT_EQ(schedule.control_changes.size(), 1u);
+  EXPECT_EQ(schedule.control_changes[0].value, 0.1);
+}
+
+TEST(Schedule, StepCountsKeepEveryDigit) {
+  // Steps were kept as a double: --steps 2^62-1 became 2^62, past kMaxSteps,
+  // and the run failed with "steps must be from 1 to ..., got 4611686018427387904".
+  EXPECT_EQ(When::steps(simloop::kMaxSteps).to_steps(0.002, 0), simloop::kMaxSteps);
+  EXPECT_EQ(When::steps((std::int64_t{1} << 53) + 1).to_steps(0.002, 0), (std::int64_t{1} << 53) + 1);
+}
+
+TEST(Scenario, ADirectoryIsNotAScenarioFile) {
+  // std::ifstream opens a directory and reads nothing: `--scenario DIR` ran
+  // an empty scenario on the chapter's scene and exited 0.
+  EXPECT_THROW((void)Scenario::from_toml_file(std::filesystem::temp_directory_path()), simloop::IoError);
 }
 
 TEST(DidYouMean, SuggestsOnlyLikelyTypos) {

@@ -127,6 +127,16 @@ def test_the_shipped_answer_files_are_blank(exercise, tmp_path):
     assert "check.py:" in proc.stderr
 
 
+@pytest.mark.parametrize("exercise", [1, 2, 3])
+def test_every_file_the_exercise_names_exists(exercise):
+    # 02's answer.txt asked about policy_loop.py after it became loop.py.
+    import re
+    folder = EXERCISES / FOLDERS[exercise]
+    for text in ((folder / "answer.txt").read_text(), (folder / "README.md").read_text()):
+        for name in re.findall(r"[\w./-]+\.py\b", text):
+            assert (folder / name).exists() or (ROOT / name).exists(), name
+
+
 def test_the_pristine_copy_is_the_shipped_loop():
     assert (EXERCISES / "_pristine" / FOLDERS[2] / "loop.py").read_bytes() == \
            (EXERCISES / FOLDERS[2] / "loop.py").read_bytes()

@@ -163,3 +163,44 @@ def test_a_control_from_a_csv_file(tmp_path):
     applied = simloop.run_scenario(s).column("push_x_ctrl")
     np.testing.assert_array_equal(applied[:40], values)        # step by step, as written (inside ctrlrange)
     np.testing.assert_array_equal(applied[40:60], values[-1])  # then the last value holds
+
+
+def test_a_scenario_the_run_would_refuse_is_bad_input(tmp_path):
+    # The length and the recorded columns were checked only once the run
+    # began: exit 1, in words that named no flag, file or key.
+    pusht = str(SCENES / "pusht.xml")
+    cases = [
+        ("short.toml", f'scene = "{pusht}"\nduration = 0.0001\n',
+         "the run's length (0.0001 s) is less than one step of 0.002 s"),
+        ("long.toml", f'scene = "{pusht}"\nduration = 1e30\n',
+         "the run's length (1e+30 s) is more than 4611686018427387903 steps of 0.002 s"),
+        ("twice.toml", f'scene = "{pusht}"\nsteps = 10\n[record]\nbodies = ["tblock", "tblock"]\n',
+         "two recorded columns would both be named 'tblock_x': rename one of the scene's elements, or record fewer"),
+    ]
+    for name, text, message in cases:
+        path = _write(tmp_path / name, text)
+        for python in (False, True):
+            proc = run_command(["--scenario", str(path), "--out", "bad"], tmp_path, python=python)
+            assert proc.returncode == 2, (name, proc.stderr)
+            program = "sim-loop" if python else "sim_loop"
+            assert proc.stderr.splitlines() == [f"{program}: --scenario {path}: {message}"], proc.stderr
+            assert not (tmp_path / "bad").exists()
+
+
+def test_keyword_scenarios_refuse_odd_values_in_one_line_naming_them():
+    # These raised Python's own words ("'bool' object is not iterable",
+    # "not enough values to unpack") or a TOML error about the generated text.
+    pusht = str(SCENES / "pusht.xml")
+    for controls in ({"push_x": "1"}, {"push_x": True}, {"push_x": None}, {"push_x": [(0.0, 1.0, 2.0)]},
+                     {"push_x": [("a", 1.0)]}, {"push_x": 10 ** 400}):
+        with pytest.raises((TypeError, ValueError)) as error:
+            simloop.Scenario(scene=pusht, controls=controls)
+        assert str(error.value).startswith("controls['push_x'] must be"), str(error.value)
+        assert "\n" not in str(error.value)
+    s = simloop.Scenario(scene=pusht, steps=10, controls={"push_x": np.int64(1), 1: np.float32(0.5)})
+    assert s.toml.count('"value" = ') == 2
+    # Names outside the Basic Multilingual Plane are written as TOML escapes.
+    with pytest.raises(ValueError, match="disturbance\\[0\\]: no body named 't\U0001F600'"):
+        simloop.run_scenario(simloop.Scenario(scene=pusht, disturbances=[dict(body="t\U0001F600", force=[0, 1, 0])]))
+    with pytest.raises(ValueError, match="^scene must be text"):
+        simloop.Scenario(scene="tests/\udcffx.xml")
