@@ -497,7 +497,15 @@ ResolvedScenario resolve(const Scenario& scenario, const mjModel* m) {
   ResolvedScenario r;
   for (std::size_t i = 0; i < scenario.controls.size(); ++i) {
     const ControlSpec& c = scenario.controls[i];
-    r.controls.push_back({find_actuator(m, c.actuator, "control[" + std::to_string(i) + "]"), c.schedule});
+    const int actuator = find_actuator(m, c.actuator, "control[" + std::to_string(i) + "]");
+    for (std::size_t k = 0; k < r.controls.size(); ++k) {
+      // Two controls on one actuator: the later would silently win.
+      if (r.controls[k].actuator == actuator) {
+        throw InvalidArgument("control[" + std::to_string(i) + "]: actuator '" + c.actuator + "' is already driven by control[" +
+                              std::to_string(k) + "]; give each actuator one control (a schedule for changes)");
+      }
+    }
+    r.controls.push_back({actuator, c.schedule});
   }
   for (std::size_t i = 0; i < scenario.disturbances.size(); ++i) {
     const DisturbanceSpec& d = scenario.disturbances[i];
