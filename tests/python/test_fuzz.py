@@ -28,6 +28,8 @@ from pathlib import Path
 
 import pytest
 
+import simloop
+
 from conftest import sim_loop_exe
 
 SEED = int(os.environ.get("FUZZ_SEED", "8"))
@@ -150,25 +152,7 @@ def test_fuzz_command_lines(tmp_path):
 
 # ---- MJCF mutations ----
 
-CHAPTER_SCENE = """<mujoco model="pusher_scene">
-  <compiler autolimits="true"/>
-  <worldbody>
-    <light pos="0 0 3" dir="0 0 -1"/>
-    <geom name="floor" type="plane" size="2 2 0.1" rgba="0.85 0.85 0.85 1"/>
-    <body name="box" pos="0.4 0 0.05">
-      <freejoint/>
-      <geom name="box_geom" type="box" size="0.05 0.05 0.05" mass="0.5" rgba="0.85 0.3 0.25 1"/>
-    </body>
-    <body name="pusher" pos="0 0 0.05">
-      <joint name="pusher_slide" type="slide" axis="1 0 0" damping="4"/>
-      <geom name="pusher_geom" type="box" size="0.04 0.12 0.05" mass="1.0" rgba="0.25 0.45 0.85 1"/>
-    </body>
-  </worldbody>
-  <actuator>
-    <motor name="push_motor" joint="pusher_slide" gear="10" ctrlrange="-1 1"/>
-  </actuator>
-</mujoco>
-"""
+CHAPTER_SCENE = simloop._core.PUSHER_SCENE_XML  # the chapter's scene, as sim_loop embeds it
 
 # A hinged paddle that swats the box, with options set.
 PADDLE_SCENE = """<mujoco model="paddle">
