@@ -297,7 +297,6 @@ Options parse(int argc, const char* const* argv) {
 }
 
 Scenario scenario_from_flags(const Options& opts, const Model* scene) {
-  if (!opts.scenario_path.empty()) return Scenario::from_toml_file(opts.scenario_path);
   Scenario s = Scenario::chapter();
   if (!opts.model_path.empty()) {
     s.scene = opts.model_path;

@@ -56,13 +56,12 @@ class UsageError : public std::runtime_error {
 // refuse bad ones with the same words.
 [[nodiscard]] Options parse(int argc, const char* const* argv);
 
-// The scenario the flags describe (Options::is_scenario()): the --scenario
-// file, or the chapter's run made from the quick flags on `scene` (the
+// The scenario the quick flags describe (--body, --ctrl; a --scenario file
+// is read with Scenario::from_toml_file): the chapter's run on `scene` (the
 // --model, or the chapter's): the chapter's shove on --body (default box),
 // the --ctrl values held from step 0 (default: actuator 0 at 1.0, as the
 // chapter writes ctrl[0]), recording every body on a free joint, the pushed
 // body and every actuator. The scene's own timestep unless --timestep.
-// Throws InvalidArgument (bad file: IoError) in the words of the flags.
 [[nodiscard]] Scenario scenario_from_flags(const Options& opts, const Model* scene = nullptr);
 
 // Checks what is about to run against its scene, in the words of the flags

@@ -227,9 +227,7 @@ ScenarioRunResult detail::run_schedule_counted_elsewhere(const mjModel* m, mjDat
   RowSink& rows = sink ? *sink : keep;
   rows.describe(result.columns);
   rows.start(width, result.rows);
-  const std::int64_t block_rows = std::min(result.rows, RunControl::kChunkSteps / record_every + 2);
-  std::vector<double> block(static_cast<size_t>(block_rows) * static_cast<size_t>(width));
-  std::int64_t in_block = 0;
+  detail::RowBlock block(width, std::min(result.rows, RunControl::kChunkSteps / record_every + 2));
   detail::WarningCounter warnings;
   detail::DivergenceCheck divergence(m);
 
@@ -255,7 +253,7 @@ ScenarioRunResult detail::run_schedule_counted_elsewhere(const mjModel* m, mjDat
         }
         double* row = nullptr;
         if (until_record-- == 0) {
-          row = block.data() + static_cast<size_t>(in_block++) * static_cast<size_t>(width);
+          row = block.next();
           recorder.before_step(row, step, m, d, true);
           until_record = record_every - 1;
         }
@@ -265,16 +263,15 @@ ScenarioRunResult detail::run_schedule_counted_elsewhere(const mjModel* m, mjDat
         if (row) recorder.after_step(row, m, d);
       }
     });
-    rows.write(block.data(), in_block);
-    in_block = 0;
+    block.flush_to(rows);
     if (control) control->advance(chunk_end - chunk_start);
   }
-  double* last = block.data();
+  double* last = block.next();
   recorder.before_step(last, steps, m, d, false);
   detail::mujoco_call([&] { mj_forward(m, d); });
   recorder.after_step(last, m, d);
-  rows.write(last, 1);
   result.final_row.assign(last, last + width);
+  block.flush_to(rows);
 
   result.warnings = warnings.warnings();
   if (divergence.diverged()) result.warnings.push_back(divergence.warning());

@@ -202,23 +202,6 @@ RunResult run(const Model& model, const RunConfig& config) {
 namespace {
 
 
-// The rows recorded during one chunk of steps, handed to the sink after it.
-class RowBlock {
- public:
-  RowBlock(int columns, std::int64_t capacity)
-      : columns_(columns), values_(static_cast<size_t>(capacity) * static_cast<size_t>(columns)) {}
-  [[nodiscard]] double* next() noexcept { return values_.data() + static_cast<size_t>(count_++) * columns_; }
-  [[nodiscard]] double* last() noexcept { return values_.data() + static_cast<size_t>(count_ - 1) * columns_; }
-  void flush_to(RowSink& sink) {
-    if (count_ > 0) sink.write(values_.data(), count_);
-    count_ = 0;
-  }
-
- private:
-  int columns_;
-  std::int64_t count_ = 0;
-  std::vector<double> values_;
-};
 
 }  // namespace
 
@@ -254,7 +237,7 @@ RunResult detail::run_counted_elsewhere(const Model& model_in, const RunConfig& 
   detail::KeepRows keep(result.trajectory);
   RowSink& rows = sink ? *sink : keep;
   rows.start(columns, result.rows);
-  RowBlock block(columns, std::min(result.rows, RunControl::kChunkSteps / every + 2));
+  detail::RowBlock block(columns, std::min(result.rows, RunControl::kChunkSteps / every + 2));
   detail::WarningCounter warnings;
   detail::DivergenceCheck divergence(m);
   detail::EnergyAudit energy(m->nv);

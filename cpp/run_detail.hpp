@@ -28,6 +28,24 @@ class KeepRows final : public RowSink {
   std::int64_t next_ = 0;
 };
 
+// The rows recorded during one chunk of steps, handed to the sink after it.
+class RowBlock {
+ public:
+  RowBlock(int columns, std::int64_t capacity)
+      : columns_(columns), values_(static_cast<size_t>(capacity) * static_cast<size_t>(columns)) {}
+  [[nodiscard]] double* next() noexcept { return values_.data() + static_cast<size_t>(count_++) * columns_; }
+  [[nodiscard]] double* last() noexcept { return values_.data() + static_cast<size_t>(count_ - 1) * columns_; }
+  void flush_to(RowSink& sink) {
+    if (count_ > 0) sink.write(values_.data(), count_);
+    count_ = 0;
+  }
+
+ private:
+  int columns_;
+  std::int64_t count_ = 0;
+  std::vector<double> values_;
+};
+
 // Throws InvalidArgument if a run of `steps` steps keeping every
 // `record_every`-th row of `columns` doubles would not fit the memory budget
 // (trajectory_memory_budget), saying how much it needs and what to change.

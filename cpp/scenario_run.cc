@@ -224,9 +224,11 @@ Json rounded(const double* values, int count) {
   return {a};
 }
 
-// Where a recorded body's columns start in the row (its "_x"), by name.
-std::map<std::string, size_t> body_columns(const ScenarioRunResult& r) {
-  std::map<std::string, size_t> out;
+
+}  // namespace
+
+std::map<std::string, std::size_t> recorded_bodies(const ScenarioRunResult& r) {
+  std::map<std::string, std::size_t> out;
   for (size_t c = 0; c + 12 < r.columns.size(); ++c) {
     const std::string& name = r.columns[c].name;
     if (name.size() > 2 && name.compare(name.size() - 2, 2, "_x") == 0 &&
@@ -238,8 +240,6 @@ std::map<std::string, size_t> body_columns(const ScenarioRunResult& r) {
   return out;
 }
 
-}  // namespace
-
 std::string scenario_metrics_json(const ScenarioRunResult& r) {
   Json::Object m;
   m["scenario"] = {r.name};
@@ -249,7 +249,7 @@ std::string scenario_metrics_json(const ScenarioRunResult& r) {
   m["steps"] = {r.schedule.steps};
   m["timestep"] = {r.timestep};
   Json::Object bodies;
-  for (const auto& [name, c] : body_columns(r)) {
+  for (const auto& [name, c] : recorded_bodies(r)) {
     const double* v = r.final_row.data() + c;
     const double speed = std::sqrt(v[7] * v[7] + v[8] * v[8] + v[9] * v[9]);
     bodies[name] = {Json::Object{{"final_pos", rounded(v, 3)}, {"final_speed", {round6(speed)}}}};
@@ -281,7 +281,7 @@ std::string scenario_summary(const ScenarioRunResult& r) {
                 r.name.empty() ? "(unnamed)" : r.name.c_str(), static_cast<long long>(r.schedule.steps),
                 python_float_repr(r.timestep).c_str(), r.sim_time);
   out += line;
-  for (const auto& [name, c] : body_columns(r)) {
+  for (const auto& [name, c] : recorded_bodies(r)) {
     const double* v = r.final_row.data() + c;
     std::snprintf(line, sizeof line, "%s final position [%.3f, %.3f, %.3f], speed %.3f m/s\n", name.c_str(), v[0],
                   v[1], v[2], std::sqrt(v[7] * v[7] + v[8] * v[8] + v[9] * v[9]));

@@ -606,6 +606,8 @@ PYBIND11_MODULE(_core, m) {
                                }
                                return out;
                              })
+      .def_property_readonly("bodies", [](const simloop::ScenarioRunResult& r) { return simloop::recorded_bodies(r); },
+                             "The recorded bodies: {name: the column of its _x}.")
       .def("metrics_json", &simloop::scenario_metrics_json)
       .def("summary", &simloop::scenario_summary)
       .def(

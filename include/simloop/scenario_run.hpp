@@ -3,7 +3,9 @@
 // recorded, and what the run leaves behind (metrics.json, the summary).
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -57,6 +59,10 @@ void check_scenario(const Model& scene, const Scenario& scenario, const Scenario
 [[nodiscard]] std::vector<ScenarioRunResult> run_scenario_batch(const Model& scene, const Scenario& scenario,
                                                                 const std::vector<ScenarioConfig>& configs,
                                                                 int threads = 0, RunControl* control = nullptr);
+
+// The recorded bodies, by name, with the column of each one's "_x" (its 13
+// columns follow: position, orientation, linear and angular velocity).
+[[nodiscard]] std::map<std::string, std::size_t> recorded_bodies(const ScenarioRunResult& result);
 
 // metrics.json for a scenario run: byte for byte what Python's
 // json.dumps(metrics, indent=2, sort_keys=True) + "\n" writes, floats

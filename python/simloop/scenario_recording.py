@@ -73,7 +73,7 @@ def record_scenario(result: _core.ScenarioResult, model: _core.Model,
     names = list(result.column_names)
     data = np.asarray(result.trajectory)
     column = {name: data[:, i] for i, name in enumerate(names)}
-    bodies = [n[:-2] for n in names if n.endswith("_x") and n[:-2] + "_qw" in column and n[:-2] + "_vx" in column]
+    bodies = list(result.bodies)
     geoms = _core.scene_geometry(model)
     run_id = uuid.uuid5(uuid.NAMESPACE_URL, "simloop-scenario:" + result.name + ":" + result.metrics_json())
     with replacing(target) as temp_name:
