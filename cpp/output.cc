@@ -15,19 +15,11 @@
 #include <vector>
 
 #include "simloop/errors.hpp"
+#include "json_text.hpp"
 #include "simloop/number_format.hpp"
 
 namespace simloop {
 namespace {
-
-// json.dumps writes a float as repr() does, except for the non-finite ones.
-std::string json_float(double x) {
-  if (std::isnan(x)) return "NaN";
-  if (std::isinf(x)) return x > 0 ? "Infinity" : "-Infinity";
-  return python_float_repr(x);
-}
-
-const char* json_bool(bool b) { return b ? "true" : "false"; }
 
 [[noreturn]] void throw_io(const std::filesystem::path& path, std::string_view what, int err) {
   throw IoError(path.string() + ": " + std::string(what) + " (" + std::strerror(err) + ")");
@@ -85,21 +77,21 @@ class BlockTerminatingSignals {
 }  // namespace
 
 std::string metrics_json(const Metrics& m) {
-  // Keys in sorted order, two-space indent, ", " never used: what json.dumps
-  // writes with indent=2 and sort_keys=True.
-  std::string out = "{\n  \"box_final_pos\": [\n";
-  for (int i = 0; i < 3; ++i) {
-    out += "    " + json_float(m.box_final_pos[i]) + (i < 2 ? ",\n" : "\n");
-  }
-  out += "  ],\n";
-  out += "  \"box_final_speed\": " + json_float(m.box_final_speed) + ",\n";
-  out += "  \"lateral_drift\": " + json_float(m.lateral_drift) + ",\n";
-  out += std::string("  \"perturb\": ") + json_bool(m.perturb) + ",\n";
-  out += "  \"pusher_final_x\": " + json_float(m.pusher_final_x) + ",\n";
-  out += "  \"seed\": " + std::to_string(m.seed) + ",\n";
-  out += std::string("  \"shove_moved_box\": ") + json_bool(m.shove_moved_box) + ",\n";
-  out += "  \"steps\": " + std::to_string(m.steps) + "\n}\n";
-  return out;
+  using detail::Json;
+  Json::Object o;
+  Json::Array position;
+  for (double x : m.box_final_pos) position.push_back({x});
+  o["box_final_pos"] = {position};
+  o["box_final_speed"] = {m.box_final_speed};
+  o["lateral_drift"] = {m.lateral_drift};
+  o["perturb"] = {m.perturb};
+  o["pusher_final_x"] = {m.pusher_final_x};
+  o["seed"] = {m.seed};
+  o["shove_moved_box"] = {m.shove_moved_box};
+  o["steps"] = {m.steps};
+  std::string out;
+  Json{o}.dump(out, 0);
+  return out + "\n";
 }
 
 std::string trajectory_csv(const Trajectory& t, const std::vector<Column>& columns) {
