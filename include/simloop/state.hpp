@@ -1,0 +1,52 @@
+// A simulation's full state as one flat array of doubles, for saving,
+// restoring, copying and starting batches from.
+//
+// MuJoCo 2.2 has no mj_getState; this is the same idea as later MuJoCo's
+// mjSTATE_INTEGRATION: everything mj_step reads that is not the model, so
+// that set_state(get_state(d)) and stepping gives the bits the original
+// would have given. In order (sizes from the model):
+//
+//   time (1), qpos (nq), qvel (nv), act (na), qacc_warmstart (nv),
+//   ctrl (nu), qfrc_applied (nv), xfrc_applied (6 nbody),
+//   mocap_pos (3 nmocap), mocap_quat (4 nmocap), userdata (nuserdata)
+//
+// The warmstart is part of it because MuJoCo's constraint solver starts from
+// it: leave it out and a restored run differs in the last bits.
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <mujoco/mujoco.h>
+
+namespace simloop {
+
+// The state's parts, in order, with their sizes for `m`: ("time", 1), ("qpos", nq), ...
+[[nodiscard]] std::vector<std::pair<std::string, std::size_t>> state_layout(const mjModel* m);
+
+// The number of doubles in a state of `m`.
+[[nodiscard]] std::size_t state_size(const mjModel* m) noexcept;
+
+// Copies d's state into state[0 .. state_size(m)).
+void get_state(const mjModel* m, const mjData* d, double* state) noexcept;
+[[nodiscard]] std::vector<double> get_state(const mjModel* m, const mjData* d);
+
+// Writes state[0 .. state_size(m)) into d and runs forward_keeping_warmstart,
+// so that what MuJoCo derives from the state (poses, contacts, sensors) is
+// current. The caller checks the size; values are taken as they are (a state
+// is data MuJoCo itself produced, or the caller's responsibility). Inside
+// MuJoCo's error guard, as forward_keeping_warmstart.
+void set_state(const mjModel* m, mjData* d, const double* state);
+
+// mj_forward without its side effect on the next step: MuJoCo 2.2's
+// mj_forward writes its constraint solution into qacc_warmstart, where the
+// next mj_step's solver starts, so a plain mj_forward between two steps
+// changes the run's bits. This puts the warmstart back. Use it to read
+// derived quantities (poses, sensors, contacts) mid-run, as a policy does.
+//
+// Call it inside MuJoCo's error guard (mujoco_call), as any MuJoCo call.
+void forward_keeping_warmstart(const mjModel* m, mjData* d);
+
+}  // namespace simloop
