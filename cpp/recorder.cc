@@ -9,6 +9,7 @@
 #include "mujoco_guard.hpp"
 #include "run_detail.hpp"
 #include "simloop/errors.hpp"
+#include "simloop/state.hpp"
 #include "divergence.hpp"
 #include "warning_counter.hpp"
 
@@ -200,21 +201,56 @@ void detail::check_schedule_run(std::int64_t steps, std::int64_t record_every) {
   }
 }
 
+void check_inputs(const mjModel* m, const RunInputs& inputs, std::int64_t steps) {
+  if (inputs.controls) {
+    if (inputs.control_steps != steps || inputs.control_width != m->nu) {
+      throw InvalidArgument("controls must have one row per step and one column per actuator, (" +
+                            std::to_string(steps) + ", " + std::to_string(m->nu) + ") for this run, got (" +
+                            std::to_string(inputs.control_steps) + ", " + std::to_string(inputs.control_width) + ")");
+    }
+    const std::size_t count = static_cast<std::size_t>(steps) * static_cast<std::size_t>(m->nu);
+    const double* bad = std::find_if(inputs.controls, inputs.controls + count, [](double v) { return !std::isfinite(v); });
+    if (bad != inputs.controls + count) {
+      const std::size_t at = static_cast<std::size_t>(bad - inputs.controls);
+      throw InvalidArgument("controls must be finite, got " + std::to_string(*bad) + " at step " +
+                            std::to_string(at / static_cast<std::size_t>(m->nu)) + ", actuator " +
+                            std::to_string(at % static_cast<std::size_t>(m->nu)));
+    }
+  }
+  if (inputs.initial_state) {
+    if (inputs.state_size != state_size(m)) {
+      throw InvalidArgument("initial_state must hold state_size = " + std::to_string(state_size(m)) +
+                            " numbers for this scene (state.hpp's layout), got " + std::to_string(inputs.state_size));
+    }
+    const double* end = inputs.initial_state + inputs.state_size;
+    const double* bad = std::find_if(inputs.initial_state, end, [](double v) { return !std::isfinite(v); });
+    if (bad != end) {
+      throw InvalidArgument("initial_state must be finite, got " + std::to_string(*bad) + " at index " +
+                            std::to_string(bad - inputs.initial_state));
+    }
+  }
+}
+
 ScenarioRunResult run_schedule(const mjModel* m, mjData* d, const ResolvedScenario& scenario,
                                const Schedule& schedule, std::int64_t record_every, RowSink* sink,
-                               RunControl* control) {
+                               RunControl* control, const RunInputs& inputs) {
   if (control && schedule.steps >= 1 && schedule.steps <= kMaxSteps) control->add_total(schedule.steps);
-  return detail::run_schedule_counted_elsewhere(m, d, scenario, schedule, record_every, sink, control);
+  return detail::run_schedule_counted_elsewhere(m, d, scenario, schedule, record_every, sink, control, inputs);
 }
 
 ScenarioRunResult detail::run_schedule_counted_elsewhere(const mjModel* m, mjData* d, const ResolvedScenario& scenario,
                                                          const Schedule& schedule, std::int64_t record_every,
-                                                         RowSink* sink, RunControl* control) {
+                                                         RowSink* sink, RunControl* control, const RunInputs& inputs) {
   detail::check_schedule_run(schedule.steps, record_every);
+  check_inputs(m, inputs, schedule.steps);
   const Recorder recorder(m, scenario, schedule);
   if (sink == nullptr) detail::check_kept_rows(schedule.steps, record_every, recorder.width());
   const std::vector<ForceChange> forces = force_changes(schedule);
-  const std::vector<Schedule::ControlChange>& controls = schedule.control_changes;
+  // The caller's controls replace the schedule's: none of its changes apply.
+  static const std::vector<Schedule::ControlChange> kNoChanges;
+  const std::vector<Schedule::ControlChange>& controls = inputs.controls ? kNoChanges : schedule.control_changes;
+  const double* own_controls = inputs.controls;
+  const int nu = m->nu;
   const std::int64_t steps = schedule.steps;
   const int width = recorder.width();
 
@@ -233,7 +269,11 @@ ScenarioRunResult detail::run_schedule_counted_elsewhere(const mjModel* m, mjDat
 
   detail::mujoco_call([&] {
     mj_resetData(m, d);
-    mj_forward(m, d);
+    if (inputs.initial_state) {
+      set_state(m, d, inputs.initial_state);  // forward, keeping the state's own warmstart
+    } else {
+      mj_forward(m, d);
+    }
   });
   std::size_t next_control = 0, next_force = 0;
   std::int64_t until_record = 0;
@@ -247,6 +287,7 @@ ScenarioRunResult detail::run_schedule_counted_elsewhere(const mjModel* m, mjDat
         for (; next_control < controls.size() && controls[next_control].step == step; ++next_control) {
           d->ctrl[controls[next_control].actuator] = controls[next_control].value;
         }
+        if (own_controls) std::copy_n(own_controls + step * nu, nu, d->ctrl);
         for (; next_force < forces.size() && forces[next_force].step == step; ++next_force) {
           std::copy(forces[next_force].wrench.begin(), forces[next_force].wrench.end(),
                     d->xfrc_applied + 6 * forces[next_force].body);
@@ -268,6 +309,8 @@ ScenarioRunResult detail::run_schedule_counted_elsewhere(const mjModel* m, mjDat
   }
   double* last = block.next();
   recorder.before_step(last, steps, m, d, false);
+  // Before mj_forward, which would overwrite the warmstart the next step needs.
+  result.final_state = get_state(m, d);
   detail::mujoco_call([&] { mj_forward(m, d); });
   recorder.after_step(last, m, d);
   result.final_row.assign(last, last + width);

@@ -334,6 +334,12 @@ RunResult detail::run_counted_elsewhere(const Model& model_in, const RunConfig& 
   metrics.pusher_final_x = round6(d->qpos[at.pusher_qposadr]);
   metrics.lateral_drift = round6(drift);
   metrics.shove_moved_box = drift > 0.01;
+  Metrics& exact = result.unrounded_metrics;
+  exact = metrics;
+  for (int i = 0; i < 3; ++i) exact.box_final_pos[i] = box_q[i];
+  exact.box_final_speed = speed;
+  exact.pusher_final_x = d->qpos[at.pusher_qposadr];
+  exact.lateral_drift = drift;
 
   result.warnings = warnings.warnings();
   if (divergence.diverged()) result.warnings.push_back(divergence.warning());

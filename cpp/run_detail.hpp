@@ -64,7 +64,8 @@ void check_schedule_run(std::int64_t steps, std::int64_t record_every);
 [[nodiscard]] ScenarioRunResult run_schedule_counted_elsewhere(const mjModel* m, mjData* d,
                                                                const ResolvedScenario& scenario,
                                                                const Schedule& schedule, std::int64_t record_every,
-                                                               RowSink* sink, RunControl* control);
+                                                               RowSink* sink, RunControl* control,
+                                                               const RunInputs& inputs = {});
 
 // run() without announcing its steps to the control: a batch announces all
 // of its runs' steps up front, so progress has its true total from the start.

@@ -10,6 +10,7 @@
 
 #include "json_text.hpp"
 #include "run_detail.hpp"
+#include "simloop/batch.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/number_format.hpp"
 #include "simloop/output.hpp"
@@ -68,23 +69,31 @@ void check_scenario(const Model& scene, const Scenario& scenario, const Scenario
 }
 
 ScenarioRunResult run_scenario(const Model& scene, const Scenario& scenario, const ScenarioConfig& config,
-                               Data* workspace, RowSink* sink, RunControl* control) {
+                               Data* workspace, RowSink* sink, RunControl* control, const RunInputs& inputs) {
   const Model model = scene.for_run(run_timestep(scene, scenario, config), false);
   std::optional<Data> own;
   if (workspace == nullptr) workspace = &own.emplace(model);
   if (!workspace->fits(model)) throw InvalidArgument("workspace Data was made for a model of another size");
   const PreparedRun run = prepare(model, scenario, config);
   return labelled(
-      run_schedule(model.get(), workspace->get(), run.resolved, run.schedule, config.record_every, sink, control),
+      run_schedule(model.get(), workspace->get(), run.resolved, run.schedule, config.record_every, sink, control,
+                   inputs),
       model.get(), scenario, config);
 }
 
 std::vector<ScenarioRunResult> run_scenario_batch(const Model& scene, const Scenario& scenario,
                                                   const std::vector<ScenarioConfig>& configs, int threads,
-                                                  RunControl* control) {
+                                                  RunControl* control, const std::vector<RunInputs>& inputs,
+                                                  bool keep_rows) {
   if (threads < 0) {
     throw InvalidArgument("threads must be at least 1, or 0 for one per core, got " + std::to_string(threads));
   }
+  if (!inputs.empty() && inputs.size() != configs.size()) {
+    throw InvalidArgument("inputs: one RunInputs per config, got " + std::to_string(inputs.size()) + " for " +
+                          std::to_string(configs.size()) + " configs");
+  }
+  const RunInputs no_inputs;
+  const auto inputs_of = [&](std::size_t i) -> const RunInputs& { return inputs.empty() ? no_inputs : inputs[i]; };
   // Up front, on this thread: one model per distinct timestep (the model is
   // frozen while the workers share it), every run's names, inputs and
   // columns, and the memory all the kept rows will take together.
@@ -101,13 +110,15 @@ std::vector<ScenarioRunResult> run_scenario_batch(const Model& scene, const Scen
       model_of.push_back(&it->second);
       runs.push_back(prepare(it->second, scenario, config));
       detail::check_schedule_run(runs.back().schedule.steps, config.record_every);
+      check_inputs(it->second.get(), inputs_of(i), runs.back().schedule.steps);
       const Recorder columns(it->second.get(), runs.back().resolved, runs.back().schedule);
       kept.push_back({runs.back().schedule.steps, config.record_every, columns.width()});
     } catch (const InvalidArgument& e) {
       throw InvalidArgument("run " + std::to_string(i) + ": " + e.what());
     }
   }
-  if (!configs.empty()) detail::check_kept_rows(kept);
+  if (!configs.empty() && keep_rows) detail::check_kept_rows(kept);
+  DiscardRows discard;  // stateless: every worker may write to it at once
 
   std::vector<ScenarioRunResult> results(configs.size());
   std::vector<std::int64_t> steps;
@@ -115,7 +126,8 @@ std::vector<ScenarioRunResult> run_scenario_batch(const Model& scene, const Scen
   detail::run_jobs(scene, configs.size(), threads, steps, control, [&](std::size_t i, Data& data, RunControl& ctl) {
     const mjModel* m = model_of[i]->get();
     results[i] = labelled(detail::run_schedule_counted_elsewhere(m, data.get(), runs[i].resolved, runs[i].schedule,
-                                                                 configs[i].record_every, nullptr, &ctl),
+                                                                 configs[i].record_every, keep_rows ? nullptr : &discard,
+                                                                 &ctl, inputs_of(i)),
                           m, scenario, configs[i]);
   });
   return results;

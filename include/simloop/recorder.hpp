@@ -68,6 +68,7 @@ struct ScenarioRunResult {
   std::vector<std::string> disturbed_bodies;  // schedule.forces[i]'s body, by name
   std::vector<Column> columns;
   std::vector<double> final_row;  // the last row, whether kept or streamed
+  std::vector<double> final_state;  // the full state at the end (state.hpp's layout)
   Trajectory trajectory;  // empty when the rows went to a RowSink
   std::int64_t rows = 0;
   Schedule schedule;
@@ -76,11 +77,36 @@ struct ScenarioRunResult {
   double sim_time = 0.0;
 };
 
-// The loop: reset, mj_forward, then for each step write the schedule's
-// inputs (ctrl changes, forces, explicit zeros when a window closes), record,
-// mj_step. `m` and `d` must belong together; `d` is reset first.
+// A run's inputs of the caller's own, as mujoco.rollout takes them: read in
+// place (nothing is copied), so they must outlive the run and not change
+// during it. Either may be left null.
+struct RunInputs {
+  // steps x control_width doubles, row-major: row t is the whole ctrl vector
+  // (one value per actuator, nu) written before step t. It replaces the
+  // scenario's controls; its disturbances still apply. Values are written
+  // as given (MuJoCo clamps them to ctrlrange when it applies them) and
+  // must be finite.
+  const double* controls = nullptr;
+  std::int64_t control_steps = 0;
+  std::int64_t control_width = 0;
+  // state_size(m) doubles in state.hpp's layout: the run starts from this
+  // state (time included) instead of the scene's reset pose.
+  const double* initial_state = nullptr;
+  std::size_t state_size = 0;
+};
+
+// Throws InvalidArgument naming `controls` or `initial_state` unless
+// `inputs` fit a run of `steps` steps of `m`: control_steps == steps,
+// control_width == nu, state_size == state_size(m), every value finite.
+void check_inputs(const mjModel* m, const RunInputs& inputs, std::int64_t steps);
+
+// The loop: reset (or set the initial state), mj_forward, then for each step
+// write the schedule's inputs (ctrl changes, or the caller's controls;
+// forces, explicit zeros when a window closes), record, mj_step. `m` and `d`
+// must belong together; `d` is reset first.
 [[nodiscard]] ScenarioRunResult run_schedule(const mjModel* m, mjData* d, const ResolvedScenario& scenario,
                                              const Schedule& schedule, std::int64_t record_every,
-                                             RowSink* sink = nullptr, RunControl* control = nullptr);
+                                             RowSink* sink = nullptr, RunControl* control = nullptr,
+                                             const RunInputs& inputs = {});
 
 }  // namespace simloop

@@ -199,6 +199,7 @@ struct EnergyTotals {
 struct RunResult {
   RunConfig config;
   Metrics metrics;
+  Metrics unrounded_metrics;  // the same, floats as computed (tables; metrics.json rounds)
   Shove shove;             // the shove drawn for this run (applied only if perturb)
   Trajectory trajectory;    // empty when the rows went to a RowSink
   std::int64_t rows = 0;    // trajectory rows the run recorded, kept or not

@@ -38,9 +38,13 @@ struct ScenarioConfig {
 // scene's own. Names are resolved first (InvalidArgument listing what the
 // scene has), then the schedule is drawn, then the loop runs in `workspace`
 // (a fresh Data if null). Same scenario, scene, config: the same bits.
+// With `inputs` (recorder.hpp's RunInputs), the run follows the caller's
+// controls instead of the scenario's and starts from the caller's state;
+// both are checked first (InvalidArgument naming them).
 [[nodiscard]] ScenarioRunResult run_scenario(const Model& scene, const Scenario& scenario,
                                              const ScenarioConfig& config, Data* workspace = nullptr,
-                                             RowSink* sink = nullptr, RunControl* control = nullptr);
+                                             RowSink* sink = nullptr, RunControl* control = nullptr,
+                                             const RunInputs& inputs = {});
 
 // Runs `scenario` once per config over one scene, with `threads` workers (0:
 // one per core), each stepping its own Data; the scene is compiled once per
@@ -56,9 +60,17 @@ struct ScenarioConfig {
 // run_scenario() would. The commands call it before touching --out.
 void check_scenario(const Model& scene, const Scenario& scenario, const ScenarioConfig& config);
 
+//
+// inputs: empty, or one RunInputs per config (run i follows inputs[i]; runs
+// may share the same arrays), checked with the rest before any run starts.
+// keep_rows false: the runs keep no trajectory (each result still has its
+// final_row, final_state, warnings and schedule, which is all the metrics
+// need), so a batch's memory does not grow with its runs' lengths.
 [[nodiscard]] std::vector<ScenarioRunResult> run_scenario_batch(const Model& scene, const Scenario& scenario,
                                                                 const std::vector<ScenarioConfig>& configs,
-                                                                int threads = 0, RunControl* control = nullptr);
+                                                                int threads = 0, RunControl* control = nullptr,
+                                                                const std::vector<RunInputs>& inputs = {},
+                                                                bool keep_rows = true);
 
 // The recorded bodies, by name, with the column of each one's "_x" (its 13
 // columns follow: position, orientation, linear and angular velocity).
