@@ -297,6 +297,57 @@ auto locked(R (simloop::Sim::*fn)() const noexcept) {
   };
 }
 
+
+// --- Batches of the caller's own inputs, metrics-only batches, reprs ---
+
+std::string py_bool(bool b) { return b ? "True" : "False"; }
+
+std::string py_str_repr(const std::string& text) {
+  return py::repr(py::str(text)).cast<std::string>();
+}
+
+// One RunInputs per run from Python's arrays (already checked and made
+// C-contiguous float64 by simloop.scenario): controls (B, T, nu) gives run i
+// its own slice, (T, nu) the same array to every run; initial_state (B, n)
+// or (n,) likewise. The arrays are read in place: the caller keeps them
+// alive (they are this call's arguments) for the whole call.
+using DoubleArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
+
+std::vector<simloop::RunInputs> run_inputs(std::size_t runs, const std::optional<DoubleArray>& controls,
+                                           const std::optional<DoubleArray>& initial_state) {
+  std::vector<simloop::RunInputs> out(runs);
+  if (controls) {
+    const py::ssize_t nd = controls->ndim();
+    if (nd != 2 && nd != 3) throw py::value_error("controls must be (steps, nu) or (runs, steps, nu)");
+    if (nd == 3 && static_cast<std::size_t>(controls->shape(0)) != runs) {
+      throw py::value_error("controls: " + std::to_string(controls->shape(0)) + " runs' controls for " +
+                            std::to_string(runs) + " runs");
+    }
+    const std::int64_t steps = controls->shape(nd - 2), width = controls->shape(nd - 1);
+    for (std::size_t i = 0; i < runs; ++i) {
+      out[i].controls = controls->data() + (nd == 3 ? i * static_cast<std::size_t>(steps * width) : 0);
+      out[i].control_steps = steps;
+      out[i].control_width = width;
+    }
+  }
+  if (initial_state) {
+    const py::ssize_t nd = initial_state->ndim();
+    if (nd != 1 && nd != 2) throw py::value_error("initial_state must be (state_size,) or (runs, state_size)");
+    if (nd == 2 && static_cast<std::size_t>(initial_state->shape(0)) != runs) {
+      throw py::value_error("initial_state: " + std::to_string(initial_state->shape(0)) + " states for " +
+                            std::to_string(runs) + " runs");
+    }
+    const auto size = static_cast<std::size_t>(initial_state->shape(nd - 1));
+    for (std::size_t i = 0; i < runs; ++i) {
+      out[i].initial_state = initial_state->data() + (nd == 2 ? i * size : 0);
+      out[i].state_size = size;
+    }
+  }
+  return out;
+}
+
+py::array vector_array(const std::vector<double>& values) { return vec(values.data(), values.size()); }
+
 }  // namespace
 
 PYBIND11_MODULE(_core, m) {
@@ -524,12 +575,7 @@ PYBIND11_MODULE(_core, m) {
       .def_readonly("name", &simloop::Scenario::name)
       .def_property_readonly("scene", [](const simloop::Scenario& s) { return fs_str(s.scene.native()); })
       .def_readonly("timestep", &simloop::Scenario::timestep)
-      .def_property_readonly("body_names", [](const simloop::Scenario& s) { return s.record.bodies; })
-      .def("__repr__", [](const simloop::Scenario& s) {
-        return "<simloop.Scenario " + (s.name.empty() ? std::string("(unnamed)") : s.name) + ": " +
-               std::to_string(s.controls.size()) + " controls, " + std::to_string(s.disturbances.size()) +
-               " disturbances, scene " + (s.scene.empty() ? std::string("the chapter's") : s.scene.string()) + ">";
-      });
+      .def_property_readonly("body_names", [](const simloop::Scenario& s) { return s.record.bodies; });
   m.def("load_scene", &simloop::load_scene, "scenario"_a);
   m.def(
       "check_scenario_names",
@@ -751,11 +797,7 @@ PYBIND11_MODULE(_core, m) {
       .def_property_readonly("energy_unexplained", [](const simloop::SweepPoint& p) { return p.energy.unexplained; })
       .def_property_readonly("energy_change",
                              [](const simloop::SweepPoint& p) { return p.energy.energy_end - p.energy.energy_start; })
-      .def_readonly("stable", &simloop::SweepPoint::stable)
-      .def("__repr__", [](const simloop::SweepPoint& p) {
-        return "SweepPoint(timestep=" + simloop::python_float_repr(p.timestep) +
-               ", stable=" + (p.stable ? "True" : "False") + ")";
-      });
+      .def_readonly("stable", &simloop::SweepPoint::stable);
   py::class_<simloop::SweepResult>(m, "SweepResult", "A timestep sweep of the baseline run.")
       .def_readonly("duration", &simloop::SweepResult::duration)
       .def_readonly("points", &simloop::SweepResult::points)
@@ -838,4 +880,136 @@ PYBIND11_MODULE(_core, m) {
   m.def("write_file_atomically", [](const std::filesystem::path& path, const std::string& contents) {
     simloop::write_file_atomically(path, contents);
   }, "path"_a, "contents"_a);
+
+  // --- Batches of the caller's own inputs, metrics-only batches, reprs ---
+  // (simloop/scenario.py and simloop/tables.py hold the Python side.)
+  m.def(
+      "run_scenario_with_inputs",
+      [](const simloop::Model& scene, const simloop::Scenario& scenario, const simloop::ScenarioConfig& config,
+         std::optional<DoubleArray> controls, std::optional<DoubleArray> initial_state, py::object progress) {
+        const simloop::RunInputs inputs = run_inputs(1, controls, initial_state).front();
+        Interruptible work(std::move(progress));
+        simloop::ScenarioRunResult result = work.run([&](simloop::RunControl* control) {
+          return naming_failures("run_scenario(" + scenario.name + ")", [&] {
+            return simloop::run_scenario(scene, scenario, config, nullptr, nullptr, control, inputs);
+          });
+        });
+        work.finish();
+        return result;
+      },
+      "scene"_a, "scenario"_a, "config"_a, "controls"_a, "initial_state"_a, "progress"_a = py::none());
+  m.def(
+      "run_scenario_batch_with_inputs",
+      [](const simloop::Model& scene, const simloop::Scenario& scenario,
+         const std::vector<simloop::ScenarioConfig>& configs, int threads, std::optional<DoubleArray> controls,
+         std::optional<DoubleArray> initial_state, bool keep_rows, py::object progress) {
+        std::vector<simloop::RunInputs> inputs;
+        if (controls || initial_state) inputs = run_inputs(configs.size(), controls, initial_state);
+        Interruptible work(std::move(progress));
+        std::vector<simloop::ScenarioRunResult> results = work.run([&](simloop::RunControl* control) {
+          return naming_failures("run_scenario_batch(" + scenario.name + ") x " + std::to_string(configs.size()) +
+                                     " runs",
+                                 [&] {
+                                   return simloop::run_scenario_batch(scene, scenario, configs, threads, control,
+                                                                      inputs, keep_rows);
+                                 });
+        });
+        work.finish();
+        return results;
+      },
+      "scene"_a, "scenario"_a, "configs"_a, "threads"_a, "controls"_a, "initial_state"_a, "keep_rows"_a,
+      "progress"_a = py::none());
+  m.def(
+      "run_batch_metrics_only",
+      [](const simloop::Model& model, const std::vector<simloop::RunConfig>& configs, int threads,
+         py::object progress) {
+        simloop::DiscardRows discard;  // stateless: shared by every run
+        const std::vector<simloop::RowSink*> sinks(configs.size(), &discard);
+        Interruptible work(std::move(progress));
+        std::vector<RunResult> results = work.run([&](simloop::RunControl* control) {
+          return naming_failures("run_batch(metrics_only=True) x " + std::to_string(configs.size()) + " runs",
+                                 [&] { return simloop::run_batch(model, configs, sinks, threads, control); });
+        });
+        work.finish();
+        return results;
+      },
+      "model"_a, "configs"_a, "threads"_a, "progress"_a = py::none());
+
+  auto run_result = py::reinterpret_borrow<py::class_<RunResult>>(m.attr("RunResult"));
+  run_result
+      .def_property_readonly("unrounded_metrics", [](const RunResult& r) { return metrics_dict(r.unrounded_metrics); },
+                             "metrics as computed, not rounded (metrics.json rounds to 6 decimals).")
+      .def("__repr__", [](const RunResult& r) {
+        return "RunResult(seed=" + std::to_string(r.config.seed) + ", steps=" + std::to_string(r.metrics.steps) +
+               ", timestep=" + simloop::python_float_repr(r.timestep) + ", rows=" +
+               std::to_string(r.trajectory.rows()) + ", lateral_drift=" +
+               simloop::python_float_repr(r.metrics.lateral_drift) + ", warnings=" + std::to_string(r.warnings.size()) +
+               ")";
+      });
+  py::reinterpret_borrow<py::class_<simloop::RunConfig>>(m.attr("RunConfig"))
+      .def("__repr__", [](const simloop::RunConfig& c) {
+        return "RunConfig(seed=" + std::to_string(c.seed) + ", steps=" + std::to_string(c.steps) +
+               ", timestep=" + simloop::python_float_repr(c.timestep) + ", perturb=" + py_bool(c.perturb) +
+               ", smoke=" + py_bool(c.smoke) + ", record_every=" + std::to_string(c.record_every) +
+               ", audit_energy=" + py_bool(c.audit_energy) + ", rng='" + std::string(simloop::rng_name(c.rng)) + "')";
+      });
+  py::reinterpret_borrow<py::class_<simloop::SweepPoint>>(m.attr("SweepPoint"))
+      .def("__repr__", [](const simloop::SweepPoint& p) {
+        return "SweepPoint(timestep=" + simloop::python_float_repr(p.timestep) + ", steps=" + std::to_string(p.steps) +
+               ", stable=" + py_bool(p.stable) + ", peak_box_z=" + simloop::python_float_repr(simloop::round6(p.peak_box_z)) +
+               ", warnings=" + std::to_string(p.warnings) + ")";
+      });
+  py::reinterpret_borrow<py::class_<simloop::SweepResult>>(m.attr("SweepResult"))
+      .def("__repr__", [](const simloop::SweepResult& r) {
+        const std::string edge =
+            r.edge_index < 0 ? "None"
+                             : simloop::python_float_repr(r.points[static_cast<std::size_t>(r.edge_index)].timestep);
+        std::string range;
+        if (!r.points.empty()) {
+          range = ", timesteps=" + simloop::python_float_repr(r.points.front().timestep) + ".." +
+                  simloop::python_float_repr(r.points.back().timestep);
+        }
+        return "SweepResult(points=" + std::to_string(r.points.size()) + range + ", duration=" +
+               simloop::python_float_repr(r.duration) + ", edge=" + edge + ")";
+      });
+  py::reinterpret_borrow<py::class_<simloop::ScenarioConfig>>(m.attr("ScenarioConfig"))
+      .def("__repr__", [](const simloop::ScenarioConfig& c) {
+        return "ScenarioConfig(seed=" + std::to_string(c.seed) + ", rng='" + std::string(simloop::rng_name(c.rng)) +
+               "', timestep=" + (c.timestep ? simloop::python_float_repr(*c.timestep) : std::string("None")) +
+               ", steps=" + (c.steps ? std::to_string(*c.steps) : std::string("None")) + ", perturb=" +
+               py_bool(c.perturb) + ", record_every=" + std::to_string(c.record_every) + ")";
+      });
+  py::reinterpret_borrow<py::class_<simloop::ScenarioRunResult>>(m.attr("ScenarioResult"))
+      .def_readonly("rng", &simloop::ScenarioRunResult::rng)
+      .def_readonly("perturb", &simloop::ScenarioRunResult::perturb)
+      .def_property_readonly("final_row", [](const simloop::ScenarioRunResult& r) { return vector_array(r.final_row); },
+                             "The last row (columns as column_names), kept or not: a copy.")
+      .def_property_readonly(
+          "final_state", [](const simloop::ScenarioRunResult& r) { return vector_array(r.final_state); },
+          "The full state at the end (the flat layout of state.hpp): an initial_state that continues this run.")
+      .def("__repr__", [](const simloop::ScenarioRunResult& r) {
+        return "ScenarioResult(name=" + py_str_repr(r.name) + ", seed=" + std::to_string(r.seed) + ", steps=" +
+               std::to_string(r.schedule.steps) + ", timestep=" + simloop::python_float_repr(r.timestep) +
+               ", rows=" + std::to_string(r.trajectory.rows()) + ", columns=" + std::to_string(r.columns.size()) +
+               ", disturbances=" + std::to_string(r.schedule.forces.size()) +
+               ", warnings=" + std::to_string(r.warnings.size()) + ")";
+      });
+  py::reinterpret_borrow<py::class_<simloop::Scenario>>(m.attr("Scenario"))
+      .def("__repr__", [](const simloop::Scenario& s) {
+        std::string length;
+        switch (s.length.unit) {
+          case simloop::When::Unit::kSteps: length = "steps=" + std::to_string(s.length.count); break;
+          case simloop::When::Unit::kSeconds: length = "duration=" + simloop::python_float_repr(s.length.value); break;
+          default: length = "length=" + simloop::python_float_repr(s.length.value); break;
+        }
+        std::string controls;
+        for (const simloop::ControlSpec& c : s.controls) controls += (controls.empty() ? "" : ", ") + py_str_repr(c.actuator);
+        std::string recorded;
+        for (const std::string& b : s.record.bodies) recorded += (recorded.empty() ? "" : ", ") + py_str_repr(b);
+        return "Scenario(name=" + py_str_repr(s.name) + ", scene=" +
+               (s.scene.empty() ? std::string("None") : py::repr(fs_str(s.scene.native())).cast<std::string>()) +
+               ", timestep=" + (s.timestep ? simloop::python_float_repr(*s.timestep) : std::string("None")) + ", " +
+               length + ", controls=[" + controls + "], disturbances=" + std::to_string(s.disturbances.size()) +
+               ", bodies=[" + recorded + "])";
+      });
 }

@@ -11,6 +11,7 @@ numpy views of the trajectory, and writes the rerun recording.
 
 from ._api import Sim, draw_shove, load_model, run, run_batch, sweep
 from .scenario import Scenario, ScenarioResult, run_scenario, run_scenario_batch
+from .tables import BatchTable, table, to_arrow, to_pandas
 from ._core import (
     COLUMN_NAMES,
     ENERGY_COLUMN_NAMES,
@@ -29,6 +30,7 @@ from ._core import (
 )
 
 __all__ = [
+    "BatchTable",
     "COLUMN_NAMES",
     "ENERGY_COLUMN_NAMES",
     "MAX_RECORD_EVERY",
@@ -53,4 +55,7 @@ __all__ = [
     "run_scenario",
     "run_scenario_batch",
     "sweep",
+    "table",
+    "to_arrow",
+    "to_pandas",
 ]

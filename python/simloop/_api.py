@@ -20,10 +20,13 @@ import functools
 import math
 import numbers
 import os
-from typing import Callable, Iterable, List, Optional, Sequence, Union
+from typing import TYPE_CHECKING, Callable, Iterable, List, Optional, Sequence, Union
 
 from . import _core
 from ._core import Model, RunResult, SweepResult
+
+if TYPE_CHECKING:
+    from .tables import BatchTable
 
 ModelLike = Union[None, Model, str, "os.PathLike[str]"]
 PathLike = Union[str, bytes, "os.PathLike[str]"]
@@ -222,7 +225,7 @@ def _sequence(name: str, values: object) -> list:
 def run_batch(seeds: Iterable[int] = (0,), timesteps: Iterable[float] = (0.002,), *, steps: int = 2000,
               perturb: bool = True, smoke: bool = False, model: ModelLike = None, record_every: int = 1,
               audit_energy: bool = False, threads: Optional[int] = None, rng: str = "mt19937_64",
-              progress: Progress = None) -> List[RunResult]:
+              progress: Progress = None, metrics_only: bool = False) -> "Union[List[RunResult], BatchTable]":
     """Runs every (seed, timestep) pair over one compiled model, in parallel.
 
     Results come in the order of itertools.product(seeds, timesteps), and each
@@ -230,12 +233,20 @@ def run_batch(seeds: Iterable[int] = (0,), timesteps: Iterable[float] = (0.002,)
     is (None: one worker per core). Each worker steps its own MuJoCo data;
     the model is shared. Every argument is checked before any run starts.
     progress: as for run(), over the steps of all the runs.
+    metrics_only: keep no trajectories and return a simloop.BatchTable, one
+    row per run (the parameters, the metrics unrounded, the shove, warning
+    counts), whose memory does not grow with the runs' lengths:
+    .to_pandas(), .to_arrow(), table["lateral_drift"].
     """
     seed_list = [_check_int("seeds[%d]" % i, s, 0, _U64_MAX) for i, s in enumerate(_sequence("seeds", seeds))]
     timestep_list = [_check_timestep(t, "timesteps[%d]" % i) for i, t in enumerate(_sequence("timesteps", timesteps))]
     workers = 0 if threads is None else _check_int("threads", threads, 1, 4096)
     configs = [_config(s, steps, t, perturb, smoke, record_every, audit_energy, rng)
                for s in seed_list for t in timestep_list]
+    if _check_bool("metrics_only", metrics_only):
+        from .tables import table
+        return table(_core.run_batch_metrics_only(load_model(model), configs, workers,
+                                                  progress=_check_progress(progress)))
     return _core.run_batch(load_model(model), configs, workers, progress=_check_progress(progress))
 
 

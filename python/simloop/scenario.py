@@ -23,8 +23,11 @@ import numbers
 import os
 from typing import Any, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple, Union
 
+import numpy as np
+
 from . import _core
 from ._api import Progress, _check_bool, _sequence, _check_int, _check_progress, _check_timestep, _describe, _U64_MAX, RNGS
+from .tables import BatchTable, table
 
 ScenarioResult = _core.ScenarioResult
 
@@ -196,10 +199,29 @@ def _scenario_and_scene(scenario: Union[Scenario, str, os.PathLike],
     return scenario, scene
 
 
+def _inputs_array(name: str, value: object, shapes: Tuple[int, ...], described: str) -> Optional[np.ndarray]:
+    """value as a C-contiguous float64 array (the same array, not a copy,
+    when it already is one), or None. Values are checked by the C++ side,
+    which knows the run's steps, actuators and state size."""
+    if value is None:
+        return None
+    if isinstance(value, (str, bytes)):
+        raise TypeError(f"{name} must be an array of numbers {described}, got {_describe(value)}")
+    try:
+        array = np.asarray(value)
+    except (TypeError, ValueError):  # ragged lists
+        raise TypeError(f"{name} must be an array of numbers {described}, got {_describe(value)}") from None
+    if array.dtype.kind not in "iuf":
+        raise TypeError(f"{name} must be an array of numbers {described}, got an array of dtype {array.dtype}")
+    if array.ndim not in shapes:
+        raise ValueError(f"{name} must be {described}, got shape {array.shape}")
+    return np.ascontiguousarray(array, dtype=np.float64)
+
+
 def run_scenario(scenario: Union[Scenario, str, os.PathLike], *, seed: int = 0, rng: str = "mt19937_64",
                  timestep: Optional[float] = None, steps: Optional[int] = None, perturb: bool = True,
                  record_every: int = 1, model: Optional[_core.Model] = None,
-                 progress: Progress = None) -> ScenarioResult:
+                 progress: Progress = None, controls: Any = None, initial_state: Any = None) -> ScenarioResult:
     """Runs a scenario (a Scenario or a scenario file's path) once.
 
     seed draws its random disturbances and nothing else; rng is "mt19937_64"
@@ -209,6 +231,20 @@ def run_scenario(scenario: Union[Scenario, str, os.PathLike], *, seed: int = 0, 
     ScenarioResult: column_names, trajectory (a read-only numpy view),
     column(name), metrics (a dict), disturbances, warnings, summary(),
     write(out). Unknown names raise ValueError listing what the scene has.
+
+    controls: your own controls, as mujoco.rollout takes them: a (steps, nu)
+    array whose row t is the whole ctrl vector (one value per actuator, in
+    the scene's order) written before step t. They replace the scenario's
+    controls; its disturbances still apply (perturb=False drops them). The
+    rows must match the run's steps exactly (ValueError otherwise) and every
+    value must be finite (NaN is refused, not read as "keep"); MuJoCo clamps
+    values to ctrlrange as it applies them, and the ctrl columns record what
+    it applied. A C-contiguous float64 array is read in place, not copied:
+    do not write to it during the call.
+    initial_state: start from this full state (time included) instead of the
+    scene's reset pose: the flat layout of include/simloop/state.hpp, as
+    result.final_state gives it, so a run continued from a result's
+    final_state gives the bits of one longer run.
     """
     scenario, scene = _scenario_and_scene(scenario, model)
     if rng not in RNGS:
@@ -218,14 +254,20 @@ def run_scenario(scenario: Union[Scenario, str, os.PathLike], *, seed: int = 0, 
         None if timestep is None else _check_timestep(timestep),
         None if steps is None else _check_int("steps", steps, 1, _core.MAX_STEPS),
         _check_bool("perturb", perturb), _check_int("record_every", record_every, 1, _core.MAX_RECORD_EVERY))
-    return _core.run_scenario(scene, scenario._core, config, progress=_check_progress(progress))
+    own = _inputs_array("controls", controls, (2,), "shaped (steps, nu)")
+    start = _inputs_array("initial_state", initial_state, (1,), "shaped (state_size,)")
+    if own is None and start is None:
+        return _core.run_scenario(scene, scenario._core, config, progress=_check_progress(progress))
+    return _core.run_scenario_with_inputs(scene, scenario._core, config, own, start,
+                                          progress=_check_progress(progress))
 
 
 def run_scenario_batch(scenario: Union[Scenario, str, os.PathLike], seeds: Iterable[int] = (0,),
                        timesteps: Iterable[Optional[float]] = (None,), *, rng: str = "mt19937_64",
                        steps: Optional[int] = None, perturb: bool = True, record_every: int = 1,
                        model: Optional[_core.Model] = None, threads: Optional[int] = None,
-                       progress: Progress = None) -> List[ScenarioResult]:
+                       progress: Progress = None, controls: Any = None, initial_state: Any = None,
+                       metrics_only: bool = False) -> Union[List[ScenarioResult], BatchTable]:
     """Runs a scenario once per (seed, timestep) pair, in parallel over one scene.
 
     Results come in the order of itertools.product(seeds, timesteps), and each
@@ -235,6 +277,15 @@ def run_scenario_batch(scenario: Union[Scenario, str, os.PathLike], seeds: Itera
     timestep and shared; each worker steps its own MuJoCo data. Every run is
     checked before any starts, and so is the memory all the kept trajectories
     take together. progress: as for run(), over the steps of all the runs.
+
+    controls: (runs, steps, nu), run i following controls[i], or (steps, nu)
+    for every run; initial_state: (runs, state_size) or (state_size,). As
+    for run_scenario(), and read in place. runs is len(seeds) *
+    len(timesteps), in the results' order.
+    metrics_only: keep no trajectories and return a simloop.BatchTable (one
+    row per run: the parameters, each recorded body's final position and
+    speed, the disturbances as drawn, warning counts; unrounded), whose
+    memory does not grow with the runs' lengths. .to_pandas(), .to_arrow().
     """
     scenario, scene = _scenario_and_scene(scenario, model)
     if rng not in RNGS:
@@ -247,7 +298,18 @@ def run_scenario_batch(scenario: Union[Scenario, str, os.PathLike], seeds: Itera
     perturb = _check_bool("perturb", perturb)
     every = _check_int("record_every", record_every, 1, _core.MAX_RECORD_EVERY)
     configs = [_core.ScenarioConfig(s, rng, t, step_count, perturb, every) for s in seed_list for t in timestep_list]
-    return _core.run_scenario_batch(scene, scenario._core, configs, workers, progress=_check_progress(progress))
+    metrics_only = _check_bool("metrics_only", metrics_only)
+    own = _inputs_array("controls", controls, (2, 3), "shaped (runs, steps, nu) or (steps, nu)")
+    start = _inputs_array("initial_state", initial_state, (1, 2), "shaped (runs, state_size) or (state_size,)")
+    for name, array, ndim in (("controls", own, 3), ("initial_state", start, 2)):
+        if array is not None and array.ndim == ndim and array.shape[0] != len(configs):
+            raise ValueError(f"{name} holds {array.shape[0]} runs' inputs for {len(configs)} runs "
+                             f"({len(seed_list)} seeds x {len(timestep_list)} timesteps)")
+    if own is None and start is None and not metrics_only:
+        return _core.run_scenario_batch(scene, scenario._core, configs, workers, progress=_check_progress(progress))
+    results = _core.run_scenario_batch_with_inputs(scene, scenario._core, configs, workers, own, start,
+                                                   not metrics_only, progress=_check_progress(progress))
+    return table(results) if metrics_only else results
 
 
 def _metrics(result: ScenarioResult) -> dict:
