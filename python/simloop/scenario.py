@@ -229,8 +229,9 @@ def run_scenario(scenario: Union[Scenario, str, os.PathLike], *, seed: int = 0, 
     perturb=False drops its disturbances. model: the scene already compiled
     (scenario.model()), to compile it once for many runs. Returns a
     ScenarioResult: column_names, trajectory (a read-only numpy view),
-    column(name), metrics (a dict), disturbances, warnings, summary(),
-    write(out). Unknown names raise ValueError listing what the scene has.
+    column(name), metrics (a dict), disturbances, warnings, final_row,
+    final_state (the full state at the end), summary(), write(out).
+    Unknown names raise ValueError listing what the scene has.
 
     controls: your own controls, as mujoco.rollout takes them: a (steps, nu)
     array whose row t is the whole ctrl vector (one value per actuator, in

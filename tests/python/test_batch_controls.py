@@ -132,3 +132,13 @@ def test_batch_inputs_must_have_one_entry_per_run():
     u[2, 7, 0] = np.nan
     with pytest.raises(ValueError, match=r"^run 2: controls must be finite, got nan at step 7, actuator 0$"):
         simloop.run_scenario_batch(PUSHT, seeds=[0, 1, 2], steps=100, controls=u)
+
+
+def test_progress_counts_every_run_of_a_batch_with_inputs():
+    seen = []
+    table = simloop.run_scenario_batch(PUSHT, seeds=[0, 1, 2], steps=300, controls=controls(5, 300),
+                                       metrics_only=True, progress=lambda done, total: seen.append((done, total)))
+    assert len(table) == 3
+    assert seen[-1] == (900, 900) and all(total == 900 for _, total in seen)
+    with pytest.raises(ZeroDivisionError):
+        simloop.run_scenario(PUSHT, steps=300, controls=controls(5, 300), progress=lambda done, total: 1 / 0)
