@@ -142,3 +142,11 @@ def test_progress_counts_every_run_of_a_batch_with_inputs():
     assert seen[-1] == (900, 900) and all(total == 900 for _, total in seen)
     with pytest.raises(ZeroDivisionError):
         simloop.run_scenario(PUSHT, steps=300, controls=controls(5, 300), progress=lambda done, total: 1 / 0)
+
+
+def test_the_chapters_scenario_with_its_own_control_as_an_array_is_the_same_run():
+    chapter = simloop.Scenario.chapter()
+    nu = simloop.Model.pusher_scene().nu
+    ones = np.ones((2000, nu))
+    assert same(simloop.run_scenario(chapter, controls=ones), simloop.run_scenario(chapter))
+    assert not same(simloop.run_scenario(chapter, controls=ones * 0.5), simloop.run_scenario(chapter))
