@@ -54,3 +54,8 @@ __all__ = [
     "run_scenario_batch",
     "sweep",
 ]
+
+# Scenario sweeps: sweep(scenario=...) returns a ScenarioSweepResult.
+from ._core import SCENARIO_SWEEP_TOLERANCE, ScenarioSweepPoint, ScenarioSweepResult  # noqa: E402
+
+__all__ += ["SCENARIO_SWEEP_TOLERANCE", "ScenarioSweepPoint", "ScenarioSweepResult"]
