@@ -173,22 +173,49 @@ std::string sweep_csv(const SweepResult& result) {
   return out;
 }
 
+namespace {
+
+// Every cell as text first, then each column as wide as its widest cell,
+// right-aligned, so the table stays aligned whatever the numbers are; the
+// last column left-aligned and unpadded: it carries the edge mark.
+std::string aligned_table(const std::vector<std::string>& header, const std::vector<std::vector<std::string>>& rows) {
+  std::vector<size_t> width(header.size());
+  for (size_t c = 0; c < header.size(); ++c) {
+    width[c] = header[c].size();
+    for (const auto& row : rows) width[c] = std::max(width[c], row[c].size());
+  }
+  std::string out;
+  const auto append_row = [&](const std::vector<std::string>& cells) {
+    std::string text = " ";
+    for (size_t c = 0; c < cells.size(); ++c) {
+      const bool last = c + 1 == cells.size();
+      const std::string pad(last ? 0 : width[c] - cells[c].size(), ' ');
+      text += "  " + (last ? cells[c] : pad + cells[c]);
+    }
+    out += text + "\n";
+  };
+  append_row(header);
+  for (const auto& row : rows) append_row(row);
+  return out;
+}
+
+std::string fixed(double value, int decimals) {
+  char text[64];
+  std::snprintf(text, sizeof text, "%.*f", decimals, value);
+  return text;
+}
+
+}  // namespace
+
 std::string sweep_summary(const SweepResult& result) {
   char line[256];
   std::string out;
   std::snprintf(line, sizeof line, "swept %zu timesteps, %s s of sim time each, no shove\n", result.points.size(),
                 python_float_repr(result.duration).c_str());
   out += line;
-  // Every cell as text first, then each column as wide as its widest cell,
-  // so the table stays aligned whatever the numbers are.
   const std::vector<std::string> header = {"timestep (s)", "steps", "peak z (m)", "max |y| (m)", "final z (m)",
                                            "contacts +work (J)", "unexplained (J)", "warnings", "stable"};
   std::vector<std::vector<std::string>> rows;
-  const auto fixed = [](double value, int decimals) {
-    char text[64];
-    std::snprintf(text, sizeof text, "%.*f", decimals, value);
-    return std::string(text);
-  };
   for (size_t i = 0; i < result.points.size(); ++i) {
     const SweepPoint& p = result.points[i];
     rows.push_back({python_float_repr(p.timestep), std::to_string(p.steps), fixed(p.peak_box_z, 4),
@@ -197,22 +224,7 @@ std::string sweep_summary(const SweepResult& result) {
                     std::string(p.stable ? "yes" : "no") +
                         (static_cast<int>(i) == result.edge_index ? "  <- edge" : "")});
   }
-  std::vector<size_t> width(header.size());
-  for (size_t c = 0; c < header.size(); ++c) {
-    width[c] = header[c].size();
-    for (const auto& row : rows) width[c] = std::max(width[c], row[c].size());
-  }
-  const auto append_row = [&](const std::vector<std::string>& cells) {
-    std::string text = " ";
-    for (size_t c = 0; c < cells.size(); ++c) {
-      const bool last = c + 1 == cells.size();  // left-aligned, unpadded: it carries the edge mark
-      const std::string pad(last ? 0 : width[c] - cells[c].size(), ' ');
-      text += "  " + (last ? cells[c] : pad + cells[c]);
-    }
-    out += text + "\n";
-  };
-  append_row(header);
-  for (const auto& row : rows) append_row(row);
+  out += aligned_table(header, rows);
   if (result.edge_index >= 0) {
     std::snprintf(line, sizeof line, "largest stable timestep: %s s\n",
                   python_float_repr(result.points[static_cast<size_t>(result.edge_index)].timestep).c_str());
@@ -378,11 +390,6 @@ std::string scenario_sweep_summary(const ScenarioSweepResult& result) {
                 result.name.empty() ? "(unnamed)" : result.name.c_str(), result.points.size(),
                 python_float_repr(result.duration).c_str());
   out += line;
-  const auto fixed = [](double value, int decimals) {
-    char text[64];
-    std::snprintf(text, sizeof text, "%.*f", decimals, value);
-    return std::string(text);
-  };
   std::vector<std::string> header = {"timestep (s)", "steps", "warnings", "diverged", "peak speed (m/s)"};
   for (const std::string& b : result.bodies) header.push_back(b + " off (m)");
   header.push_back("blew up");
@@ -397,22 +404,7 @@ std::string scenario_sweep_summary(const ScenarioSweepResult& result) {
                   (static_cast<int>(i) == result.edge_index ? "  <- edge" : ""));
     rows.push_back(std::move(row));
   }
-  std::vector<size_t> width(header.size());
-  for (size_t c = 0; c < header.size(); ++c) {
-    width[c] = header[c].size();
-    for (const auto& row : rows) width[c] = std::max(width[c], row[c].size());
-  }
-  const auto append_row = [&](const std::vector<std::string>& cells) {
-    std::string text = " ";
-    for (size_t c = 0; c < cells.size(); ++c) {
-      const bool last = c + 1 == cells.size();
-      const std::string pad(last ? 0 : width[c] - cells[c].size(), ' ');
-      text += "  " + (last ? cells[c] : pad + cells[c]);
-    }
-    out += text + "\n";
-  };
-  append_row(header);
-  for (const auto& row : rows) append_row(row);
+  out += aligned_table(header, rows);
   if (result.edge_index >= 0) {
     std::snprintf(line, sizeof line, "largest timestep before any blew up: %s s\n",
                   python_float_repr(result.points[static_cast<size_t>(result.edge_index)].timestep).c_str());

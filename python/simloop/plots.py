@@ -290,6 +290,8 @@ def scenario_sweep_figure(cols):
             ax.axvline(x, color=BOX_COLOR, alpha=0.07, lw=6)
         if edge is not None:
             ax.axvline(edge, color="black", lw=1.2, ls=":", label=f"edge: {edge:.4g} s" if ax is ax_off else None)
+        ax.axvline(dt[0], color="#2a6f2a", lw=1.0, ls="-.",
+                   label=f"reference: {dt[0]:.4g} s\n(the finest)" if ax is ax_off else None)
     ax_off.plot([], [], color=BOX_COLOR, alpha=0.25, lw=6, label="blew up")
     for ax in (ax_off, ax_v):  # legends beside the axes, never on the data
         ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
