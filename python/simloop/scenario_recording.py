@@ -17,8 +17,8 @@ run_scenario_to_files(..., drawing=ScenarioRecording(...)), which writes
 trajectory.csv as it steps (its columns are the scenario's, recording or not)
 and hands this class each block of rows followed by every moving body's pose
 (its frame in the world, read where the recorded bodies' poses are). Blocks
-are sent as columns every BLOCK_ROWS rows, so memory stays bounded however
-long the run.
+are sent as columns every BLOCK_ROWS rows, and each block is written before
+the next is gathered, so memory stays bounded however long the run.
 
 The recording id is derived from what decides the run (the command line and
 the bytes of the scenario and scene files), so the same run gets the same id
@@ -142,6 +142,10 @@ class ScenarioRecording:
             if name not in ("step", "time"):
                 self._rec.send_columns(f"plots/{name}", indexes=times,
                                        columns=rr.Scalars.columns(scalars=np.ascontiguousarray(data[:, c])))
+        # rerun writes the file on a thread of its own and queues what it has
+        # not written yet: waiting for it here keeps that queue to one block
+        # (10^6 rows of 35 columns sent as fast as they came: 280 MiB more without).
+        self._rec.flush()
 
     def finish(self, result: _core.ScenarioResult) -> None:
         """Sends what is left, names the recording after the run, closes the file."""

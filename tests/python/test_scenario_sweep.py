@@ -136,3 +136,15 @@ def test_the_sweep_picture_of_a_scenario(tmp_path):
     tolerance = float(read_csv(tmp_path / "p" / "sweep.csv")[1][0, -2])
     assert any(math.isclose(line.get_ydata()[0], tolerance) for line in offsets.get_lines() if len(line.get_ydata()))
     assert offsets.get_yscale() == speeds.get_yscale() == "log"
+
+
+def test_progress_counts_every_step_and_its_exception_stops_the_sweep():
+    seen = []
+    simloop.sweep([0.002, 0.004], duration=0.4, scenario=PUSHT, progress=lambda done, total: seen.append((done, total)))
+    assert seen[-1] == (300, 300)  # 200 + 100 steps
+
+    def stop(done, total):
+        raise RuntimeError("stop here (test)")
+
+    with pytest.raises(RuntimeError, match="stop here"):
+        simloop.sweep([0.0005, 0.001], duration=20.0, scenario=PUSHT, progress=stop)
