@@ -9,6 +9,7 @@
 #include <string_view>
 
 #include "simloop/errors.hpp"
+#include "simloop/number_format.hpp"
 #include "simloop/sweep.hpp"
 
 namespace simloop::cli {
@@ -175,6 +176,7 @@ Options parse(int argc, const char* const* argv) {
       const std::string_view v = value();
       try {
         opts.sweep_duration = parse_timestep(arg, v);
+        opts.sweep_duration_given = true;
       } catch (const UsageError&) {
         throw UsageError("--duration must be a positive, finite number of seconds, got " + quoted(v));
       }
@@ -202,17 +204,14 @@ Options parse(int argc, const char* const* argv) {
       opts.run.timestep = parse_timestep(arg, value());
       opts.timestep_given = true;
     } else if (arg == "--scenario") {
-      run_only();
       const std::string_view v = value();
       if (v.empty()) throw UsageError("--scenario must name a scenario file (TOML), got ''");
       opts.scenario_path = std::string(v);
     } else if (arg == "--body") {
-      run_only();
       const std::string_view v = value();
       if (v.empty()) throw UsageError("--body must name a body of the scene, got ''");
       opts.body = std::string(v);
     } else if (arg == "--ctrl") {
-      run_only();
       opts.ctrls.push_back(parse_ctrl(arg, value()));
     } else if (arg == "--record-every") {
       run_only();
@@ -258,6 +257,18 @@ Options parse(int argc, const char* const* argv) {
     } else {
       throw UsageError("unexpected argument " + quoted(arg) + " (see --help)");
     }
+  }
+  if (sweeping && opts.is_scenario()) {
+    // A scenario sweep: its span and grid depend on the scenario and its
+    // scene (complete_scenario_sweep, once they are loaded).
+    if (!opts.scenario_path.empty() && !opts.model_path.empty()) {
+      throw UsageError("--model and --scenario: the scenario file names its scene");
+    }
+    if (!opts.scenario_path.empty() && (!opts.body.empty() || !opts.ctrls.empty())) {
+      throw UsageError(std::string(opts.body.empty() ? "--ctrl" : "--body") +
+                       " and --scenario: the scenario file says what is pushed and driven");
+    }
+    return opts;
   }
   if (sweeping) {
     if (opts.sweep_timesteps.empty()) opts.sweep_timesteps = default_sweep_timesteps();
@@ -355,6 +366,7 @@ void check_run_inputs(Options& opts, const Model& scene, const Scenario* scenari
     } catch (const Error& e) {
       throw UsageError(scenario_error(opts, e.what()));
     }
+    if (opts.command == Command::kSweep) complete_scenario_sweep(opts, scene, *scenario);
     return;
   }
   if (!scene.has_chapter_layout()) {
@@ -362,6 +374,33 @@ void check_run_inputs(Options& opts, const Model& scene, const Scenario* scenari
                      "; for any other scene, name the body to shove (--body) or run a --scenario");
   }
   if (!opts.model_path.empty() && !opts.timestep_given) opts.run.timestep = scene.timestep();  // the scene's own
+}
+
+void complete_scenario_sweep(Options& opts, const Model& scene, const Scenario& scenario) {
+  const char* flag = opts.sweep_duration_given ? "--duration" : "--duration (default: the scenario's length)";
+  if (!opts.sweep_duration_given) {
+    try {
+      opts.sweep_duration = scenario_duration(scene, scenario);
+    } catch (const Error& e) {
+      throw UsageError(scenario_error(opts, e.what()));
+    }
+  }
+  std::string timesteps_flag = std::string(opts.sweep_timesteps.empty() ? "" : "--timesteps/") + flag;
+  if (opts.sweep_timesteps.empty()) {
+    opts.sweep_timesteps = default_scenario_sweep_timesteps(opts.sweep_duration);
+    if (opts.sweep_timesteps.empty()) {
+      throw UsageError(std::string(flag) + ": " + python_float_repr(opts.sweep_duration) +
+                       " s of sim time is too short for any of the default timesteps (each run needs " +
+                       std::to_string(kMinSweepSteps) + " steps); give --duration or --timesteps");
+    }
+  }
+  for (const double dt : opts.sweep_timesteps) {
+    try {
+      (void)sweep_steps(opts.sweep_duration, dt);
+    } catch (const std::exception& e) {
+      throw UsageError(timesteps_flag + ": " + e.what());
+    }
+  }
 }
 
 ScenarioConfig scenario_config(const Options& opts) {
@@ -455,6 +494,14 @@ options:
   --plot                also draw sweep.png, with matplotlib through the
                         Python package
   -h, --help            print this help and exit
+
+scenario sweeps: --scenario FILE (or --body NAME, --ctrl ACT=VALUE, with or
+without --model, as for a run) sweeps the scenario instead: each timestep runs
+it over --duration (default: the scenario's own length) with its controls and
+disturbances (seed 0), and the finest timestep is the reference. A timestep
+blew up when MuJoCo or simloop_DIVERGED warned, or a recorded body ended more
+than 10% of the scene's size (MuJoCo's stat.extent) from where the reference
+left it. The default grid drops timesteps that leave a run under 4 steps.
 )";
 }
 

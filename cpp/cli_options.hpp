@@ -24,6 +24,7 @@ struct Options {
   // `sweep`: the timesteps (empty: the default range), the span, the workers.
   std::vector<double> sweep_timesteps;
   double sweep_duration = 4.0;
+  bool sweep_duration_given = false;  // --duration was given (a scenario sweep's default is the scenario's length)
   int threads = 0;         // 0: one per core
   bool plot = false;       // --plot: trajectory.png / sweep.png
   std::filesystem::path out = "outputs/ch0.1-sim-loop";
@@ -70,6 +71,13 @@ class UsageError : public std::runtime_error {
 // pusher. The chapter's run on a --model keeps the scene's own timestep
 // unless --timestep was given (written into opts.run).
 void check_run_inputs(Options& opts, const Model& scene, const Scenario* scenario);
+
+// A scenario sweep (sweep with --scenario, --body or --ctrl): the span is
+// --duration or else the scenario's own length (scenario_duration), the
+// timesteps --timesteps/--range or else the default grid's that give every
+// run at least kMinSweepSteps steps; every point is checked (UsageError in
+// the flags' words). check_run_inputs calls it for a sweep.
+void complete_scenario_sweep(Options& opts, const Model& scene, const Scenario& scenario);
 
 // What --seed, --rng, --timestep, --steps/--smoke, --no-perturb and
 // --record-every ask of a scenario run.

@@ -135,7 +135,9 @@ double peak_memory_mib() {
 // What the command was doing, and with which inputs, for error lines:
 // "running 10000000 steps of the pusher scene (--steps 10000000, ...)".
 std::string doing(const simloop::cli::Options& opts) {
-  const std::string model = opts.model_path.empty() ? "the pusher scene" : "--model " + opts.model_path;
+  const std::string model = !opts.scenario_path.empty() ? "--scenario " + opts.scenario_path
+                            : opts.model_path.empty()    ? "the pusher scene"
+                                                         : "--model " + opts.model_path;
   if (opts.command == simloop::cli::Command::kSweep) {
     const std::string count = opts.sweep_timesteps.empty()
                                   ? "the default timesteps"
@@ -243,16 +245,15 @@ int plot_with_python(const std::filesystem::path& out, const char* what) {
   return 0;
 }
 
-int sweep_command(const simloop::cli::Options& opts, const simloop::Model& model) {
-  const simloop::SweepResult result =
-      simloop::sweep(model, opts.sweep_timesteps, opts.sweep_duration, opts.threads, &g_control);
+// A sweep's outputs: sweep.csv put in place, the summary, the plot if asked.
+int report_sweep(const simloop::cli::Options& opts, const std::string& csv_text, const std::string& summary) {
   const std::filesystem::path csv = opts.out / "sweep.csv";
   simloop::PendingFile file(csv);
-  file.append(simloop::sweep_csv(result));
+  file.append(csv_text);
   file.finish();
   simloop::commit_together({&file}, &g_control);
   g_outputs_written = true;
-  std::fputs(simloop::sweep_summary(result).c_str(), stdout);
+  std::fputs(summary.c_str(), stdout);
   std::printf("sweep: %s\n", csv.c_str());
   if (opts.plot) {
     const int status = plot_with_python(opts.out, "sweep");
@@ -260,6 +261,21 @@ int sweep_command(const simloop::cli::Options& opts, const simloop::Model& model
     std::printf("plot: %s\n", (opts.out / "sweep.png").c_str());
   }
   return 0;
+}
+
+int sweep_command(const simloop::cli::Options& opts, const simloop::Model& model) {
+  const simloop::SweepResult result =
+      simloop::sweep(model, opts.sweep_timesteps, opts.sweep_duration, opts.threads, &g_control);
+  return report_sweep(opts, simloop::sweep_csv(result), simloop::sweep_summary(result));
+}
+
+// sweep --scenario, --body, --ctrl: the scenario at every timestep.
+int scenario_sweep_command(const simloop::cli::Options& opts, const simloop::Scenario& scenario,
+                           const simloop::Model& scene) {
+  const simloop::ScenarioSweepResult result =
+      simloop::sweep_scenario(scene, scenario, opts.sweep_timesteps, opts.sweep_duration,
+                              simloop::cli::scenario_config(opts), opts.threads, &g_control);
+  return report_sweep(opts, simloop::scenario_sweep_csv(result), simloop::scenario_sweep_summary(result));
 }
 
 int run_command(const simloop::cli::Options& opts, const simloop::Model& model) {
@@ -394,9 +410,11 @@ int run_main(int argc, char** argv) {
 
   try {
     check_stop();
-    const int status = opts.command == cli::Command::kSweep ? sweep_command(opts, *model)
-                       : scenario                           ? scenario_command(opts, *scenario, *model)
-                                                            : run_command(opts, *model);
+    const bool sweeping = opts.command == cli::Command::kSweep;
+    const int status = sweeping && scenario ? scenario_sweep_command(opts, *scenario, *model)
+                       : sweeping           ? sweep_command(opts, *model)
+                       : scenario           ? scenario_command(opts, *scenario, *model)
+                                            : run_command(opts, *model);
     if (status != 0) return status;
   } catch (const simloop::Interrupted&) {
     return interrupted();

@@ -85,6 +85,20 @@ std::vector<ScenarioRunResult> run_scenario_batch(const Model& scene, const Scen
                                                   const std::vector<ScenarioConfig>& configs, int threads,
                                                   RunControl* control, const std::vector<RunInputs>& inputs,
                                                   bool keep_rows) {
+  DiscardRows discard;  // stateless: every worker may write to it at once
+  return run_scenario_batch(scene, scenario, configs,
+                            std::vector<RowSink*>(configs.size(), keep_rows ? nullptr : &discard), threads, control,
+                            inputs);
+}
+
+std::vector<ScenarioRunResult> run_scenario_batch(const Model& scene, const Scenario& scenario,
+                                                  const std::vector<ScenarioConfig>& configs,
+                                                  const std::vector<RowSink*>& sinks, int threads,
+                                                  RunControl* control, const std::vector<RunInputs>& inputs) {
+  if (sinks.size() != configs.size()) {
+    throw InvalidArgument("sinks must hold one per config (" + std::to_string(configs.size()) + "), got " +
+                          std::to_string(sinks.size()));
+  }
   if (threads < 0) {
     throw InvalidArgument("threads must be at least 1, or 0 for one per core, got " + std::to_string(threads));
   }
@@ -112,13 +126,12 @@ std::vector<ScenarioRunResult> run_scenario_batch(const Model& scene, const Scen
       detail::check_schedule_run(runs.back().schedule.steps, config.record_every);
       check_inputs(it->second.get(), inputs_of(i), runs.back().schedule.steps);
       const Recorder columns(it->second.get(), runs.back().resolved, runs.back().schedule);
-      kept.push_back({runs.back().schedule.steps, config.record_every, columns.width()});
+      if (sinks[i] == nullptr) kept.push_back({runs.back().schedule.steps, config.record_every, columns.width()});
     } catch (const InvalidArgument& e) {
       throw InvalidArgument("run " + std::to_string(i) + ": " + e.what());
     }
   }
-  if (!configs.empty() && keep_rows) detail::check_kept_rows(kept);
-  DiscardRows discard;  // stateless: every worker may write to it at once
+  if (!kept.empty()) detail::check_kept_rows(kept);
 
   std::vector<ScenarioRunResult> results(configs.size());
   std::vector<std::int64_t> steps;
@@ -126,8 +139,8 @@ std::vector<ScenarioRunResult> run_scenario_batch(const Model& scene, const Scen
   detail::run_jobs(scene, configs.size(), threads, steps, control, [&](std::size_t i, Data& data, RunControl& ctl) {
     const mjModel* m = model_of[i]->get();
     results[i] = labelled(detail::run_schedule_counted_elsewhere(m, data.get(), runs[i].resolved, runs[i].schedule,
-                                                                 configs[i].record_every, keep_rows ? nullptr : &discard,
-                                                                 &ctl, inputs_of(i)),
+                                                                 configs[i].record_every, sinks[i], &ctl,
+                                                                 inputs_of(i)),
                           m, scenario, configs[i]);
   });
   return results;
@@ -147,13 +160,15 @@ Json rounded(const double* values, int count) {
 
 }  // namespace
 
-std::map<std::string, std::size_t> recorded_bodies(const ScenarioRunResult& r) {
+std::map<std::string, std::size_t> recorded_bodies(const ScenarioRunResult& r) { return recorded_bodies(r.columns); }
+
+std::map<std::string, std::size_t> recorded_bodies(const std::vector<Column>& columns) {
   std::map<std::string, std::size_t> out;
-  for (size_t c = 0; c + 12 < r.columns.size(); ++c) {
-    const std::string& name = r.columns[c].name;
+  for (size_t c = 0; c + 12 < columns.size(); ++c) {
+    const std::string& name = columns[c].name;
     if (name.size() > 2 && name.compare(name.size() - 2, 2, "_x") == 0 &&
-        r.columns[c + 3].name == name.substr(0, name.size() - 2) + "_qw" &&
-        r.columns[c + 7].name == name.substr(0, name.size() - 2) + "_vx") {
+        columns[c + 3].name == name.substr(0, name.size() - 2) + "_qw" &&
+        columns[c + 7].name == name.substr(0, name.size() - 2) + "_vx") {
       out[name.substr(0, name.size() - 2)] = c;
     }
   }
@@ -243,6 +258,112 @@ OutputFiles write_scenario_outputs(const ScenarioRunResult& r, const std::filesy
   writer.trajectory().start(t.columns(), t.rows());
   writer.trajectory().write(t.data(), t.rows());
   return writer.commit(scenario_metrics_json(r));
+}
+
+// ---------------------------------------------------------------------------
+// Drawing a run.
+
+namespace {
+
+std::vector<int> moving_body_ids(const mjModel* m) {
+  std::vector<int> out;
+  for (int b = 1; b < m->nbody; ++b) {
+    if ((m->body_weldid[b] != 0 || m->body_mocapid[b] >= 0) && m->body_geomnum[b] > 0) out.push_back(b);
+  }
+  return out;
+}
+
+}  // namespace
+
+std::vector<std::string> moving_bodies(const Model& scene) {
+  const mjModel* m = scene.get();
+  std::vector<std::string> out;
+  for (int b : moving_body_ids(m)) {
+    const char* name = mj_id2name(m, mjOBJ_BODY, b);
+    out.push_back(name && *name ? std::string(name) : "body" + std::to_string(b));
+  }
+  return out;
+}
+
+namespace {
+
+// Splits the rows of a run that records the moving bodies too: the
+// trajectory's own columns go to `sink`; those followed by each moving
+// body's pose go to `drawing`.
+class DrawingSplit final : public RowSink {
+ public:
+  DrawingSplit(std::vector<Column> columns, std::vector<std::string> bodies, RowSink& sink, RowSink& drawing)
+      : columns_(std::move(columns)), bodies_(std::move(bodies)), sink_(sink), drawing_(drawing) {}
+  void describe(const std::vector<Column>& wide) override {
+    std::map<std::string, std::size_t> index;
+    for (std::size_t c = 0; c < wide.size(); ++c) index[wide[c].name] = c;
+    for (const Column& c : columns_) picks_.push_back(index.at(c.name));
+    std::vector<Column> drawn = columns_;
+    const std::map<std::string, std::size_t> poses = recorded_bodies(wide);
+    for (const std::string& body : bodies_) {
+      for (int k = 0; k < 7; ++k) {
+        pose_picks_.push_back(poses.at(body) + static_cast<std::size_t>(k));
+        drawn.push_back(wide[poses.at(body) + static_cast<std::size_t>(k)]);
+      }
+    }
+    sink_.describe(columns_);
+    drawing_.describe(drawn);
+  }
+  void start(int columns, std::int64_t rows) override {
+    wide_ = columns;
+    sink_.start(static_cast<int>(picks_.size()), rows);
+    drawing_.start(static_cast<int>(picks_.size() + pose_picks_.size()), rows);
+  }
+  void write(const double* rows, std::int64_t count) override {
+    const std::size_t narrow = picks_.size(), drawn = narrow + pose_picks_.size();
+    narrow_.resize(static_cast<std::size_t>(count) * narrow);
+    drawn_.resize(static_cast<std::size_t>(count) * drawn);
+    for (std::int64_t i = 0; i < count; ++i) {
+      const double* row = rows + i * wide_;
+      double* to_sink = narrow_.data() + static_cast<std::size_t>(i) * narrow;
+      double* to_drawing = drawn_.data() + static_cast<std::size_t>(i) * drawn;
+      for (std::size_t c = 0; c < narrow; ++c) to_sink[c] = to_drawing[c] = row[picks_[c]];
+      for (std::size_t c = 0; c < pose_picks_.size(); ++c) to_drawing[narrow + c] = row[pose_picks_[c]];
+    }
+    sink_.write(narrow_.data(), count);
+    drawing_.write(drawn_.data(), count);
+  }
+  // The wide final row as the trajectory's.
+  [[nodiscard]] std::vector<double> narrowed(const std::vector<double>& wide_row) const {
+    std::vector<double> out;
+    for (std::size_t c : picks_) out.push_back(wide_row[c]);
+    return out;
+  }
+
+ private:
+  std::vector<Column> columns_;
+  std::vector<std::string> bodies_;
+  RowSink& sink_;
+  RowSink& drawing_;
+  std::vector<std::size_t> picks_, pose_picks_;
+  std::int64_t wide_ = 0;
+  std::vector<double> narrow_, drawn_;
+};
+
+}  // namespace
+
+ScenarioRunResult run_scenario_drawn(const Model& scene, const Scenario& scenario, const ScenarioConfig& config,
+                                     RowSink& sink, RowSink& drawing, RunControl* control) {
+  const Model model = scene.for_run(run_timestep(scene, scenario, config), false);
+  const PreparedRun run = prepare(model, scenario, config);
+  const mjModel* m = model.get();
+  ResolvedScenario wide = run.resolved;
+  for (int id : moving_body_ids(m)) {
+    if (std::find(wide.bodies.begin(), wide.bodies.end(), id) == wide.bodies.end()) wide.bodies.push_back(id);
+  }
+  const std::vector<std::string> bodies = moving_bodies(model);
+  DrawingSplit split(Recorder(m, run.resolved, run.schedule).columns(), bodies, sink, drawing);
+  Data workspace(model);
+  ScenarioRunResult result =
+      run_schedule(m, workspace.get(), wide, run.schedule, config.record_every, &split, control);
+  result.columns = Recorder(m, run.resolved, run.schedule).columns();
+  result.final_row = split.narrowed(result.final_row);
+  return labelled(std::move(result), m, scenario, config);
 }
 
 }  // namespace simloop

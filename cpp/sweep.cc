@@ -7,6 +7,7 @@
 #include <limits>
 #include <string>
 
+#include "divergence.hpp"
 #include "simloop/batch.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/number_format.hpp"
@@ -172,22 +173,49 @@ std::string sweep_csv(const SweepResult& result) {
   return out;
 }
 
+namespace {
+
+// Every cell as text first, then each column as wide as its widest cell,
+// right-aligned, so the table stays aligned whatever the numbers are; the
+// last column left-aligned and unpadded: it carries the edge mark.
+std::string aligned_table(const std::vector<std::string>& header, const std::vector<std::vector<std::string>>& rows) {
+  std::vector<size_t> width(header.size());
+  for (size_t c = 0; c < header.size(); ++c) {
+    width[c] = header[c].size();
+    for (const auto& row : rows) width[c] = std::max(width[c], row[c].size());
+  }
+  std::string out;
+  const auto append_row = [&](const std::vector<std::string>& cells) {
+    std::string text = " ";
+    for (size_t c = 0; c < cells.size(); ++c) {
+      const bool last = c + 1 == cells.size();
+      const std::string pad(last ? 0 : width[c] - cells[c].size(), ' ');
+      text += "  " + (last ? cells[c] : pad + cells[c]);
+    }
+    out += text + "\n";
+  };
+  append_row(header);
+  for (const auto& row : rows) append_row(row);
+  return out;
+}
+
+std::string fixed(double value, int decimals) {
+  char text[64];
+  std::snprintf(text, sizeof text, "%.*f", decimals, value);
+  return text;
+}
+
+}  // namespace
+
 std::string sweep_summary(const SweepResult& result) {
   char line[256];
   std::string out;
   std::snprintf(line, sizeof line, "swept %zu timesteps, %s s of sim time each, no shove\n", result.points.size(),
                 python_float_repr(result.duration).c_str());
   out += line;
-  // Every cell as text first, then each column as wide as its widest cell,
-  // so the table stays aligned whatever the numbers are.
   const std::vector<std::string> header = {"timestep (s)", "steps", "peak z (m)", "max |y| (m)", "final z (m)",
                                            "contacts +work (J)", "unexplained (J)", "warnings", "stable"};
   std::vector<std::vector<std::string>> rows;
-  const auto fixed = [](double value, int decimals) {
-    char text[64];
-    std::snprintf(text, sizeof text, "%.*f", decimals, value);
-    return std::string(text);
-  };
   for (size_t i = 0; i < result.points.size(); ++i) {
     const SweepPoint& p = result.points[i];
     rows.push_back({python_float_repr(p.timestep), std::to_string(p.steps), fixed(p.peak_box_z, 4),
@@ -196,22 +224,7 @@ std::string sweep_summary(const SweepResult& result) {
                     std::string(p.stable ? "yes" : "no") +
                         (static_cast<int>(i) == result.edge_index ? "  <- edge" : "")});
   }
-  std::vector<size_t> width(header.size());
-  for (size_t c = 0; c < header.size(); ++c) {
-    width[c] = header[c].size();
-    for (const auto& row : rows) width[c] = std::max(width[c], row[c].size());
-  }
-  const auto append_row = [&](const std::vector<std::string>& cells) {
-    std::string text = " ";
-    for (size_t c = 0; c < cells.size(); ++c) {
-      const bool last = c + 1 == cells.size();  // left-aligned, unpadded: it carries the edge mark
-      const std::string pad(last ? 0 : width[c] - cells[c].size(), ' ');
-      text += "  " + (last ? cells[c] : pad + cells[c]);
-    }
-    out += text + "\n";
-  };
-  append_row(header);
-  for (const auto& row : rows) append_row(row);
+  out += aligned_table(header, rows);
   if (result.edge_index >= 0) {
     std::snprintf(line, sizeof line, "largest stable timestep: %s s\n",
                   python_float_repr(result.points[static_cast<size_t>(result.edge_index)].timestep).c_str());
@@ -223,6 +236,187 @@ std::string sweep_summary(const SweepResult& result) {
                 "  stable: the box rises at most %g mm above rest (%.2f m) and ends at most %g mm below it, and "
                 "MuJoCo raised no warning\n",
                 kStableHop * 1e3, kBoxRestZ, kStableSink * 1e3);
+  out += line;
+  return out;
+}
+
+// ---------------------------------------------------------------------------
+// A scenario, swept.
+
+double scenario_duration(const Model& scene, const Scenario& scenario) {
+  switch (scenario.length.unit) {
+    case When::Unit::kSeconds: return scenario.length.value;
+    case When::Unit::kSteps:
+      return static_cast<double>(scenario.length.count) * scenario.timestep.value_or(scene.timestep());
+    default: break;
+  }
+  throw InvalidArgument("scenario " + scenario.name + ": its length is a fraction of itself; give a duration");
+}
+
+std::vector<double> default_scenario_sweep_timesteps(double duration) {
+  std::vector<double> out;
+  for (double dt : default_sweep_timesteps()) {
+    if (std::isfinite(duration) && duration > 0.0 && std::llround(duration / dt) >= kMinSweepSteps) out.push_back(dt);
+  }
+  return out;
+}
+
+namespace {
+
+// Reduces a scenario run's rows to the largest speed of any recorded body,
+// as they come (the final positions are in the result's final row).
+class PeakSpeed final : public RowSink {
+ public:
+  void describe(const std::vector<Column>& columns) override {
+    for (const auto& [name, column] : recorded_bodies(columns)) velocity_columns_.push_back(column + 7);
+  }
+  void start(int columns, std::int64_t /*rows*/) override { columns_ = columns; }
+  void write(const double* rows, std::int64_t count) override {
+    for (std::int64_t i = 0; i < count; ++i) {
+      const double* row = rows + i * columns_;
+      for (std::size_t c : velocity_columns_) {
+        const double* v = row + c;
+        const double speed = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+        // A NaN speed (a state gone bad) is the largest of all.
+        if (!(speed <= peak_)) peak_ = std::isnan(peak_) ? peak_ : speed;
+      }
+    }
+  }
+  [[nodiscard]] double peak() const noexcept { return peak_; }
+
+ private:
+  std::vector<std::size_t> velocity_columns_;
+  std::int64_t columns_ = 0;
+  double peak_ = 0.0;
+};
+
+}  // namespace
+
+ScenarioSweepResult sweep_scenario(const Model& scene, const Scenario& scenario, std::vector<double> timesteps,
+                                   double duration, const ScenarioConfig& config, int threads, RunControl* control) {
+  if (!(std::isfinite(duration) && duration > 0.0)) {
+    throw InvalidArgument("duration must be a positive, finite number of seconds, got " + python_float_repr(duration));
+  }
+  if (timesteps.empty()) throw InvalidArgument("timesteps must not be empty");
+  std::vector<ScenarioConfig> configs;
+  for (double dt : timesteps) {
+    ScenarioConfig c = config;
+    c.timestep = dt;
+    c.steps = sweep_steps(duration, dt);  // refuses a point that cannot be run faithfully
+    c.record_every = 1;                   // every step's speed is read
+    configs.push_back(c);
+  }
+  const auto timestep_of = [](const ScenarioConfig& c) { return *c.timestep; };
+  std::sort(configs.begin(), configs.end(),
+            [&](const ScenarioConfig& a, const ScenarioConfig& b) { return timestep_of(a) < timestep_of(b); });
+  configs.erase(std::unique(configs.begin(), configs.end(),
+                            [&](const ScenarioConfig& a, const ScenarioConfig& b) {
+                              return timestep_of(a) == timestep_of(b);
+                            }),
+                configs.end());
+  std::vector<PeakSpeed> reducers(configs.size());
+  std::vector<RowSink*> sinks;
+  for (PeakSpeed& r : reducers) sinks.push_back(&r);
+  const std::vector<ScenarioRunResult> runs = run_scenario_batch(scene, scenario, configs, sinks, threads, control);
+
+  ScenarioSweepResult result;
+  result.name = scenario.name;
+  result.duration = duration;
+  result.scene_size = scene.get()->stat.extent;
+  result.tolerance = kScenarioSweepTolerance * result.scene_size;
+  std::vector<std::pair<std::size_t, std::string>> bodies;  // in the columns' order
+  for (const auto& [name, column] : recorded_bodies(runs.front().columns)) bodies.push_back({column, name});
+  std::sort(bodies.begin(), bodies.end());
+  for (const auto& body : bodies) result.bodies.push_back(body.second);
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    const ScenarioRunResult& r = runs[i];
+    ScenarioSweepPoint p;
+    p.timestep = r.timestep;
+    p.steps = r.schedule.steps;
+    p.peak_speed = reducers[i].peak();
+    for (const Warning& w : r.warnings) (w.name == detail::kDivergedWarning ? p.diverged : p.mujoco_warnings) += w.count;
+    for (const auto& body : bodies) {
+      const double* pos = r.final_row.data() + body.first;
+      p.final_positions.push_back({pos[0], pos[1], pos[2]});
+    }
+    result.points.push_back(std::move(p));
+  }
+  const ScenarioSweepPoint& reference = result.points.front();
+  for (ScenarioSweepPoint& p : result.points) {
+    for (std::size_t b = 0; b < p.final_positions.size(); ++b) {
+      const auto& a = p.final_positions[b];
+      const auto& ref = reference.final_positions[b];
+      const double offset = std::sqrt((a[0] - ref[0]) * (a[0] - ref[0]) + (a[1] - ref[1]) * (a[1] - ref[1]) +
+                                      (a[2] - ref[2]) * (a[2] - ref[2]));
+      p.offsets.push_back(offset);
+      if (!(offset <= p.max_offset)) p.max_offset = std::isnan(p.max_offset) ? p.max_offset : offset;
+    }
+    p.blew_up = p.mujoco_warnings > 0 || p.diverged > 0 || !(p.max_offset <= result.tolerance);
+  }
+  for (size_t i = 0; i < result.points.size() && !result.points[i].blew_up; ++i) {
+    result.edge_index = static_cast<int>(i);
+  }
+  return result;
+}
+
+std::string scenario_sweep_csv(const ScenarioSweepResult& result) {
+  std::string out = "timestep,steps,mujoco_warnings,diverged,peak_speed";
+  for (const std::string& b : result.bodies) out += "," + b + "_final_x," + b + "_final_y," + b + "_final_z," + b + "_offset";
+  out += ",max_offset,tolerance,blew_up\n";
+  for (const ScenarioSweepPoint& p : result.points) {
+    append_shortest(out, p.timestep);
+    out += ',' + std::to_string(p.steps) + ',' + std::to_string(p.mujoco_warnings) + ',' + std::to_string(p.diverged) +
+           ',';
+    append_shortest(out, p.peak_speed);
+    for (std::size_t b = 0; b < p.final_positions.size(); ++b) {
+      for (double v : {p.final_positions[b][0], p.final_positions[b][1], p.final_positions[b][2], p.offsets[b]}) {
+        out += ',';
+        append_shortest(out, v);
+      }
+    }
+    out += ',';
+    append_shortest(out, p.max_offset);
+    out += ',';
+    append_shortest(out, result.tolerance);
+    out += p.blew_up ? ",1\n" : ",0\n";
+  }
+  return out;
+}
+
+std::string scenario_sweep_summary(const ScenarioSweepResult& result) {
+  char line[512];
+  std::string out;
+  std::snprintf(line, sizeof line, "swept scenario %s over %zu timesteps, %s s of sim time each\n",
+                result.name.empty() ? "(unnamed)" : result.name.c_str(), result.points.size(),
+                python_float_repr(result.duration).c_str());
+  out += line;
+  std::vector<std::string> header = {"timestep (s)", "steps", "warnings", "diverged", "peak speed (m/s)"};
+  for (const std::string& b : result.bodies) header.push_back(b + " off (m)");
+  header.push_back("blew up");
+  std::vector<std::vector<std::string>> rows;
+  for (size_t i = 0; i < result.points.size(); ++i) {
+    const ScenarioSweepPoint& p = result.points[i];
+    std::vector<std::string> row = {python_float_repr(p.timestep), std::to_string(p.steps),
+                                    std::to_string(p.mujoco_warnings), std::to_string(p.diverged),
+                                    fixed(p.peak_speed, 3)};
+    for (double offset : p.offsets) row.push_back(fixed(offset, 4));
+    row.push_back(std::string(p.blew_up ? "yes" : "no") + (i == 0 ? "  (reference)" : "") +
+                  (static_cast<int>(i) == result.edge_index ? "  <- edge" : ""));
+    rows.push_back(std::move(row));
+  }
+  out += aligned_table(header, rows);
+  if (result.edge_index >= 0) {
+    std::snprintf(line, sizeof line, "largest timestep before any blew up: %s s\n",
+                  python_float_repr(result.points[static_cast<size_t>(result.edge_index)].timestep).c_str());
+  } else {
+    std::snprintf(line, sizeof line, "largest timestep before any blew up: none (even the finest did)\n");
+  }
+  out += line;
+  std::snprintf(line, sizeof line,
+                "  blew up: MuJoCo or simloop_DIVERGED warned, or a recorded body ended more than %s m (%g%% of the "
+                "scene's size, %s m) from where the finest timestep left it\n",
+                fixed(result.tolerance, 4).c_str(), kScenarioSweepTolerance * 100,
+                fixed(result.scene_size, 3).c_str());
   out += line;
   return out;
 }

@@ -7,6 +7,7 @@
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cstdint>
 #include <memory>
@@ -16,6 +17,7 @@
 #include <string>
 #include <system_error>
 #include <thread>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -347,6 +349,58 @@ std::vector<simloop::RunInputs> run_inputs(std::size_t runs, const std::optional
 }
 
 py::array vector_array(const std::vector<double>& values) { return vec(values.data(), values.size()); }
+
+// The rows of a run handed to Python as they come (for a recording made
+// while the run streams its files): `to.columns(names)` once, then
+// `to.rows(array)` per block, each a (rows, columns) float64 copy, called with
+// the GIL. An exception there stops the run and reaches the caller
+// (raise_if_failed, once the run is over).
+class RowsToPython final : public simloop::RowSink {
+ public:
+  struct Failed {};
+  explicit RowsToPython(py::object to) : to_(std::move(to)) {}
+  ~RowsToPython() override {
+    py::gil_scoped_acquire gil;
+    to_ = py::object();
+    error_.reset();
+  }
+  void describe(const std::vector<simloop::Column>& columns) override {
+    call([&] {
+      py::list names;
+      for (const simloop::Column& c : columns) names.append(c.name);
+      to_.attr("columns")(names);
+    });
+  }
+  void start(int columns, std::int64_t /*rows*/) override { columns_ = columns; }
+  void write(const double* rows, std::int64_t count) override {
+    call([&] {
+      py::array_t<double> block({static_cast<py::ssize_t>(count), static_cast<py::ssize_t>(columns_)});
+      std::copy(rows, rows + count * columns_, block.mutable_data());
+      to_.attr("rows")(block);
+    });
+  }
+  void raise_if_failed() {
+    if (!error_) return;
+    py::error_already_set error = std::move(*error_);
+    error_.reset();
+    throw error;
+  }
+
+ private:
+  template <class Call>
+  void call(Call&& c) {
+    py::gil_scoped_acquire gil;
+    try {
+      c();
+    } catch (py::error_already_set& e) {
+      error_.emplace(std::move(e));
+      throw Failed{};
+    }
+  }
+  py::object to_;
+  int columns_ = 0;
+  std::optional<py::error_already_set> error_;
+};
 
 }  // namespace
 
@@ -1012,4 +1066,92 @@ PYBIND11_MODULE(_core, m) {
                length + ", controls=[" + controls + "], disturbances=" + std::to_string(s.disturbances.size()) +
                ", bodies=[" + recorded + "])";
       });
+
+  // Scenario sweeps; a scenario's run streamed to its files, with the rows of
+  // every moving body's pose handed to Python for the recording.
+  py::class_<simloop::ScenarioSweepPoint>(m, "ScenarioSweepPoint", "One timestep of a scenario sweep.")
+      .def_readonly("timestep", &simloop::ScenarioSweepPoint::timestep)
+      .def_readonly("steps", &simloop::ScenarioSweepPoint::steps)
+      .def_readonly("mujoco_warnings", &simloop::ScenarioSweepPoint::mujoco_warnings)
+      .def_readonly("diverged", &simloop::ScenarioSweepPoint::diverged)
+      .def_readonly("peak_speed", &simloop::ScenarioSweepPoint::peak_speed)
+      .def_readonly("final_positions", &simloop::ScenarioSweepPoint::final_positions)
+      .def_readonly("offsets", &simloop::ScenarioSweepPoint::offsets)
+      .def_readonly("max_offset", &simloop::ScenarioSweepPoint::max_offset)
+      .def_readonly("blew_up", &simloop::ScenarioSweepPoint::blew_up)
+      .def("__repr__", [](const simloop::ScenarioSweepPoint& p) {
+        return "ScenarioSweepPoint(timestep=" + simloop::python_float_repr(p.timestep) +
+               ", blew_up=" + (p.blew_up ? "True" : "False") + ")";
+      });
+  py::class_<simloop::ScenarioSweepResult>(m, "ScenarioSweepResult", "A timestep sweep of a scenario.")
+      .def_readonly("name", &simloop::ScenarioSweepResult::name)
+      .def_readonly("duration", &simloop::ScenarioSweepResult::duration)
+      .def_readonly("bodies", &simloop::ScenarioSweepResult::bodies)
+      .def_readonly("scene_size", &simloop::ScenarioSweepResult::scene_size)
+      .def_readonly("tolerance", &simloop::ScenarioSweepResult::tolerance)
+      .def_readonly("points", &simloop::ScenarioSweepResult::points)
+      .def_property_readonly("edge", [](const simloop::ScenarioSweepResult& r) -> py::object {
+        if (r.edge_index < 0) return py::none();
+        return py::float_(r.points[static_cast<size_t>(r.edge_index)].timestep);
+      }, "The largest timestep before any blew up (None if even the finest did).")
+      .def("csv", &simloop::scenario_sweep_csv)
+      .def("summary", &simloop::scenario_sweep_summary)
+      .def(
+          "write",
+          [](const simloop::ScenarioSweepResult& r, const std::filesystem::path& out) {
+            simloop::prepare_output_dir(out);
+            simloop::write_file_atomically(out / "sweep.csv", simloop::scenario_sweep_csv(r));
+            return out / "sweep.csv";
+          },
+          "out"_a, "Writes sweep.csv into out (atomically); returns its path.");
+  m.def(
+      "sweep_scenario",
+      [](const simloop::Model& scene, const simloop::Scenario& scenario, const std::vector<double>& timesteps,
+         double duration, const simloop::ScenarioConfig& config, int threads, py::object progress) {
+        Interruptible work(std::move(progress));
+        simloop::ScenarioSweepResult result = work.run([&](simloop::RunControl* control) {
+          return naming_failures("sweep(scenario=" + scenario.name + ", " + std::to_string(timesteps.size()) +
+                                     " timesteps, duration=" + simloop::python_float_repr(duration) + ")",
+                                 [&] {
+                                   return simloop::sweep_scenario(scene, scenario, timesteps, duration, config,
+                                                                  threads, control);
+                                 });
+        });
+        work.finish();
+        return result;
+      },
+      "scene"_a, "scenario"_a, "timesteps"_a, "duration"_a, "config"_a, "threads"_a, "progress"_a = py::none());
+  m.def("scenario_duration", &simloop::scenario_duration, "scene"_a, "scenario"_a);
+  m.def("default_scenario_sweep_timesteps", &simloop::default_scenario_sweep_timesteps, "duration"_a);
+  m.attr("SCENARIO_SWEEP_TOLERANCE") = simloop::kScenarioSweepTolerance;
+  m.def("moving_bodies", &simloop::moving_bodies, "scene"_a);
+  m.def(
+      "run_scenario_to_files",
+      [](const simloop::Model& scene, const simloop::Scenario& scenario, const simloop::ScenarioConfig& config,
+         const std::filesystem::path& out, py::object drawing, py::object progress) {
+        std::optional<RowsToPython> to_python;
+        if (!drawing.is_none()) to_python.emplace(drawing);
+        Interruptible work(std::move(progress));
+        try {
+          auto done = work.run([&](simloop::RunControl* control) {
+            return naming_failures("run_scenario(" + scenario.name + ")", [&] {
+              simloop::OutputWriter writer(out);
+              simloop::ScenarioRunResult result =
+                  to_python ? simloop::run_scenario_drawn(scene, scenario, config, writer.trajectory(), *to_python,
+                                                          control)
+                            : simloop::run_scenario(scene, scenario, config, nullptr, &writer.trajectory(), control);
+              const simloop::OutputFiles files = writer.commit(simloop::scenario_metrics_json(result), control);
+              return std::make_tuple(std::move(result), files.metrics, files.trajectory);
+            });
+          });
+          work.finish();
+          return done;
+        } catch (const RowsToPython::Failed&) {
+          to_python->raise_if_failed();
+          throw;
+        }
+      },
+      "scene"_a, "scenario"_a, "config"_a, "out"_a, "drawing"_a = py::none(), "progress"_a = py::none(),
+      "Runs a scenario, writing trajectory.csv as it steps and then metrics.json (both or neither); "
+      "drawing.columns(names) and drawing.rows(array) get the rows and every moving body's pose.");
 }

@@ -72,9 +72,21 @@ void check_scenario(const Model& scene, const Scenario& scenario, const Scenario
                                                                 const std::vector<RunInputs>& inputs = {},
                                                                 bool keep_rows = true);
 
+// The same, with run i's rows going to sinks[i] (one per config; null: kept
+// in its result's trajectory; each used by one worker at a time): a sink
+// that reduces rows as they come lets a batch of any length run in little
+// memory (the scenario sweep does; keep_rows false above is DiscardRows).
+[[nodiscard]] std::vector<ScenarioRunResult> run_scenario_batch(const Model& scene, const Scenario& scenario,
+                                                                const std::vector<ScenarioConfig>& configs,
+                                                                const std::vector<RowSink*>& sinks,
+                                                                int threads = 0, RunControl* control = nullptr,
+                                                                const std::vector<RunInputs>& inputs = {});
+
 // The recorded bodies, by name, with the column of each one's "_x" (its 13
 // columns follow: position, orientation, linear and angular velocity).
 [[nodiscard]] std::map<std::string, std::size_t> recorded_bodies(const ScenarioRunResult& result);
+// The same from a run's columns (what a RowSink's describe() is given).
+[[nodiscard]] std::map<std::string, std::size_t> recorded_bodies(const std::vector<Column>& columns);
 
 // metrics.json for a scenario run: byte for byte what Python's
 // json.dumps(metrics, indent=2, sort_keys=True) + "\n" writes, floats
@@ -91,5 +103,25 @@ void check_scenario(const Model& scene, const Scenario& scenario, const Scenario
 // Writes an in-memory scenario result's metrics.json and trajectory.csv into
 // `dir`, both or neither (as write_outputs does for the chapter's run).
 OutputFiles write_scenario_outputs(const ScenarioRunResult& result, const std::filesystem::path& dir);
+
+// ---------------------------------------------------------------------------
+// Drawing a run (the rerun recording): every body that moves, not only the
+// recorded ones, without changing what the run records.
+
+// The bodies whose pose can change during a run (not welded to the world, or
+// moved by mocap) and that have geoms to draw, by name ("body<id>" when
+// unnamed, as the recorder and scene_geometry name them), in body order.
+[[nodiscard]] std::vector<std::string> moving_bodies(const Model& scene);
+
+// run_scenario with its rows going to `sink`, bitwise the rows run_scenario
+// gives (the same columns: a recording changes nothing in trajectory.csv),
+// and, at the same rows, the same values followed by the pose of every body
+// in moving_bodies() (x y z, then qw qx qy qz: its frame in the world, read
+// where the recorded bodies' poses are) going to `drawing`. It is one run:
+// the recorder reads the extra bodies too, and the rows are split. The
+// result is labelled as run_scenario's, with the trajectory's columns.
+[[nodiscard]] ScenarioRunResult run_scenario_drawn(const Model& scene, const Scenario& scenario,
+                                                   const ScenarioConfig& config, RowSink& sink, RowSink& drawing,
+                                                   RunControl* control = nullptr);
 
 }  // namespace simloop

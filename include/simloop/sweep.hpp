@@ -2,12 +2,15 @@
 // same span of simulated time, and where it stops being stable.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
 
 #include "simloop/model.hpp"
 #include "simloop/run.hpp"
+#include "simloop/scenario.hpp"
+#include "simloop/scenario_run.hpp"
 
 namespace simloop {
 
@@ -75,5 +78,79 @@ inline constexpr std::int64_t kMinSweepSteps = 4;
 
 // A table for people, then the edge and the criterion.
 [[nodiscard]] std::string sweep_summary(const SweepResult& result);
+
+// ---------------------------------------------------------------------------
+// A scenario, swept: any scene at many timesteps over the same span of
+// simulated time. A scene has no resting box to measure a hop against, so
+// the criterion is general: the finest timestep is the reference, and a
+// timestep "blew up" when
+//   (1) a warning was raised while it ran (MuJoCo's, or simloop_DIVERGED), or
+//   (2) a recorded body's final position is not finite, or lies further than
+//       kScenarioSweepTolerance times the scene's size from where the
+//       reference run left it. The scene's size is MuJoCo's own measure of
+//       it, mjModel::stat.extent (the span of its bodies and geoms), so the
+//       tolerance scales with the scene: 10% of it (5.9 cm for the PushT
+//       test scene, 18.7 cm for the walker). Contact-rich scenes drift apart
+//       a few per cent of their size between sound timesteps (the PushT
+//       block ends 0.7 to 3.6 cm from the reference at 0.0006 to 0.004 s);
+//       a tenth of the scene is past that noise and well short of the metres
+//       a blow-up throws a body.
+// The reference cannot blow up by (2); it can by (1). The largest speed any
+// recorded body reached is reported beside, as a sign to read, not a rule.
+inline constexpr double kScenarioSweepTolerance = 0.10;
+
+struct ScenarioSweepPoint {
+  double timestep = 0.0;
+  std::int64_t steps = 0;
+  int mujoco_warnings = 0;   // MuJoCo's warnings raised, all kinds
+  int diverged = 0;          // simloop_DIVERGED raised
+  double peak_speed = 0.0;   // largest linear speed of any recorded body over the run, m/s
+  std::vector<std::array<double, 3>> final_positions;  // per recorded body (ScenarioSweepResult::bodies), m
+  std::vector<double> offsets;  // each one's distance from the reference's final position, m
+  double max_offset = 0.0;      // the largest of them (NaN if any is not finite)
+  bool blew_up = false;
+};
+
+struct ScenarioSweepResult {
+  std::string name;                 // the scenario's
+  double duration = 0.0;            // sim seconds each run covers
+  std::vector<std::string> bodies;  // the recorded bodies, in the columns' order
+  double scene_size = 0.0;          // mjModel::stat.extent, m
+  double tolerance = 0.0;           // kScenarioSweepTolerance * scene_size, m
+  std::vector<ScenarioSweepPoint> points;  // ascending timesteps; points[0] is the reference
+  // The largest timestep below which no swept timestep blew up; -1 if even
+  // the finest did.
+  int edge_index = -1;
+};
+
+// The scenario's own span of simulated time: its duration in seconds, or
+// its steps at its timestep (the scenario's, else the scene's).
+[[nodiscard]] double scenario_duration(const Model& scene, const Scenario& scenario);
+
+// The default grid (default_sweep_timesteps) without the timesteps that
+// would give a run of `duration` fewer than kMinSweepSteps steps.
+[[nodiscard]] std::vector<double> default_scenario_sweep_timesteps(double duration);
+
+// Runs `scenario` at every timestep (sorted, duplicates dropped) for
+// sweep_steps(duration, timestep) steps each, with `config`'s seed, rng and
+// perturb (its timestep, steps and record_every are the sweep's: every step
+// is read). The scene is compiled once per timestep and each worker steps
+// its own Data (run_scenario_batch), so each point is bitwise what
+// run_scenario with that timestep and those steps gives. Rows are reduced as
+// they come: a sweep keeps no trajectories. Throws InvalidArgument naming a
+// bad timestep, duration, thread count or scenario name before any run.
+[[nodiscard]] ScenarioSweepResult sweep_scenario(const Model& scene, const Scenario& scenario,
+                                                 std::vector<double> timesteps, double duration,
+                                                 const ScenarioConfig& config = {}, int threads = 0,
+                                                 RunControl* control = nullptr);
+
+// sweep.csv for a scenario: timestep, steps, mujoco_warnings, diverged,
+// peak_speed, then per recorded body <body>_final_x, _final_y, _final_z and
+// <body>_offset, then max_offset, tolerance (the same on every line) and
+// blew_up (1 or 0).
+[[nodiscard]] std::string scenario_sweep_csv(const ScenarioSweepResult& result);
+
+// A table for people, then the edge and the rule.
+[[nodiscard]] std::string scenario_sweep_summary(const ScenarioSweepResult& result);
 
 }  // namespace simloop

@@ -59,3 +59,8 @@ __all__ = [
     "to_arrow",
     "to_pandas",
 ]
+
+# Scenario sweeps: sweep(scenario=...) returns a ScenarioSweepResult.
+from ._core import SCENARIO_SWEEP_TOLERANCE, ScenarioSweepPoint, ScenarioSweepResult  # noqa: E402
+
+__all__ += ["SCENARIO_SWEEP_TOLERANCE", "ScenarioSweepPoint", "ScenarioSweepResult"]

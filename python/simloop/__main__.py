@@ -171,11 +171,15 @@ def _viewer() -> str:
     return relative if os.sep in relative else os.path.join(".", relative)
 
 
-def _sweep(opts, model, out: Path) -> None:
+def _sweep(opts, model, out: Path, scenario=None) -> None:
     from . import _core
 
     global _outputs_written
-    result = _core.sweep(model, opts.sweep_timesteps, opts.sweep_duration, opts.threads)
+    if scenario is not None:  # sweep --scenario, --body, --ctrl
+        result = _core.sweep_scenario(model, scenario, opts.sweep_timesteps, opts.sweep_duration,
+                                      _core.scenario_config_from_flags(opts), opts.threads)
+    else:
+        result = _core.sweep(model, opts.sweep_timesteps, opts.sweep_duration, opts.threads)
     csv = result.write(out)
     _outputs_written = True
     print(result.summary(), end="")
@@ -216,27 +220,60 @@ def main(argv: Optional[List[str]] = None) -> int:
     return _finish_stdout(code)
 
 
-def _scenario(opts, scenario, model, out: Path, started: float) -> int:
-    """A scenario's run (--scenario, --body, --ctrl): its outputs, summary and recording."""
+def _run_key(args: List[str], opts) -> str:
+    """What decides a scenario run, for its recording id: the command line
+    (but --out and the recording flags) and the scenario's and scene's bytes."""
+    kept, skip = [], False
+    for arg in args:
+        if skip:
+            skip = False
+        elif arg == "--out":
+            skip = True
+        elif not arg.startswith(("--out=", "--rerun", "--no-rerun")):
+            kept.append(arg)
+    key = "\0".join(kept)
+    for path in (opts.scenario_path, opts.model_path):
+        if path:
+            with open(path, "rb") as f:
+                key += "\0" + f.read().hex()
+    return key
+
+
+def _scenario(opts, scenario, model, out: Path, started: float, args: List[str]) -> int:
+    """A scenario's run (--scenario, --body, --ctrl): trajectory.csv written as
+    the loop steps (as sim_loop writes it: the same bytes, in bounded memory),
+    metrics.json, the summary, and the recording made from the same run."""
     global _outputs_written
     from . import _core
 
+    config = _core.scenario_config_from_flags(opts)
     try:
-        result = _core.run_scenario(model, scenario, _core.scenario_config_from_flags(opts))
-        metrics_path, trajectory_path = result.write(out)
-        _outputs_written = True
+        if opts.rerun:
+            from .recording import replacing
+            from .scenario_recording import ScenarioRecording
+
+            rrd = out / "sim_loop.rrd"
+            with replacing(rrd) as temp_name:
+                recording = ScenarioRecording(model, temp_name, _run_key(args, opts))
+                try:
+                    result, metrics_path, trajectory_path = _core.run_scenario_to_files(
+                        model, scenario, config, out, drawing=recording)
+                    _outputs_written = True
+                    recording.finish(result)
+                finally:
+                    recording.close()
+        else:
+            result, metrics_path, trajectory_path = _core.run_scenario_to_files(model, scenario, config, out)
+            _outputs_written = True
         print(result.summary(), end="")
         print(f"metrics: {metrics_path}")
         print(f"trajectory: {trajectory_path} ({result.rows} rows, {len(result.column_names)} columns)")
         if opts.rerun:
-            from .scenario_recording import record_scenario
-
-            rrd = record_scenario(result, model, out / "sim_loop.rrd")
             print(f"recording: {rrd} -- open it with: {_viewer()} {rrd}")
     except (OSError, _core.MujocoError, ValueError) as e:
         return _fail(EXIT_RUN_FAILED, str(e))
-    except ImportError as e:  # rerun for the recording
-        return _fail(EXIT_RUN_FAILED, f"{e} (metrics.json and trajectory.csv were written)")
+    except ImportError as e:  # rerun for the recording, imported before anything is written
+        return _fail(EXIT_RUN_FAILED, f"{e} (nothing was written; --no-rerun runs without the recording)")
     print(f"wall-clock: {(time.perf_counter() - started) * 1e3:.1f} ms, peak memory: {_peak_memory_mib():.1f} MiB")
     return 0
 
@@ -295,7 +332,7 @@ def _main(argv: Optional[List[str]]) -> int:
 
     if opts.command == "sweep":
         try:
-            _sweep(opts, model, out)
+            _sweep(opts, model, out, scenario)
         except (OSError, _core.MujocoError, ValueError) as e:
             return _fail(EXIT_RUN_FAILED, str(e))
         except ImportError as e:  # matplotlib, for sweep.png
@@ -304,7 +341,7 @@ def _main(argv: Optional[List[str]]) -> int:
         return 0
 
     if scenario is not None:
-        return _scenario(opts, scenario, model, out, started)
+        return _scenario(opts, scenario, model, out, started, args)
     try:
         result = _core.run(model, opts.run)
         metrics_path, trajectory_path = result.write(out)

@@ -20,7 +20,7 @@ import functools
 import math
 import numbers
 import os
-from typing import TYPE_CHECKING, Callable, Iterable, List, Optional, Sequence, Union
+from typing import TYPE_CHECKING, Any, Callable, Iterable, List, Optional, Sequence, Union
 
 from . import _core
 from ._core import Model, RunResult, SweepResult
@@ -378,14 +378,26 @@ class Sim:
         return f"<simloop.Sim t={self.time!r} steps_taken={self.steps_taken} timestep={self.timestep!r}>"
 
 
-def sweep(timesteps: Optional[Iterable[float]] = None, duration: float = 4.0, threads: Optional[int] = None,
-          model: ModelLike = None, *, progress: Progress = None) -> SweepResult:
+def sweep(timesteps: Optional[Iterable[float]] = None, duration: Optional[float] = None,
+          threads: Optional[int] = None, model: ModelLike = None, *, scenario: Any = None, seed: int = 0,
+          rng: str = "mt19937_64", perturb: bool = True, progress: Progress = None) -> Any:
     """The baseline (no shove) at many timesteps over the same span of sim time.
 
     timesteps: None for the default: 25 round timesteps (1, 2, 3, 4, 5, 6 and
         8 per decade) from 0.0005 s to 1 s, from the stable range through the
         edge to the box sinking into the floor.
-    duration: sim seconds each run covers (round(duration / timestep) steps).
+    duration: sim seconds each run covers (round(duration / timestep) steps);
+        None: 4 s (a scenario's: its own length).
+
+    scenario: a simloop.Scenario or a scenario file's path sweeps that
+        scenario instead (with seed, rng and perturb; model: its scene
+        already compiled), and returns a ScenarioSweepResult: per timestep
+        the warnings, simloop_DIVERGED, the largest speed of any recorded
+        body, each one's final position and its distance from the finest
+        timestep's, and whether it blew up (warned, or a body ended more than
+        SCENARIO_SWEEP_TOLERANCE times the scene's size from the finest
+        timestep's). The default grid drops timesteps that would leave a run
+        under 4 steps. Each point is bitwise run_scenario at that timestep.
 
     Runs in parallel over one compiled model with the energy audit on. The
     result's .points hold, per timestep, peak box z, largest |y|, the final
@@ -395,15 +407,37 @@ def sweep(timesteps: Optional[Iterable[float]] = None, duration: float = 4.0, th
     rest, ends at most 1 mm below rest, and MuJoCo raised no warning.
     progress: as for run(), over the steps of all the timesteps.
     """
-    if timesteps is None:
-        values = _core.default_sweep_timesteps()
-    else:
+    if timesteps is not None:
         values = [_check_timestep(t, "timesteps[%d]" % i) for i, t in enumerate(_sequence("timesteps", timesteps))]
         if not values:
             raise ValueError("timesteps must not be empty")
-    span = _check_timestep(duration, "duration")
     workers = 0 if threads is None else _check_int("threads", threads, 1, 4096)
+    if scenario is not None:
+        return _sweep_scenario(scenario, None if timesteps is None else values, duration, workers, model, seed, rng,
+                               perturb, progress)
+    if timesteps is None:
+        values = _core.default_sweep_timesteps()
+    span = _check_timestep(4.0 if duration is None else duration, "duration")
     return _core.sweep(load_model(model), values, span, workers, progress=_check_progress(progress))
+
+
+def _sweep_scenario(scenario: Any, timesteps: Optional[List[float]], duration: Optional[float], workers: int,
+                    model: Any, seed: int, rng: str, perturb: bool, progress: Progress) -> Any:
+    """sweep(scenario=...): the arguments checked, then the C++ sweep."""
+    from .scenario import _scenario_and_scene
+
+    scenario, scene = _scenario_and_scene(scenario, model)
+    if rng not in RNGS:
+        raise ValueError(f"rng must be 'mt19937_64' or 'numpy', got {rng!r}")
+    config = _core.ScenarioConfig(_check_int("seed", seed, 0, _U64_MAX), rng, None, None,
+                                  _check_bool("perturb", perturb), 1)
+    span = _core.scenario_duration(scene, scenario._core) if duration is None else _check_timestep(duration, "duration")
+    values = _core.default_scenario_sweep_timesteps(span) if timesteps is None else timesteps
+    if not values:
+        raise ValueError(f"duration {span!r} s is too short for any of the default timesteps (each run needs 4 steps); "
+                         "give duration or timesteps")
+    return _core.sweep_scenario(scene, scenario._core, values, span, config, workers,
+                                progress=_check_progress(progress))
 
 
 # The compiled classes' methods, checked in Python's words. pybind11 answers a

@@ -200,10 +200,14 @@ def sweep_png(csv: PathLike, png: PathLike) -> Path:
 def sweep_figure(csv: PathLike):
     """The sweep's figures against the timestep (log scale): z zoomed on the
     stable band with the far points marked on its edges, the edge, the
-    chapter's 0.002 s and 0.05 s, sideways drift, and the energy audit."""
+    chapter's 0.002 s and 0.05 s, sideways drift, and the energy audit. A
+    scenario sweep's sweep.csv (it has a blew_up column) gets
+    scenario_sweep_figure instead."""
     import numpy as np
 
     cols = _read_csv(Path(csv))
+    if "blew_up" in cols:
+        return scenario_sweep_figure(cols)
     plt = _pyplot()
     dt = cols["timestep"]
     stable = cols["stable"] == 1
@@ -246,6 +250,53 @@ def sweep_figure(csv: PathLike):
     for ax in axes:  # legends beside the axes, never on the data
         ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
     title = f"Break It, swept: largest stable timestep {edge:.4g} s" if edge is not None else "no stable timestep"
+    fig.suptitle(title)
+    fig.tight_layout()
+    return fig
+
+
+def scenario_sweep_figure(cols):
+    """A scenario sweep against the timestep (log scale): each recorded body's
+    distance from where the finest timestep left it, with the tolerance; the
+    largest speed any recorded body reached; the timesteps that blew up
+    shaded (warnings marked), and the edge."""
+    import numpy as np
+
+    plt = _pyplot()
+    dt = cols["timestep"]
+    blew_up = cols["blew_up"] == 1
+    edge = dt[np.flatnonzero(np.cumprod(~blew_up))[-1]] if not blew_up[0] else None
+    warned = (cols["mujoco_warnings"] > 0) | (cols["diverged"] > 0)
+    bodies = [name[:-len("_offset")] for name in cols if name.endswith("_offset") and name != "max_offset"]
+    fig, (ax_off, ax_v) = plt.subplots(2, 1, sharex=True, figsize=(10, 7), gridspec_kw={"height_ratios": [1.4, 1]})
+    floor = cols["tolerance"][0] * 1e-3  # the reference's own zero, drawn at the bottom of the log axis
+    for i, body in enumerate(bodies):
+        offset = np.where(np.isfinite(cols[body + "_offset"]), cols[body + "_offset"], np.nan)
+        ax_off.plot(dt[1:], np.maximum(offset[1:], floor), "o-", ms=4, color=RUN_COLORS[i % len(RUN_COLORS)],
+                    label=body)
+    ax_off.axhline(cols["tolerance"][0], color="black", lw=1.0, ls="--",
+                   label=f"tolerance\n({cols['tolerance'][0]:.3g} m)")
+    ax_off.set_yscale("log")
+    ax_off.set_ylabel("final position's distance\nfrom the finest timestep's (m)")
+    ax_v.plot(dt, cols["peak_speed"], "o-", ms=4, color=CONTACT_COLOR, label="largest speed\nof a recorded body")
+    ax_v.plot(dt[warned], cols["peak_speed"][warned], "x", ms=9, color=BOX_COLOR, label="warned (MuJoCo or\nsimloop_DIVERGED)")
+    ax_v.set_yscale("log")
+    ax_v.set_ylabel("largest speed (m/s)")
+    ax_v.set_xlabel("timestep (s, log scale)")
+    for ax in (ax_off, ax_v):
+        ax.set_xscale("log")
+        ax.grid(alpha=0.3, which="both")
+        for x in dt[blew_up]:
+            ax.axvline(x, color=BOX_COLOR, alpha=0.07, lw=6)
+        if edge is not None:
+            ax.axvline(edge, color="black", lw=1.2, ls=":", label=f"edge: {edge:.4g} s" if ax is ax_off else None)
+        ax.axvline(dt[0], color="#2a6f2a", lw=1.0, ls="-.",
+                   label=f"reference: {dt[0]:.4g} s\n(the finest)" if ax is ax_off else None)
+    ax_off.plot([], [], color=BOX_COLOR, alpha=0.25, lw=6, label="blew up")
+    for ax in (ax_off, ax_v):  # legends beside the axes, never on the data
+        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
+    title = (f"scenario swept: largest timestep before any blew up {edge:.4g} s" if edge is not None
+             else "scenario swept: even the finest timestep blew up")
     fig.suptitle(title)
     fig.tight_layout()
     return fig
