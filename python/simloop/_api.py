@@ -254,7 +254,7 @@ def _finite_vector(name: str, value: object, size: int, what: str) -> "list[floa
         raise ValueError(f"{name} must have shape ({size},) ({what}), got shape {array.shape}")
     bad = np.flatnonzero(~np.isfinite(array))
     if bad.size:
-        raise ValueError(f"{name}[{bad[0]}] must be finite, got {array[bad[0]]!r}")
+        raise ValueError(f"{name}[{bad[0]}] must be finite, got {float(array[bad[0]])!r}")
     return array.tolist()
 
 
@@ -361,7 +361,7 @@ class ActuatorView(_Named):
 
     @property
     def force(self) -> float:
-        """actuator_force: what it applied in the last step (N or N m)."""
+        """actuator_force: its scalar force in the last step, before the gear (a motor: ctrl)."""
         return float(self._sim._views["actuator_force"][self.id])
 
     @property
