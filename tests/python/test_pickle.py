@@ -45,7 +45,7 @@ def test_damaged_pickles_are_refused_with_a_message():
     result = simloop.run(steps=20)
     version, fields = result.__getstate__()
     with pytest.raises(ValueError, match="cannot unpickle a RunResult: the saved fields are damaged"):
-        pickle.loads(pickle.dumps(result)[:-40])  # noqa: S301 (our own bytes)
+        simloop.RunResult.__new__(simloop.RunResult).__setstate__((version, fields[:-40]))
     with pytest.raises(ValueError, match="pickled by another simloop version"):
         simloop.RunResult.__new__(simloop.RunResult).__setstate__((version + 1, fields))
 
