@@ -342,42 +342,53 @@ py::list model_names(const simloop::Model& model, const std::string& kind) {
 }
 
 // A result's fields, in order, as bytes (pickling): plain values copied as
-// they are, so every double comes back with the same bits.
+// they are, so every double comes back with the same bits. One list of
+// fields per result (run_result_fields, scenario_result_fields) serves both
+// directions: FieldWriter's field() appends, FieldReader's reads back.
 class FieldWriter {
  public:
   template <class T>
-  void put(const T& value) {
+  void field(const T& value) {
     static_assert(std::is_trivially_copyable_v<T>);
     bytes_.append(reinterpret_cast<const char*>(&value), sizeof value);
   }
-  void put(const std::string& text) {
-    put(static_cast<std::uint64_t>(text.size()));
+  template <class T>
+  void field(const std::vector<T>& values) {
+    field(static_cast<std::uint64_t>(values.size()));
+    if constexpr (std::is_trivially_copyable_v<T>) {
+      bytes_.append(reinterpret_cast<const char*>(values.data()), values.size() * sizeof(T));
+    } else {
+      for (const T& v : values) field(v);
+    }
+  }
+  void field(const std::string& text) {
+    field(static_cast<std::uint64_t>(text.size()));
     bytes_ += text;
   }
-  void put(const std::vector<double>& values) {
-    put(static_cast<std::uint64_t>(values.size()));
-    bytes_.append(reinterpret_cast<const char*>(values.data()), values.size() * sizeof(double));
-  }
-  void put(const std::vector<std::string>& texts) {
-    put(static_cast<std::uint64_t>(texts.size()));
-    for (const std::string& t : texts) put(t);
-  }
-  void put(const Trajectory& t) {
-    put(t.rows());
-    put(t.columns());
+  void field(const Trajectory& t) {
+    field(t.rows());
+    field(t.columns());
     bytes_.append(reinterpret_cast<const char*>(t.data()),
                   static_cast<size_t>(t.rows()) * static_cast<size_t>(t.columns()) * sizeof(double));
   }
-  void put(const std::vector<simloop::Warning>& warnings) {
-    put(static_cast<std::uint64_t>(warnings.size()));
-    for (const simloop::Warning& w : warnings) {
-      put(w.name);
-      put(w.count);
-      put(w.first_step);
-      put(w.message);
-    }
-  }
+  void field(const simloop::Warning& w) { warning_fields(*this, w); }
+  void field(const simloop::Column& c) { column_fields(*this, c); }
   [[nodiscard]] py::bytes bytes() const { return py::bytes(bytes_); }
+
+  template <class Io, class W>
+  static void warning_fields(Io& io, W& w) {
+    io.field(w.name);
+    io.field(w.count);
+    io.field(w.first_step);
+    io.field(w.message);
+  }
+  template <class Io, class C>
+  static void column_fields(Io& io, C& c) {
+    io.field(c.name);
+    io.field(c.unit);
+    io.field(c.integer);
+    io.field(c.input);
+  }
 
  private:
   std::string bytes_;
@@ -387,27 +398,30 @@ class FieldReader {
  public:
   FieldReader(std::string bytes, const char* what) : bytes_(std::move(bytes)), what_(what) {}
   template <class T>
-  void get(T& value) {
+  void field(T& value) {
     static_assert(std::is_trivially_copyable_v<T>);
     std::memcpy(&value, take(sizeof value), sizeof value);
   }
-  void get(std::string& text) {
+  template <class T>
+  void field(std::vector<T>& values) {
+    if constexpr (std::is_trivially_copyable_v<T>) {
+      values.resize(count(sizeof(T)));
+      const size_t n = values.size() * sizeof(T);
+      if (n > 0) std::memcpy(static_cast<void*>(values.data()), take(n), n);
+    } else {
+      values.resize(count(sizeof(std::uint64_t)));  // each element holds at least one count
+      for (T& v : values) field(v);
+    }
+  }
+  void field(std::string& text) {
     const size_t n = count(1);
     text.assign(take(n), n);
   }
-  void get(std::vector<double>& values) {
-    values.resize(count(sizeof(double)));
-    std::memcpy(values.data(), take(values.size() * sizeof(double)), values.size() * sizeof(double));
-  }
-  void get(std::vector<std::string>& texts) {
-    texts.resize(count(sizeof(std::uint64_t)));
-    for (std::string& t : texts) get(t);
-  }
-  void get(Trajectory& t) {
+  void field(Trajectory& t) {
     std::int64_t rows = 0;
     int columns = 0;
-    get(rows);
-    get(columns);
+    field(rows);
+    field(columns);
     if (rows < 0 || columns < 0 || (columns > 0 && static_cast<std::uint64_t>(rows) > left() / sizeof(double) /
                                                        static_cast<std::uint64_t>(columns))) {
       fail();
@@ -416,15 +430,8 @@ class FieldReader {
     const size_t n = static_cast<size_t>(rows) * static_cast<size_t>(columns) * sizeof(double);
     if (n > 0) std::memcpy(t.mutable_row(0), take(n), n);
   }
-  void get(std::vector<simloop::Warning>& warnings) {
-    warnings.resize(count(1));
-    for (simloop::Warning& w : warnings) {
-      get(w.name);
-      get(w.count);
-      get(w.first_step);
-      get(w.message);
-    }
-  }
+  void field(simloop::Warning& w) { FieldWriter::warning_fields(*this, w); }
+  void field(simloop::Column& c) { FieldWriter::column_fields(*this, c); }
   void finish() const {
     if (at_ != bytes_.size()) fail();
   }
@@ -435,7 +442,7 @@ class FieldReader {
   // takes at least `min_size` bytes), so bad bytes cannot ask for huge memory.
   size_t count(size_t min_size) {
     std::uint64_t n = 0;
-    get(n);
+    field(n);
     if (n > left() / min_size) fail();
     return static_cast<size_t>(n);
   }
@@ -457,115 +464,60 @@ class FieldReader {
 // The pickle format's version: bump when a result's fields change.
 constexpr int kPickleVersion = 1;
 
-py::tuple pickle_run_result(const RunResult& r) {
-  FieldWriter w;
-  w.put(r.config.seed);
-  w.put(r.config.steps);
-  w.put(r.config.timestep);
-  w.put(r.config.perturb);
-  w.put(r.config.smoke);
-  w.put(r.config.record_every);
-  w.put(r.config.audit_energy);
-  w.put(r.config.rng);
-  w.put(r.metrics);
-  w.put(r.shove);
-  w.put(r.trajectory);
-  w.put(r.rows);
-  w.put(r.warnings);
-  w.put(r.energy);
-  w.put(r.timestep);
-  w.put(r.sim_time);
-  return py::make_tuple(kPickleVersion, w.bytes());
+template <class Io, class Result>
+void run_result_fields(Io& io, Result& r) {
+  io.field(r.config.seed);
+  io.field(r.config.steps);
+  io.field(r.config.timestep);
+  io.field(r.config.perturb);
+  io.field(r.config.smoke);
+  io.field(r.config.record_every);
+  io.field(r.config.audit_energy);
+  io.field(r.config.rng);
+  io.field(r.metrics);
+  io.field(r.shove);
+  io.field(r.trajectory);
+  io.field(r.rows);
+  io.field(r.warnings);
+  io.field(r.energy);
+  io.field(r.timestep);
+  io.field(r.sim_time);
 }
 
-void check_pickle_version(const py::tuple& t, const char* what) {
+template <class Io, class Result>
+void scenario_result_fields(Io& io, Result& r) {
+  io.field(r.name);
+  io.field(r.seed);
+  io.field(r.rng);
+  io.field(r.perturb);
+  io.field(r.disturbed_bodies);
+  io.field(r.columns);
+  io.field(r.final_row);
+  io.field(r.trajectory);
+  io.field(r.rows);
+  io.field(r.schedule.steps);
+  io.field(r.schedule.control_changes);
+  io.field(r.schedule.forces);
+  io.field(r.warnings);
+  io.field(r.timestep);
+  io.field(r.sim_time);
+}
+
+template <class Result, void (*Fields)(FieldWriter&, const Result&)>
+py::tuple pickle_fields(const Result& r) {
+  FieldWriter out;
+  Fields(out, r);
+  return py::make_tuple(kPickleVersion, out.bytes());
+}
+
+template <class Result, void (*Fields)(FieldReader&, Result&)>
+Result unpickle_fields(const py::tuple& t, const char* what) {
   if (t.size() != 2 || t[0].cast<int>() != kPickleVersion) {
     throw py::value_error(std::string("cannot unpickle a ") + what + " pickled by another simloop version");
   }
-}
-
-RunResult unpickle_run_result(const py::tuple& t) {
-  check_pickle_version(t, "RunResult");
-  FieldReader in(t[1].cast<std::string>(), "RunResult");
-  RunResult r;
-  in.get(r.config.seed);
-  in.get(r.config.steps);
-  in.get(r.config.timestep);
-  in.get(r.config.perturb);
-  in.get(r.config.smoke);
-  in.get(r.config.record_every);
-  in.get(r.config.audit_energy);
-  in.get(r.config.rng);
-  in.get(r.metrics);
-  in.get(r.shove);
-  in.get(r.trajectory);
-  in.get(r.rows);
-  in.get(r.warnings);
-  in.get(r.energy);
-  in.get(r.timestep);
-  in.get(r.sim_time);
-  in.finish();
-  return r;
-}
-
-py::tuple pickle_scenario_result(const simloop::ScenarioRunResult& r) {
-  FieldWriter w;
-  w.put(r.name);
-  w.put(r.seed);
-  w.put(r.rng);
-  w.put(r.perturb);
-  w.put(r.disturbed_bodies);
-  w.put(static_cast<std::uint64_t>(r.columns.size()));
-  for (const simloop::Column& c : r.columns) {
-    w.put(c.name);
-    w.put(c.unit);
-    w.put(c.integer);
-    w.put(c.input);
-  }
-  w.put(r.final_row);
-  w.put(r.trajectory);
-  w.put(r.rows);
-  w.put(r.schedule.steps);
-  w.put(static_cast<std::uint64_t>(r.schedule.control_changes.size()));
-  for (const simloop::Schedule::ControlChange& c : r.schedule.control_changes) w.put(c);
-  w.put(static_cast<std::uint64_t>(r.schedule.forces.size()));
-  for (const simloop::Schedule::Force& f : r.schedule.forces) w.put(f);
-  w.put(r.warnings);
-  w.put(r.timestep);
-  w.put(r.sim_time);
-  return py::make_tuple(kPickleVersion, w.bytes());
-}
-
-simloop::ScenarioRunResult unpickle_scenario_result(const py::tuple& t) {
-  check_pickle_version(t, "ScenarioResult");
-  FieldReader in(t[1].cast<std::string>(), "ScenarioResult");
-  simloop::ScenarioRunResult r;
-  in.get(r.name);
-  in.get(r.seed);
-  in.get(r.rng);
-  in.get(r.perturb);
-  in.get(r.disturbed_bodies);
-  std::uint64_t n = 0;
-  in.get(n);
-  for (std::uint64_t i = 0; i < n; ++i) {
-    simloop::Column c;
-    in.get(c.name);
-    in.get(c.unit);
-    in.get(c.integer);
-    in.get(c.input);
-    r.columns.push_back(std::move(c));
-  }
-  in.get(r.final_row);
-  in.get(r.trajectory);
-  in.get(r.rows);
-  in.get(r.schedule.steps);
-  in.get(n);
-  for (std::uint64_t i = 0; i < n; ++i) in.get(r.schedule.control_changes.emplace_back());
-  in.get(n);
-  for (std::uint64_t i = 0; i < n; ++i) in.get(r.schedule.forces.emplace_back());
-  in.get(r.warnings);
-  in.get(r.timestep);
-  in.get(r.sim_time);
+  FieldReader in(t[1].cast<std::string>(), what);
+  Result r;
+  Fields(in, r);
   in.finish();
   return r;
 }
@@ -1248,7 +1200,14 @@ PYBIND11_MODULE(_core, m) {
       .def(py::pickle([](const simloop::Model& model) { return py::bytes(model.to_bytes()); },
                       [](const py::bytes& bytes) { return simloop::Model::from_bytes(std::string(bytes)); }));
   py::reinterpret_borrow<py::class_<RunResult>>(m.attr("RunResult"))
-      .def(py::pickle(&pickle_run_result, &unpickle_run_result));
+      .def(py::pickle(&pickle_fields<RunResult, &run_result_fields<FieldWriter, const RunResult>>, [](const py::tuple& t) {
+        return unpickle_fields<RunResult, &run_result_fields<FieldReader, RunResult>>(t, "RunResult");
+      }));
   py::reinterpret_borrow<py::class_<simloop::ScenarioRunResult>>(m.attr("ScenarioResult"))
-      .def(py::pickle(&pickle_scenario_result, &unpickle_scenario_result));
+      .def(py::pickle(
+          &pickle_fields<simloop::ScenarioRunResult, &scenario_result_fields<FieldWriter, const simloop::ScenarioRunResult>>,
+          [](const py::tuple& t) {
+            return unpickle_fields<simloop::ScenarioRunResult,
+                                   &scenario_result_fields<FieldReader, simloop::ScenarioRunResult>>(t, "ScenarioResult");
+          }));
 }

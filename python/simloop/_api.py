@@ -386,6 +386,17 @@ class SensorView(_Named):
         return self._sim._views["sensordata"][info["adr"]:info["adr"] + info["dim"]]
 
 
+def _view_property(name: str, doc: str, settable: bool = False) -> property:
+    """A Sim property giving its view `name`; settable: assigning writes into the view (checked)."""
+    def get(self: "Sim"):
+        return self._views[name]
+
+    def set(self: "Sim", value: object) -> None:
+        self._set_array(name, value)
+
+    return property(get, set if settable else None, doc=doc)
+
+
 _ARRAYS = ("qpos", "qvel", "ctrl", "act", "qfrc_applied", "xfrc_applied", "sensordata", "actuator_force", "xpos",
            "xquat")
 
@@ -487,26 +498,10 @@ class Sim:
 
     def _set_array(self, name: str, value: object) -> None:
         view = self._views[name]
-        values = _finite_vector(name, value, view.size, f"{name} has {view.size} values")
-        view[:] = values
+        view[:] = _finite_vector(name, value, view.size, f"{name} has {view.size} values")
 
-    @property
-    def qpos(self):
-        """Joint positions (nq), a writable view."""
-        return self._views["qpos"]
-
-    @qpos.setter
-    def qpos(self, value) -> None:
-        self._set_array("qpos", value)
-
-    @property
-    def qvel(self):
-        """Joint velocities (nv), a writable view."""
-        return self._views["qvel"]
-
-    @qvel.setter
-    def qvel(self, value) -> None:
-        self._set_array("qvel", value)
+    qpos = _view_property("qpos", "Joint positions (nq), a writable view.", settable=True)
+    qvel = _view_property("qvel", "Joint velocities (nv), a writable view.", settable=True)
 
     @property
     def ctrl(self):
@@ -526,30 +521,13 @@ class Sim:
         else:
             self._sim.set_ctrl_vector(_finite_vector("ctrl", value, self.model.nu, "one per actuator"))
 
-    @property
-    def ctrl_array(self):
-        """Every actuator's ctrl (nu), a writable view, on any scene."""
-        return self._views["ctrl"]
-
-    @property
-    def act(self):
-        """Actuator activations (na), a writable view."""
-        return self._views["act"]
-
-    @property
-    def qfrc_applied(self):
-        """Generalized forces applied (nv), a writable view; it persists."""
-        return self._views["qfrc_applied"]
-
-    @property
-    def xfrc_applied(self):
-        """Force and torque on each body, world frame (nbody x 6), a writable view; it persists."""
-        return self._views["xfrc_applied"]
-
-    @property
-    def sensordata(self):
-        """Every sensor's reading (nsensordata), a read-only view, as of the last step."""
-        return self._views["sensordata"]
+    ctrl_array = _view_property("ctrl", "Every actuator's ctrl (nu), a writable view, on any scene.")
+    act = _view_property("act", "Actuator activations (na), a writable view.")
+    qfrc_applied = _view_property("qfrc_applied", "Generalized forces applied (nv), a writable view; it persists.")
+    xfrc_applied = _view_property("xfrc_applied", "Force and torque on each body, world frame (nbody x 6), a "
+                                                  "writable view; it persists.")
+    sensordata = _view_property("sensordata", "Every sensor's reading (nsensordata), a read-only view, as of the "
+                                              "last step.")
 
     # --- Named access.
 
