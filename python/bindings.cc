@@ -952,9 +952,11 @@ PYBIND11_MODULE(_core, m) {
         return s.sim.state_layout();
       })
       .def("id", [](PySim& s, const std::string& kind, const std::string& name) {
-        return s.sim.id(object_type(kind), name);  // the model only: no lock needed
+        SimLock lock(s);  // set_timestep may be swapping the model on another thread
+        return s.sim.id(object_type(kind), name);
       }, "kind"_a, "name"_a)
       .def("checked_index", [](PySim& s, const std::string& kind, long long index) {
+        SimLock lock(s);
         return s.sim.checked_index(object_type(kind), index);
       }, "kind"_a, "index"_a)
       .def("body_velocity", [](PySim& s, int body) {
@@ -969,6 +971,7 @@ PYBIND11_MODULE(_core, m) {
           "array",
           [](const py::object& self, const std::string& name) {
             PySim& s = self.cast<PySim&>();
+            SimLock lock(s);  // for the model's sizes; the view itself outlives the lock, as documented
             const mjModel* mm = s.sim.model().get();
             mjData* d = s.sim.data();
             // Inputs and state: writable. What MuJoCo derives: read-only.

@@ -240,16 +240,18 @@ def run_batch(seeds: Iterable[int] = (0,), timesteps: Iterable[float] = (0.002,)
 
 
 def _finite_vector(name: str, value: object, size: int, what: str) -> "list[float]":
-    """A vector of `size` finite numbers from a sequence or numpy array; TypeError
-    or ValueError naming `name`, its shape and the size wanted."""
+    """A vector of `size` finite numbers from a sequence or a numeric numpy array;
+    TypeError or ValueError naming `name`, its shape and the size wanted."""
     import numpy as np
 
-    if isinstance(value, (str, bytes)) or not (isinstance(value, (Sequence, np.ndarray)) or hasattr(value, "__array__")):
+    if isinstance(value, np.ndarray):
+        if value.dtype.kind not in "biuf":
+            raise TypeError(f"{name} must hold numbers ({what}), got an array of dtype {value.dtype}")
+        array = value.astype(np.float64)
+    elif isinstance(value, Sequence) and not isinstance(value, (str, bytes)):
+        array = np.array([_check_real("%s[%d]" % (name, i), v) for i, v in enumerate(value)], dtype=np.float64)
+    else:
         raise TypeError(f"{name} must be a sequence or numpy array of {size} numbers ({what}), got {_describe(value)}")
-    try:
-        array = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise TypeError(f"{name} must hold numbers ({what}), got {_describe(value)}") from None
     if array.shape != (size,):
         raise ValueError(f"{name} must have shape ({size},) ({what}), got shape {array.shape}")
     bad = np.flatnonzero(~np.isfinite(array))
@@ -535,8 +537,12 @@ class Sim:
         if isinstance(key, str):
             index = self._sim.id(kind, key)
         elif isinstance(key, numbers.Integral) and not isinstance(key, bool):
-            index = self._sim.checked_index(kind, int(key)) if -2**63 <= int(key) < 2**63 else \
-                self._sim.checked_index(kind, -1)
+            number = int(key)
+            if not -2**63 <= number < 2**63:
+                plural = "bodies" if kind == "body" else kind + "s"
+                raise ValueError(f"{kind} index {_show(number)} is out of range: the scene has "
+                                 f"{len(self.model.names(kind))} {plural}")
+            index = self._sim.checked_index(kind, number)
         else:
             raise TypeError(f"{kind} must be a name (str) or an index (int), got {_describe(key)}")
         return index, self.model.names(kind)[index]

@@ -261,3 +261,15 @@ def test_the_readmes_sim_example_runs(monkeypatch):
     exec(compile(code, "README.md", "exec"), scope)  # noqa: S102 (our own README)
     assert scope["sim"].time == 0.0 and scope["restored"].steps_taken == 350  # set_state leaves the count
     assert np.array_equal(scope["twin"].get_state(), scope["saved"])
+
+
+def test_vectors_must_hold_numbers():
+    sim = simloop.Sim(PUSHT)
+    with pytest.raises(TypeError, match=r"ctrl\[1\] must be a number, got '0' \(str\)"):
+        sim.step(1, ctrl=[0.1, "0"])
+    with pytest.raises(TypeError, match="ctrl must hold numbers .* got an array of dtype <U1"):
+        sim.step(1, ctrl=np.array(["a", "b"]))
+    with pytest.raises(ValueError, match=r"qpos must have shape \(9,\)"):
+        sim.qpos = [0.0]
+    sim.qvel = np.arange(8.0)
+    assert np.array_equal(sim.qvel, np.arange(8.0)) and sim.steps_taken == 0
