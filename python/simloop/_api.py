@@ -535,7 +535,10 @@ class Sim:
 
     def _lookup(self, kind: str, key: object) -> "tuple[int, str]":
         if isinstance(key, str):
-            index = self._sim.id(kind, key)
+            name = _check_text(kind, key)  # ValueError for text UTF-8 cannot hold
+            if b"\0" in name:
+                raise ValueError(f"{kind} must not contain a NUL character, got {_show(key)}")
+            index = self._sim.id(kind, name)
         elif isinstance(key, numbers.Integral) and not isinstance(key, bool):
             number = int(key)
             if not -2**63 <= number < 2**63:

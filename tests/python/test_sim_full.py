@@ -273,3 +273,13 @@ def test_vectors_must_hold_numbers():
         sim.qpos = [0.0]
     sim.qvel = np.arange(8.0)
     assert np.array_equal(sim.qvel, np.arange(8.0)) and sim.steps_taken == 0
+
+
+def test_names_that_cannot_be_a_scenes_are_refused_in_one_line():
+    sim = simloop.Sim(PUSHT)
+    with pytest.raises(ValueError, match="body must be text that UTF-8 can encode"):
+        sim.body("\udcfe")
+    with pytest.raises(ValueError, match="joint must not contain a NUL character"):
+        sim.joint("slide_x\0")
+    with pytest.raises(ValueError, match=r"body index 2\*\*70|body index 1180591620717411303424 is out of range"):
+        sim.body(2**70)
