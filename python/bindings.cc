@@ -920,9 +920,9 @@ PYBIND11_MODULE(_core, m) {
         SimLock lock(s);
         s.sim.set_ctrl(value);
       }, "value"_a)
-      .def("set_ctrl_vector", [](PySim& s, const std::vector<double>& values) {
+      .def("set_ctrl_vector", [](PySim& s, const py::array_t<double, py::array::c_style | py::array::forcecast>& values) {
         SimLock lock(s);
-        s.sim.set_ctrl(values.data(), values.size());
+        s.sim.set_ctrl(values.data(), static_cast<size_t>(values.size()));
       }, "values"_a)
       .def_property_readonly("ctrl", locked(&simloop::Sim::ctrl))
       .def("apply_force", locked(&simloop::Sim::apply_force), "force"_a)

@@ -239,11 +239,14 @@ def run_batch(seeds: Iterable[int] = (0,), timesteps: Iterable[float] = (0.002,)
     return _core.run_batch(load_model(model), configs, workers, progress=_check_progress(progress))
 
 
-def _finite_vector(name: str, value: object, size: int, what: str) -> "list[float]":
+def _finite_vector(name: str, value: object, size: int, what: str) -> "Sequence[float]":
     """A vector of `size` finite numbers from a sequence or a numeric numpy array;
     TypeError or ValueError naming `name`, its shape and the size wanted."""
     import numpy as np
 
+    if isinstance(value, np.ndarray) and value.dtype == np.float64 and value.shape == (size,) \
+            and np.isfinite(value).all():
+        return value  # the common case, kept cheap
     if isinstance(value, np.ndarray):
         if value.dtype.kind not in "biuf":
             raise TypeError(f"{name} must hold numbers ({what}), got an array of dtype {value.dtype}")
