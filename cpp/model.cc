@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <limits>
 #include <sstream>
 
 #include "model_detail.hpp"
@@ -123,29 +124,42 @@ void detail::check_xml_size(std::size_t size, std::string_view source) {
   }
 }
 
+namespace {
+
+struct VfsDeleter {
+  void operator()(mjVFS* v) const noexcept {
+    mj_deleteVFS(v);
+    delete v;
+  }
+};
+using Vfs = std::unique_ptr<mjVFS, VfsDeleter>;
+
+// A virtual file system holding one file, `name`, with `contents` (which
+// the caller has checked fits in an int). `what` says what it holds, for errors.
+Vfs one_file_vfs(const char* name, std::string_view contents, std::string_view source, const char* what) {
+  Vfs vfs(new mjVFS);
+  mj_defaultVFS(vfs.get());
+  int status = 0;
+  const int size = static_cast<int>(contents.size());
+  try {
+    detail::mujoco_call([&] { status = mj_makeEmptyFileVFS(vfs.get(), name, size); });
+  } catch (const MujocoError& e) {
+    throw MujocoError(std::string(source) + ": holding the " + what + " in memory: " + e.what());
+  }
+  if (status != 0) {
+    throw Error(std::string(source) + ": could not hold the " + what + " in MuJoCo's virtual file system");
+  }
+  std::memcpy(vfs->filedata[vfs->nfile - 1], contents.data(), contents.size());
+  return vfs;
+}
+
+}  // namespace
+
 Model Model::from_xml_string(std::string_view xml, std::string_view source) {
   detail::check_xml_size(xml.size(), source);
   detail::install_mujoco_handlers();
-  struct VfsDeleter {
-    void operator()(mjVFS* v) const noexcept {
-      mj_deleteVFS(v);
-      delete v;
-    }
-  };
-  std::unique_ptr<mjVFS, VfsDeleter> vfs(new mjVFS);
-  mj_defaultVFS(vfs.get());
   constexpr const char* kName = "model.xml";
-  int status = 0;
-  const int size = static_cast<int>(xml.size());  // checked above: fits
-  try {
-    detail::mujoco_call([&] { status = mj_makeEmptyFileVFS(vfs.get(), kName, size); });
-  } catch (const MujocoError& e) {
-    throw MujocoError(std::string(source) + ": holding the XML in memory: " + e.what());
-  }
-  if (status != 0) {
-    throw Error(std::string(source) + ": could not hold the XML in MuJoCo's virtual file system");
-  }
-  std::memcpy(vfs->filedata[vfs->nfile - 1], xml.data(), xml.size());
+  const Vfs vfs = one_file_vfs(kName, xml, source, "XML");
   mjModel* raw = load_xml(kName, vfs.get(), source);
   return adopt(raw, source);
 }
@@ -200,6 +214,50 @@ Data::Data(const Model& model) {
 
 bool Data::fits(const Model& model) const noexcept {
   return std::memcmp(sizes_.data(), &model.get()->nq, sizeof sizes_) == 0;
+}
+
+// --- Serialization (pickling): MuJoCo's own binary model format.
+
+std::string Model::to_bytes() const {
+  const mjModel* m = model_.get();
+  int size = 0;
+  detail::mujoco_call([&] { size = mj_sizeModel(m); });
+  std::string bytes(static_cast<std::size_t>(size), '\0');
+  char* buffer = bytes.data();
+  try {
+    detail::mujoco_call([&] { mj_saveModel(m, nullptr, buffer, size); });
+  } catch (const MujocoError& e) {
+    throw MujocoError(std::string("saving the model as bytes: ") + e.what());
+  }
+  return bytes;
+}
+
+Model Model::from_bytes(std::string_view bytes, std::string_view source) {
+  if (bytes.empty() || bytes.size() > static_cast<std::size_t>(std::numeric_limits<int>::max())) {
+    throw InvalidArgument(std::string(source) + ": a saved model must be 1 to 2**31-1 bytes, got " +
+                          std::to_string(bytes.size()));
+  }
+  detail::install_mujoco_handlers();
+  constexpr const char* kName = "model.mjb";
+  const Vfs vfs = one_file_vfs(kName, bytes, source, "saved model");
+  mjModel* raw = nullptr;
+  const mjVFS* files = vfs.get();
+  try {
+    detail::mujoco_call([&] { raw = mj_loadModel(kName, files); });
+  } catch (const MujocoError& e) {
+    throw MujocoError(std::string(source) + ": loading the saved model: " + e.what());
+  }
+  if (raw == nullptr) {
+    throw MujocoError(std::string(source) + ": not a model MuJoCo " + std::to_string(mj_version()) +
+                      " saved (mj_loadModel refused it)");
+  }
+  return adopt(raw, source);
+}
+
+std::string Model::name() const {
+  // MuJoCo's compiler puts the model's name first in the names buffer.
+  const mjModel* m = model_.get();
+  return m->nnames > 0 ? std::string(m->names) : std::string();
 }
 
 std::string mujoco_version() {

@@ -7,6 +7,8 @@
 #include "mujoco_guard.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/number_format.hpp"
+#include "simloop/scenario.hpp"
+#include "simloop/state.hpp"
 #include "warning_counter.hpp"
 
 namespace simloop {
@@ -21,11 +23,68 @@ void require_finite(double value, const char* what) {
   }
 }
 
+struct Kind {
+  const char* one;
+  const char* many;
+};
+
+Kind kind_of(mjtObj type) {
+  switch (type) {
+    case mjOBJ_BODY: return {"body", "bodies"};
+    case mjOBJ_JOINT: return {"joint", "joints"};
+    case mjOBJ_ACTUATOR: return {"actuator", "actuators"};
+    case mjOBJ_SENSOR: return {"sensor", "sensors"};
+    case mjOBJ_KEY: return {"keyframe", "keyframes"};
+    case mjOBJ_GEOM: return {"geom", "geoms"};
+    case mjOBJ_SITE: return {"site", "sites"};
+    default: return {"object", "objects"};
+  }
+}
+
+int count_of(const mjModel* m, mjtObj type) {
+  switch (type) {
+    case mjOBJ_BODY: return m->nbody;
+    case mjOBJ_JOINT: return m->njnt;
+    case mjOBJ_ACTUATOR: return m->nu;
+    case mjOBJ_SENSOR: return m->nsensor;
+    case mjOBJ_KEY: return m->nkey;
+    case mjOBJ_GEOM: return m->ngeom;
+    case mjOBJ_SITE: return m->nsite;
+    default: throw InvalidArgument("Sim: objects of MuJoCo type " + std::to_string(type) + " are not looked up by name");
+  }
+}
+
+// "the scene's joints: hip, knee (and 2 unnamed)": what a lookup could have named.
+std::string listing(const mjModel* m, mjtObj type, std::vector<std::string>& names) {
+  const int count = count_of(m, type);
+  int unnamed = 0;
+  for (int i = 0; i < count; ++i) {
+    const char* name = mj_id2name(m, type, i);
+    if (name != nullptr && *name != '\0') {
+      names.emplace_back(name);
+    } else {
+      ++unnamed;
+    }
+  }
+  std::string out = std::string("the scene's ") + kind_of(type).many + ": ";
+  if (names.empty()) out += "(none named)";
+  for (std::size_t i = 0; i < names.size(); ++i) out += (i ? ", " : "") + names[i];
+  if (unnamed > 0 && !names.empty()) out += " (and " + std::to_string(unnamed) + " unnamed)";
+  if (unnamed > 0) out += "; " + std::to_string(count) + " in all, by index 0 to " + std::to_string(count - 1);
+  return out;
+}
+
 }  // namespace
 
-Sim::Sim(const Model& model) : model_(model), data_(model) {
-  (void)model_.layout();  // the chapter's Sim reads the box and the pusher: refuse other scenes now
-  reset();
+Sim::Sim(const Model& model) : model_(model), data_(model) { reset(); }
+
+Sim::Sim(const Sim& other)
+    : model_(other.model_), data_(other.model_), steps_(other.steps_),
+      counter_(std::make_shared<Counter>(*other.counter_)) {
+  const mjModel* m = model_.get();
+  mjData* d = data_.get();
+  const mjData* src = other.data_.get();
+  detail::mujoco_call([&] { mj_copyData(d, m, src); });
 }
 
 void Sim::reset() {
@@ -39,11 +98,65 @@ void Sim::reset() {
   counter_ = std::make_shared<Counter>();
 }
 
+void Sim::reset_to_keyframe(int key) {
+  const mjModel* m = model_.get();
+  (void)checked_index(mjOBJ_KEY, key);
+  mjData* d = data_.get();
+  detail::mujoco_call([&] {
+    mj_resetDataKeyframe(m, d, key);
+    mj_forward(m, d);
+  });
+  steps_ = 0;
+  counter_ = std::make_shared<Counter>();
+}
+
+int Sim::id(mjtObj type, const std::string& name) const {
+  const mjModel* m = model_.get();
+  (void)count_of(m, type);  // a type we look up
+  const int found = mj_name2id(m, type, name.c_str());
+  if (found >= 0) return found;
+  std::vector<std::string> names;
+  const std::string known = listing(m, type, names);
+  const std::string hint = did_you_mean(name, names);
+  throw InvalidArgument(std::string("no ") + kind_of(type).one + " named '" + name + "'" +
+                        (hint.empty() ? "" : " (did you mean '" + hint + "'?)") + "; " + known);
+}
+
+int Sim::checked_index(mjtObj type, long long index) const {
+  const mjModel* m = model_.get();
+  const int count = count_of(m, type);
+  if (index >= 0 && index < count) return static_cast<int>(index);
+  std::vector<std::string> names;
+  throw InvalidArgument(std::string(kind_of(type).one) + " index " + std::to_string(index) +
+                        " is out of range: the scene has " + std::to_string(count) + " " + kind_of(type).many +
+                        (count > 0 ? "; " + listing(m, type, names) : std::string()));
+}
+
 void Sim::set_timestep(double timestep) { model_ = model_.with_timestep(timestep); }
 
 void Sim::set_ctrl(double value) {
   require_finite(value, "ctrl");
+  if (model_.get()->nu < 1) throw InvalidArgument("ctrl: the model has no actuator (ctrl[0] does not exist)");
   data_.get()->ctrl[0] = value;
+}
+
+double Sim::ctrl() const {
+  if (model_.get()->nu < 1) throw InvalidArgument("ctrl: the model has no actuator (ctrl[0] does not exist)");
+  return data_.get()->ctrl[0];
+}
+
+void Sim::set_ctrl(const double* values, std::size_t count) {
+  const auto nu = static_cast<std::size_t>(model_.get()->nu);
+  if (count != nu) {
+    throw InvalidArgument("ctrl must have nu = " + std::to_string(nu) + " values (one per actuator), got " +
+                          std::to_string(count));
+  }
+  for (std::size_t i = 0; i < count; ++i) {
+    if (!std::isfinite(values[i])) {
+      throw InvalidArgument("ctrl[" + std::to_string(i) + "] must be finite, got " + python_float_repr(values[i]));
+    }
+  }
+  std::copy(values, values + count, data_.get()->ctrl);
 }
 
 void Sim::apply_force(const std::array<double, 3>& force) {
@@ -52,12 +165,62 @@ void Sim::apply_force(const std::array<double, 3>& force) {
   for (int i = 0; i < 3; ++i) slot[i] = force[i];
 }
 
-void Sim::clear_force() noexcept {
+void Sim::clear_force() {
   double* slot = data_.get()->xfrc_applied + 6 * model_.layout().box_body;
   for (int i = 0; i < 3; ++i) slot[i] = 0.0;
 }
 
-std::array<double, 3> Sim::applied_force() const noexcept {
+void Sim::apply_wrench(int body, const std::array<double, 3>* force, const std::array<double, 3>* torque) {
+  (void)checked_index(mjOBJ_BODY, body);
+  if (force) {
+    for (double f : *force) require_finite(f, "force");
+  }
+  if (torque) {
+    for (double t : *torque) require_finite(t, "torque");
+  }
+  double* slot = data_.get()->xfrc_applied + 6 * body;
+  if (force) std::copy(force->begin(), force->end(), slot);
+  if (torque) std::copy(torque->begin(), torque->end(), slot + 3);
+}
+
+void Sim::clear_forces() noexcept {
+  std::fill_n(data_.get()->xfrc_applied, 6 * model_.get()->nbody, 0.0);
+}
+
+void Sim::forward() {
+  const mjModel* m = model_.get();
+  mjData* d = data_.get();
+  detail::mujoco_call([&] { forward_keeping_warmstart(m, d); });
+}
+
+std::vector<double> Sim::state() const { return get_state(model_.get(), data_.get()); }
+
+std::size_t Sim::state_size() const noexcept { return simloop::state_size(model_.get()); }
+
+std::vector<std::pair<std::string, std::size_t>> Sim::state_layout() const { return simloop::state_layout(model_.get()); }
+
+void Sim::set_state(const double* state, std::size_t size) {
+  const mjModel* m = model_.get();
+  if (size != state_size()) {
+    throw InvalidArgument("state must have " + std::to_string(state_size()) + " values for this model (" +
+                          "time, qpos, qvel, act, qacc_warmstart, ctrl, qfrc_applied, xfrc_applied, mocap, " +
+                          "userdata), got " + std::to_string(size));
+  }
+  mjData* d = data_.get();
+  detail::mujoco_call([&] { simloop::set_state(m, d, state); });
+}
+
+std::array<double, 6> Sim::body_velocity(int body) const {
+  (void)checked_index(mjOBJ_BODY, body);
+  std::array<double, 6> velocity{};
+  const mjModel* m = model_.get();
+  const mjData* d = data_.get();
+  double* out = velocity.data();
+  detail::mujoco_call([&] { mj_objectVelocity(m, d, mjOBJ_BODY, body, out, 0); });
+  return velocity;
+}
+
+std::array<double, 3> Sim::applied_force() const {
   const double* slot = data_.get()->xfrc_applied + 6 * model_.layout().box_body;
   return {slot[0], slot[1], slot[2]};
 }
@@ -79,24 +242,24 @@ void Sim::step(std::int64_t n, RunControl* control) {
   }
 }
 
-std::array<double, 3> Sim::box_position() const noexcept {
+std::array<double, 3> Sim::box_position() const {
   const double* q = data_.get()->qpos + model_.layout().box_qposadr;
   return {q[0], q[1], q[2]};
 }
 
-std::array<double, 4> Sim::box_quaternion() const noexcept {
+std::array<double, 4> Sim::box_quaternion() const {
   const double* q = data_.get()->qpos + model_.layout().box_qposadr + 3;
   return {q[0], q[1], q[2], q[3]};
 }
 
-std::array<double, 3> Sim::box_velocity() const noexcept {
+std::array<double, 3> Sim::box_velocity() const {
   const double* v = data_.get()->qvel + model_.layout().box_dofadr;
   return {v[0], v[1], v[2]};
 }
 
-double Sim::pusher_x() const noexcept { return data_.get()->qpos[model_.layout().pusher_qposadr]; }
+double Sim::pusher_x() const { return data_.get()->qpos[model_.layout().pusher_qposadr]; }
 
-double Sim::pusher_velocity() const noexcept { return data_.get()->qvel[model_.layout().pusher_dofadr]; }
+double Sim::pusher_velocity() const { return data_.get()->qvel[model_.layout().pusher_dofadr]; }
 
 std::vector<Contact> Sim::contacts() const {
   const mjModel* m = model_.get();

@@ -8,7 +8,9 @@
 #include <pybind11/stl/filesystem.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
+#include <cstring>
 #include <cstdint>
 #include <memory>
 #include <mutex>
@@ -18,6 +20,7 @@
 #include <system_error>
 #include <thread>
 #include <tuple>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -231,6 +234,7 @@ class Interruptible {
 // that another thread is stepping for a long time.
 struct PySim {
   explicit PySim(const simloop::Model& model) : sim(model) {}
+  explicit PySim(const simloop::Sim& other) : sim(other) {}
   simloop::Sim sim;
   std::timed_mutex mutex;
   // The thread holding `mutex`, if any. Only the holder writes it, and a
@@ -402,6 +406,229 @@ class RowsToPython final : public simloop::RowSink {
   std::optional<py::error_already_set> error_;
 };
 
+// --- Sim for any scene: views into mjData and mjModel, names, pickling.
+
+// A numpy view of `count` (x `width`) doubles at `values`, owned by `owner`
+// (the Sim or Model Python object), which the view keeps alive through its
+// base. Safe because a Sim's mjData and a Model's mjModel never move.
+py::array owned_view(const py::object& owner, double* values, py::ssize_t count, py::ssize_t width, bool writable) {
+  static double empty = 0.0;  // a size-0 view still needs a pointer to own nothing
+  double* at = count > 0 ? values : &empty;
+  const auto item = static_cast<py::ssize_t>(sizeof(double));
+  py::array view = width > 0 ? py::array(py::dtype::of<double>(), {count, width}, {item * width, item}, at, owner)
+                             : py::array(py::dtype::of<double>(), {count}, {item}, at, owner);
+  if (!writable) py::detail::array_proxy(view.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
+  return view;
+}
+
+mjtObj object_type(const std::string& kind) {
+  if (kind == "body") return mjOBJ_BODY;
+  if (kind == "joint") return mjOBJ_JOINT;
+  if (kind == "actuator") return mjOBJ_ACTUATOR;
+  if (kind == "sensor") return mjOBJ_SENSOR;
+  if (kind == "keyframe") return mjOBJ_KEY;
+  throw py::value_error("kind must be 'body', 'joint', 'actuator', 'sensor' or 'keyframe', got '" + kind + "'");
+}
+
+py::list model_names(const simloop::Model& model, const std::string& kind) {
+  const mjtObj type = object_type(kind);
+  const mjModel* raw = model.get();
+  const int count = type == mjOBJ_BODY       ? raw->nbody
+                    : type == mjOBJ_JOINT    ? raw->njnt
+                    : type == mjOBJ_ACTUATOR ? raw->nu
+                    : type == mjOBJ_SENSOR   ? raw->nsensor
+                                             : raw->nkey;
+  py::list names;
+  for (int i = 0; i < count; ++i) {
+    const char* name = mj_id2name(raw, type, i);
+    names.append(py::str(name ? name : ""));
+  }
+  return names;
+}
+
+// A result's fields, in order, as bytes (pickling): plain values copied as
+// they are, so every double comes back with the same bits. One list of
+// fields per result (run_result_fields, scenario_result_fields) serves both
+// directions: FieldWriter's field() appends, FieldReader's reads back.
+class FieldWriter {
+ public:
+  template <class T>
+  void field(const T& value) {
+    static_assert(std::is_trivially_copyable_v<T>);
+    bytes_.append(reinterpret_cast<const char*>(&value), sizeof value);
+  }
+  template <class T>
+  void field(const std::vector<T>& values) {
+    field(static_cast<std::uint64_t>(values.size()));
+    if constexpr (std::is_trivially_copyable_v<T>) {
+      bytes_.append(reinterpret_cast<const char*>(values.data()), values.size() * sizeof(T));
+    } else {
+      for (const T& v : values) field(v);
+    }
+  }
+  void field(const std::string& text) {
+    field(static_cast<std::uint64_t>(text.size()));
+    bytes_ += text;
+  }
+  void field(const Trajectory& t) {
+    field(t.rows());
+    field(t.columns());
+    bytes_.append(reinterpret_cast<const char*>(t.data()),
+                  static_cast<size_t>(t.rows()) * static_cast<size_t>(t.columns()) * sizeof(double));
+  }
+  void field(const simloop::Warning& w) { warning_fields(*this, w); }
+  void field(const simloop::Column& c) { column_fields(*this, c); }
+  [[nodiscard]] py::bytes bytes() const { return py::bytes(bytes_); }
+
+  template <class Io, class W>
+  static void warning_fields(Io& io, W& w) {
+    io.field(w.name);
+    io.field(w.count);
+    io.field(w.first_step);
+    io.field(w.message);
+  }
+  template <class Io, class C>
+  static void column_fields(Io& io, C& c) {
+    io.field(c.name);
+    io.field(c.unit);
+    io.field(c.integer);
+    io.field(c.input);
+  }
+
+ private:
+  std::string bytes_;
+};
+
+class FieldReader {
+ public:
+  FieldReader(std::string bytes, const char* what) : bytes_(std::move(bytes)), what_(what) {}
+  template <class T>
+  void field(T& value) {
+    static_assert(std::is_trivially_copyable_v<T>);
+    std::memcpy(&value, take(sizeof value), sizeof value);
+  }
+  template <class T>
+  void field(std::vector<T>& values) {
+    if constexpr (std::is_trivially_copyable_v<T>) {
+      values.resize(count(sizeof(T)));
+      const size_t n = values.size() * sizeof(T);
+      if (n > 0) std::memcpy(static_cast<void*>(values.data()), take(n), n);
+    } else {
+      values.resize(count(sizeof(std::uint64_t)));  // each element holds at least one count
+      for (T& v : values) field(v);
+    }
+  }
+  void field(std::string& text) {
+    const size_t n = count(1);
+    text.assign(take(n), n);
+  }
+  void field(Trajectory& t) {
+    std::int64_t rows = 0;
+    int columns = 0;
+    field(rows);
+    field(columns);
+    if (rows < 0 || columns < 0 || (columns > 0 && static_cast<std::uint64_t>(rows) > left() / sizeof(double) /
+                                                       static_cast<std::uint64_t>(columns))) {
+      fail();
+    }
+    t = Trajectory(rows, columns);
+    const size_t n = static_cast<size_t>(rows) * static_cast<size_t>(columns) * sizeof(double);
+    if (n > 0) std::memcpy(t.mutable_row(0), take(n), n);
+  }
+  void field(simloop::Warning& w) { FieldWriter::warning_fields(*this, w); }
+  void field(simloop::Column& c) { FieldWriter::column_fields(*this, c); }
+  void finish() const {
+    if (at_ != bytes_.size()) fail();
+  }
+
+ private:
+  [[nodiscard]] std::uint64_t left() const noexcept { return bytes_.size() - at_; }
+  // A stored element count, checked against the bytes left (each element
+  // takes at least `min_size` bytes), so bad bytes cannot ask for huge memory.
+  size_t count(size_t min_size) {
+    std::uint64_t n = 0;
+    field(n);
+    if (n > left() / min_size) fail();
+    return static_cast<size_t>(n);
+  }
+  const char* take(size_t n) {
+    if (n > left()) fail();
+    const char* at = bytes_.data() + at_;
+    at_ += n;
+    return at;
+  }
+  [[noreturn]] void fail() const {
+    throw py::value_error(std::string("cannot unpickle a ") + what_ + ": the saved fields are damaged or from another "
+                          "simloop version");
+  }
+  std::string bytes_;
+  const char* what_;
+  size_t at_ = 0;
+};
+
+// The pickle format's version: bump when a result's fields change.
+constexpr int kPickleVersion = 1;
+
+template <class Io, class Result>
+void run_result_fields(Io& io, Result& r) {
+  io.field(r.config.seed);
+  io.field(r.config.steps);
+  io.field(r.config.timestep);
+  io.field(r.config.perturb);
+  io.field(r.config.smoke);
+  io.field(r.config.record_every);
+  io.field(r.config.audit_energy);
+  io.field(r.config.rng);
+  io.field(r.metrics);
+  io.field(r.unrounded_metrics);
+  io.field(r.shove);
+  io.field(r.trajectory);
+  io.field(r.rows);
+  io.field(r.warnings);
+  io.field(r.energy);
+  io.field(r.timestep);
+  io.field(r.sim_time);
+}
+
+template <class Io, class Result>
+void scenario_result_fields(Io& io, Result& r) {
+  io.field(r.name);
+  io.field(r.seed);
+  io.field(r.rng);
+  io.field(r.perturb);
+  io.field(r.disturbed_bodies);
+  io.field(r.columns);
+  io.field(r.final_row);
+  io.field(r.final_state);
+  io.field(r.trajectory);
+  io.field(r.rows);
+  io.field(r.schedule.steps);
+  io.field(r.schedule.control_changes);
+  io.field(r.schedule.forces);
+  io.field(r.warnings);
+  io.field(r.timestep);
+  io.field(r.sim_time);
+}
+
+template <class Result, void (*Fields)(FieldWriter&, const Result&)>
+py::tuple pickle_fields(const Result& r) {
+  FieldWriter out;
+  Fields(out, r);
+  return py::make_tuple(kPickleVersion, out.bytes());
+}
+
+template <class Result, void (*Fields)(FieldReader&, Result&)>
+Result unpickle_fields(const py::tuple& t, const char* what) {
+  if (t.size() != 2 || t[0].cast<int>() != kPickleVersion) {
+    throw py::value_error(std::string("cannot unpickle a ") + what + " pickled by another simloop version");
+  }
+  FieldReader in(t[1].cast<std::string>(), what);
+  Result r;
+  Fields(in, r);
+  in.finish();
+  return r;
+}
+
 }  // namespace
 
 PYBIND11_MODULE(_core, m) {
@@ -458,8 +685,12 @@ PYBIND11_MODULE(_core, m) {
       .def_property_readonly("nv", [](const simloop::Model& model) { return model.get()->nv; })
       .def_property_readonly("nu", [](const simloop::Model& model) { return model.get()->nu; })
       .def("__repr__", [](const simloop::Model& model) {
-        return "<simloop.Model nq=" + std::to_string(model.get()->nq) + " nv=" + std::to_string(model.get()->nv) +
-               " timestep=" + simloop::python_float_repr(model.timestep()) + ">";
+        const mjModel* raw = model.get();
+        const std::string name = model.name();
+        return "<simloop.Model " + (name.empty() ? std::string("(unnamed)") : "'" + name + "'") +
+               " nq=" + std::to_string(raw->nq) + " nv=" + std::to_string(raw->nv) + " nu=" + std::to_string(raw->nu) +
+               " nbody=" + std::to_string(raw->nbody) + " timestep=" + simloop::python_float_repr(model.timestep()) +
+               ">";
       });
 
   py::class_<simloop::RunConfig>(m, "RunConfig")
@@ -772,22 +1003,93 @@ PYBIND11_MODULE(_core, m) {
       });
 
   // Every call holds the Sim's lock (PySim, SimLock): safe from any thread.
+  // The arrays (array()) are views into the Sim's mjData and take no lock:
+  // see simloop.Sim's docstring for what that means across threads.
   py::class_<PySim>(m, "Sim")
       .def(py::init([](const simloop::Model& model) {
              return naming_failures("Sim", [&] { return std::make_unique<PySim>(model); });
            }),
            "model"_a)
+      .def("copy", [](PySim& s) {
+        SimLock lock(s);
+        return naming_failures("Sim.copy", [&] { return std::make_unique<PySim>(s.sim); });
+      }, "An independent copy: its own data, the same (shared, read-only) model.")
       .def("reset", locked(&simloop::Sim::reset))
+      .def("reset_to_keyframe", locked(&simloop::Sim::reset_to_keyframe), "key"_a)
       .def("set_timestep", locked(&simloop::Sim::set_timestep), "timestep"_a)
       .def_property_readonly("timestep", locked(&simloop::Sim::timestep))
-      .def("set_ctrl", locked(&simloop::Sim::set_ctrl), "value"_a)
+      .def("set_ctrl", [](PySim& s, double value) {
+        SimLock lock(s);
+        s.sim.set_ctrl(value);
+      }, "value"_a)
+      .def("set_ctrl_vector", [](PySim& s, const py::array_t<double, py::array::c_style | py::array::forcecast>& values) {
+        SimLock lock(s);
+        s.sim.set_ctrl(values.data(), static_cast<size_t>(values.size()));
+      }, "values"_a)
       .def_property_readonly("ctrl", locked(&simloop::Sim::ctrl))
       .def("apply_force", locked(&simloop::Sim::apply_force), "force"_a)
       .def("clear_force", locked(&simloop::Sim::clear_force))
+      .def("apply_wrench", [](PySim& s, int body, std::optional<std::array<double, 3>> force,
+                              std::optional<std::array<double, 3>> torque) {
+        SimLock lock(s);
+        s.sim.apply_wrench(body, force ? &*force : nullptr, torque ? &*torque : nullptr);
+      }, "body"_a, "force"_a, "torque"_a)
+      .def("clear_forces", locked(&simloop::Sim::clear_forces))
       .def_property_readonly("applied_force", [](PySim& s) {
         SimLock lock(s);
         return vec(s.sim.applied_force().data(), 3);
       })
+      .def("forward", locked(&simloop::Sim::forward))
+      .def("get_state", [](PySim& s) {
+        SimLock lock(s);
+        const std::vector<double> state = s.sim.state();
+        return vec(state.data(), state.size());
+      })
+      .def("set_state", [](PySim& s, const py::array_t<double, py::array::c_style>& state) {
+        SimLock lock(s);
+        s.sim.set_state(state.data(), static_cast<size_t>(state.size()));
+      }, "state"_a)
+      .def_property_readonly("state_layout", [](PySim& s) {
+        SimLock lock(s);
+        return s.sim.state_layout();
+      })
+      .def("id", [](PySim& s, const std::string& kind, const std::string& name) {
+        SimLock lock(s);  // set_timestep may be swapping the model on another thread
+        return s.sim.id(object_type(kind), name);
+      }, "kind"_a, "name"_a)
+      .def("checked_index", [](PySim& s, const std::string& kind, long long index) {
+        SimLock lock(s);
+        return s.sim.checked_index(object_type(kind), index);
+      }, "kind"_a, "index"_a)
+      .def("body_velocity", [](PySim& s, int body) {
+        SimLock lock(s);
+        return vec(s.sim.body_velocity(body).data(), 6);
+      }, "body"_a)
+      .def_property_readonly("model", [](PySim& s) {
+        SimLock lock(s);
+        return s.sim.model();
+      }, "This Sim's own model (with its timestep).")
+      .def(
+          "array",
+          [](const py::object& self, const std::string& name) {
+            PySim& s = self.cast<PySim&>();
+            SimLock lock(s);  // for the model's sizes; the view itself outlives the lock, as documented
+            const mjModel* mm = s.sim.model().get();
+            mjData* d = s.sim.data();
+            // Inputs and state: writable. What MuJoCo derives: read-only.
+            if (name == "qpos") return owned_view(self, d->qpos, mm->nq, 0, true);
+            if (name == "qvel") return owned_view(self, d->qvel, mm->nv, 0, true);
+            if (name == "ctrl") return owned_view(self, d->ctrl, mm->nu, 0, true);
+            if (name == "act") return owned_view(self, d->act, mm->na, 0, true);
+            if (name == "qfrc_applied") return owned_view(self, d->qfrc_applied, mm->nv, 0, true);
+            if (name == "xfrc_applied") return owned_view(self, d->xfrc_applied, mm->nbody, 6, true);
+            if (name == "sensordata") return owned_view(self, d->sensordata, mm->nsensordata, 0, false);
+            if (name == "actuator_force") return owned_view(self, d->actuator_force, mm->nu, 0, false);
+            if (name == "xpos") return owned_view(self, d->xpos, mm->nbody, 3, false);
+            if (name == "xquat") return owned_view(self, d->xquat, mm->nbody, 4, false);
+            throw py::value_error("no Sim array named '" + name + "'");
+          },
+          "name"_a, "A numpy view into this Sim's mjData (keeps the Sim alive).")
       .def(
           "step",
           [](PySim& s, std::int64_t n) {
@@ -829,7 +1131,23 @@ PYBIND11_MODULE(_core, m) {
       .def_property_readonly("pusher_x", locked(&simloop::Sim::pusher_x))
       .def_property_readonly("pusher_velocity", locked(&simloop::Sim::pusher_velocity))
       .def_property_readonly("contacts", locked(&simloop::Sim::contacts))
-      .def_property_readonly("warnings", locked(&simloop::Sim::warnings));
+      .def_property_readonly("warnings", locked(&simloop::Sim::warnings))
+      // Pickled as its model (MuJoCo's binary, with this Sim's timestep), its
+      // full state and its step count; MuJoCo's warnings are not carried.
+      .def(py::pickle(
+          [](PySim& s) {
+            SimLock lock(s);
+            const std::vector<double> state = s.sim.state();
+            return py::make_tuple(s.sim.model(), vec(state.data(), state.size()), s.sim.steps_taken());
+          },
+          [](const py::tuple& t) {
+            if (t.size() != 3) throw py::value_error("cannot unpickle a Sim: expected (model, state, steps_taken)");
+            auto s = std::make_unique<PySim>(t[0].cast<simloop::Model>());
+            const auto state = t[1].cast<py::array_t<double, py::array::c_style | py::array::forcecast>>();
+            s->sim.set_state(state.data(), static_cast<size_t>(state.size()));
+            s->sim.set_steps_taken(t[2].cast<std::int64_t>());
+            return s;
+          }));
 
   m.def("pusher_track", [](const simloop::Model& model) {
     const simloop::PusherTrack t = simloop::pusher_track(model);
@@ -1154,4 +1472,62 @@ PYBIND11_MODULE(_core, m) {
       "scene"_a, "scenario"_a, "config"_a, "out"_a, "drawing"_a = py::none(), "progress"_a = py::none(),
       "Runs a scenario, writing trajectory.csv as it steps and then metrics.json (both or neither); "
       "drawing.columns(names) and drawing.rows(array) get the rows and every moving body's pose.");
+  // --- Model views and names, and pickling Model, RunResult, ScenarioResult
+  // (Sim pickles above). Results pickle field by field, bits unchanged, so
+  // they come back from multiprocessing workers as they were.
+  auto model_class = py::reinterpret_borrow<py::class_<simloop::Model>>(m.attr("Model"));
+  model_class
+      .def_property_readonly("name", &simloop::Model::name, "<mujoco model=...>'s name ('' if none).")
+      .def_property_readonly("has_chapter_layout", &simloop::Model::has_chapter_layout,
+                             "True if the scene has the chapter's box and pusher (the chapter's loop runs on it).")
+      .def_property_readonly("nbody", [](const simloop::Model& model) { return model.get()->nbody; })
+      .def_property_readonly("njnt", [](const simloop::Model& model) { return model.get()->njnt; })
+      .def_property_readonly("na", [](const simloop::Model& model) { return model.get()->na; })
+      .def_property_readonly("nsensor", [](const simloop::Model& model) { return model.get()->nsensor; })
+      .def_property_readonly("nsensordata", [](const simloop::Model& model) { return model.get()->nsensordata; })
+      .def_property_readonly("nkey", [](const simloop::Model& model) { return model.get()->nkey; })
+      .def(
+          "names",
+          &model_names,
+          "kind"_a, "Every object's name of a kind, by index ('' for an unnamed one).")
+      .def(
+          "object_info",
+          [](const simloop::Model& model, const std::string& kind, int id) {
+            // The model's fixed facts the named views need, as plain values.
+            const mjModel* raw = model.get();
+            const mjtObj type = object_type(kind);
+            if (id < 0 || static_cast<size_t>(id) >= py::len(model_names(model, kind))) throw py::value_error(kind + " id out of range");
+            if (type == mjOBJ_BODY) return py::dict("mass"_a = raw->body_mass[id]);
+            if (type == mjOBJ_JOINT) {
+              static constexpr const char* kTypes[] = {"free", "ball", "slide", "hinge"};
+              const int t = raw->jnt_type[id];
+              const int nq = t == mjJNT_FREE ? 7 : t == mjJNT_BALL ? 4 : 1;
+              const int nv = t == mjJNT_FREE ? 6 : t == mjJNT_BALL ? 3 : 1;
+              return py::dict("type"_a = kTypes[t], "qposadr"_a = raw->jnt_qposadr[id], "nq"_a = nq,
+                              "dofadr"_a = raw->jnt_dofadr[id], "nv"_a = nv, "body"_a = raw->jnt_bodyid[id]);
+            }
+            if (type == mjOBJ_ACTUATOR) {
+              return py::dict("ctrlrange"_a = py::make_tuple(raw->actuator_ctrlrange[2 * id],
+                                                             raw->actuator_ctrlrange[2 * id + 1]),
+                              "ctrllimited"_a = raw->actuator_ctrllimited[id] != 0);
+            }
+            if (type == mjOBJ_SENSOR) {
+              return py::dict("adr"_a = raw->sensor_adr[id], "dim"_a = raw->sensor_dim[id]);
+            }
+            return py::dict();
+          },
+          "kind"_a, "id"_a)
+      .def(py::pickle([](const simloop::Model& model) { return py::bytes(model.to_bytes()); },
+                      [](const py::bytes& bytes) { return simloop::Model::from_bytes(std::string(bytes)); }));
+  py::reinterpret_borrow<py::class_<RunResult>>(m.attr("RunResult"))
+      .def(py::pickle(&pickle_fields<RunResult, &run_result_fields<FieldWriter, const RunResult>>, [](const py::tuple& t) {
+        return unpickle_fields<RunResult, &run_result_fields<FieldReader, RunResult>>(t, "RunResult");
+      }));
+  py::reinterpret_borrow<py::class_<simloop::ScenarioRunResult>>(m.attr("ScenarioResult"))
+      .def(py::pickle(
+          &pickle_fields<simloop::ScenarioRunResult, &scenario_result_fields<FieldWriter, const simloop::ScenarioRunResult>>,
+          [](const py::tuple& t) {
+            return unpickle_fields<simloop::ScenarioRunResult,
+                                   &scenario_result_fields<FieldReader, simloop::ScenarioRunResult>>(t, "ScenarioResult");
+          }));
 }

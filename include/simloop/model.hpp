@@ -57,6 +57,15 @@ class Model {
   [[nodiscard]] Model for_run(double timestep, bool energy) const;
   [[nodiscard]] bool computes_energy() const noexcept { return (model_->opt.enableflags & mjENBL_ENERGY) != 0; }
 
+  // The compiled model in MuJoCo's binary format (mj_saveModel): what a
+  // pickled Model carries. from_bytes loads it back (mj_loadModel through a
+  // one-file virtual file system) as a model that steps bit for bit as this
+  // one. Throws MujocoError if MuJoCo refuses the bytes.
+  [[nodiscard]] std::string to_bytes() const;
+  [[nodiscard]] static Model from_bytes(std::string_view bytes, std::string_view source = "<saved model>");
+  // <mujoco model="...">'s name ("" if the scene has none).
+  [[nodiscard]] std::string name() const;
+
   [[nodiscard]] const mjModel* get() const noexcept { return model_.get(); }
   [[nodiscard]] double timestep() const noexcept { return model_->opt.timestep; }
   // The chapter's layout: a body "box" on a free joint and an actuator 0

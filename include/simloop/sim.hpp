@@ -1,10 +1,15 @@
 // The loop's rhythm, one call at a time, for people who write their own loop:
-// write intent (ctrl), write interference (a force on the box), step, look.
+// write intent (ctrl), write interference (a force on a body), step, look.
+// Any scene: the chapter's accessors (box_position, pusher_x, apply_force on
+// the box) throw InvalidArgument on a scene without the chapter's layout;
+// everything else works on any model.
 #pragma once
 
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "simloop/model.hpp"
@@ -21,51 +26,105 @@ struct Contact {
 
 class Sim {
  public:
-  // A fresh state for `model` at t = 0, with mj_forward run so every read
-  // is the true rest pose before the first step.
+  // A fresh state for `model` (any scene) at t = 0, with mj_forward run so
+  // every read is the true rest pose before the first step.
   explicit Sim(const Model& model);
 
-  // Back to t = 0: state, ctrl, applied force and warnings all cleared.
+  // An independent copy: its own mjData holding the same state (mj_copyData),
+  // the same steps taken and warnings; the compiled model is shared
+  // read-only. Stepping one never moves the other.
+  Sim(const Sim& other);
+  // Not assignable: the mjData a Sim steps is the same one for its whole
+  // life, so views into it (the Python bindings' arrays) never dangle.
+  Sim& operator=(const Sim&) = delete;
+
+  // Back to t = 0: state, ctrl, applied forces, steps and warnings all cleared.
   void reset();
+  // Back to keyframe `key` (0 .. nkey-1) of the model (mj_resetDataKeyframe),
+  // steps and warnings cleared. Throws InvalidArgument naming the range.
+  void reset_to_keyframe(int key);
 
   // Sim seconds per step. Changes this Sim's own copy of the model.
   void set_timestep(double timestep);
   [[nodiscard]] double timestep() const noexcept { return model_.timestep(); }
 
-  // ctrl[0], the motor's command. Like everything written into mjData it
-  // stays until overwritten. Throws InvalidArgument unless finite.
+  // The model's object of `type` named `name`: its id. Throws
+  // InvalidArgument naming what the scene has, with a likely typo's fix:
+  // "no body named 'torsoo' (did you mean 'torso'?); the scene's bodies: ...".
+  [[nodiscard]] int id(mjtObj type, const std::string& name) const;
+  // The same for an index: throws InvalidArgument unless 0 <= index < count.
+  [[nodiscard]] int checked_index(mjtObj type, long long index) const;
+
+  // ctrl[0], the motor's command (the chapter's). Like everything written
+  // into mjData it stays until overwritten. Throws InvalidArgument unless
+  // finite, or if the model has no actuator.
   void set_ctrl(double value);
-  [[nodiscard]] double ctrl() const noexcept { return data_.get()->ctrl[0]; }
+  [[nodiscard]] double ctrl() const;
+  // The whole ctrl vector: `count` must be nu and every value finite
+  // (InvalidArgument naming the sizes or the index).
+  void set_ctrl(const double* values, std::size_t count);
 
   // An external force on the box (N, world frame), added on top of physics
   // through xfrc_applied. IT PERSISTS: MuJoCo never clears it, so it acts on
   // every following step until clear_force(). Forgetting that is the
   // chapter's classic bug. Throws InvalidArgument unless finite.
   void apply_force(const std::array<double, 3>& force);
-  void clear_force() noexcept;
-  [[nodiscard]] std::array<double, 3> applied_force() const noexcept;
+  void clear_force();
+  [[nodiscard]] std::array<double, 3> applied_force() const;
 
-  // Advances n steps (n >= 1) with the current ctrl and force. With a
+  // A force (N) and/or torque (N m) on any body, world frame, at the body's
+  // origin, written into its xfrc_applied; a part not given (null) is left
+  // as it was. It persists as above, until clear_forces(). Throws
+  // InvalidArgument for a bad body or a non-finite value, writing nothing.
+  void apply_wrench(int body, const std::array<double, 3>* force, const std::array<double, 3>* torque);
+  // Zeros every body's xfrc_applied.
+  void clear_forces() noexcept;
+
+  // Advances n steps (n >= 1) with the current ctrl and forces. With a
   // `control`, a long step can be stopped between chunks (Interrupted; the
   // steps already taken stay taken).
   void step(std::int64_t n = 1, RunControl* control = nullptr);
 
+  // Brings what MuJoCo derives from the state (xpos, xquat, cvel, sensors,
+  // contacts) up to the current qpos/qvel without changing the next step's
+  // bits (forward_keeping_warmstart). After mj_step they describe the state
+  // at the start of the step just taken, as in MuJoCo.
+  void forward();
+
+  // The full physics state (state.hpp's layout) and back. set_state throws
+  // InvalidArgument unless the size is state_size(); it leaves steps_taken.
+  [[nodiscard]] std::vector<double> state() const;
+  void set_state(const double* state, std::size_t size);
+  [[nodiscard]] std::size_t state_size() const noexcept;
+  [[nodiscard]] std::vector<std::pair<std::string, std::size_t>> state_layout() const;
+  // For restoring a saved Sim (pickle): the count steps_taken() reports.
+  void set_steps_taken(std::int64_t steps) noexcept { steps_ = steps; }
+
+  // A body's velocity, world frame, at its origin: (wx, wy, wz, vx, vy, vz),
+  // from cvel (mj_objectVelocity), as of the last step or forward().
+  [[nodiscard]] std::array<double, 6> body_velocity(int body) const;
+
   [[nodiscard]] double time() const noexcept { return data_.get()->time; }
   [[nodiscard]] std::int64_t steps_taken() const noexcept { return steps_; }
   // The box's free joint: position (m), quaternion (w, x, y, z), linear
-  // velocity (m/s, world) -- the state now, from qpos/qvel.
-  [[nodiscard]] std::array<double, 3> box_position() const noexcept;
-  [[nodiscard]] std::array<double, 4> box_quaternion() const noexcept;
-  [[nodiscard]] std::array<double, 3> box_velocity() const noexcept;
-  // The pusher's joint position and velocity.
-  [[nodiscard]] double pusher_x() const noexcept;
-  [[nodiscard]] double pusher_velocity() const noexcept;
+  // velocity (m/s, world) -- the state now, from qpos/qvel. The chapter's
+  // scene only: InvalidArgument naming what another scene lacks.
+  [[nodiscard]] std::array<double, 3> box_position() const;
+  [[nodiscard]] std::array<double, 4> box_quaternion() const;
+  [[nodiscard]] std::array<double, 3> box_velocity() const;
+  // The pusher's joint position and velocity (the chapter's scene only).
+  [[nodiscard]] double pusher_x() const;
+  [[nodiscard]] double pusher_velocity() const;
   // The contacts MuJoCo found in its last collision pass.
   [[nodiscard]] std::vector<Contact> contacts() const;
   // Warnings MuJoCo raised since construction or reset.
   [[nodiscard]] std::vector<Warning> warnings() const;
 
   [[nodiscard]] const Model& model() const noexcept { return model_; }
+  // The mjData this Sim steps: the same object for the Sim's whole life.
+  // Writes through it take effect at the next step.
+  [[nodiscard]] mjData* data() noexcept { return data_.get(); }
+  [[nodiscard]] const mjData* data() const noexcept { return data_.get(); }
 
  private:
   Model model_;

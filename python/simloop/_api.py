@@ -250,25 +250,256 @@ def run_batch(seeds: Iterable[int] = (0,), timesteps: Iterable[float] = (0.002,)
     return _core.run_batch(load_model(model), configs, workers, progress=_check_progress(progress))
 
 
-class Sim:
-    """The loop's rhythm, one call at a time: write ctrl, write a force, step, look.
+def _finite_vector(name: str, value: object, size: int, what: str) -> "Sequence[float]":
+    """A vector of `size` finite numbers from a sequence or a numeric numpy array;
+    TypeError or ValueError naming `name`, its shape and the size wanted."""
+    import numpy as np
 
-    Reads (box_position, contacts, ...) return copies: nothing you hold
-    changes under you when the simulation steps on.
+    if isinstance(value, np.ndarray) and value.dtype == np.float64 and value.shape == (size,) \
+            and np.isfinite(value).all():
+        return value  # the common case, kept cheap
+    if isinstance(value, np.ndarray):
+        if value.dtype.kind not in "biuf":
+            raise TypeError(f"{name} must hold numbers ({what}), got an array of dtype {value.dtype}")
+        array = value.astype(np.float64)
+    elif isinstance(value, Sequence) and not isinstance(value, (str, bytes)):
+        array = np.array([_check_real("%s[%d]" % (name, i), v) for i, v in enumerate(value)], dtype=np.float64)
+    else:
+        raise TypeError(f"{name} must be a sequence or numpy array of {size} numbers ({what}), got {_describe(value)}")
+    if array.shape != (size,):
+        raise ValueError(f"{name} must have shape ({size},) ({what}), got shape {array.shape}")
+    bad = np.flatnonzero(~np.isfinite(array))
+    if bad.size:
+        raise ValueError(f"{name}[{bad[0]}] must be finite, got {float(array[bad[0]])!r}")
+    return array.tolist()
+
+
+_JOINT_TYPES = ("free", "ball", "slide", "hinge")
+
+
+class _Named:
+    """One named object of a Sim's scene (base of the body, joint, actuator and sensor views)."""
+
+    __slots__ = ("_sim", "id", "name")
+    _kind = ""
+
+    def __init__(self, sim: "Sim", id: int, name: str) -> None:
+        self._sim = sim
+        self.id = id
+        self.name = name
+
+    def _info(self) -> dict:
+        return self._sim.model.object_info(self._kind, self.id)
+
+    def __repr__(self) -> str:
+        return f"<simloop.Sim {self._kind} {self.id} {self.name!r}{self._details()}>"
+
+    def _details(self) -> str:
+        return ""
+
+
+class BodyView(_Named):
+    """A body: pose and velocity (world frame, as of the last step or
+    Sim.forward(): MuJoCo derives them before integrating), mass, and the
+    force/torque applied to it (a writable view of its xfrc_applied row)."""
+
+    __slots__ = ()
+    _kind = "body"
+
+    @property
+    def xpos(self):
+        """Position of the body's frame, world, m (a copy)."""
+        return self._sim._views["xpos"][self.id].copy()
+
+    @property
+    def xquat(self):
+        """Orientation (w, x, y, z), world (a copy)."""
+        return self._sim._views["xquat"][self.id].copy()
+
+    @property
+    def angular_velocity(self):
+        """rad/s, world frame (from cvel, mj_objectVelocity)."""
+        return self._sim._sim.body_velocity(self.id)[:3]
+
+    @property
+    def linear_velocity(self):
+        """m/s of the body's origin, world frame (from cvel, mj_objectVelocity)."""
+        return self._sim._sim.body_velocity(self.id)[3:]
+
+    @property
+    def mass(self) -> float:
+        return self._info()["mass"]
+
+    @property
+    def xfrc_applied(self):
+        """(fx, fy, fz, tx, ty, tz) applied on this body: a writable view; it persists."""
+        return self._sim._views["xfrc_applied"][self.id]
+
+    def _details(self) -> str:
+        return f" mass={self.mass!r}"
+
+
+class JointView(_Named):
+    """A joint: its type and its slices of qpos and qvel (writable views)."""
+
+    __slots__ = ()
+    _kind = "joint"
+
+    @property
+    def type(self) -> str:
+        """'free', 'ball', 'slide' or 'hinge'."""
+        return self._info()["type"]
+
+    @property
+    def qpos(self):
+        info = self._info()
+        return self._sim._views["qpos"][info["qposadr"]:info["qposadr"] + info["nq"]]
+
+    @property
+    def qvel(self):
+        info = self._info()
+        return self._sim._views["qvel"][info["dofadr"]:info["dofadr"] + info["nv"]]
+
+    def _details(self) -> str:
+        return f" type={self.type}"
+
+
+class ActuatorView(_Named):
+    """An actuator: its ctrl (a writable view of one value), the force it
+    produced in the last step, and its ctrlrange."""
+
+    __slots__ = ()
+    _kind = "actuator"
+
+    @property
+    def ctrl(self):
+        return self._sim._views["ctrl"][self.id:self.id + 1]
+
+    @property
+    def force(self) -> float:
+        """actuator_force: its scalar force in the last step, before the gear (a motor: ctrl)."""
+        return float(self._sim._views["actuator_force"][self.id])
+
+    @property
+    def ctrlrange(self) -> Optional[tuple]:
+        """(low, high) MuJoCo clamps ctrl to, or None if unlimited."""
+        info = self._info()
+        return info["ctrlrange"] if info["ctrllimited"] else None
+
+    def _details(self) -> str:
+        return f" ctrlrange={self.ctrlrange}"
+
+
+class SensorView(_Named):
+    """A sensor: its readings (a read-only view into sensordata)."""
+
+    __slots__ = ()
+    _kind = "sensor"
+
+    @property
+    def data(self):
+        info = self._info()
+        return self._sim._views["sensordata"][info["adr"]:info["adr"] + info["dim"]]
+
+
+def _view_property(name: str, doc: str, settable: bool = False) -> property:
+    """A Sim property giving its view `name`; settable: assigning writes into the view (checked)."""
+    def get(self: "Sim"):
+        return self._views[name]
+
+    def set(self: "Sim", value: object) -> None:
+        self._set_array(name, value)
+
+    return property(get, set if settable else None, doc=doc)
+
+
+_ARRAYS = ("qpos", "qvel", "ctrl", "act", "qfrc_applied", "xfrc_applied", "sensordata", "actuator_force", "xpos",
+           "xquat")
+
+
+class Sim:
+    """The loop's rhythm, one call at a time, on any scene: write ctrl, write forces, step, look.
+
+        sim = simloop.Sim("tests/scenes/walker.xml")      # a Model, an MJCF path, a Scenario
+        sim.ctrl[:] = 0.3                                   # or sim.step(100, ctrl=[...])
+        sim.apply_force(body="torso", force=[0, 0, 20])     # persists until clear_forces()
+        sim.step(100)
+        sim.body("torso").xpos, sim.joint("hip").qpos, sim.sensor(0).data
+        saved = sim.get_state(); ...; sim.set_state(saved)  # bit for bit
+
+    Arrays. qpos, qvel, ctrl, act, qfrc_applied and xfrc_applied (nbody x 6)
+    are numpy VIEWS into MuJoCo's mjData, writable: a write takes effect at
+    the next step, and what you hold changes when the Sim steps (copy it to
+    keep it). sensordata is a read-only view. A view keeps its Sim alive, and
+    the mjData never moves, so a view never dangles. Derived quantities (a
+    body's xpos, xquat, velocity) are copies, as of the last step: MuJoCo
+    computes them before integrating; forward() brings them up to date
+    without changing the run's bits.
+
+    Threads. Each method call (step, reads, get/set_state, apply_force...)
+    holds the Sim's lock, so calls from several threads take turns. The
+    views do NOT take the lock: reading or writing one while another thread
+    steps the Sim sees a half-written state. Share a Sim across threads
+    through its methods, or give each thread its own copy (copy.copy(sim)).
 
     IMPORTANT: like MuJoCo's xfrc_applied, a force set with apply_force()
     PERSISTS. MuJoCo never clears it: it pushes on every following step until
-    you call clear_force(). ctrl persists the same way. Forgetting this is the
+    you clear it. ctrl persists the same way. Forgetting this is the
     chapter's classic bug (exercise 2).
 
-    Any thread may call a Sim: each call (a step, a read, a timestep change)
-    holds the Sim's own lock, so calls from several threads take turns.
+    Sim(scenario) takes the scenario's scene and timestep only: you drive
+    the loop (ctrl, forces); its controls and disturbances are not applied
+    (run_scenario does that).
+
+    The chapter's accessors (box_position, pusher_x, apply_force(force),
+    clear_force, ...) need the chapter's layout (a body "box" on a free
+    joint, actuator 0 on a slide or hinge joint); on another scene they
+    raise ValueError saying what it lacks.
+
+    copy.copy / copy.deepcopy give an independent Sim (its own data, the
+    same read-only model); pickle carries the model, the full state and
+    steps_taken (not MuJoCo's warnings).
     """
 
-    def __init__(self, model: ModelLike = None, timestep: Optional[float] = None) -> None:
+    def __init__(self, model: Union[ModelLike, "object"] = None, timestep: Optional[float] = None) -> None:
+        from .scenario import Scenario  # here: scenario.py imports this module
+
+        if isinstance(model, Scenario):
+            if timestep is None:
+                timestep = model.timestep
+            model = model.model()
         self._sim = _core.Sim(load_model(model))
+        self._make_views()
         if timestep is not None:
             self.timestep = timestep
+
+    def _make_views(self) -> None:
+        self._views = {name: self._sim.array(name) for name in _ARRAYS}
+
+    @classmethod
+    def _wrapping(cls, core: "_core.Sim") -> "Sim":
+        sim = cls.__new__(cls)
+        sim._sim = core
+        sim._make_views()
+        return sim
+
+    def __copy__(self) -> "Sim":
+        return Sim._wrapping(self._sim.copy())
+
+    def __deepcopy__(self, memo: dict) -> "Sim":
+        return Sim._wrapping(self._sim.copy())
+
+    def __getstate__(self) -> dict:
+        return {"sim": self._sim}
+
+    def __setstate__(self, state: dict) -> None:
+        self._sim = state["sim"]
+        self._make_views()
+
+    @property
+    def model(self) -> Model:
+        """This Sim's model (its own copy when the timestep was changed)."""
+        return self._sim.model
 
     @property
     def timestep(self) -> float:
@@ -279,23 +510,84 @@ class Sim:
     def timestep(self, value: float) -> None:
         self._sim.set_timestep(_check_timestep(value))
 
+    # --- The arrays (views; see the class docstring).
+
+    def _set_array(self, name: str, value: object) -> None:
+        view = self._views[name]
+        view[:] = _finite_vector(name, value, view.size, f"{name} has {view.size} values")
+
+    qpos = _view_property("qpos", "Joint positions (nq), a writable view.", settable=True)
+    qvel = _view_property("qvel", "Joint velocities (nv), a writable view.", settable=True)
+
     @property
-    def ctrl(self) -> float:
-        """The motor command, ctrl[0]; MuJoCo clamps it to the ctrlrange [-1, 1]."""
-        return self._sim.ctrl
+    def ctrl(self):
+        """The chapter's scene: the motor command ctrl[0], a float (MuJoCo clamps it to
+        [-1, 1]). Any other scene: every actuator's ctrl (nu), a writable view."""
+        if self.model.has_chapter_layout:
+            return self._sim.ctrl
+        return self._views["ctrl"]
 
     @ctrl.setter
-    def ctrl(self, value: float) -> None:
-        number = _check_real("ctrl", value)
-        if not math.isfinite(number):
-            raise ValueError(f"ctrl must be finite, got {number!r}")
-        self._sim.set_ctrl(number)
+    def ctrl(self, value) -> None:
+        if isinstance(value, numbers.Real) and not isinstance(value, bool):
+            number = _check_real("ctrl", value)
+            if not math.isfinite(number):
+                raise ValueError(f"ctrl must be finite, got {number!r}")
+            self._sim.set_ctrl(number)
+        else:
+            self._sim.set_ctrl_vector(_finite_vector("ctrl", value, self.model.nu, "one per actuator"))
 
-    def step(self, n: int = 1, ctrl: Optional[float] = None, *, progress: Progress = None) -> None:
+    ctrl_array = _view_property("ctrl", "Every actuator's ctrl (nu), a writable view, on any scene.")
+    act = _view_property("act", "Actuator activations (na), a writable view.")
+    qfrc_applied = _view_property("qfrc_applied", "Generalized forces applied (nv), a writable view; it persists.")
+    xfrc_applied = _view_property("xfrc_applied", "Force and torque on each body, world frame (nbody x 6), a "
+                                                  "writable view; it persists.")
+    sensordata = _view_property("sensordata", "Every sensor's reading (nsensordata), a read-only view, as of the "
+                                              "last step.")
+
+    # --- Named access.
+
+    def _lookup(self, kind: str, key: object) -> "tuple[int, str]":
+        if isinstance(key, str):
+            name = _check_text(kind, key)  # ValueError for text UTF-8 cannot hold
+            if b"\0" in name:
+                raise ValueError(f"{kind} must not contain a NUL character, got {_show(key)}")
+            index = self._sim.id(kind, name)
+        elif isinstance(key, numbers.Integral) and not isinstance(key, bool):
+            number = int(key)
+            if not -2**63 <= number < 2**63:
+                plural = "bodies" if kind == "body" else kind + "s"
+                raise ValueError(f"{kind} index {_show(number)} is out of range: the scene has "
+                                 f"{len(self.model.names(kind))} {plural}")
+            index = self._sim.checked_index(kind, number)
+        else:
+            raise TypeError(f"{kind} must be a name (str) or an index (int), got {_describe(key)}")
+        return index, self.model.names(kind)[index]
+
+    def body(self, key: Union[str, int]) -> BodyView:
+        """A body by name or index: xpos, xquat, linear/angular_velocity, mass, id."""
+        return BodyView(self, *self._lookup("body", key))
+
+    def joint(self, key: Union[str, int]) -> JointView:
+        """A joint by name or index: type, qpos and qvel (writable views)."""
+        return JointView(self, *self._lookup("joint", key))
+
+    def actuator(self, key: Union[str, int]) -> ActuatorView:
+        """An actuator by name or index: ctrl (a writable view), force, ctrlrange."""
+        return ActuatorView(self, *self._lookup("actuator", key))
+
+    def sensor(self, key: Union[str, int]) -> SensorView:
+        """A sensor by name or index: data (a read-only view)."""
+        return SensorView(self, *self._lookup("sensor", key))
+
+    # --- Stepping.
+
+    def step(self, n: int = 1, ctrl: Optional[object] = None, *, progress: Progress = None) -> None:
         """Advances n steps (1 to 2**62-1); with ctrl given, writes it first (it then persists).
 
-        Ctrl-C stops a long step promptly (KeyboardInterrupt; the steps taken
-        stay taken). progress: as for run().
+        ctrl: a number (ctrl[0], the chapter's motor) or a vector of nu
+        numbers (every actuator). Ctrl-C stops a long step promptly
+        (KeyboardInterrupt; the steps taken stay taken). progress: as for run().
         """
         count = _check_int("n", n, 1, MAX_STEPS)
         if ctrl is not None:
@@ -305,32 +597,98 @@ class Sim:
         else:
             self._sim.step_with_progress(count, _check_progress(progress))
 
-    def apply_force(self, force: Sequence[float]) -> None:
-        """Pushes on the box with (fx, fy, fz) newtons, world frame, from now on.
+    def forward(self) -> None:
+        """Brings xpos, xquat, velocities, sensordata and contacts up to the current
+        qpos/qvel (mj_forward) without changing the next step's bits."""
+        self._sim.forward()
 
-        It PERSISTS until clear_force(): MuJoCo does not reset it after a step.
+    # --- Forces.
+
+    def apply_force(self, force: Optional[Sequence[float]] = None, *, body: Union[str, int, None] = None,
+                    torque: Optional[Sequence[float]] = None) -> None:
+        """Pushes with (fx, fy, fz) newtons and/or twists with (tx, ty, tz) N m, world
+        frame, at the body's origin, from now on.
+
+        body: a name or index; None is the chapter's box (force only). A part
+        not given is left as it was. It PERSISTS until clear_forces() (or
+        clear_force() for the box): MuJoCo does not reset it after a step.
         """
-        values = _sequence("force", force)
+        if body is None:
+            if torque is not None:
+                raise ValueError("torque needs body=...: the chapter's apply_force(force) pushes the box only")
+            if force is None:
+                raise TypeError("apply_force needs a force (and body=... for a body other than the chapter's box)")
+            self._sim.apply_force(self._force_components("force", force))
+            return
+        index, _ = self._lookup("body", body)
+        if force is None and torque is None:
+            raise ValueError("apply_force needs force=..., torque=... or both")
+        self._sim.apply_wrench(index, None if force is None else self._force_components("force", force),
+                               None if torque is None else self._force_components("torque", torque))
+
+    @staticmethod
+    def _force_components(name: str, value: object) -> "list[float]":
+        values = _sequence(name, value)
         if len(values) != 3:
-            raise ValueError(f"force must have 3 components (fx, fy, fz), got {len(values)}")
-        checked = [_check_real("force[%d]" % i, v) for i, v in enumerate(values)]
+            axes = "(fx, fy, fz)" if name == "force" else "(tx, ty, tz)"
+            raise ValueError(f"{name} must have 3 components {axes}, got {len(values)}")
+        checked = [_check_real("%s[%d]" % (name, i), v) for i, v in enumerate(values)]
         for i, v in enumerate(checked):
             if not math.isfinite(v):
-                raise ValueError(f"force[{i}] must be finite, got {v!r}")
-        self._sim.apply_force(checked)
+                raise ValueError(f"{name}[{i}] must be finite, got {v!r}")
+        return checked
 
     def clear_force(self) -> None:
-        """Stops pushing: writes zero into the box's xfrc_applied."""
+        """Stops pushing the chapter's box: writes zero into its xfrc_applied force."""
         self._sim.clear_force()
 
-    def reset(self) -> None:
-        """Back to t = 0: state, ctrl, force and warnings cleared (timestep kept)."""
-        self._sim.reset()
+    def clear_forces(self) -> None:
+        """Zeros every body's xfrc_applied (forces and torques)."""
+        self._sim.clear_forces()
 
     @property
     def applied_force(self):
-        """The force now written on the box (a copy), N."""
+        """The force now written on the chapter's box (a copy), N."""
         return self._sim.applied_force
+
+    # --- State.
+
+    def get_state(self):
+        """The full physics state as a flat float64 array (a copy): time, qpos,
+        qvel, act, qacc_warmstart, ctrl, qfrc_applied, xfrc_applied, mocap_pos,
+        mocap_quat, userdata (see state_layout()). set_state() of it continues
+        bit for bit, in this Sim or another on the same model."""
+        return self._sim.get_state()
+
+    def set_state(self, state) -> None:
+        """Restores a state from get_state() (a float64 array of state_size values).
+        steps_taken and warnings are left as they are."""
+        import numpy as np
+
+        if not isinstance(state, np.ndarray):
+            raise TypeError(f"state must be a numpy float64 array (from get_state()), got {_describe(state)}")
+        if state.dtype != np.float64:
+            raise ValueError(f"state must have dtype float64, got {state.dtype}")
+        size = sum(n for _, n in self.state_layout())
+        if state.shape != (size,):
+            raise ValueError(f"state must have shape ({size},) for this model, got shape {state.shape}")
+        self._sim.set_state(np.ascontiguousarray(state))
+
+    def state_layout(self) -> "list[tuple[str, int]]":
+        """The state's parts in order with their sizes: [('time', 1), ('qpos', nq), ...]."""
+        return [(name, int(size)) for name, size in self._sim.state_layout]
+
+    @property
+    def state_size(self) -> int:
+        return sum(n for _, n in self.state_layout())
+
+    def reset(self, keyframe: Union[str, int, None] = None) -> None:
+        """Back to t = 0, or to a keyframe of the scene (a name or index): state,
+        ctrl, forces, steps_taken and warnings reset (timestep kept)."""
+        if keyframe is None:
+            self._sim.reset()
+        else:
+            self._sim.reset_to_keyframe(self._lookup("keyframe", keyframe)[0])
 
     @property
     def time(self) -> float:
@@ -339,6 +697,8 @@ class Sim:
     @property
     def steps_taken(self) -> int:
         return self._sim.steps_taken
+
+    # --- The chapter's scene.
 
     @property
     def box_position(self):
@@ -375,7 +735,10 @@ class Sim:
         return self._sim.warnings
 
     def __repr__(self) -> str:
-        return f"<simloop.Sim t={self.time!r} steps_taken={self.steps_taken} timestep={self.timestep!r}>"
+        model = self.model
+        scene = repr(model.name) if model.name else "(unnamed)"
+        return (f"<simloop.Sim {scene} t={self.time!r} steps_taken={self.steps_taken} timestep={self.timestep!r} "
+                f"nq={model.nq} nv={model.nv} nu={model.nu} nbody={model.nbody}>")
 
 
 def sweep(timesteps: Optional[Iterable[float]] = None, duration: Optional[float] = None,

@@ -18,6 +18,7 @@ import math
 import numbers
 import random
 import sys
+from pathlib import Path
 
 import numpy as np
 
@@ -65,6 +66,7 @@ def main():
     sweep = simloop.sweep(timesteps=[0.25], duration=1.0, threads=1)
     model = simloop.Model.pusher_scene()
     sim = simloop.Sim()
+    any_sim = simloop.Sim(Path(__file__).resolve().parents[1] / "scenes" / "pusht.xml")
 
     def set_attr(obj, attr):
         return lambda v: setattr(obj, attr, v)
@@ -108,6 +110,16 @@ def main():
         ("Sim.timestep", "value", set_attr(sim, "timestep")),
         ("Sim.apply_force", "force", sim.apply_force),
         ("Sim.apply_force", "force[1]", lambda v: sim.apply_force([0.0, v, 0.0])),
+        # Sim on a scene without the chapter's layout: names, vectors, state.
+        ("Sim.body", "key", any_sim.body),
+        ("Sim.joint", "key", any_sim.joint),
+        ("Sim.sensor", "key", any_sim.sensor),
+        ("Sim.reset", "keyframe", lambda v: any_sim.reset(keyframe=v)),
+        ("Sim.set_state", "state", any_sim.set_state),
+        ("Sim.apply_force", "body", lambda v: any_sim.apply_force(body=v, force=[0.0, 0.0, 1.0])),
+        ("Sim.apply_force", "torque", lambda v: any_sim.apply_force(body=1, torque=v)),
+        ("Sim.step", "ctrl", lambda v: any_sim.step(1, ctrl=v)),
+        ("Sim.qpos", "value", set_attr(any_sim, "qpos")),
     ]
     raised, bad = {}, []
     done = 0

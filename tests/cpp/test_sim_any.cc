@@ -1,0 +1,155 @@
+// Sim on any scene: names, inputs, forces, state, keyframes, copies, and a
+// model saved as bytes and loaded back.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "simloop/errors.hpp"
+#include "simloop/model.hpp"
+#include "simloop/sim.hpp"
+
+namespace {
+
+using simloop::Model;
+using simloop::Sim;
+
+Model scene(const std::string& file) { return Model::from_file(std::string(SIMLOOP_TEST_SCENES) + "/" + file); }
+
+template <class F>
+std::string message_of(F&& f) {
+  try {
+    f();
+  } catch (const simloop::InvalidArgument& e) {
+    return e.what();
+  }
+  return "(no InvalidArgument)";
+}
+
+bool same_bits(const std::vector<double>& a, const std::vector<double>& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0;
+}
+
+// Every actuator at a different ctrl, then n steps.
+void drive(Sim& sim, int n) {
+  std::vector<double> ctrl(static_cast<std::size_t>(sim.model().get()->nu));
+  for (std::size_t i = 0; i < ctrl.size(); ++i) ctrl[i] = 0.6 - 0.25 * static_cast<double>(i);
+  sim.set_ctrl(ctrl.data(), ctrl.size());
+  sim.step(n);
+}
+
+TEST(SimAny, RunsASceneWithoutTheChaptersLayoutAndSaysWhatTheChaptersReadsNeed) {
+  const Model walker = scene("walker.xml");
+  Sim sim(walker);
+  drive(sim, 50);
+  EXPECT_EQ(sim.steps_taken(), 50);
+  EXPECT_NE(sim.data()->qpos[2], walker.get()->qpos0[2]);  // the walker moved
+  EXPECT_EQ(message_of([&] { (void)sim.box_position(); }), walker.missing_layout());
+  EXPECT_EQ(message_of([&] { sim.apply_force({1.0, 0.0, 0.0}); }), walker.missing_layout());
+}
+
+TEST(SimAny, UnknownNamesListWhatTheSceneHasWithALikelyFix) {
+  Sim sim(scene("walker.xml"));
+  EXPECT_EQ(sim.id(mjOBJ_BODY, "torso"), 1);
+  EXPECT_EQ(message_of([&] { (void)sim.id(mjOBJ_BODY, "torsoo"); }),
+            "no body named 'torsoo' (did you mean 'torso'?); the scene's bodies: world, torso, thigh_left, "
+            "shin_left, thigh_right, shin_right");
+  EXPECT_EQ(message_of([&] { (void)sim.id(mjOBJ_KEY, "stand"); }), "no keyframe named 'stand'; the scene's keyframes: (none named)");
+  EXPECT_NE(message_of([&] { (void)sim.checked_index(mjOBJ_ACTUATOR, 4); })
+                .find("actuator index 4 is out of range: the scene has 4 actuators"),
+            std::string::npos);
+}
+
+TEST(SimAny, CtrlVectorNeedsOneFiniteValuePerActuator) {
+  Sim sim(scene("pusht.xml"));
+  const std::array<double, 3> three{0.1, 0.2, 0.3};
+  EXPECT_EQ(message_of([&] { sim.set_ctrl(three.data(), 3); }),
+            "ctrl must have nu = 2 values (one per actuator), got 3");
+  const std::array<double, 2> bad{0.1, std::nan("")};
+  EXPECT_EQ(message_of([&] { sim.set_ctrl(bad.data(), 2); }), "ctrl[1] must be finite, got nan");
+  EXPECT_EQ(sim.data()->ctrl[0], 0.0);  // nothing written
+}
+
+TEST(SimAny, AWrenchOnAnyBodyPersistsUntilCleared) {
+  Sim sim(scene("pusht.xml"));
+  const int block = sim.id(mjOBJ_BODY, "tblock");
+  const std::array<double, 3> torque{0.0, 0.0, 0.05};
+  sim.apply_wrench(block, nullptr, &torque);
+  const double* slot = sim.data()->xfrc_applied + 6 * block;
+  sim.step(100);
+  EXPECT_EQ(slot[5], 0.05);
+  EXPECT_EQ(slot[0], 0.0);  // the force part, not given, left alone
+  const double turned = sim.data()->qvel[5];  // the free joint's angular z
+  EXPECT_GT(turned, 0.0);
+  const std::array<double, 3> nan_force{std::nan(""), 0.0, 0.0};
+  EXPECT_NE(message_of([&] { sim.apply_wrench(block, &nan_force, nullptr); }), "(no InvalidArgument)");
+  EXPECT_NE(message_of([&] { sim.apply_wrench(99, &nan_force, nullptr); }).find("body index 99 is out of range"),
+            std::string::npos);
+  sim.clear_forces();
+  for (int i = 0; i < 6 * sim.model().get()->nbody; ++i) EXPECT_EQ(sim.data()->xfrc_applied[i], 0.0);
+}
+
+TEST(SimAny, AStateRestoredIntoAnotherSimGoesOnBitForBit) {
+  for (const char* file : {"pusht.xml", "walker.xml"}) {
+    const Model model = scene(file);
+    Sim a(model);
+    drive(a, 137);
+    const std::vector<double> saved = a.state();
+    drive(a, 200);
+    Sim b(model);
+    b.set_state(saved.data(), saved.size());
+    drive(b, 200);
+    EXPECT_TRUE(same_bits(a.state(), b.state())) << file;
+    EXPECT_NE(message_of([&] { b.set_state(saved.data(), saved.size() - 1); })
+                  .find("state must have " + std::to_string(saved.size()) + " values"),
+              std::string::npos);
+  }
+}
+
+TEST(SimAny, ACopyIsIndependentAndStepsAsTheOriginalWould) {
+  Sim original(scene("pusht.xml"));
+  drive(original, 80);
+  Sim copy(original);
+  EXPECT_NE(copy.data(), original.data());
+  drive(copy, 40);
+  EXPECT_EQ(original.steps_taken(), 80);  // stepping the copy did not move the original
+  EXPECT_EQ(copy.steps_taken(), 120);
+  drive(original, 40);
+  EXPECT_TRUE(same_bits(original.state(), copy.state()));
+}
+
+TEST(SimAny, ResetsToAKeyframe) {
+  const Model model = Model::from_xml_string(R"(<mujoco model="keyed">
+  <worldbody><body name="ball" pos="0 0 1"><freejoint/><geom size="0.1" mass="1"/></body></worldbody>
+  <keyframe><key name="high" qpos="0 0 3 1 0 0 0"/></keyframe>
+</mujoco>)");
+  Sim sim(model);
+  sim.step(10);
+  sim.reset_to_keyframe(sim.id(mjOBJ_KEY, "high"));
+  EXPECT_EQ(sim.data()->qpos[2], 3.0);
+  EXPECT_EQ(sim.time(), 0.0);
+  EXPECT_EQ(sim.steps_taken(), 0);
+  EXPECT_NE(message_of([&] { sim.reset_to_keyframe(1); }).find("keyframe index 1 is out of range: the scene has 1 keyframes; the scene's keyframes: high"),
+            std::string::npos);
+}
+
+TEST(SimAny, AModelSavedAsBytesLoadsBackAndStepsToTheSameBits) {
+  for (const char* file : {"pusht.xml", "walker.xml"}) {
+    const Model model = scene(file).with_timestep(0.003);
+    const std::string bytes = model.to_bytes();
+    const Model loaded = Model::from_bytes(bytes);
+    EXPECT_EQ(loaded.to_bytes(), bytes) << file;
+    EXPECT_EQ(loaded.timestep(), 0.003);
+    EXPECT_EQ(loaded.name(), model.name());
+    Sim a(model), b(loaded);
+    drive(a, 300);
+    drive(b, 300);
+    EXPECT_TRUE(same_bits(a.state(), b.state())) << file;
+  }
+  EXPECT_THROW((void)Model::from_bytes("not a model"), simloop::MujocoError);
+  EXPECT_THROW((void)Model::from_bytes(""), simloop::InvalidArgument);
+}
+
+}  // namespace

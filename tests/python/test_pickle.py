@@ -1,0 +1,96 @@
+"""Model, Sim, RunResult and ScenarioResult pickle, and come back from worker
+processes as they were, bit for bit."""
+
+from __future__ import annotations
+
+import concurrent.futures
+import multiprocessing
+import pickle
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import simloop
+
+SCENES = Path(__file__).resolve().parents[1] / "scenes"
+
+
+def same_trajectory(a, b) -> bool:
+    """Bit for bit (the final row's input columns are NaN, which == never equals)."""
+    return a.shape == b.shape and a.tobytes() == b.tobytes()
+
+
+def test_a_model_pickles_as_the_same_compiled_model():
+    model = simloop.Model.from_file(SCENES / "walker.xml").with_timestep(0.003)
+    back = pickle.loads(pickle.dumps(model))
+    assert repr(back) == repr(model) and back.timestep == 0.003 and back.name == "walker"
+    assert pickle.dumps(back) == pickle.dumps(model)  # the same bytes again
+    scenario = simloop.Scenario.from_file(SCENES / "walker.toml")
+    ours = simloop.run_scenario(scenario, seed=3, steps=300, model=model)
+    theirs = simloop.run_scenario(scenario, seed=3, steps=300, model=back)
+    assert same_trajectory(ours.trajectory, theirs.trajectory)
+
+
+def test_the_chapters_model_pickles_and_runs_the_chapters_bits():
+    back = pickle.loads(pickle.dumps(simloop.Model.pusher_scene()))
+    assert back.has_chapter_layout
+    assert simloop.run(model=back, steps=400).metrics_json() == simloop.run(steps=400).metrics_json()
+    assert same_trajectory(simloop.run(model=back, steps=400).trajectory, simloop.run(steps=400).trajectory)
+
+
+def test_damaged_pickles_are_refused_with_a_message():
+    with pytest.raises(simloop.MujocoError, match="<saved model>: loading the saved model: "):
+        simloop.Model.__new__(simloop.Model).__setstate__(b"not a model")
+    result = simloop.run(steps=20)
+    version, fields = result.__getstate__()
+    with pytest.raises(ValueError, match="cannot unpickle a RunResult: the saved fields are damaged"):
+        simloop.RunResult.__new__(simloop.RunResult).__setstate__((version, fields[:-40]))
+    with pytest.raises(ValueError, match="pickled by another simloop version"):
+        simloop.RunResult.__new__(simloop.RunResult).__setstate__((version + 1, fields))
+
+
+@pytest.mark.parametrize("scene", ["pusht.xml", "walker.xml"])
+def test_a_pickled_sim_goes_on_bit_for_bit(scene):
+    sim = simloop.Sim(SCENES / scene)
+    sim.timestep = 0.003
+    sim.step(111, ctrl=np.linspace(-0.5, 0.5, sim.model.nu))
+    sim.apply_force(body=1, force=[0.0, 0.1, 0.0])
+    back = pickle.loads(pickle.dumps(sim))
+    assert back.steps_taken == 111 and back.timestep == 0.003
+    assert np.array_equal(back.get_state(), sim.get_state())
+    sim.step(200)
+    back.step(200)
+    assert np.array_equal(back.get_state(), sim.get_state())
+
+
+def test_results_pickle_field_by_field():
+    result = simloop.run(seed=5, steps=300, record_every=7, audit_energy=True, rng="numpy")
+    back = pickle.loads(pickle.dumps(result))
+    assert same_trajectory(back.trajectory, result.trajectory)
+    assert back.metrics == result.metrics and back.energy == result.energy
+    assert back.metrics_json() == result.metrics_json() and back.summary() == result.summary()
+    assert repr(back.shove) == repr(result.shove) and back.config.rng == "numpy"
+    assert (back.rows, back.timestep, back.sim_time) == (result.rows, result.timestep, result.sim_time)
+
+    scenario = simloop.run_scenario(SCENES / "walker.toml", seed=2, steps=400, record_every=3)
+    again = pickle.loads(pickle.dumps(scenario))
+    assert same_trajectory(again.trajectory, scenario.trajectory)
+    assert again.column_names == scenario.column_names and again.column_units == scenario.column_units
+    assert again.metrics_json() == scenario.metrics_json() and again.summary() == scenario.summary()
+    assert repr(again.disturbances) == repr(scenario.disturbances)
+
+
+def test_results_come_back_from_worker_processes():
+    spawn = multiprocessing.get_context("spawn")
+    sim = simloop.Sim(SCENES / "pusht.xml")
+    sim.step(50, ctrl=[0.4, -0.2])
+    with concurrent.futures.ProcessPoolExecutor(max_workers=2, mp_context=spawn) as pool:
+        chapter = pool.submit(simloop.run, seed=4, steps=200)
+        scenario = pool.submit(simloop.run_scenario, str(SCENES / "pusht.toml"), seed=1, steps=200)
+        sim_back = pool.submit(pickle.loads, pickle.dumps(sim))  # a Sim through a process and back
+        chapter, scenario, sim_back = chapter.result(), scenario.result(), sim_back.result()
+    assert same_trajectory(chapter.trajectory, simloop.run(seed=4, steps=200).trajectory)
+    assert same_trajectory(scenario.trajectory,
+                           simloop.run_scenario(SCENES / "pusht.toml", seed=1, steps=200).trajectory)
+    assert np.array_equal(sim_back.get_state(), sim.get_state())
