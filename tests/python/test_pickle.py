@@ -69,6 +69,7 @@ def test_results_pickle_field_by_field():
     back = pickle.loads(pickle.dumps(result))
     assert same_trajectory(back.trajectory, result.trajectory)
     assert back.metrics == result.metrics and back.energy == result.energy
+    assert back.unrounded_metrics == result.unrounded_metrics  # the tables' values, not metrics.json's
     assert back.metrics_json() == result.metrics_json() and back.summary() == result.summary()
     assert repr(back.shove) == repr(result.shove) and back.config.rng == "numpy"
     assert (back.rows, back.timestep, back.sim_time) == (result.rows, result.timestep, result.sim_time)
@@ -79,6 +80,8 @@ def test_results_pickle_field_by_field():
     assert again.column_names == scenario.column_names and again.column_units == scenario.column_units
     assert again.metrics_json() == scenario.metrics_json() and again.summary() == scenario.summary()
     assert repr(again.disturbances) == repr(scenario.disturbances)
+    assert np.array_equal(again.final_state, scenario.final_state)  # where a continuation starts
+    assert again.final_state.size > 0
 
 
 def test_results_come_back_from_worker_processes():
