@@ -14,7 +14,13 @@ import sys
 import threading
 import time
 from pathlib import Path
-from typing import List, Optional
+from types import FrameType
+from typing import TYPE_CHECKING, Any, List, NoReturn, Optional, TextIO
+
+from .progress import progress_bar
+
+if TYPE_CHECKING:
+    from . import _core
 
 PROGRAM = "sim-loop"
 EXIT_RUN_FAILED = 1
@@ -32,7 +38,7 @@ class _Terminated(KeyboardInterrupt):
     the same way (the C++ calls check for signals between chunks)."""
 
 
-def _on_sigterm(signum, frame):
+def _on_sigterm(signum: int, frame: Optional[FrameType]) -> NoReturn:
     raise _Terminated()
 
 
@@ -45,22 +51,22 @@ class _Report:
     """sys.stdout while the command runs: the same stream, but a failed write
     raises _ReportLost."""
 
-    def __init__(self, stream):
+    def __init__(self, stream: TextIO) -> None:
         self._stream = stream
 
-    def write(self, text):
+    def write(self, text: str) -> int:
         try:
             return self._stream.write(text)
         except OSError as e:
             raise _ReportLost(e.strerror or str(e)) from None
 
-    def flush(self):
+    def flush(self) -> None:
         try:
             self._stream.flush()
         except OSError as e:
             raise _ReportLost(e.strerror or str(e)) from None
 
-    def __getattr__(self, name):
+    def __getattr__(self, name: str) -> Any:
         return getattr(self._stream, name)
 
 
@@ -171,11 +177,12 @@ def _viewer() -> str:
     return relative if os.sep in relative else os.path.join(".", relative)
 
 
-def _sweep(opts, model, out: Path) -> None:
+def _sweep(opts: "_core.CommandLine", model: "_core.Model", out: Path) -> None:
     from . import _core
 
     global _outputs_written
-    result = _core.sweep(model, opts.sweep_timesteps, opts.sweep_duration, opts.threads)
+    with progress_bar("sweeping") as progress:
+        result = _core.sweep(model, opts.sweep_timesteps, opts.sweep_duration, opts.threads, progress)
     csv = result.write(out)
     _outputs_written = True
     print(result.summary(), end="")
@@ -216,13 +223,15 @@ def main(argv: Optional[List[str]] = None) -> int:
     return _finish_stdout(code)
 
 
-def _scenario(opts, scenario, model, out: Path, started: float) -> int:
+def _scenario(opts: "_core.CommandLine", scenario: "_core.Scenario", model: "_core.Model", out: Path,
+              started: float) -> int:
     """A scenario's run (--scenario, --body, --ctrl): its outputs, summary and recording."""
     global _outputs_written
     from . import _core
 
     try:
-        result = _core.run_scenario(model, scenario, _core.scenario_config_from_flags(opts))
+        with progress_bar("running") as progress:
+            result = _core.run_scenario(model, scenario, _core.scenario_config_from_flags(opts), progress)
         metrics_path, trajectory_path = result.write(out)
         _outputs_written = True
         print(result.summary(), end="")
@@ -306,7 +315,8 @@ def _main(argv: Optional[List[str]]) -> int:
     if scenario is not None:
         return _scenario(opts, scenario, model, out, started)
     try:
-        result = _core.run(model, opts.run)
+        with progress_bar("running") as progress:
+            result = _core.run(model, opts.run, progress)
         metrics_path, trajectory_path = result.write(out)
         _outputs_written = True
         print(result.summary(), end="")
