@@ -26,7 +26,7 @@ from conftest import sim_loop_exe, snapshot, without_wall_clock
 from simloop.progress import progress_bar, wants_bar
 
 # Long enough that the bar (shown after 0.25 s of work) appears on a loaded machine too.
-STEPS = "300000"
+STEPS = "150000"
 BAR = {"sim_loop": re.compile(r"sim_loop \[[#.]*\] +\d+% \d+/\d+ steps"),
        "python": re.compile(r"running: +\d+%\|")}
 
