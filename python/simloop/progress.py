@@ -48,8 +48,14 @@ def progress_bar(description: str, unit: str = "step", stream: Optional[TextIO] 
         return
     from tqdm import tqdm  # only for a terminal: the import costs ~30 ms
 
+    # A terminal that says it has no width (a fresh pseudo-terminal) gets 80
+    # columns; tqdm would draw nothing at all.
+    try:
+        width = os.get_terminal_size(out.fileno()).columns
+    except (AttributeError, ValueError, OSError):
+        width = 0
     bar = tqdm(desc=description, unit=unit, unit_scale=unit_scale, file=out, leave=False, delay=DELAY,
-               mininterval=REDRAW_INTERVAL, dynamic_ncols=True)
+               mininterval=REDRAW_INTERVAL, dynamic_ncols=width > 0, ncols=None if width > 0 else 80)
 
     def progress(done: int, total: int) -> None:
         if total != bar.total:

@@ -47,9 +47,9 @@ def _env(term: str = "xterm") -> dict:
 class _Terminal:
     """A pseudo-terminal of 24 x 100 whose output is read as it comes (a thread)."""
 
-    def __init__(self) -> None:
+    def __init__(self, columns: int = 100) -> None:
         self.master, self.slave = pty.openpty()
-        fcntl.ioctl(self.slave, termios.TIOCSWINSZ, struct.pack("HHHH", 24, 100, 0, 0))
+        fcntl.ioctl(self.slave, termios.TIOCSWINSZ, struct.pack("HHHH", 24, columns, 0, 0))
         self.data = bytearray()
         self._reader = threading.Thread(target=self._read, daemon=True)
 
@@ -152,6 +152,17 @@ def test_on_a_terminal_the_screen_reads_as_the_report_without_a_bar(which, tmp_p
     assert BAR[which].search(bytes(terminal.data).decode())
     screen = [line for line in _screen(terminal.data) if not line.startswith("wall-clock:")]
     assert screen == without_wall_clock(plain.stdout.decode()).splitlines() + [""]
+
+
+@pytest.mark.parametrize("which", ["sim_loop", "python"])
+def test_a_terminal_that_gives_no_width_gets_an_80_column_bar(which, tmp_path):
+    terminal = _Terminal(columns=0)
+    proc = terminal.start(_command(which, *RUN), tmp_path, _env())
+    terminal.finish(proc)
+    assert proc.returncode == 0
+    drawn = [line for line in bytes(terminal.data).decode().replace("\x1b[K", "").split("\r") if line.strip()]
+    assert drawn and all(BAR[which].search(line) for line in drawn), drawn
+    assert max(len(line) for line in drawn) <= 80, drawn
 
 
 @pytest.mark.parametrize("which", ["sim_loop", "python"])
