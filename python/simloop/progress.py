@@ -48,14 +48,16 @@ def progress_bar(description: str, unit: str = "step", stream: Optional[TextIO] 
         return
     from tqdm import tqdm  # only for a terminal: the import costs ~30 ms
 
-    # A terminal that says it has no width (a fresh pseudo-terminal) gets 80
-    # columns; tqdm would draw nothing at all.
+    # A terminal that says it has no size (a fresh pseudo-terminal: 0 x 0) is
+    # taken as 80 x 24; tqdm would draw nothing at all.
     try:
-        width = os.get_terminal_size(out.fileno()).columns
+        size = os.get_terminal_size(out.fileno())
+        sized = size.columns > 0 and size.lines > 0
     except (AttributeError, ValueError, OSError):
-        width = 0
+        sized = False
     bar = tqdm(desc=description, unit=unit, unit_scale=unit_scale, file=out, leave=False, delay=DELAY,
-               mininterval=REDRAW_INTERVAL, dynamic_ncols=width > 0, ncols=None if width > 0 else 80)
+               mininterval=REDRAW_INTERVAL, dynamic_ncols=sized, ncols=None if sized else 80,
+               nrows=None if sized else 24)
 
     def progress(done: int, total: int) -> None:
         if total != bar.total:

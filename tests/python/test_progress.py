@@ -47,9 +47,9 @@ def _env(term: str = "xterm") -> dict:
 class _Terminal:
     """A pseudo-terminal of 24 x 100 whose output is read as it comes (a thread)."""
 
-    def __init__(self, columns: int = 100) -> None:
+    def __init__(self, columns: int = 100, lines: int = 24) -> None:
         self.master, self.slave = pty.openpty()
-        fcntl.ioctl(self.slave, termios.TIOCSWINSZ, struct.pack("HHHH", 24, columns, 0, 0))
+        fcntl.ioctl(self.slave, termios.TIOCSWINSZ, struct.pack("HHHH", lines, columns, 0, 0))
         self.data = bytearray()
         self._reader = threading.Thread(target=self._read, daemon=True)
 
@@ -155,8 +155,9 @@ def test_on_a_terminal_the_screen_reads_as_the_report_without_a_bar(which, tmp_p
 
 
 @pytest.mark.parametrize("which", ["sim_loop", "python"])
-def test_a_terminal_that_gives_no_width_gets_an_80_column_bar(which, tmp_path):
-    terminal = _Terminal(columns=0)
+@pytest.mark.parametrize("lines", [24, 0])
+def test_a_terminal_that_gives_no_size_gets_an_80_column_bar(which, lines, tmp_path):
+    terminal = _Terminal(columns=0, lines=lines)
     proc = terminal.start(_command(which, *RUN), tmp_path, _env())
     terminal.finish(proc)
     assert proc.returncode == 0
