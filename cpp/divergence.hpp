@@ -92,8 +92,7 @@ class DivergenceCheck {
                   "body \"%s\" went through the floor: its centre reached z = %.6g m, more than %g times its size "
                   "(%.3g m) below the floor (z = %.6g m); the simulation diverged (too large a timestep?)",
                   first_body_->name.c_str(), lowest_z_, kDivergedDepthInSizes, 2.0 * first_body_->radius, floor_z_);
-    const int count = count_ > INT32_MAX ? INT32_MAX : static_cast<int>(count_);
-    return Warning{kDivergedWarning, count, first_step_, text};
+    return Warning{kDivergedWarning, count_, first_step_, text};
   }
 
  private:

@@ -5,9 +5,11 @@
 #include <poll.h>
 #include <signal.h>
 #include <spawn.h>
+#include <sys/ioctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <csignal>
@@ -41,10 +43,84 @@ constexpr int kExitUsage = 2;
 // shell reports a process the signal ended (130 for Ctrl-C, 143 for SIGTERM).
 constexpr int kExitSignalBase = 128;
 
+// A progress bar on stderr while the work runs, when stderr is a terminal
+// (and TERM is not "dumb"): drawn from RunControl's poll (on the main thread,
+// at most every 20 ms), shown once the work has taken kDelay, redrawn at most
+// every kRedraw, and erased (finish()) before anything else is printed, so
+// stdout and the output files are the same with or without it.
+class TerminalProgress {
+ public:
+  static bool wanted() {
+    const char* term = std::getenv("TERM");
+    return ::isatty(STDERR_FILENO) == 1 && !(term && std::strcmp(term, "dumb") == 0);
+  }
+
+  // From here on the bar may be drawn (after the banner, before the work).
+  void start() {
+    if (!wanted()) return;
+    winsize size{};
+    columns_ = ::ioctl(STDERR_FILENO, TIOCGWINSZ, &size) == 0 && size.ws_col > 0 ? size.ws_col : 80;
+    started_ = std::chrono::steady_clock::now();
+    active_ = true;
+  }
+
+  void draw(std::int64_t done, std::int64_t total) {
+    if (!active_ || total <= 0) return;
+    const auto now = std::chrono::steady_clock::now();
+    if (now - started_ < kDelay || (drawn_ && now - last_draw_ < kRedraw)) return;
+    last_draw_ = now;
+    const double fraction = std::min(1.0, static_cast<double>(done) / static_cast<double>(total));
+    char counts[96];
+    std::snprintf(counts, sizeof counts, "] %3d%% %lld/%lld steps", static_cast<int>(fraction * 100.0),
+                  static_cast<long long>(done), static_cast<long long>(total));
+    const std::string head = "sim_loop [";
+    const int room = columns_ - 1 - static_cast<int>(head.size() + std::strlen(counts));
+    const int width = std::max(0, std::min(room, 40));
+    const int filled = static_cast<int>(fraction * width);
+    std::string line = "\r" + head + std::string(static_cast<size_t>(filled), '#') +
+                       std::string(static_cast<size_t>(width - filled), '.') + counts + "\033[K";
+    write_all(line);
+    drawn_ = true;
+  }
+
+  // Erases the bar (the line is left empty, the cursor at its start); no
+  // more drawing after this.
+  void finish() {
+    active_ = false;
+    if (drawn_) write_all("\r\033[K");
+    drawn_ = false;
+  }
+
+ private:
+  static constexpr std::chrono::milliseconds kDelay{250};
+  static constexpr std::chrono::milliseconds kRedraw{100};
+
+  static void write_all(const std::string& text) {
+    for (size_t at = 0; at < text.size();) {
+      const ssize_t n = ::write(STDERR_FILENO, text.data() + at, text.size() - at);
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) return;  // a terminal that went away: no bar, nothing else to do
+      at += static_cast<size_t>(n);
+    }
+  }
+
+  bool active_ = false;
+  bool drawn_ = false;
+  int columns_ = 80;
+  std::chrono::steady_clock::time_point started_, last_draw_;
+};
+TerminalProgress g_progress;
+
 // The command's one control: SIGINT and SIGTERM request a stop, the loops
 // throw Interrupted within a chunk of steps, and the outputs' temporary files
-// go with the stack. Made at startup, on the main thread (its owner).
-simloop::RunControl g_control;
+// go with the stack. Made at startup, on the main thread (its owner). Its
+// poll draws the progress bar; without a terminal there is no poll at all,
+// so the loop does not even read the clock for it.
+simloop::RunControl g_control = TerminalProgress::wanted()
+                                    ? simloop::RunControl([](std::int64_t done, std::int64_t total) {
+                                        g_progress.draw(done, total);
+                                      })
+                                    : simloop::RunControl();
 volatile std::sig_atomic_t g_signal = 0;
 // Set while nothing is half-done (no temporary file exists): loading the
 // model, which cannot be stopped between chunks, ends the process at once.
@@ -113,6 +189,7 @@ int finish_stdout(int code) {
 
 // One line on stderr, whatever the message held (MuJoCo's XML errors span lines).
 int fail(int code, const std::string& message) {
+  g_progress.finish();
   std::fprintf(stderr, "sim_loop: %s\n", simloop::detail::one_line(message).c_str());
   return code;
 }
@@ -253,6 +330,7 @@ int report_sweep(const simloop::cli::Options& opts, const std::string& csv_text,
   file.finish();
   simloop::commit_together({&file}, &g_control);
   g_outputs_written = true;
+  g_progress.finish();
   std::fputs(summary.c_str(), stdout);
   std::printf("sweep: %s\n", csv.c_str());
   if (opts.plot) {
@@ -287,6 +365,7 @@ int run_command(const simloop::cli::Options& opts, const simloop::Model& model) 
   const simloop::RunResult result = simloop::run(model, opts.run, workspace, &writer.trajectory(), &g_control);
   const simloop::OutputFiles files = writer.commit(result.metrics, &g_control);
   g_outputs_written = true;
+  g_progress.finish();
   std::fputs(simloop::summary_text(result).c_str(), stdout);
   std::printf("metrics: %s\n", files.metrics.c_str());
   std::printf("trajectory: %s (%lld rows)\n", files.trajectory.c_str(), static_cast<long long>(result.rows));
@@ -310,6 +389,7 @@ int scenario_command(const simloop::cli::Options& opts, const simloop::Scenario&
       scene, scenario, simloop::cli::scenario_config(opts), nullptr, &writer.trajectory(), &g_control);
   const simloop::OutputFiles files = writer.commit(simloop::scenario_metrics_json(result), &g_control);
   g_outputs_written = true;
+  g_progress.finish();
   std::fputs(simloop::scenario_summary(result).c_str(), stdout);
   std::printf("metrics: %s\n", files.metrics.c_str());
   std::printf("trajectory: %s (%lld rows, %zu columns)\n", files.trajectory.c_str(),
@@ -410,6 +490,7 @@ int run_main(int argc, char** argv) {
 
   try {
     check_stop();
+    g_progress.start();
     const bool sweeping = opts.command == cli::Command::kSweep;
     const int status = sweeping && scenario ? scenario_sweep_command(opts, *scenario, *model)
                        : sweeping           ? sweep_command(opts, *model)

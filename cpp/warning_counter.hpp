@@ -28,7 +28,9 @@ class WarningCounter {
   [[nodiscard]] std::vector<Warning> warnings() const;
 
  private:
-  int count_[mjNWARNING] = {};
+  // int64: a long run can warn in more than 2^31 steps (MuJoCo's own counter
+  // is an int, but it is emptied into ours after every step).
+  std::int64_t count_[mjNWARNING] = {};
   int last_info_[mjNWARNING] = {};
   std::int64_t first_step_[mjNWARNING] = {};
 };

@@ -79,7 +79,7 @@ struct Metrics {
 // a run that raised one did not simulate what its numbers seem to say.
 struct Warning {
   std::string name;             // "mjWARN_BADQACC"
-  int count = 0;                // how many times it was raised in the run
+  std::int64_t count = 0;       // how many times it was raised in the run
   std::int64_t first_step = 0;  // the step during which it was first raised
   std::string message;          // MuJoCo's text for it, with the last info
 };

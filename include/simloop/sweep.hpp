@@ -34,7 +34,7 @@ struct SweepPoint {
   double max_abs_box_y = 0.0;   // furthest sideways, m
   double final_box_x = 0.0, final_box_y = 0.0, final_box_z = 0.0;
   double final_pusher_x = 0.0;
-  int warnings = 0;             // warnings raised, all kinds: MuJoCo's and simloop_DIVERGED
+  std::int64_t warnings = 0;    // warnings raised, all kinds: MuJoCo's and simloop_DIVERGED
   EnergyTotals energy;          // the energy audit over the run
   bool stable = false;
 };

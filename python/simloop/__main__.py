@@ -14,7 +14,13 @@ import sys
 import threading
 import time
 from pathlib import Path
-from typing import List, Optional
+from types import FrameType
+from typing import TYPE_CHECKING, Any, List, NoReturn, Optional, TextIO
+
+from .progress import progress_bar
+
+if TYPE_CHECKING:
+    from . import _core
 
 PROGRAM = "sim-loop"
 EXIT_RUN_FAILED = 1
@@ -32,7 +38,7 @@ class _Terminated(KeyboardInterrupt):
     the same way (the C++ calls check for signals between chunks)."""
 
 
-def _on_sigterm(signum, frame):
+def _on_sigterm(signum: int, frame: Optional[FrameType]) -> NoReturn:
     raise _Terminated()
 
 
@@ -45,22 +51,22 @@ class _Report:
     """sys.stdout while the command runs: the same stream, but a failed write
     raises _ReportLost."""
 
-    def __init__(self, stream):
+    def __init__(self, stream: TextIO) -> None:
         self._stream = stream
 
-    def write(self, text):
+    def write(self, text: str) -> int:
         try:
             return self._stream.write(text)
         except OSError as e:
             raise _ReportLost(e.strerror or str(e)) from None
 
-    def flush(self):
+    def flush(self) -> None:
         try:
             self._stream.flush()
         except OSError as e:
             raise _ReportLost(e.strerror or str(e)) from None
 
-    def __getattr__(self, name):
+    def __getattr__(self, name: str) -> Any:
         return getattr(self._stream, name)
 
 
@@ -171,15 +177,17 @@ def _viewer() -> str:
     return relative if os.sep in relative else os.path.join(".", relative)
 
 
-def _sweep(opts, model, out: Path, scenario=None) -> None:
+def _sweep(opts: "_core.CommandLine", model: "_core.Model", out: Path,
+           scenario: "Optional[_core.Scenario]" = None) -> None:
     from . import _core
 
     global _outputs_written
-    if scenario is not None:  # sweep --scenario, --body, --ctrl
-        result = _core.sweep_scenario(model, scenario, opts.sweep_timesteps, opts.sweep_duration,
-                                      _core.scenario_config_from_flags(opts), opts.threads)
-    else:
-        result = _core.sweep(model, opts.sweep_timesteps, opts.sweep_duration, opts.threads)
+    with progress_bar("sweeping") as progress:
+        if scenario is not None:  # sweep --scenario, --body, --ctrl
+            result = _core.sweep_scenario(model, scenario, opts.sweep_timesteps, opts.sweep_duration,
+                                          _core.scenario_config_from_flags(opts), opts.threads, progress)
+        else:
+            result = _core.sweep(model, opts.sweep_timesteps, opts.sweep_duration, opts.threads, progress)
     csv = result.write(out)
     _outputs_written = True
     print(result.summary(), end="")
@@ -220,7 +228,7 @@ def main(argv: Optional[List[str]] = None) -> int:
     return _finish_stdout(code)
 
 
-def _run_key(args: List[str], opts) -> str:
+def _run_key(args: List[str], opts: "_core.CommandLine") -> str:
     """What decides a scenario run, for its recording id: the command line
     (but --out and the recording flags) and the scenario's and scene's bytes."""
     kept, skip = [], False
@@ -239,7 +247,8 @@ def _run_key(args: List[str], opts) -> str:
     return key
 
 
-def _scenario(opts, scenario, model, out: Path, started: float, args: List[str]) -> int:
+def _scenario(opts: "_core.CommandLine", scenario: "_core.Scenario", model: "_core.Model", out: Path,
+              started: float, args: List[str]) -> int:
     """A scenario's run (--scenario, --body, --ctrl): trajectory.csv written as
     the loop steps (as sim_loop writes it: the same bytes, in bounded memory),
     metrics.json, the summary, and the recording made from the same run."""
@@ -256,14 +265,17 @@ def _scenario(opts, scenario, model, out: Path, started: float, args: List[str])
             with replacing(rrd) as temp_name:
                 recording = ScenarioRecording(model, temp_name, _run_key(args, opts))
                 try:
-                    result, metrics_path, trajectory_path = _core.run_scenario_to_files(
-                        model, scenario, config, out, drawing=recording)
+                    with progress_bar("running") as progress:
+                        result, metrics_path, trajectory_path = _core.run_scenario_to_files(
+                            model, scenario, config, out, drawing=recording, progress=progress)
                     _outputs_written = True
                     recording.finish(result)
                 finally:
                     recording.close()
         else:
-            result, metrics_path, trajectory_path = _core.run_scenario_to_files(model, scenario, config, out)
+            with progress_bar("running") as progress:
+                result, metrics_path, trajectory_path = _core.run_scenario_to_files(
+                    model, scenario, config, out, progress=progress)
             _outputs_written = True
         print(result.summary(), end="")
         print(f"metrics: {metrics_path}")
@@ -343,7 +355,8 @@ def _main(argv: Optional[List[str]]) -> int:
     if scenario is not None:
         return _scenario(opts, scenario, model, out, started, args)
     try:
-        result = _core.run(model, opts.run)
+        with progress_bar("running") as progress:
+            result = _core.run(model, opts.run, progress)
         metrics_path, trajectory_path = result.write(out)
         _outputs_written = True
         print(result.summary(), end="")

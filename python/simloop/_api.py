@@ -20,7 +20,12 @@ import functools
 import math
 import numbers
 import os
-from typing import TYPE_CHECKING, Any, Callable, Iterable, List, Optional, Sequence, Union
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Callable, Dict, Iterable, List, Optional, Sequence, Tuple, Union
+
+if TYPE_CHECKING:  # (importing numpy would cost every `import simloop` ~50 ms)
+    import numpy as np
+    from numpy.typing import NDArray
 
 from . import _core
 from ._core import Model, RunResult, SweepResult
@@ -169,7 +174,7 @@ def _config(seed: object, steps: object, timestep: object, perturb: object, smok
     )
 
 
-def _check_progress(progress: object) -> object:
+def _check_progress(progress: object) -> Progress:
     if progress is not None and not callable(progress):
         raise TypeError(f"progress must be None or a callable progress(steps_done, steps_total), got {_describe(progress)}")
     return progress
@@ -216,7 +221,7 @@ def draw_shove(seed: int = 0, steps: int = 2000, rng: str = "mt19937_64") -> "_c
                             _check_rng(rng))
 
 
-def _sequence(name: str, values: object) -> list:
+def _sequence(name: str, values: object) -> List[Any]:
     if isinstance(values, (str, bytes)) or not isinstance(values, Iterable):
         raise TypeError(f"{name} must be a sequence, got {_describe(values)}")
     return list(values)
@@ -647,7 +652,7 @@ class Sim:
         self._sim.clear_forces()
 
     @property
-    def applied_force(self):
+    def applied_force(self) -> NDArray[np.float64]:
         """The force now written on the chapter's box (a copy), N."""
         return self._sim.applied_force
 
@@ -701,17 +706,17 @@ class Sim:
     # --- The chapter's scene.
 
     @property
-    def box_position(self):
+    def box_position(self) -> NDArray[np.float64]:
         """The box's position now (x, y, z), m: a copy."""
         return self._sim.box_position
 
     @property
-    def box_quaternion(self):
+    def box_quaternion(self) -> NDArray[np.float64]:
         """The box's orientation now, (w, x, y, z) as MuJoCo stores it: a copy."""
         return self._sim.box_quaternion
 
     @property
-    def box_velocity(self):
+    def box_velocity(self) -> NDArray[np.float64]:
         """The box's linear velocity now, m/s, world frame: a copy."""
         return self._sim.box_velocity
 
@@ -725,12 +730,12 @@ class Sim:
         return self._sim.pusher_velocity
 
     @property
-    def contacts(self) -> list:
+    def contacts(self) -> List[_core.Contact]:
         """The contacts of MuJoCo's last collision pass (geom1, geom2, dist, pos)."""
         return self._sim.contacts
 
     @property
-    def warnings(self) -> list:
+    def warnings(self) -> List[_core.MujocoWarning]:
         """Warnings MuJoCo raised since construction or reset."""
         return self._sim.warnings
 
@@ -832,33 +837,38 @@ def _install_checked_methods() -> None:
         function.__doc__ = doc
         setattr(Model, function.__name__, staticmethod(function))
 
-    compiled = {(cls, name): getattr(cls, name) for cls, name in (
+    compiled: Dict[Tuple[type, str], Callable[..., Any]] = {(cls, name): getattr(cls, name) for cls, name in (
         (Model, "with_timestep"), (RunResult, "column"), (RunResult, "write"), (RunResult, "metrics_json"),
         (RunResult, "trajectory_csv"), (RunResult, "summary"), (SweepResult, "write"), (SweepResult, "csv"),
         (SweepResult, "summary"))}
 
-    def with_timestep(self, timestep: float) -> Model:
-        return compiled[Model, "with_timestep"](self, _check_timestep(timestep))
+    def with_timestep(self: Model, timestep: float) -> Model:
+        copy: Model = compiled[Model, "with_timestep"](self, _check_timestep(timestep))
+        return copy
 
-    def column(self, name: str):
+    def column(self: RunResult, name: str) -> NDArray[np.float64]:
         if not isinstance(name, str):
             raise TypeError(f"name must be a str (a column name), got {_describe(name)}")
         if name not in self.column_names:
             raise KeyError(f"no trajectory column named {_show(name)}; see result.column_names")
-        return compiled[RunResult, "column"](self, name)
+        view: NDArray[np.float64] = compiled[RunResult, "column"](self, name)
+        return view
 
-    def write_run(self, out: PathLike):
-        return compiled[RunResult, "write"](self, _check_path("out", out, "a directory"))
+    def write_run(self: RunResult, out: PathLike) -> Tuple[Path, Path]:
+        paths: Tuple[Path, Path] = compiled[RunResult, "write"](self, _check_path("out", out, "a directory"))
+        return paths
 
-    def write_sweep(self, out: PathLike):
-        return compiled[SweepResult, "write"](self, _check_path("out", out, "a directory"))
+    def write_sweep(self: SweepResult, out: PathLike) -> Path:
+        path: Path = compiled[SweepResult, "write"](self, _check_path("out", out, "a directory"))
+        return path
 
-    def no_arguments(cls: type, name: str):
-        def method(self):
-            return compiled[cls, name](self)
+    def no_arguments(cls: type, name: str) -> Callable[[object], str]:
+        def method(self: object) -> str:
+            text: str = compiled[cls, name](self)
+            return text
         return method
 
-    methods = [
+    methods: List[Tuple[type, str, Callable[..., Any], str]] = [
         (Model, "with_timestep", with_timestep, "A copy with opt.timestep set (a positive, finite number)."),
         (RunResult, "column", column, "One trajectory column as a read-only (strided) view (no copy); "
                                       "KeyError if the result has no such column."),
@@ -871,11 +881,11 @@ def _install_checked_methods() -> None:
         (SweepResult, "csv", no_arguments(SweepResult, "csv"), "sweep.csv's text."),
         (SweepResult, "summary", no_arguments(SweepResult, "summary"), "The sweep's table, edge and criterion."),
     ]
-    for cls, name, function, doc in methods:
-        function.__name__ = name
-        function.__qualname__ = f"{cls.__name__}.{name}"
-        function.__doc__ = doc
-        setattr(cls, name, function)
+    for cls, name, checked, doc in methods:
+        checked.__name__ = name
+        checked.__qualname__ = f"{cls.__name__}.{name}"
+        checked.__doc__ = doc
+        setattr(cls, name, checked)
 
 
 _install_checked_methods()

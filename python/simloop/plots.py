@@ -115,7 +115,7 @@ def trajectory_figure(csv: PathLike, compare: Iterable[PathLike] = (), x: str = 
     plt = _pyplot()
     fig, (ax_x, ax_y, ax_z, ax_c) = plt.subplots(4, 1, sharex=True, figsize=(9, 9),
                                                  gridspec_kw={"height_ratios": [1.1, 1, 1.2, 0.7]})
-    legend = []  # one legend for the figure, above the axes: never on the data
+    legend: list = []  # one legend for the figure, above the axes: never on the data
     z_low, z_high = Z_RANGE
     for k, (cols, name) in enumerate(runs):
         t = cols["time"] if x == "time" else cols["step"]

@@ -131,7 +131,7 @@ class Scenario:
     actuators, sensors (lists of names) and contacts (bool).
     """
 
-    def __init__(self, scene: Union[str, os.PathLike, None] = None, *, name: str = "",
+    def __init__(self, scene: Union[str, "os.PathLike[str]", None] = None, *, name: str = "",
                  timestep: Optional[float] = None, steps: Optional[int] = None, duration: Optional[float] = None,
                  controls: Optional[Mapping[Union[str, int], Any]] = None,
                  disturbances: Iterable[Mapping[str, Any]] = (),
@@ -150,7 +150,7 @@ class Scenario:
         self.toml = text
 
     @classmethod
-    def from_file(cls, path: Union[str, os.PathLike]) -> "Scenario":
+    def from_file(cls, path: Union[str, "os.PathLike[str]"]) -> "Scenario":
         """Reads a scenario file (TOML); a relative scene resolves against its folder."""
         self = cls.__new__(cls)
         self._core = _core.Scenario.from_file(os.fspath(path))
@@ -187,7 +187,7 @@ class Scenario:
         return repr(self._core)
 
 
-def _scenario_and_scene(scenario: Union[Scenario, str, os.PathLike],
+def _scenario_and_scene(scenario: Union[Scenario, str, "os.PathLike[str]"],
                         model: Optional[_core.Model]) -> Tuple[Scenario, _core.Model]:
     if isinstance(scenario, (str, os.PathLike)):
         scenario = Scenario.from_file(scenario)
@@ -218,7 +218,7 @@ def _inputs_array(name: str, value: object, shapes: Tuple[int, ...], described: 
     return np.ascontiguousarray(array, dtype=np.float64)
 
 
-def run_scenario(scenario: Union[Scenario, str, os.PathLike], *, seed: int = 0, rng: str = "mt19937_64",
+def run_scenario(scenario: Union[Scenario, str, "os.PathLike[str]"], *, seed: int = 0, rng: str = "mt19937_64",
                  timestep: Optional[float] = None, steps: Optional[int] = None, perturb: bool = True,
                  record_every: int = 1, model: Optional[_core.Model] = None,
                  progress: Progress = None, controls: Any = None, initial_state: Any = None) -> ScenarioResult:
@@ -263,7 +263,7 @@ def run_scenario(scenario: Union[Scenario, str, os.PathLike], *, seed: int = 0, 
                                           progress=_check_progress(progress))
 
 
-def run_scenario_batch(scenario: Union[Scenario, str, os.PathLike], seeds: Iterable[int] = (0,),
+def run_scenario_batch(scenario: Union[Scenario, str, "os.PathLike[str]"], seeds: Iterable[int] = (0,),
                        timesteps: Iterable[Optional[float]] = (None,), *, rng: str = "mt19937_64",
                        steps: Optional[int] = None, perturb: bool = True, record_every: int = 1,
                        model: Optional[_core.Model] = None, threads: Optional[int] = None,
@@ -313,9 +313,10 @@ def run_scenario_batch(scenario: Union[Scenario, str, os.PathLike], seeds: Itera
     return table(results) if metrics_only else results
 
 
-def _metrics(result: ScenarioResult) -> dict:
-    return json.loads(result.metrics_json())
+def _metrics(result: ScenarioResult) -> Dict[str, Any]:
+    metrics: Dict[str, Any] = json.loads(result.metrics_json())
+    return metrics
 
 
 # The result's metrics as the dict metrics.json holds.
-ScenarioResult.metrics = property(_metrics, doc="The dict metrics.json holds (floats rounded to 6 decimals).")
+setattr(ScenarioResult, "metrics", property(_metrics, doc="The dict metrics.json holds (floats rounded to 6 decimals)."))

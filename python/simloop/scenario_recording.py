@@ -32,7 +32,7 @@ from __future__ import annotations
 import os
 import uuid
 from pathlib import Path
-from typing import List, Sequence, Union
+from typing import Any, List, Mapping, Sequence, Union
 
 from . import _core
 
@@ -48,7 +48,7 @@ def _rgba(colour) -> list:
     return [int(round(255 * max(0.0, min(1.0, c)))) for c in colour]
 
 
-def _shape(rr, geom: dict):
+def _shape(rr, geom: Mapping[str, Any]):
     """The rerun archetype that draws `geom` in its own frame."""
     kind, half, colour = geom["kind"], geom["half_size"], [_rgba(geom["rgba"])]
     if kind == "box":
@@ -67,7 +67,7 @@ def _shape(rr, geom: dict):
     return None  # heightfields and the like: not drawn
 
 
-def _pose(rr, geom: dict):
+def _pose(rr, geom: Mapping[str, Any]):
     w, x, y, z = geom["quat"]
     return rr.Transform3D(translation=geom["pos"], quaternion=[x, y, z, w])
 
