@@ -21,13 +21,15 @@ import json
 import math
 import numbers
 import os
-from typing import Any, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple, Union
-
-import numpy as np
+from typing import TYPE_CHECKING, Any, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple, Union
 
 from . import _core
 from ._api import Progress, _check_bool, _sequence, _check_int, _check_progress, _check_timestep, _describe, _U64_MAX, RNGS
-from .tables import BatchTable, table
+
+if TYPE_CHECKING:  # numpy and the tables load when used: `import simloop` stays quick
+    import numpy as np
+
+    from .tables import BatchTable
 
 ScenarioResult = _core.ScenarioResult
 
@@ -205,6 +207,8 @@ def _inputs_array(name: str, value: object, shapes: Tuple[int, ...], described: 
     which knows the run's steps, actuators and state size."""
     if value is None:
         return None
+    import numpy as np
+
     if isinstance(value, (str, bytes)):
         raise TypeError(f"{name} must be an array of numbers {described}, got {_describe(value)}")
     try:
@@ -310,7 +314,11 @@ def run_scenario_batch(scenario: Union[Scenario, str, "os.PathLike[str]"], seeds
         return _core.run_scenario_batch(scene, scenario._core, configs, workers, progress=_check_progress(progress))
     results = _core.run_scenario_batch_with_inputs(scene, scenario._core, configs, workers, own, start,
                                                    not metrics_only, progress=_check_progress(progress))
-    return table(results) if metrics_only else results
+    if metrics_only:
+        from .tables import table
+
+        return table(results)
+    return results
 
 
 def _metrics(result: ScenarioResult) -> Dict[str, Any]:
