@@ -222,7 +222,7 @@ def _sequence(name: str, values: object) -> list:
 def run_batch(seeds: Iterable[int] = (0,), timesteps: Iterable[float] = (0.002,), *, steps: int = 2000,
               perturb: bool = True, smoke: bool = False, model: ModelLike = None, record_every: int = 1,
               audit_energy: bool = False, threads: Optional[int] = None, rng: str = "mt19937_64",
-              progress: Progress = None) -> List[RunResult]:
+              progress: Progress = None, executor: object = None, chunk_size: Optional[int] = None):
     """Runs every (seed, timestep) pair over one compiled model, in parallel.
 
     Results come in the order of itertools.product(seeds, timesteps), and each
@@ -230,12 +230,24 @@ def run_batch(seeds: Iterable[int] = (0,), timesteps: Iterable[float] = (0.002,)
     is (None: one worker per core). Each worker steps its own MuJoCo data;
     the model is shared. Every argument is checked before any run starts.
     progress: as for run(), over the steps of all the runs.
+
+    executor: a dask.distributed Client or a concurrent.futures.Executor
+    (simloop.distributed): the runs go out in chunks of chunk_size (None: a
+    default), each run on a worker by the C++ batch with `threads` threads
+    (None: 1), and a simloop.distributed.MetricsTable comes back (one row
+    of metrics per run, in the same order, the same bits as a local run; no
+    trajectories). model must then be None or an MJCF path; progress is
+    called as progress(runs_done, runs_total) as chunks finish.
     """
     seed_list = [_check_int("seeds[%d]" % i, s, 0, _U64_MAX) for i, s in enumerate(_sequence("seeds", seeds))]
     timestep_list = [_check_timestep(t, "timesteps[%d]" % i) for i, t in enumerate(_sequence("timesteps", timesteps))]
     workers = 0 if threads is None else _check_int("threads", threads, 1, 4096)
     configs = [_config(s, steps, t, perturb, smoke, record_every, audit_energy, rng)
                for s in seed_list for t in timestep_list]
+    if executor is not None:
+        from .distributed import run_batch_on
+
+        return run_batch_on(executor, configs, model, threads, chunk_size, _check_progress(progress))
     return _core.run_batch(load_model(model), configs, workers, progress=_check_progress(progress))
 
 
@@ -368,7 +380,8 @@ class Sim:
 
 
 def sweep(timesteps: Optional[Iterable[float]] = None, duration: float = 4.0, threads: Optional[int] = None,
-          model: ModelLike = None, *, progress: Progress = None) -> SweepResult:
+          model: ModelLike = None, *, progress: Progress = None, executor: object = None,
+          chunk_size: Optional[int] = None) -> SweepResult:
     """The baseline (no shove) at many timesteps over the same span of sim time.
 
     timesteps: None for the default: 25 round timesteps (1, 2, 3, 4, 5, 6 and
@@ -383,6 +396,10 @@ def sweep(timesteps: Optional[Iterable[float]] = None, duration: float = 4.0, th
     .write(out) sweep.csv. The criterion: the box rises at most 5 mm above
     rest, ends at most 1 mm below rest, and MuJoCo raised no warning.
     progress: as for run(), over the steps of all the timesteps.
+    executor: a dask.distributed Client or a concurrent.futures.Executor: the
+    timesteps go out in chunks (chunk_size), each swept on a worker with
+    `threads` threads (None: 1); the same SweepResult comes back. model must
+    then be None or an MJCF path; progress(points_done, points_total).
     """
     if timesteps is None:
         values = _core.default_sweep_timesteps()
@@ -391,6 +408,10 @@ def sweep(timesteps: Optional[Iterable[float]] = None, duration: float = 4.0, th
         if not values:
             raise ValueError("timesteps must not be empty")
     span = _check_timestep(duration, "duration")
+    if executor is not None:
+        from .distributed import sweep_on
+
+        return sweep_on(executor, values, span, model, threads, chunk_size, _check_progress(progress))
     workers = 0 if threads is None else _check_int("threads", threads, 1, 4096)
     return _core.sweep(load_model(model), values, span, workers, progress=_check_progress(progress))
 

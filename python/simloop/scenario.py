@@ -143,7 +143,8 @@ class Scenario:
             text += "\n" + _toml_table("[[disturbance]]", d)
         if record is not None:
             text += "\n" + _toml_table("[record]", record)
-        self._core = _core.Scenario.from_toml(text, "Scenario(...)", os.getcwd())
+        self._base = os.getcwd()  # where its relative paths resolve (sent along to workers)
+        self._core = _core.Scenario.from_toml(text, "Scenario(...)", self._base)
         self.toml = text
 
     @classmethod
@@ -151,6 +152,7 @@ class Scenario:
         """Reads a scenario file (TOML); a relative scene resolves against its folder."""
         self = cls.__new__(cls)
         self._core = _core.Scenario.from_file(os.fspath(path))
+        self._base = os.path.dirname(os.path.abspath(os.fspath(path)))
         with open(path, encoding="utf-8") as f:
             self.toml = f.read()
         return self
@@ -160,6 +162,7 @@ class Scenario:
         """The chapter's run: its scene, push_motor at 1.0, the shove on the box."""
         self = cls.__new__(cls)
         self._core = _core.Scenario.chapter()
+        self._base = ""
         self.toml = ""
         return self
 
@@ -225,7 +228,7 @@ def run_scenario_batch(scenario: Union[Scenario, str, os.PathLike], seeds: Itera
                        timesteps: Iterable[Optional[float]] = (None,), *, rng: str = "mt19937_64",
                        steps: Optional[int] = None, perturb: bool = True, record_every: int = 1,
                        model: Optional[_core.Model] = None, threads: Optional[int] = None,
-                       progress: Progress = None) -> List[ScenarioResult]:
+                       progress: Progress = None, executor: object = None, chunk_size: Optional[int] = None):
     """Runs a scenario once per (seed, timestep) pair, in parallel over one scene.
 
     Results come in the order of itertools.product(seeds, timesteps), and each
@@ -235,8 +238,18 @@ def run_scenario_batch(scenario: Union[Scenario, str, os.PathLike], seeds: Itera
     timestep and shared; each worker steps its own MuJoCo data. Every run is
     checked before any starts, and so is the memory all the kept trajectories
     take together. progress: as for run(), over the steps of all the runs.
+
+    executor: a dask.distributed Client or a concurrent.futures.Executor, as
+    for run_batch(): chunks on workers, a simloop.distributed.MetricsTable
+    back (the scenario travels as its TOML text; model must be None).
     """
-    scenario, scene = _scenario_and_scene(scenario, model)
+    if executor is not None:
+        if model is not None:
+            raise TypeError("model must be None with executor= (the scenario's scene is compiled on each worker)")
+        scenario, scene = _scenario_and_scene(scenario, None)  # compiled here too: bad names fail before any work goes out
+        _core.check_scenario_names(scenario._core, scene)
+    else:
+        scenario, scene = _scenario_and_scene(scenario, model)
     if rng not in RNGS:
         raise ValueError(f"rng must be 'mt19937_64' or 'numpy', got {rng!r}")
     seed_list = [_check_int("seeds[%d]" % i, s, 0, _U64_MAX) for i, s in enumerate(_sequence("seeds", seeds))]
@@ -246,6 +259,12 @@ def run_scenario_batch(scenario: Union[Scenario, str, os.PathLike], seeds: Itera
     step_count = None if steps is None else _check_int("steps", steps, 1, _core.MAX_STEPS)
     perturb = _check_bool("perturb", perturb)
     every = _check_int("record_every", record_every, 1, _core.MAX_RECORD_EVERY)
+    if executor is not None:
+        from .distributed import run_scenario_batch_on
+
+        return run_scenario_batch_on(executor, scenario, seed_list, timestep_list, rng=rng, steps=step_count,
+                                     perturb=perturb, threads=threads, chunk_size=chunk_size,
+                                     progress=_check_progress(progress))
     configs = [_core.ScenarioConfig(s, rng, t, step_count, perturb, every) for s in seed_list for t in timestep_list]
     return _core.run_scenario_batch(scene, scenario._core, configs, workers, progress=_check_progress(progress))
 
