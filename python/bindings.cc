@@ -906,4 +906,6 @@ PYBIND11_MODULE(_core, m) {
       },
       "duration"_a, "points"_a);
   m.def("sweep_steps", &simloop::sweep_steps, "duration"_a, "timestep"_a);
+  m.def("check_scenario", &simloop::check_scenario, "scene"_a, "scenario"_a, "config"_a,
+        "Everything run_scenario checks before its first step, without running.");
 }
