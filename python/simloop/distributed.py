@@ -53,6 +53,11 @@ def versions() -> Tuple[str, str]:
     return (_core.__version__, _core.MUJOCO_VERSION)
 
 
+def _worker_versions() -> Tuple[str, str]:
+    """versions(), as a worker reports its own (called by reference there)."""
+    return versions()
+
+
 class VersionMismatch(RuntimeError):
     """A worker runs another simloop or MuJoCo than the client."""
 
@@ -295,15 +300,15 @@ class _Pool:
         if not self.dask:
             return
         try:
-            found = self.executor.run(versions)
+            found = self.executor.run(_worker_versions)
         except Exception as e:  # a worker that cannot import simloop at all
             raise VersionMismatch(f"a worker cannot run simloop ({type(e).__name__}: {e}); install simloop "
                                   f"{_core.__version__} on every machine") from None
+        mine = versions()
         for address, theirs in found.items():
-            if tuple(theirs) != versions():
+            if tuple(theirs) != mine:
                 raise VersionMismatch(f"worker {address} has simloop {theirs[0]} ({theirs[1]}), the client simloop "
-                                      f"{_core.__version__} ({_core.MUJOCO_VERSION}): install the same simloop on "
-                                      "every machine")
+                                      f"{mine[0]} ({mine[1]}): install the same simloop on every machine")
 
     def map_unordered(self, fn: Callable, tasks: Iterable[Tuple[int, tuple]], window: int) -> Iterator[Tuple[int, Any]]:
         """Yields (key, fn(*args)) as tasks finish, with at most `window` in flight."""

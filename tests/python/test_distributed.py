@@ -113,6 +113,18 @@ def test_a_worker_killed_mid_batch_loses_nothing(client):
     client.wait_for_workers(2, timeout=60)  # the nanny brings a new one up for the other tests
 
 
+def test_a_worker_of_another_version_is_refused_before_any_work(client, monkeypatch):
+    # The workers report their real versions; this client now claims another.
+    monkeypatch.setattr(distributed, "versions", lambda: ("9.9.9", _core.MUJOCO_VERSION))
+    with pytest.raises(distributed.VersionMismatch, match=r"^worker tcp://127\.0\.0\.1:\d+ has simloop "
+                                                          + _core.__version__ + r" .* the client simloop 9\.9\.9 "):
+        simloop.run_batch(range(4), steps=50, executor=client)
+    # A worker that joins later (after the check) refuses the chunk itself.
+    monkeypatch.setattr(distributed._Pool, "check_workers", lambda self: None)
+    with pytest.raises(distributed.VersionMismatch, match=r"^worker \S+ has simloop .* the client simloop 9\.9\.9"):
+        simloop.run_batch(range(4), steps=50, executor=client)
+
+
 def test_concurrent_futures_executors(local):
     with ProcessPoolExecutor(2, mp_context=multiprocessing.get_context("spawn")) as pool:
         assert_same_as_local(simloop.run_batch(SEEDS, TIMESTEPS, steps=STEPS, executor=pool, chunk_size=16), local)
@@ -189,6 +201,37 @@ def test_the_batch_command_writes_one_row_per_run_of_the_grid(tmp_path):
     plain_table = pq.read_table(tmp_path / "plain.parquet").to_pydict()
     for name in ("box_final_pos_x", "box_final_pos_y", "box_final_speed", "disturbance0_force_y"):
         assert table[name][28:42] == plain_table[name]  # friction 1.0, mass 0.5
+
+
+def test_a_progress_bar_on_a_terminal_only(tmp_path):
+    import fcntl
+    import pty
+    import struct
+    import termios
+
+    leader, follower = pty.openpty()
+    fcntl.ioctl(follower, termios.TIOCSWINSZ, struct.pack("HHHH", 24, 100, 0, 0))  # a terminal 100 columns wide
+    try:
+        done = subprocess.run([sys.executable, "-m", "simloop", "batch", "--seeds", "0:20", "--steps", "100",
+                               "--chunk-size", "5", "--out", "t.parquet"], cwd=tmp_path, stdin=subprocess.DEVNULL,
+                              stdout=subprocess.PIPE, stderr=follower, timeout=120)
+        os.close(follower)
+        follower = -1
+        drawn = b""
+        while True:
+            try:
+                chunk = os.read(leader, 65536)
+            except OSError:  # the terminal's other end is closed: all read
+                break
+            if not chunk:
+                break
+            drawn += chunk
+    finally:
+        if follower >= 0:
+            os.close(follower)
+        os.close(leader)
+    assert done.returncode == 0
+    assert b"20/20" in drawn and b"run" in drawn
 
 
 def test_bad_input_is_one_line_exit_2_and_nothing_written(tmp_path):
