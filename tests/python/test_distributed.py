@@ -6,6 +6,7 @@ an interrupted batch is resumed."""
 
 from __future__ import annotations
 
+import contextlib
 import math
 import multiprocessing
 import os
@@ -169,6 +170,27 @@ def batch(args, cwd, **kwargs) -> subprocess.CompletedProcess:
                           stdin=subprocess.DEVNULL, timeout=180, **kwargs)
 
 
+@contextlib.contextmanager
+def running_batch(args, cwd):
+    """`python -m simloop batch ARGS` started in the background; killed if still running at the end."""
+    runner = subprocess.Popen([sys.executable, "-m", "simloop", "batch", *args], cwd=cwd, stdin=subprocess.DEVNULL,
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        yield runner
+    finally:
+        if runner.poll() is None:
+            runner.kill()
+            runner.wait()
+
+
+def wait_for_chunks(runner: subprocess.Popen, parts: Path, count: int) -> None:
+    """Until the running batch has `count` finished chunks in its parts folder."""
+    deadline = time.monotonic() + 120
+    while not (parts.is_dir() and len(list(parts.glob("chunk-*.parquet"))) >= count):
+        assert runner.poll() is None and time.monotonic() < deadline, "the batch ended before it could be stopped"
+        time.sleep(0.02)
+
+
 GRID = ["--seeds", "0:6,40", "--timestep", "0.002,0.004", "--friction", "0.5,1.0", "--mass", "box=0.5,2",
         "--steps", "300", "--chunk-size", "5"]
 
@@ -254,19 +276,10 @@ def test_resume_after_ctrl_c_gives_the_bytes_of_an_uninterrupted_batch(tmp_path)
     whole = batch([*args, "--out", "whole.parquet"], tmp_path)
     assert whole.returncode == 0, whole.stderr
     parts = tmp_path / "cut.parquet.parts"
-    runner = subprocess.Popen([sys.executable, "-m", "simloop", "batch", *args, "--out", "cut.parquet"], cwd=tmp_path,
-                              stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    try:
-        deadline = time.monotonic() + 120
-        while not (parts.is_dir() and len(list(parts.glob("chunk-*.parquet"))) >= 3):
-            assert runner.poll() is None and time.monotonic() < deadline, "the batch ended before it could be stopped"
-            time.sleep(0.02)
+    with running_batch([*args, "--out", "cut.parquet"], tmp_path) as runner:
+        wait_for_chunks(runner, parts, 3)
         runner.send_signal(signal.SIGINT)
         _, err = runner.communicate(timeout=60)
-    finally:
-        if runner.poll() is None:
-            runner.kill()
-            runner.wait()
     assert runner.returncode == 130, err
     assert "cut.parquet not written" in err and "--resume" in err and err.count("\n") == 1
     assert not (tmp_path / "cut.parquet").exists()
@@ -365,23 +378,13 @@ def test_a_real_scheduler_and_workers_with_one_killed_give_the_local_bytes(dask_
     local = batch([*args, "--threads", "2", "--out", "local.parquet"], tmp_path)
     assert local.returncode == 0, local.stderr
 
-    runner = subprocess.Popen([sys.executable, "-m", "simloop", "batch", *args, "--scheduler", address,
-                               "--out", "cluster.parquet"], cwd=tmp_path, stdin=subprocess.DEVNULL,
-                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    try:
-        parts = tmp_path / "cluster.parquet.parts"
-        deadline = time.monotonic() + 120
-        while not (parts.is_dir() and list(parts.glob("chunk-*.parquet"))):
-            assert runner.poll() is None and time.monotonic() < deadline, runner.stderr.read()
-            time.sleep(0.02)
+    parts = tmp_path / "cluster.parquet.parts"
+    with running_batch([*args, "--scheduler", address, "--out", "cluster.parquet"], tmp_path) as runner:
+        wait_for_chunks(runner, parts, 1)
         # The worker process under the first `dask worker` (its nanny), mid-batch.
         victim = psutil.Process(workers[0].pid).children()[0]
         victim.send_signal(signal.SIGKILL)
         out, err = runner.communicate(timeout=180)
-    finally:
-        if runner.poll() is None:
-            runner.kill()
-            runner.wait()
     assert runner.returncode == 0, err
     assert "batch: 240 runs" in out
     assert not parts.exists()
