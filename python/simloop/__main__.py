@@ -534,6 +534,8 @@ def _batch_command(args: List[str]) -> int:
             earlier = batch.prepare(opts["resume"])
         except distributed.ResumeError as e:
             return _fail(EXIT_USAGE, f"batch: {e}")
+        if os.path.isdir(opts["out"]):
+            return _fail(EXIT_USAGE, f"batch: --out: {opts['out']} is a directory (name the Parquet file)")
         out_dir = os.path.dirname(os.path.abspath(opts["out"]))
         try:
             os.makedirs(out_dir, exist_ok=True)

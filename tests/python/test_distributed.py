@@ -269,6 +269,10 @@ def test_bad_input_is_one_line_exit_2_and_nothing_written(tmp_path):
         assert done.returncode == 2, (args, done.stderr)
         assert done.stderr.count("\n") == 1 and words in done.stderr, done.stderr
     assert list(tmp_path.iterdir()) == []
+    (tmp_path / "folder").mkdir()
+    done = batch(["--out", "folder"], tmp_path)
+    assert done.returncode == 2 and "--out: folder is a directory" in done.stderr
+    assert [p.name for p in tmp_path.iterdir()] == ["folder"] and not list((tmp_path / "folder").iterdir())
 
 
 def test_resume_after_ctrl_c_gives_the_bytes_of_an_uninterrupted_batch(tmp_path):
