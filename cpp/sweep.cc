@@ -140,11 +140,16 @@ SweepResult sweep(const Model& model, std::vector<double> timesteps, double dura
     p.energy = r.energy;
     result.points.push_back(p);
   }
+  judge_sweep(result);
+  return result;
+}
+
+void judge_sweep(SweepResult& result) {
   for (SweepPoint& p : result.points) {
     p.stable = p.peak_box_z <= kBoxRestZ + kStableHop && p.final_box_z >= kBoxRestZ - kStableSink && p.warnings == 0;
   }
+  result.edge_index = -1;
   for (size_t i = 0; i < result.points.size() && result.points[i].stable; ++i) result.edge_index = static_cast<int>(i);
-  return result;
 }
 
 std::string sweep_csv(const SweepResult& result) {

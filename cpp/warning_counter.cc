@@ -1,7 +1,10 @@
 #include "warning_counter.hpp"
 
 #include <cstdio>
+#include <iterator>
 #include <string>
+
+#include "divergence.hpp"
 
 namespace simloop::detail {
 namespace {
@@ -36,6 +39,12 @@ std::vector<Warning> WarningCounter::warnings() const {
     out.push_back({kWarningNames[i], count_[i], first_step_[i], warning_message(i, last_info_[i])});
   }
   return out;
+}
+
+std::vector<std::string> all_warning_names() {
+  std::vector<std::string> names(std::begin(kWarningNames), std::end(kWarningNames));
+  names.emplace_back(kDivergedWarning);
+  return names;
 }
 
 }  // namespace simloop::detail

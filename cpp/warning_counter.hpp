@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include <mujoco/mujoco.h>
@@ -34,5 +35,10 @@ class WarningCounter {
   int last_info_[mjNWARNING] = {};
   std::int64_t first_step_[mjNWARNING] = {};
 };
+
+// Every name a run's warnings can carry: MuJoCo's (mjWARN_...) in MuJoCo's
+// order, then simloop's own (simloop_DIVERGED). Tables of many runs give
+// each its own column.
+[[nodiscard]] std::vector<std::string> all_warning_names();
 
 }  // namespace simloop::detail

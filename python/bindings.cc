@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "cli_options.hpp"
+#include "warning_counter.hpp"
 #include "simloop/batch.hpp"
 #include "simloop/control.hpp"
 #include "simloop/errors.hpp"
@@ -34,6 +35,7 @@
 #include "simloop/run.hpp"
 #include "simloop/scenario.hpp"
 #include "simloop/scenario_run.hpp"
+#include "simloop/scene_params.hpp"
 #include "simloop/scene_geometry.hpp"
 #include "simloop/sim.hpp"
 #include "simloop/sweep.hpp"
@@ -1530,4 +1532,69 @@ PYBIND11_MODULE(_core, m) {
             return unpickle_fields<simloop::ScenarioRunResult,
                                    &scenario_result_fields<FieldReader, simloop::ScenarioRunResult>>(t, "ScenarioResult");
           }));
+  // ---- Batches past one machine (python/simloop/distributed.py) ----------
+  // Scene parameters on a copy of a model, the warning names a table's
+  // columns are made of, and sweep points as plain data (so a sweep run in
+  // chunks on workers is put back together as one SweepResult).
+  m.def(
+      "with_scene_params",
+      [](const simloop::Model& model, const std::vector<std::tuple<std::string, std::string, double>>& params) {
+        std::vector<simloop::SceneParam> converted;
+        for (const auto& [kind, name, value] : params) {
+          simloop::SceneParam p;
+          if (kind == "friction") {
+            p.kind = simloop::SceneParam::Kind::kFriction;
+          } else if (kind == "mass") {
+            p.kind = simloop::SceneParam::Kind::kMass;
+          } else if (kind == "damping") {
+            p.kind = simloop::SceneParam::Kind::kDamping;
+          } else {
+            throw py::value_error("scene parameter kind must be 'friction', 'mass' or 'damping', got '" + kind + "'");
+          }
+          p.name = name;
+          p.value = value;
+          converted.push_back(p);
+        }
+        return simloop::with_scene_params(model, converted);
+      },
+      "model"_a, "params"_a, "A copy of model with (kind, name, value) scene parameters applied.");
+  m.attr("WARNING_NAMES") = py::tuple(py::cast(simloop::detail::all_warning_names()));
+  m.def(
+      "sweep_point_fields",
+      [](const simloop::SweepPoint& p) {
+        const simloop::EnergyTotals& e = p.energy;
+        return py::make_tuple(p.timestep, p.steps, p.peak_box_z, p.max_abs_box_y, p.final_box_x, p.final_box_y,
+                              p.final_box_z, p.final_pusher_x, p.warnings,
+                              py::make_tuple(e.energy_start, e.energy_end, e.work_actuator, e.work_shove,
+                                             e.work_passive, e.work_constraint, e.work_constraint_positive,
+                                             e.unexplained));
+      },
+      "point"_a);
+  m.def(
+      "sweep_result_from_fields",
+      [](double duration, const std::vector<py::tuple>& points) {
+        simloop::SweepResult result;
+        result.duration = duration;
+        for (const py::tuple& f : points) {
+          simloop::SweepPoint p;
+          p.timestep = f[0].cast<double>();
+          p.steps = f[1].cast<std::int64_t>();
+          p.peak_box_z = f[2].cast<double>();
+          p.max_abs_box_y = f[3].cast<double>();
+          p.final_box_x = f[4].cast<double>();
+          p.final_box_y = f[5].cast<double>();
+          p.final_box_z = f[6].cast<double>();
+          p.final_pusher_x = f[7].cast<double>();
+          p.warnings = f[8].cast<int>();
+          const auto e = f[9].cast<std::array<double, 8>>();
+          p.energy = {e[0], e[1], e[2], e[3], e[4], e[5], e[6], e[7]};
+          result.points.push_back(p);
+        }
+        simloop::judge_sweep(result);
+        return result;
+      },
+      "duration"_a, "points"_a);
+  m.def("sweep_steps", &simloop::sweep_steps, "duration"_a, "timestep"_a);
+  m.def("check_scenario", &simloop::check_scenario, "scene"_a, "scenario"_a, "config"_a,
+        "Everything run_scenario checks before its first step, without running.");
 }

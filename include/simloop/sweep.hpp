@@ -73,6 +73,11 @@ inline constexpr std::int64_t kMinSweepSteps = 4;
 [[nodiscard]] SweepResult sweep(const Model& model, std::vector<double> timesteps, double duration = 4.0,
                                 int threads = 0, RunControl* control = nullptr);
 
+// Applies the criterion above to each point (stable) and finds the edge:
+// what sweep() does with its points once they are run. Points run elsewhere
+// (on a cluster's workers, in chunks of timesteps) are judged the same way.
+void judge_sweep(SweepResult& result);
+
 // sweep.csv: a header and one line per timestep.
 [[nodiscard]] std::string sweep_csv(const SweepResult& result);
 

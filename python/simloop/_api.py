@@ -230,7 +230,8 @@ def _sequence(name: str, values: object) -> List[Any]:
 def run_batch(seeds: Iterable[int] = (0,), timesteps: Iterable[float] = (0.002,), *, steps: int = 2000,
               perturb: bool = True, smoke: bool = False, model: ModelLike = None, record_every: int = 1,
               audit_energy: bool = False, threads: Optional[int] = None, rng: str = "mt19937_64",
-              progress: Progress = None, metrics_only: bool = False) -> "Union[List[RunResult], BatchTable]":
+              progress: Progress = None, metrics_only: bool = False, executor: object = None,
+              chunk_size: Optional[int] = None) -> "Union[List[RunResult], BatchTable]":
     """Runs every (seed, timestep) pair over one compiled model, in parallel.
 
     Results come in the order of itertools.product(seeds, timesteps), and each
@@ -242,13 +243,26 @@ def run_batch(seeds: Iterable[int] = (0,), timesteps: Iterable[float] = (0.002,)
     row per run (the parameters, the metrics unrounded, the shove, warning
     counts), whose memory does not grow with the runs' lengths:
     .to_pandas(), .to_arrow(), table["lateral_drift"].
+
+    executor: a dask.distributed Client or a concurrent.futures.Executor
+    (simloop.distributed): the runs go out in chunks of chunk_size (None: a
+    default), each chunk run on a worker by the C++ batch with `threads`
+    threads (None: 1), metrics only, and a BatchTable comes back (one row
+    per run, in the same order, the same bits as a local metrics-only
+    batch). model must then be None or an MJCF path; progress is called as
+    progress(runs_done, runs_total) as chunks finish.
     """
     seed_list = [_check_int("seeds[%d]" % i, s, 0, _U64_MAX) for i, s in enumerate(_sequence("seeds", seeds))]
     timestep_list = [_check_timestep(t, "timesteps[%d]" % i) for i, t in enumerate(_sequence("timesteps", timesteps))]
     workers = 0 if threads is None else _check_int("threads", threads, 1, 4096)
     configs = [_config(s, steps, t, perturb, smoke, record_every, audit_energy, rng)
                for s in seed_list for t in timestep_list]
-    if _check_bool("metrics_only", metrics_only):
+    metrics_only = _check_bool("metrics_only", metrics_only)
+    if executor is not None:
+        from .distributed import run_batch_on
+
+        return run_batch_on(executor, configs, model, threads, chunk_size, _check_progress(progress))
+    if metrics_only:
         from .tables import table
         return table(_core.run_batch_metrics_only(load_model(model), configs, workers,
                                                   progress=_check_progress(progress)))
@@ -748,7 +762,8 @@ class Sim:
 
 def sweep(timesteps: Optional[Iterable[float]] = None, duration: Optional[float] = None,
           threads: Optional[int] = None, model: ModelLike = None, *, scenario: Any = None, seed: int = 0,
-          rng: str = "mt19937_64", perturb: bool = True, progress: Progress = None) -> Any:
+          rng: str = "mt19937_64", perturb: bool = True, progress: Progress = None, executor: object = None,
+          chunk_size: Optional[int] = None) -> Any:
     """The baseline (no shove) at many timesteps over the same span of sim time.
 
     timesteps: None for the default: 25 round timesteps (1, 2, 3, 4, 5, 6 and
@@ -774,11 +789,24 @@ def sweep(timesteps: Optional[Iterable[float]] = None, duration: Optional[float]
     .write(out) sweep.csv. The criterion: the box rises at most 5 mm above
     rest, ends at most 1 mm below rest, and MuJoCo raised no warning.
     progress: as for run(), over the steps of all the timesteps.
+    executor: a dask.distributed Client or a concurrent.futures.Executor: the
+    timesteps go out in chunks (chunk_size), each swept on a worker with
+    `threads` threads (None: 1); the same SweepResult comes back. model must
+    then be None or an MJCF path; progress(points_done, points_total).
     """
     if timesteps is not None:
         values = [_check_timestep(t, "timesteps[%d]" % i) for i, t in enumerate(_sequence("timesteps", timesteps))]
         if not values:
             raise ValueError("timesteps must not be empty")
+    if executor is not None:
+        if scenario is not None:
+            raise ValueError("sweep(scenario=..., executor=...) is not supported: a scenario sweep runs locally "
+                             "(use run_scenario_batch(..., timesteps=..., executor=...) for its runs on a cluster)")
+        from .distributed import sweep_on
+
+        points = _core.default_sweep_timesteps() if timesteps is None else values
+        span = _check_timestep(4.0 if duration is None else duration, "duration")
+        return sweep_on(executor, points, span, model, threads, chunk_size, _check_progress(progress))
     workers = 0 if threads is None else _check_int("threads", threads, 1, 4096)
     if scenario is not None:
         return _sweep_scenario(scenario, None if timesteps is None else values, duration, workers, model, seed, rng,

@@ -148,7 +148,8 @@ class Scenario:
             text += "\n" + _toml_table("[[disturbance]]", d)
         if record is not None:
             text += "\n" + _toml_table("[record]", record)
-        self._core = _core.Scenario.from_toml(text, "Scenario(...)", os.getcwd())
+        self._base = os.getcwd()  # where its relative paths resolve (sent along to workers)
+        self._core = _core.Scenario.from_toml(text, "Scenario(...)", self._base)
         self.toml = text
 
     @classmethod
@@ -156,6 +157,7 @@ class Scenario:
         """Reads a scenario file (TOML); a relative scene resolves against its folder."""
         self = cls.__new__(cls)
         self._core = _core.Scenario.from_file(os.fspath(path))
+        self._base = os.path.dirname(os.path.abspath(os.fspath(path)))
         with open(path, encoding="utf-8") as f:
             self.toml = f.read()
         return self
@@ -165,6 +167,7 @@ class Scenario:
         """The chapter's run: its scene, push_motor at 1.0, the shove on the box."""
         self = cls.__new__(cls)
         self._core = _core.Scenario.chapter()
+        self._base = ""
         self.toml = ""
         return self
 
@@ -272,7 +275,8 @@ def run_scenario_batch(scenario: Union[Scenario, str, "os.PathLike[str]"], seeds
                        steps: Optional[int] = None, perturb: bool = True, record_every: int = 1,
                        model: Optional[_core.Model] = None, threads: Optional[int] = None,
                        progress: Progress = None, controls: Any = None, initial_state: Any = None,
-                       metrics_only: bool = False) -> Union[List[ScenarioResult], BatchTable]:
+                       metrics_only: bool = False, executor: object = None,
+                       chunk_size: Optional[int] = None) -> Union[List[ScenarioResult], BatchTable]:
     """Runs a scenario once per (seed, timestep) pair, in parallel over one scene.
 
     Results come in the order of itertools.product(seeds, timesteps), and each
@@ -291,8 +295,21 @@ def run_scenario_batch(scenario: Union[Scenario, str, "os.PathLike[str]"], seeds
     row per run: the parameters, each recorded body's final position and
     speed, the disturbances as drawn, warning counts; unrounded), whose
     memory does not grow with the runs' lengths. .to_pandas(), .to_arrow().
+
+    executor: a dask.distributed Client or a concurrent.futures.Executor, as
+    for run_batch(): chunks on workers, metrics only, a BatchTable back (the
+    scenario travels as its TOML text; model must be None; controls and
+    initial_state stay local).
     """
-    scenario, scene = _scenario_and_scene(scenario, model)
+    if executor is not None:
+        if model is not None:
+            raise TypeError("model must be None with executor= (the scenario's scene is compiled on each worker)")
+        if controls is not None or initial_state is not None:
+            raise ValueError("controls and initial_state are not sent to an executor: run such batches locally")
+        scenario, scene = _scenario_and_scene(scenario, None)  # compiled here too: bad names fail before any work goes out
+        _core.check_scenario_names(scenario._core, scene)
+    else:
+        scenario, scene = _scenario_and_scene(scenario, model)
     if rng not in RNGS:
         raise ValueError(f"rng must be 'mt19937_64' or 'numpy', got {rng!r}")
     seed_list = [_check_int("seeds[%d]" % i, s, 0, _U64_MAX) for i, s in enumerate(_sequence("seeds", seeds))]
@@ -302,6 +319,12 @@ def run_scenario_batch(scenario: Union[Scenario, str, "os.PathLike[str]"], seeds
     step_count = None if steps is None else _check_int("steps", steps, 1, _core.MAX_STEPS)
     perturb = _check_bool("perturb", perturb)
     every = _check_int("record_every", record_every, 1, _core.MAX_RECORD_EVERY)
+    if executor is not None:
+        from .distributed import run_scenario_batch_on
+
+        return run_scenario_batch_on(executor, scenario, seed_list, timestep_list, rng=rng, steps=step_count,
+                                     perturb=perturb, threads=threads, chunk_size=chunk_size,
+                                     progress=_check_progress(progress))
     configs = [_core.ScenarioConfig(s, rng, t, step_count, perturb, every) for s in seed_list for t in timestep_list]
     metrics_only = _check_bool("metrics_only", metrics_only)
     own = _inputs_array("controls", controls, (2, 3), "shaped (runs, steps, nu) or (steps, nu)")

@@ -1,0 +1,121 @@
+#include "simloop/scene_params.hpp"
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "mujoco_guard.hpp"
+#include "simloop/errors.hpp"
+#include "simloop/number_format.hpp"
+#include "simloop/scenario.hpp"
+
+namespace simloop {
+namespace {
+
+std::string describe(const SceneParam& p) {
+  return std::string(scene_param_kind_name(p.kind)) + (p.name.empty() ? "" : " of '" + p.name + "'") + " = " +
+         python_float_repr(p.value);
+}
+
+// The id of the object named `name`, or InvalidArgument listing the named
+// ones of that type (with a did-you-mean).
+int find_named(const mjModel* m, mjtObj type, int count, const char* kind, const char* kinds, const SceneParam& p) {
+  const int id = mj_name2id(m, type, p.name.c_str());
+  if (id >= 0) return id;
+  std::vector<std::string> names;
+  for (int i = 0; i < count; ++i) {
+    const char* n = mj_id2name(m, type, i);
+    if (n != nullptr && *n != '\0') names.emplace_back(n);
+  }
+  const std::string hint = did_you_mean(p.name, names);
+  std::string list;
+  for (const std::string& n : names) list += (list.empty() ? "" : ", ") + n;
+  throw InvalidArgument(describe(p) + ": no " + kind + " named '" + p.name + "'" +
+                        (hint.empty() ? "" : " (did you mean '" + hint + "'?)") + "; " + kinds + ": " + (list.empty() ? "(none named)" : list));
+}
+
+void check_value(const SceneParam& p) {
+  const bool positive_only = p.kind == SceneParam::Kind::kMass;
+  if (!std::isfinite(p.value) || p.value < 0.0 || (positive_only && p.value == 0.0)) {
+    throw InvalidArgument(describe(p) + ": " + scene_param_kind_name(p.kind) + " must be a finite number " +
+                          (positive_only ? "> 0" : ">= 0"));
+  }
+}
+
+// Returns true if the constants mj_setConst derives from the masses must be recomputed.
+bool apply(mjModel* m, const SceneParam& p) {
+  switch (p.kind) {
+    case SceneParam::Kind::kFriction: {
+      const int first = p.name.empty() ? 0 : find_named(m, mjOBJ_GEOM, m->ngeom, "geom", "geoms", p);
+      const int end = p.name.empty() ? m->ngeom : first + 1;
+      for (int g = first; g < end; ++g) m->geom_friction[3 * g] = p.value;
+      return false;
+    }
+    case SceneParam::Kind::kDamping: {
+      const int first = p.name.empty() ? 0 : find_named(m, mjOBJ_JOINT, m->njnt, "joint", "joints", p);
+      const int end = p.name.empty() ? m->njnt : first + 1;
+      for (int j = first; j < end; ++j) {
+        for (int v = 0; v < m->nv; ++v) {
+          if (m->dof_jntid[v] == j) m->dof_damping[v] = p.value;
+        }
+      }
+      return false;
+    }
+    case SceneParam::Kind::kMass: {
+      if (p.name.empty()) throw InvalidArgument(describe(p) + ": a mass needs a body's name");
+      const int body = find_named(m, mjOBJ_BODY, m->nbody, "body", "bodies", p);
+      if (body == 0) throw InvalidArgument(describe(p) + ": the world body has no mass to set");
+      const double old_mass = m->body_mass[body];
+      if (!(old_mass > 0.0)) {
+        throw InvalidArgument(describe(p) + ": body '" + p.name +
+                              "' has no mass in the scene, so there is no inertia to scale");
+      }
+      // Same shape, another density: the inertia scales with the mass. An
+      // unchanged mass is a factor of exactly 1 and a difference of exactly 0.
+      const double factor = p.value / old_mass;
+      const double difference = p.value - old_mass;
+      m->body_mass[body] = p.value;
+      for (int k = 0; k < 3; ++k) m->body_inertia[3 * body + k] *= factor;
+      for (int b = body; b > 0; b = m->body_parentid[b]) m->body_subtreemass[b] += difference;
+      m->body_subtreemass[0] += difference;
+      return true;
+    }
+  }
+  return false;
+}
+
+}  // namespace
+
+const char* scene_param_kind_name(SceneParam::Kind kind) noexcept {
+  switch (kind) {
+    case SceneParam::Kind::kFriction: return "friction";
+    case SceneParam::Kind::kMass: return "mass";
+    case SceneParam::Kind::kDamping: return "damping";
+  }
+  return "?";
+}
+
+Model with_scene_params(const Model& model, const std::vector<SceneParam>& params) {
+  for (const SceneParam& p : params) check_value(p);
+  if (params.empty()) return model;
+  // A fresh copy of the model that nothing else holds yet: ours to edit
+  // before it is shared (as Model::for_run edits its copy).
+  Model copy = model.with_timestep(model.timestep());
+  mjModel* m = const_cast<mjModel*>(copy.get());
+  bool masses_changed = false;
+  for (const SceneParam& p : params) masses_changed = apply(m, p) || masses_changed;
+  if (masses_changed) {
+    mjData* d = nullptr;
+    try {
+      detail::mujoco_call([&] { d = mj_makeData(m); });
+      detail::mujoco_call([&] { mj_setConst(m, d); });
+    } catch (const MujocoError& e) {
+      if (d != nullptr) mj_deleteData(d);
+      throw MujocoError(std::string("recomputing the model's constants after a mass change: ") + e.what());
+    }
+    mj_deleteData(d);
+  }
+  return copy;
+}
+
+}  // namespace simloop

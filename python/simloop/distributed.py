@@ -1,0 +1,602 @@
+"""Batches and sweeps past one machine: chunks of runs on a Dask cluster or any
+concurrent.futures executor, and a table of metrics back.
+
+Work goes out in chunks. Each chunk runs the C++ batch (run_batch,
+run_scenario_batch or sweep) with its own threads on whichever worker takes
+it, and sends back only a compact table of metrics, never trajectories: the
+client holds the table and nothing else, however many runs there are.
+
+What travels to a worker is plain data: the scene as an MJCF path (or the
+chapter's embedded scene), a scenario as its TOML text and the folder its
+relative paths resolve against, the run parameters, and the simloop and
+MuJoCo versions of the client. A worker refuses a chunk from a client of
+another version (the bits of a run are those of one build). Files a scenario
+or model names must exist at the same paths on every worker.
+
+Dask reschedules the tasks of a worker that dies (up to the scheduler's
+`distributed.scheduler.allowed-failures`, 3 by default); every chunk is a
+pure function of its inputs, so a chunk computed twice gives the same bits.
+dask is imported only when a dask Client is passed.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures
+import functools
+import itertools
+import math
+import os
+import socket
+import uuid
+from typing import Any, Callable, Dict, Iterable, Iterator, List, Optional, Sequence, Tuple
+
+import numpy as np
+
+from . import _core
+
+Columns = Dict[str, np.ndarray]
+# A scene parameter as it travels: ("friction" | "mass" | "damping", name or "", value).
+SceneParam = Tuple[str, str, float]
+# One run of a batch: its row index in the whole batch, seed, timestep (None:
+# the scenario's own) and scene parameters.
+Run = Tuple[int, int, Optional[float], Tuple[SceneParam, ...]]
+
+WARNING_NAMES: Tuple[str, ...] = tuple(_core.WARNING_NAMES)
+# The warnings that mean the run's state blew up or was reset by MuJoCo: a
+# table's `diverged` column is true when any of them was raised.
+DIVERGENCE_WARNINGS = ("mjWARN_BADQPOS", "mjWARN_BADQVEL", "mjWARN_BADQACC", "simloop_DIVERGED")
+MAX_CHUNK_SIZE = 64
+
+
+def versions() -> Tuple[str, str]:
+    """(simloop's version, MuJoCo's version) of this process."""
+    return (_core.__version__, _core.MUJOCO_VERSION)
+
+
+def _worker_versions() -> Tuple[str, str]:
+    """versions(), as a worker reports its own (called by reference there)."""
+    return versions()
+
+
+class VersionMismatch(RuntimeError):
+    """A worker runs another simloop or MuJoCo than the client."""
+
+
+def _check_versions(expected: Sequence[str]) -> None:
+    here = versions()
+    if tuple(expected) != here:
+        raise VersionMismatch(
+            f"worker {socket.gethostname()} has simloop {here[0]} ({here[1]}), the client simloop {expected[0]} "
+            f"({expected[1]}): install the same simloop on every machine (a run's bits are those of one build)")
+
+
+# ---- The scene and scenario as plain data --------------------------------
+
+def scene_source(model: object) -> Tuple[str, str]:
+    """How a model travels: ("chapter", "") or ("path", absolute MJCF path)."""
+    if model is None:
+        return ("chapter", "")
+    if isinstance(model, (str, bytes, os.PathLike)):
+        from ._api import _check_path
+
+        return ("path", os.path.abspath(_check_path("model", model, "an MJCF file")))
+    raise TypeError("model must be None (the chapter's scene) or an MJCF file's path when work goes to an executor "
+                    f"(a compiled simloop.Model does not travel to workers), got {type(model).__name__}")
+
+
+def scenario_source(scenario: Any) -> Tuple[str, str, str]:
+    """How a simloop.Scenario travels: ("chapter", "", "") or ("toml", its text, the folder its paths resolve against)."""
+    if not scenario.toml:
+        return ("chapter", "", "")
+    return ("toml", scenario.toml, scenario._base)
+
+
+@functools.lru_cache(maxsize=8)
+def _scene(source: Tuple[str, str]) -> "_core.Model":
+    kind, text = source
+    if kind == "chapter":
+        return _core.Model.pusher_scene()
+    return _core.Model.from_file(text)
+
+
+@functools.lru_cache(maxsize=8)
+def _scenario(source: Tuple[str, str, str]) -> Tuple["_core.Scenario", "_core.Model"]:
+    kind, text, base = source
+    scenario = _core.Scenario.chapter() if kind == "chapter" else _core.Scenario.from_toml(text, "scenario", base)
+    return scenario, _core.load_scene(scenario)
+
+
+@functools.lru_cache(maxsize=16)
+def _with_params(model: "_core.Model", params: Tuple[SceneParam, ...]) -> "_core.Model":
+    return _core.with_scene_params(model, list(params)) if params else model
+
+
+def param_column(param: Tuple[str, str]) -> str:
+    """The table column of a scene parameter: friction, friction_<geom>, mass_<body>, damping, damping_<joint>."""
+    kind, name = param
+    return f"{kind}_{name}" if name else kind
+
+
+# ---- The chunk: runs on a worker, returns only metrics -------------------
+
+def run_chunk(job: Dict[str, Any], runs: Sequence[Run]) -> Columns:
+    """Runs `runs` of `job` with the C++ batch (job["threads"] threads) and
+    returns their metrics as columns (metrics_columns). Runs sharing scene
+    parameters share one modified model."""
+    _check_versions(job["versions"])
+    groups: Dict[Tuple[SceneParam, ...], List[int]] = {}
+    for i, run in enumerate(runs):
+        groups.setdefault(run[3], []).append(i)
+    results: List[Any] = [None] * len(runs)
+    every = _core.MAX_RECORD_EVERY  # the first and the final rows only: the metrics need nothing else
+    for params, members in groups.items():
+        if job["kind"] == "chapter":
+            model = _with_params(_scene(job["scene"]), params)
+            configs = [_core.RunConfig(runs[i][1], job["steps"], runs[i][2], job["perturb"], job["smoke"], every,
+                                       job["audit_energy"], job["rng"]) for i in members]
+            out = _core.run_batch(model, configs, job["threads"])
+        else:
+            scenario, scene = _scenario(job["scenario"])
+            model = _with_params(scene, params)
+            configs = [_core.ScenarioConfig(runs[i][1], job["rng"], runs[i][2], job["steps"], job["perturb"], every)
+                       for i in members]
+            out = _core.run_scenario_batch(model, scenario, configs, job["threads"])
+        for i, result in zip(members, out):
+            results[i] = result
+    return metrics_columns(job, runs, results)
+
+
+def metrics_columns(job: Dict[str, Any], runs: Sequence[Run], results: Sequence[Any]) -> Columns:
+    """The table of a chunk: one row per run, flat numeric columns.
+
+    run (the row's index in the whole batch), seed, timestep (the run's), one
+    column per scene parameter of the job (param_column), steps, sim_time;
+    the metrics, unrounded where the final state gives them (chapter:
+    box_final_pos_x/_y/_z, box_final_speed, pusher_final_x, shove_newtons,
+    shove_sign, and lateral_drift and shove_moved_box as metrics.json has
+    them; a scenario: per recorded body <body>_final_pos_x/_y/_z and
+    <body>_final_speed, per disturbance disturbance<i>_force_x.. _torque_z
+    as applied and disturbance<i>_steps as it happened); energy_* with the
+    energy audit; warning_<name> (a count per name in WARNING_NAMES); and
+    diverged (any of DIVERGENCE_WARNINGS raised).
+
+    The one place rows are built: a metrics-only batch mode can replace the
+    results it reads without changing the table.
+    """
+    rows: List[Dict[str, Any]] = []
+    for run, r in zip(runs, results):
+        row: Dict[str, Any] = {"run": run[0], "seed": run[1], "timestep": float(r.timestep)}
+        for (kind, name, value) in run[3]:
+            row[param_column((kind, name))] = value
+        row["steps"] = int(r.steps) if job["kind"] != "chapter" else int(r.metrics["steps"])
+        row["sim_time"] = float(r.sim_time)
+        final = r.trajectory[-1]
+        if job["kind"] == "chapter":
+            names = _core.COLUMN_NAMES
+            at = {n: float(final[k]) for k, n in enumerate(names)}
+            vx, vy, vz = at["box_vx"], at["box_vy"], at["box_vz"]
+            row.update(box_final_pos_x=at["box_x"], box_final_pos_y=at["box_y"], box_final_pos_z=at["box_z"],
+                       box_final_speed=math.sqrt(vx * vx + vy * vy + vz * vz), pusher_final_x=at["pusher_x"],
+                       lateral_drift=r.metrics["lateral_drift"], shove_moved_box=bool(r.metrics["shove_moved_box"]),
+                       shove_newtons=float(r.shove.newtons), shove_sign=float(r.shove.sign))
+            if r.energy is not None:
+                row.update({f"energy_{k}": float(v) for k, v in r.energy.items()})
+        else:
+            for body, column in sorted(r.bodies.items()):
+                v = [float(x) for x in final[column:column + 10]]
+                row.update({f"{body}_final_pos_x": v[0], f"{body}_final_pos_y": v[1], f"{body}_final_pos_z": v[2],
+                            f"{body}_final_speed": math.sqrt(v[7] * v[7] + v[8] * v[8] + v[9] * v[9])})
+            for i, d in enumerate(r.disturbances):
+                for axis, k in zip("xyz", range(3)):
+                    row[f"disturbance{i}_force_{axis}"] = float(d["force"][k])
+                for axis, k in zip("xyz", range(3)):
+                    row[f"disturbance{i}_torque_{axis}"] = float(d["torque"][k])
+                row[f"disturbance{i}_steps"] = int(d["end_step"] - d["start_step"])
+        counts = {w.name: int(w.count) for w in r.warnings}
+        for name in WARNING_NAMES:
+            row[f"warning_{name}"] = counts.get(name, 0)
+        row["diverged"] = any(counts.get(name, 0) > 0 for name in DIVERGENCE_WARNINGS)
+        rows.append(row)
+    return _columns_of(rows)
+
+
+def _columns_of(rows: List[Dict[str, Any]]) -> Columns:
+    if not rows:
+        return {}
+    out: Columns = {}
+    for name in rows[0]:
+        values = [row[name] for row in rows]
+        first = values[0]
+        if name == "seed":
+            out[name] = np.array(values, dtype=np.uint64)
+        elif isinstance(first, bool):
+            out[name] = np.array(values, dtype=np.bool_)
+        elif isinstance(first, int):
+            out[name] = np.array(values, dtype=np.int64)
+        else:
+            out[name] = np.array(values, dtype=np.float64)
+    return out
+
+
+# ---- A table of metrics ---------------------------------------------------
+
+class MetricsTable:
+    """One row per run, in the batch's order: numpy columns by name.
+
+    table["box_final_pos_x"] is a column; len(table) the runs; to_arrow()
+    and to_pandas() convert (pyarrow and pandas are imported then).
+    """
+
+    def __init__(self, columns: Columns) -> None:
+        self.columns: Columns = dict(columns)
+
+    @classmethod
+    def concat(cls, chunks: Sequence[Columns]) -> "MetricsTable":
+        chunks = [c for c in chunks if c]
+        if not chunks:
+            return cls({})
+        return cls({name: np.concatenate([c[name] for c in chunks]) for name in chunks[0]})
+
+    @property
+    def column_names(self) -> List[str]:
+        return list(self.columns)
+
+    def __len__(self) -> int:
+        return len(next(iter(self.columns.values()))) if self.columns else 0
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        if name not in self.columns:
+            raise KeyError(f"no column named {name!r}; see table.column_names")
+        return self.columns[name]
+
+    def to_arrow(self):
+        return columns_to_arrow(self.columns)
+
+    def to_pandas(self):
+        import pandas
+
+        return pandas.DataFrame(self.columns)
+
+    def __repr__(self) -> str:
+        return f"<simloop.MetricsTable {len(self)} runs x {len(self.columns)} columns>"
+
+
+def columns_to_arrow(columns: Columns):
+    import pyarrow
+
+    return pyarrow.table({name: pyarrow.array(values) for name, values in columns.items()})
+
+
+# ---- Executors -------------------------------------------------------------
+
+def _is_dask_client(executor: object) -> bool:
+    return type(executor).__module__.split(".")[0] == "distributed" and hasattr(executor, "scheduler_info")
+
+
+class _Pool:
+    """The submit-and-result shape shared by dask's Client and
+    concurrent.futures executors; None runs chunks here, one after another,
+    with the C++ threads (and Ctrl-C is heard within a chunk of steps)."""
+
+    def __init__(self, executor: object) -> None:
+        self.executor = executor
+        self.dask = _is_dask_client(executor)
+        self.token = uuid.uuid4().hex  # dask keys: unique to this batch
+        if executor is not None and not self.dask and not isinstance(executor, concurrent.futures.Executor):
+            raise TypeError("executor must be None, a dask.distributed Client or a concurrent.futures.Executor, "
+                            f"got {type(executor).__name__}")
+
+    def workers(self) -> int:
+        if self.executor is None:
+            return 1
+        if self.dask:
+            return max(1, sum(self.executor.nthreads().values()))
+        return max(1, int(getattr(self.executor, "_max_workers", 0) or os.cpu_count() or 1))
+
+    def check_workers(self) -> None:
+        """Asks every dask worker for its versions up front, for a clear
+        message before any work goes out (a worker without simloop, or with
+        another version). Chunks check again (workers may join later)."""
+        if not self.dask:
+            return
+        try:
+            found = self.executor.run(_worker_versions)
+        except Exception as e:  # a worker that cannot import simloop at all
+            raise VersionMismatch(f"a worker cannot run simloop ({type(e).__name__}: {e}); install simloop "
+                                  f"{_core.__version__} on every machine") from None
+        mine = versions()
+        for address, theirs in found.items():
+            if tuple(theirs) != mine:
+                raise VersionMismatch(f"worker {address} has simloop {theirs[0]} ({theirs[1]}), the client simloop "
+                                      f"{mine[0]} ({mine[1]}): install the same simloop on every machine")
+
+    def map_unordered(self, fn: Callable, tasks: Iterable[Tuple[int, tuple]], window: int) -> Iterator[Tuple[int, Any]]:
+        """Yields (key, fn(*args)) as tasks finish, with at most `window` in flight."""
+        tasks = iter(tasks)
+        if self.executor is None:
+            for key, args in tasks:
+                yield key, fn(*args)
+            return
+        if self.dask:
+            from distributed import as_completed
+        pending: Dict[Any, int] = {}
+        waiter = as_completed() if self.dask else None
+        try:
+            for key, args in itertools.islice(tasks, window):
+                future = self._submit(fn, key, args)
+                pending[future] = key
+                if waiter is not None:
+                    waiter.add(future)
+            while pending:
+                if waiter is not None:
+                    done = [next(waiter)]
+                else:
+                    done, _ = concurrent.futures.wait(list(pending), return_when=concurrent.futures.FIRST_COMPLETED)
+                for future in done:
+                    key = pending.pop(future)
+                    value = future.result()
+                    for next_key, args in itertools.islice(tasks, 1):
+                        new = self._submit(fn, next_key, args)
+                        pending[new] = next_key
+                        if waiter is not None:
+                            waiter.add(new)
+                    yield key, value
+        finally:
+            for future in pending:
+                future.cancel()
+
+    def _submit(self, fn: Callable, key: int, args: tuple):
+        if self.dask:
+            return self.executor.submit(fn, *args, pure=False, key=f"simloop-chunk-{self.token}-{key}")
+        return self.executor.submit(fn, *args)
+
+
+def default_chunk_size(runs: int, workers: int) -> int:
+    """Chunks enough for every worker to get about four, of at most MAX_CHUNK_SIZE runs."""
+    return max(1, min(MAX_CHUNK_SIZE, math.ceil(runs / (4 * max(1, workers)))))
+
+
+def chunk_ranges(total: int, chunk_size: int) -> List[Tuple[int, int]]:
+    return [(start, min(total, start + chunk_size)) for start in range(0, total, chunk_size)]
+
+
+def iter_chunks(job: Dict[str, Any], runs: Sequence[Run], executor: object, *, chunk_size: Optional[int] = None,
+                skip: Iterable[int] = ()) -> Iterator[Tuple[int, Columns]]:
+    """Runs `runs` in chunks on `executor` and yields (chunk index, columns)
+    as chunks finish (not in order). Chunks whose index is in `skip` are
+    not run."""
+    pool = _Pool(executor)
+    pool.check_workers()
+    size = chunk_size or default_chunk_size(len(runs), pool.workers())
+    skipped = set(skip)
+    tasks = ((k, (job, list(runs[a:b]))) for k, (a, b) in enumerate(chunk_ranges(len(runs), size))
+             if k not in skipped)
+    yield from pool.map_unordered(run_chunk, tasks, window=max(8, 4 * pool.workers()))
+
+
+def run_table(job: Dict[str, Any], runs: Sequence[Run], executor: object, *, chunk_size: Optional[int] = None,
+              progress: Optional[Callable[[int, int], object]] = None) -> MetricsTable:
+    """Every run's metrics, in the order of `runs`. progress(runs_done, runs_total) after each chunk."""
+    chunks: Dict[int, Columns] = {}
+    done = 0
+    for index, columns in iter_chunks(job, runs, executor, chunk_size=chunk_size):
+        chunks[index] = columns
+        done += len(next(iter(columns.values()))) if columns else 0
+        if progress is not None:
+            progress(done, len(runs))
+    return MetricsTable.concat([chunks[k] for k in sorted(chunks)])
+
+
+def _threads(threads: Optional[int]) -> int:
+    from ._api import _check_int
+
+    return 1 if threads is None else _check_int("threads", threads, 1, 4096)
+
+
+def _chunk_size(chunk_size: Optional[int]) -> Optional[int]:
+    from ._api import _check_int
+
+    return None if chunk_size is None else _check_int("chunk_size", chunk_size, 1, 2**31 - 1)
+
+
+# ---- The API's executor= paths (arguments already checked by the callers) --
+
+def run_batch_on(executor: object, configs: Sequence["_core.RunConfig"], model: object, threads: Optional[int],
+                 chunk_size: Optional[int], progress) -> MetricsTable:
+    """simloop.run_batch(..., executor=...): configs as run_batch built them."""
+    first = configs[0] if configs else None
+    job = {"kind": "chapter", "scene": scene_source(model), "versions": versions(), "threads": _threads(threads),
+           "steps": first.steps if first else 2000, "perturb": first.perturb if first else True,
+           "smoke": first.smoke if first else False, "audit_energy": first.audit_energy if first else False,
+           "rng": first.rng if first else "mt19937_64"}
+    runs = [(i, c.seed, c.timestep, ()) for i, c in enumerate(configs)]
+    return run_table(job, runs, executor, chunk_size=_chunk_size(chunk_size), progress=progress)
+
+
+def run_scenario_batch_on(executor: object, scenario: Any, seeds: Sequence[int], timesteps: Sequence[Optional[float]],
+                          *, rng: str, steps: Optional[int], perturb: bool, threads: Optional[int],
+                          chunk_size: Optional[int], progress) -> MetricsTable:
+    """simloop.run_scenario_batch(..., executor=...)."""
+    job = scenario_job(scenario, rng=rng, steps=steps, perturb=perturb, threads=_threads(threads))
+    runs = [(i, s, t, ()) for i, (s, t) in enumerate(itertools.product(seeds, timesteps))]
+    return run_table(job, runs, executor, chunk_size=_chunk_size(chunk_size), progress=progress)
+
+
+def scenario_job(scenario: Any, *, rng: str = "mt19937_64", steps: Optional[int] = None, perturb: bool = True,
+                 threads: int = 1) -> Dict[str, Any]:
+    return {"kind": "scenario", "scenario": scenario_source(scenario), "versions": versions(), "threads": threads,
+            "rng": rng, "steps": steps, "perturb": perturb}
+
+
+def _sweep_chunk(scene: Tuple[str, str], versions_expected: Sequence[str], timesteps: Sequence[float],
+                 duration: float, threads: int) -> List[tuple]:
+    _check_versions(versions_expected)
+    result = _core.sweep(_scene(scene), list(timesteps), duration, threads)
+    return [_core.sweep_point_fields(p) for p in result.points]
+
+
+def sweep_on(executor: object, timesteps: Sequence[float], duration: float, model: object, threads: Optional[int],
+             chunk_size: Optional[int], progress) -> "_core.SweepResult":
+    """simloop.sweep(..., executor=...): the same SweepResult as a local sweep,
+    its timesteps run in chunks on the executor's workers."""
+    ordered = sorted(set(timesteps))  # as the C++ sweep orders them: ascending, duplicates dropped
+    for t in ordered:
+        _core.sweep_steps(duration, t)  # refuses a point that cannot be run, before any work goes out
+    pool = _Pool(executor)
+    pool.check_workers()
+    size = _chunk_size(chunk_size) or default_chunk_size(len(ordered), pool.workers())
+    source, count = scene_source(model), _threads(threads)
+    ranges = chunk_ranges(len(ordered), size)
+    tasks = ((k, (source, versions(), ordered[a:b], duration, count)) for k, (a, b) in enumerate(ranges))
+    points: Dict[int, List[tuple]] = {}
+    done = 0
+    for key, fields in pool.map_unordered(_sweep_chunk, tasks, window=max(8, 4 * pool.workers())):
+        points[key] = fields
+        done += len(fields)
+        if progress is not None:
+            progress(done, len(ordered))
+    return _core.sweep_result_from_fields(duration, [p for k in sorted(points) for p in points[k]])
+
+
+# ---- One Parquet file, streamed, resumable ---------------------------------
+
+class ResumeError(ValueError):
+    """The parts folder cannot be used: it belongs to another batch, or exists without --resume."""
+
+
+class ParquetBatch:
+    """A batch written to one Parquet file, a row per run in the order of `runs`.
+
+    Each finished chunk is first written, atomically (a temporary file
+    renamed), to OUT.parts/chunk-<index>.parquet; chunks are then appended
+    in order, one row group each, to a temporary file beside OUT
+    (.OUT.tmp.<pid>), which is renamed onto OUT once every chunk is in, after
+    which OUT.parts/ is removed. OUT is therefore never half-written. If the
+    batch stops (Ctrl-C, a failure), the temporary file is removed and
+    OUT.parts/ kept with a manifest (manifest.json: the batch it belongs to);
+    resume=True then reads the chunks found there and runs only the others.
+    The finished file has the same bytes either way (the same chunks, read
+    back from the same part files, in the same row groups); the chunk size
+    of a resumed batch is the manifest's.
+    """
+
+    def __init__(self, out: "os.PathLike[str] | str", job: Dict[str, Any], runs: Sequence[Run],
+                 chunk_size: int, description: Dict[str, Any]) -> None:
+        import hashlib
+        import json
+
+        self.out = os.fspath(out)
+        self.parts = self.out + ".parts"
+        self.job, self.runs = job, runs
+        identity = {key: value for key, value in job.items() if key != "threads"}  # threads change no bit
+        hasher = hashlib.sha256(json.dumps(identity, sort_keys=True).encode())
+        for run in runs:  # repr: floats exactly, without building one huge string
+            hasher.update(repr(run).encode())
+        digest = hasher.hexdigest()
+        self.manifest = {"format": 1, "batch": digest, "runs": len(runs), "chunk_size": chunk_size,
+                         "description": description}
+        self.chunk_size = chunk_size
+        self.done: List[int] = []
+
+    def _part(self, index: int) -> str:
+        return os.path.join(self.parts, f"chunk-{index:09d}.parquet")
+
+    def prepare(self, resume: bool) -> int:
+        """Checks the parts folder against this batch; returns the runs already done. Writes nothing."""
+        import json
+
+        if not os.path.isdir(self.parts):
+            return 0
+        manifest_path = os.path.join(self.parts, "manifest.json")
+        if not resume:
+            raise ResumeError(f"{self.parts}/ holds an interrupted batch: add --resume to finish it, or remove the "
+                              "folder to start again")
+        try:
+            with open(manifest_path, encoding="utf-8") as f:
+                theirs = json.load(f)
+        except (OSError, ValueError) as e:
+            raise ResumeError(f"--resume: {manifest_path}: unreadable ({e}); remove {self.parts}/ to start again")
+        if theirs.get("batch") != self.manifest["batch"]:
+            raise ResumeError(f"--resume: {self.parts}/ was written by another batch (other scenario, seeds, grid or "
+                              f"simloop version); remove it, or resume with that batch's arguments")
+        self.chunk_size = int(theirs["chunk_size"])
+        self.manifest["chunk_size"] = self.chunk_size
+        count = len(chunk_ranges(len(self.runs), self.chunk_size))
+        self.done = [k for k in range(count) if os.path.isfile(self._part(k))]
+        ranges = chunk_ranges(len(self.runs), self.chunk_size)
+        return sum(ranges[k][1] - ranges[k][0] for k in self.done)
+
+    def run(self, executor: object, progress: Optional[Callable[[int, int], object]] = None) -> int:
+        """Runs what is left and writes OUT; returns the runs computed now."""
+        import json
+        import shutil
+
+        import pyarrow.parquet as pq
+
+        os.makedirs(self.parts, exist_ok=True)
+        manifest_path = os.path.join(self.parts, "manifest.json")
+        if not os.path.isfile(manifest_path):
+            _write_atomically(manifest_path, lambda path: _write_text(path, json.dumps(self.manifest, indent=1)))
+        ranges = chunk_ranges(len(self.runs), self.chunk_size)
+        ready = set(self.done)
+        done_runs = sum(ranges[k][1] - ranges[k][0] for k in ready)
+        computed = 0
+        directory = os.path.dirname(os.path.abspath(self.out))
+        temporary = os.path.join(directory, f".{os.path.basename(self.out)}.tmp.{os.getpid()}")
+        writer = None
+        written = 0  # chunks appended to the temporary file, in order
+        try:
+            def flush() -> None:
+                nonlocal writer, written
+                while written in ready:
+                    table = pq.read_table(self._part(written))
+                    if writer is None:
+                        writer = pq.ParquetWriter(temporary, table.schema)
+                    writer.write_table(table)
+                    written += 1
+
+            flush()
+            if progress is not None and done_runs:
+                progress(done_runs, len(self.runs))
+            for index, columns in iter_chunks(self.job, self.runs, executor, chunk_size=self.chunk_size, skip=ready):
+                table = columns_to_arrow(columns)
+                _write_atomically(self._part(index), lambda path: pq.write_table(table, path))
+                ready.add(index)
+                count = ranges[index][1] - ranges[index][0]
+                done_runs += count
+                computed += count
+                flush()
+                if progress is not None:
+                    progress(done_runs, len(self.runs))
+            writer.close()
+            writer = None
+            os.replace(temporary, self.out)
+        except BaseException:
+            if writer is not None:
+                writer.close()
+            if os.path.exists(temporary):
+                os.unlink(temporary)
+            raise
+        shutil.rmtree(self.parts, ignore_errors=True)
+        return computed
+
+    def kept_runs(self) -> int:
+        """Runs whose chunks are in the parts folder now (after a stop)."""
+        ranges = chunk_ranges(len(self.runs), self.chunk_size)
+        return sum(b - a for k, (a, b) in enumerate(ranges) if os.path.isfile(self._part(k)))
+
+
+def _write_text(path: str, text: str) -> None:
+    with open(path, "w", encoding="utf-8") as f:
+        f.write(text)
+
+
+def _write_atomically(path: str, write: Callable[[str], object]) -> None:
+    temporary = f"{path}.tmp.{os.getpid()}"
+    try:
+        write(temporary)
+        os.replace(temporary, path)
+    except BaseException:
+        if os.path.exists(temporary):
+            os.unlink(temporary)
+        raise

@@ -1,0 +1,124 @@
+// Scene parameters applied to a copy of the model: the copy changes what a
+// run does, the original does not change, and the scene's own value changes
+// nothing at all (bit for bit).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "simloop/errors.hpp"
+#include "simloop/run.hpp"
+#include "simloop/scene_params.hpp"
+
+namespace {
+
+using Kind = simloop::SceneParam::Kind;
+
+simloop::RunResult run_on(const simloop::Model& model) {
+  simloop::RunConfig config;  // the chapter's run, seed 0
+  config.steps = 600;
+  return simloop::run(model, config);
+}
+
+bool same_bits(const simloop::RunResult& a, const simloop::RunResult& b) {
+  const simloop::Trajectory& x = a.trajectory;
+  const simloop::Trajectory& y = b.trajectory;
+  return x.rows() == y.rows() && x.columns() == y.columns() &&
+         std::memcmp(x.data(), y.data(), sizeof(double) * static_cast<size_t>(x.rows()) * static_cast<size_t>(x.columns())) == 0;
+}
+
+std::string error_of(const simloop::Model& model, const std::vector<simloop::SceneParam>& params) {
+  try {
+    (void)simloop::with_scene_params(model, params);
+  } catch (const simloop::InvalidArgument& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+
+TEST(SceneParams, TheScenesOwnValuesChangeNoBit) {
+  const simloop::Model scene = simloop::Model::pusher_scene();
+  const simloop::RunResult original = run_on(scene);
+  // The chapter's geoms all have MuJoCo's default friction 1, the box weighs
+  // 0.5 kg, the pusher's slide has damping 4.
+  for (const std::vector<simloop::SceneParam>& params : std::vector<std::vector<simloop::SceneParam>>{
+           {{Kind::kFriction, "", 1.0}},
+           {{Kind::kFriction, "box_geom", 1.0}},
+           {{Kind::kMass, "box", 0.5}},
+           {{Kind::kMass, "pusher", 1.0}},
+           {{Kind::kDamping, "pusher_slide", 4.0}},
+           {{Kind::kMass, "box", 0.5}, {Kind::kFriction, "", 1.0}, {Kind::kDamping, "pusher_slide", 4.0}}}) {
+    const simloop::Model copy = simloop::with_scene_params(scene, params);
+    EXPECT_NE(copy.get(), scene.get());
+    EXPECT_EQ(std::memcmp(copy.get()->body_invweight0, scene.get()->body_invweight0,
+                          sizeof(double) * 2 * static_cast<size_t>(scene.get()->nbody)), 0);
+    EXPECT_TRUE(same_bits(run_on(copy), original)) << params.front().name;
+  }
+}
+
+TEST(SceneParams, OtherValuesChangeTheRunAndLeaveTheOriginalAlone) {
+  const simloop::Model scene = simloop::Model::pusher_scene();
+  const double box_x = run_on(scene).trajectory.at(600, simloop::Trajectory::kBoxX);
+  for (const simloop::SceneParam& p : std::vector<simloop::SceneParam>{
+           {Kind::kFriction, "", 0.3}, {Kind::kMass, "box", 2.0}, {Kind::kDamping, "pusher_slide", 20.0}}) {
+    const simloop::Model copy = simloop::with_scene_params(scene, {p});
+    EXPECT_NE(run_on(copy).trajectory.at(600, simloop::Trajectory::kBoxX), box_x) << simloop::scene_param_kind_name(p.kind);
+  }
+  EXPECT_EQ(run_on(scene).trajectory.at(600, simloop::Trajectory::kBoxX), box_x);
+  EXPECT_EQ(scene.get()->body_mass[1], 0.5);
+  EXPECT_EQ(scene.get()->geom_friction[0], 1.0);
+}
+
+TEST(SceneParams, WhatEachParamWrites) {
+  const simloop::Model scene = simloop::Model::pusher_scene();
+  const mjModel* s = scene.get();
+  const int box = mj_name2id(s, mjOBJ_BODY, "box");
+  const int box_geom = mj_name2id(s, mjOBJ_GEOM, "box_geom");
+  const int slide = mj_name2id(s, mjOBJ_JOINT, "pusher_slide");
+
+  const simloop::Model heavier = simloop::with_scene_params(scene, {{Kind::kMass, "box", 2.0}});
+  const mjModel* h = heavier.get();
+  EXPECT_EQ(h->body_mass[box], 2.0);
+  for (int k = 0; k < 3; ++k) EXPECT_DOUBLE_EQ(h->body_inertia[3 * box + k], 4.0 * s->body_inertia[3 * box + k]);
+  EXPECT_DOUBLE_EQ(h->body_subtreemass[0], s->body_subtreemass[0] + 1.5);
+  EXPECT_LT(h->body_invweight0[2 * box], s->body_invweight0[2 * box]);  // mj_setConst ran: heavier, less mobile
+
+  const simloop::Model slick = simloop::with_scene_params(scene, {{Kind::kFriction, "box_geom", 0.2}});
+  for (int g = 0; g < s->ngeom; ++g) {
+    EXPECT_EQ(slick.get()->geom_friction[3 * g], g == box_geom ? 0.2 : s->geom_friction[3 * g]);
+    EXPECT_EQ(slick.get()->geom_friction[3 * g + 1], s->geom_friction[3 * g + 1]);  // torsional, rolling kept
+  }
+  const simloop::Model all_slick = simloop::with_scene_params(scene, {{Kind::kFriction, "", 0.2}});
+  for (int g = 0; g < s->ngeom; ++g) EXPECT_EQ(all_slick.get()->geom_friction[3 * g], 0.2);
+
+  const simloop::Model damped = simloop::with_scene_params(scene, {{Kind::kDamping, "", 7.0}});
+  for (int v = 0; v < s->nv; ++v) EXPECT_EQ(damped.get()->dof_damping[v], 7.0);  // the box's free joint's 6 too
+  const simloop::Model one = simloop::with_scene_params(scene, {{Kind::kDamping, "pusher_slide", 7.0}});
+  for (int v = 0; v < s->nv; ++v) EXPECT_EQ(one.get()->dof_damping[v], s->dof_jntid[v] == slide ? 7.0 : 0.0);
+  // A later param on the same thing wins.
+  const simloop::Model twice =
+      simloop::with_scene_params(scene, {{Kind::kFriction, "", 0.2}, {Kind::kFriction, "box_geom", 0.7}});
+  EXPECT_EQ(twice.get()->geom_friction[3 * box_geom], 0.7);
+}
+
+TEST(SceneParams, BadNamesAndValuesAreRefusedByName) {
+  const simloop::Model scene = simloop::Model::pusher_scene();
+  EXPECT_EQ(error_of(scene, {{Kind::kMass, "bx", 1.0}}),
+            "mass of 'bx' = 1.0: no body named 'bx' (did you mean 'box'?); bodies: world, box, pusher");
+  EXPECT_EQ(error_of(scene, {{Kind::kFriction, "box_gem", 1.0}}),
+            "friction of 'box_gem' = 1.0: no geom named 'box_gem' (did you mean 'box_geom'?); geoms: floor, "
+            "box_geom, pusher_geom");
+  EXPECT_EQ(error_of(scene, {{Kind::kDamping, "slide", 1.0}}).rfind("damping of 'slide' = 1.0: no joint named 'slide'", 0), 0u);
+  EXPECT_EQ(error_of(scene, {{Kind::kFriction, "", -0.1}}), "friction = -0.1: friction must be a finite number >= 0");
+  EXPECT_EQ(error_of(scene, {{Kind::kDamping, "", std::nan("")}}), "damping = nan: damping must be a finite number >= 0");
+  EXPECT_EQ(error_of(scene, {{Kind::kMass, "box", 0.0}}), "mass of 'box' = 0.0: mass must be a finite number > 0");
+  EXPECT_EQ(error_of(scene, {{Kind::kMass, "box", std::numeric_limits<double>::infinity()}}),
+            "mass of 'box' = inf: mass must be a finite number > 0");
+  EXPECT_EQ(error_of(scene, {{Kind::kMass, "", 1.0}}), "mass = 1.0: a mass needs a body's name");
+  EXPECT_EQ(error_of(scene, {{Kind::kMass, "world", 1.0}}), "mass of 'world' = 1.0: the world body has no mass to set");
+}
+
+}  // namespace
