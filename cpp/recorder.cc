@@ -9,6 +9,7 @@
 #include "mujoco_guard.hpp"
 #include "run_detail.hpp"
 #include "simloop/errors.hpp"
+#include "simloop/state.hpp"
 #include "divergence.hpp"
 #include "warning_counter.hpp"
 
@@ -157,23 +158,15 @@ void Recorder::after_step(double* row, const mjModel* m, const mjData* d) const 
   }
 }
 
-namespace {
-
-// What xfrc_applied holds from a step on: the sum of the windows open then.
-struct ForceChange {
-  std::int64_t step;
-  int body;
-  std::array<double, 6> wrench;
-};
-
-std::vector<ForceChange> force_changes(const Schedule& schedule) {
+ScheduledInputs::ScheduledInputs(const Schedule& schedule, bool controls) {
+  if (controls) controls_ = schedule.control_changes;
+  // What xfrc_applied holds from a step on: the sum of the windows open then.
   std::set<std::pair<std::int64_t, int>> points;  // (step, body) where a window opens or closes
   for (const Schedule::Force& f : schedule.forces) {
     if (f.start >= f.end) continue;
     points.insert({f.start, f.body});
     points.insert({f.end, f.body});
   }
-  std::vector<ForceChange> out;
   for (const auto& [step, body] : points) {
     if (step >= schedule.steps) continue;
     ForceChange c{step, body, {}};
@@ -182,13 +175,16 @@ std::vector<ForceChange> force_changes(const Schedule& schedule) {
         for (int i = 0; i < 6; ++i) c.wrench[static_cast<size_t>(i)] += f.wrench[static_cast<size_t>(i)];
       }
     }
-    out.push_back(c);
+    forces_.push_back(c);  // sorted by step: std::set's order
   }
-  return out;  // sorted by step: std::set's order
 }
 
-
-}  // namespace
+Policy::Policy(std::int64_t every) : every_(every) {
+  if (every < 1 || every > kMaxSteps) {
+    throw InvalidArgument("control_every must be from 1 to " + std::to_string(kMaxSteps) + ", got " +
+                          std::to_string(every));
+  }
+}
 
 void detail::check_schedule_run(std::int64_t steps, std::int64_t record_every) {
   if (record_every < 1 || record_every > kMaxRecordEvery) {
@@ -202,19 +198,18 @@ void detail::check_schedule_run(std::int64_t steps, std::int64_t record_every) {
 
 ScenarioRunResult run_schedule(const mjModel* m, mjData* d, const ResolvedScenario& scenario,
                                const Schedule& schedule, std::int64_t record_every, RowSink* sink,
-                               RunControl* control) {
+                               RunControl* control, Policy* policy) {
   if (control && schedule.steps >= 1 && schedule.steps <= kMaxSteps) control->add_total(schedule.steps);
-  return detail::run_schedule_counted_elsewhere(m, d, scenario, schedule, record_every, sink, control);
+  return detail::run_schedule_counted_elsewhere(m, d, scenario, schedule, record_every, sink, control, policy);
 }
 
 ScenarioRunResult detail::run_schedule_counted_elsewhere(const mjModel* m, mjData* d, const ResolvedScenario& scenario,
                                                          const Schedule& schedule, std::int64_t record_every,
-                                                         RowSink* sink, RunControl* control) {
+                                                         RowSink* sink, RunControl* control, Policy* policy) {
   detail::check_schedule_run(schedule.steps, record_every);
   const Recorder recorder(m, scenario, schedule);
   if (sink == nullptr) detail::check_kept_rows(schedule.steps, record_every, recorder.width());
-  const std::vector<ForceChange> forces = force_changes(schedule);
-  const std::vector<Schedule::ControlChange>& controls = schedule.control_changes;
+  ScheduledInputs inputs(schedule, policy == nullptr);
   const std::int64_t steps = schedule.steps;
   const int width = recorder.width();
 
@@ -230,27 +225,34 @@ ScenarioRunResult detail::run_schedule_counted_elsewhere(const mjModel* m, mjDat
   detail::RowBlock block(width, std::min(result.rows, RunControl::kChunkSteps / record_every + 2));
   detail::WarningCounter warnings;
   detail::DivergenceCheck divergence(m);
+  // Decision steps: 0, K, 2K, ... with a policy; none (the run's end) without.
+  std::int64_t next_decision = policy ? 0 : steps;
+  std::vector<double> observation(policy ? static_cast<std::size_t>(width) : 0);
 
   detail::mujoco_call([&] {
     mj_resetData(m, d);
     mj_forward(m, d);
   });
-  std::size_t next_control = 0, next_force = 0;
   std::int64_t until_record = 0;
   for (std::int64_t step = 0; step < steps;) {
+    if (step == next_decision) {
+      // Outside MuJoCo's guard: the policy may throw (a Python exception).
+      detail::mujoco_call([&] {
+        inputs.write(step, d);
+        forward_keeping_warmstart(m, d);
+      });
+      recorder.before_step(observation.data(), step, m, d, true);
+      recorder.after_step(observation.data(), m, d);
+      policy->decide(step, observation.data(), width, d->ctrl, m->nu);
+      next_decision = steps - step > policy->every() ? step + policy->every() : steps;
+    }
     const std::int64_t chunk_start = step;
-    const std::int64_t chunk_end = std::min(steps, step + RunControl::kChunkSteps);
+    const std::int64_t chunk_end = std::min({steps, step + RunControl::kChunkSteps, next_decision});
     detail::mujoco_call([&] {
       for (; step < chunk_end; ++step) {
         // The rhythm: write intent, write interference, step. The schedule
         // says what changes at this step; everything else persists.
-        for (; next_control < controls.size() && controls[next_control].step == step; ++next_control) {
-          d->ctrl[controls[next_control].actuator] = controls[next_control].value;
-        }
-        for (; next_force < forces.size() && forces[next_force].step == step; ++next_force) {
-          std::copy(forces[next_force].wrench.begin(), forces[next_force].wrench.end(),
-                    d->xfrc_applied + 6 * forces[next_force].body);
-        }
+        inputs.write(step, d);
         double* row = nullptr;
         if (until_record-- == 0) {
           row = block.next();

@@ -10,6 +10,7 @@
 
 #include "simloop/recorder.hpp"
 #include "simloop/run.hpp"
+#include "simloop/scenario_run.hpp"
 
 namespace simloop::detail {
 
@@ -64,7 +65,14 @@ void check_schedule_run(std::int64_t steps, std::int64_t record_every);
 [[nodiscard]] ScenarioRunResult run_schedule_counted_elsewhere(const mjModel* m, mjData* d,
                                                                const ResolvedScenario& scenario,
                                                                const Schedule& schedule, std::int64_t record_every,
-                                                               RowSink* sink, RunControl* control);
+                                                               RowSink* sink, RunControl* control,
+                                                               Policy* policy = nullptr);
+
+// A scenario as one run of `config` sees it: its length replaced by
+// config.steps, its disturbances dropped unless config.perturb.
+[[nodiscard]] Scenario configured_scenario(const Scenario& scenario, const ScenarioConfig& config);
+// The timestep such a run steps at: config's, else the scenario's, else the scene's own.
+[[nodiscard]] double run_timestep(const Model& scene, const Scenario& scenario, const ScenarioConfig& config);
 
 // run() without announcing its steps to the control: a batch announces all
 // of its runs' steps up front, so progress has its true total from the start.

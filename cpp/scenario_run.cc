@@ -31,9 +31,7 @@ struct PreparedRun {
 };
 
 PreparedRun prepare(const Model& model, const Scenario& scenario, const ScenarioConfig& config) {
-  Scenario effective = scenario;
-  if (config.steps) effective.length = When::steps(*config.steps);
-  if (!config.perturb) effective.disturbances.clear();
+  const Scenario effective = detail::configured_scenario(scenario, config);
   PreparedRun run;
   run.resolved = resolve(effective, model.get());
   const std::unique_ptr<Draws> draws = make_draws(config.seed, config.rng);
@@ -54,11 +52,20 @@ ScenarioRunResult labelled(ScenarioRunResult result, const mjModel* m, const Sce
   return result;
 }
 
-double run_timestep(const Model& scene, const Scenario& scenario, const ScenarioConfig& config) {
-  return config.timestep.value_or(scenario.timestep.value_or(scene.timestep()));
-}
+using detail::run_timestep;
 
 }  // namespace
+
+Scenario detail::configured_scenario(const Scenario& scenario, const ScenarioConfig& config) {
+  Scenario effective = scenario;
+  if (config.steps) effective.length = When::steps(*config.steps);
+  if (!config.perturb) effective.disturbances.clear();
+  return effective;
+}
+
+double detail::run_timestep(const Model& scene, const Scenario& scenario, const ScenarioConfig& config) {
+  return config.timestep.value_or(scenario.timestep.value_or(scene.timestep()));
+}
 
 void check_scenario(const Model& scene, const Scenario& scenario, const ScenarioConfig& config) {
   const Model model = scene.for_run(run_timestep(scene, scenario, config), false);
@@ -68,20 +75,21 @@ void check_scenario(const Model& scene, const Scenario& scenario, const Scenario
 }
 
 ScenarioRunResult run_scenario(const Model& scene, const Scenario& scenario, const ScenarioConfig& config,
-                               Data* workspace, RowSink* sink, RunControl* control) {
+                               Data* workspace, RowSink* sink, RunControl* control, Policy* policy) {
   const Model model = scene.for_run(run_timestep(scene, scenario, config), false);
   std::optional<Data> own;
   if (workspace == nullptr) workspace = &own.emplace(model);
   if (!workspace->fits(model)) throw InvalidArgument("workspace Data was made for a model of another size");
   const PreparedRun run = prepare(model, scenario, config);
   return labelled(
-      run_schedule(model.get(), workspace->get(), run.resolved, run.schedule, config.record_every, sink, control),
+      run_schedule(model.get(), workspace->get(), run.resolved, run.schedule, config.record_every, sink, control,
+                   policy),
       model.get(), scenario, config);
 }
 
 std::vector<ScenarioRunResult> run_scenario_batch(const Model& scene, const Scenario& scenario,
                                                   const std::vector<ScenarioConfig>& configs, int threads,
-                                                  RunControl* control) {
+                                                  RunControl* control, Policy* policy) {
   if (threads < 0) {
     throw InvalidArgument("threads must be at least 1, or 0 for one per core, got " + std::to_string(threads));
   }
@@ -115,7 +123,7 @@ std::vector<ScenarioRunResult> run_scenario_batch(const Model& scene, const Scen
   detail::run_jobs(scene, configs.size(), threads, steps, control, [&](std::size_t i, Data& data, RunControl& ctl) {
     const mjModel* m = model_of[i]->get();
     results[i] = labelled(detail::run_schedule_counted_elsewhere(m, data.get(), runs[i].resolved, runs[i].schedule,
-                                                                 configs[i].record_every, nullptr, &ctl),
+                                                                 configs[i].record_every, nullptr, &ctl, policy),
                           m, scenario, configs[i]);
   });
   return results;

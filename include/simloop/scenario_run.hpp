@@ -38,9 +38,12 @@ struct ScenarioConfig {
 // scene's own. Names are resolved first (InvalidArgument listing what the
 // scene has), then the schedule is drawn, then the loop runs in `workspace`
 // (a fresh Data if null). Same scenario, scene, config: the same bits.
+// With a `policy`, ctrl is decided every policy->every() steps (Policy in
+// recorder.hpp: the scenario's controls give way to it).
 [[nodiscard]] ScenarioRunResult run_scenario(const Model& scene, const Scenario& scenario,
                                              const ScenarioConfig& config, Data* workspace = nullptr,
-                                             RowSink* sink = nullptr, RunControl* control = nullptr);
+                                             RowSink* sink = nullptr, RunControl* control = nullptr,
+                                             Policy* policy = nullptr);
 
 // Runs `scenario` once per config over one scene, with `threads` workers (0:
 // one per core), each stepping its own Data; the scene is compiled once per
@@ -56,9 +59,14 @@ struct ScenarioConfig {
 // run_scenario() would. The commands call it before touching --out.
 void check_scenario(const Model& scene, const Scenario& scenario, const ScenarioConfig& config);
 
+// With a `policy`, every run decides with it (one object, called from every
+// worker thread: its decide() must allow that); each run's decisions depend
+// only on its own observations, so results stay bitwise those of
+// run_scenario with the same policy, whatever the thread count.
 [[nodiscard]] std::vector<ScenarioRunResult> run_scenario_batch(const Model& scene, const Scenario& scenario,
                                                                 const std::vector<ScenarioConfig>& configs,
-                                                                int threads = 0, RunControl* control = nullptr);
+                                                                int threads = 0, RunControl* control = nullptr,
+                                                                Policy* policy = nullptr);
 
 // The recorded bodies, by name, with the column of each one's "_x" (its 13
 // columns follow: position, orientation, linear and angular velocity).
