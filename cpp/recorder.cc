@@ -46,6 +46,18 @@ const char* joint_unit(int type, bool velocity) {
 
 }  // namespace
 
+CtrlRange ctrl_range(const mjModel* m) {
+  CtrlRange r{std::vector<double>(static_cast<size_t>(m->nu), -std::numeric_limits<double>::infinity()),
+              std::vector<double>(static_cast<size_t>(m->nu), std::numeric_limits<double>::infinity())};
+  for (int a = 0; a < m->nu; ++a) {
+    if (m->actuator_ctrllimited[a] && !(m->opt.disableflags & mjDSBL_CLAMPCTRL)) {
+      r.low[static_cast<size_t>(a)] = m->actuator_ctrlrange[2 * a];
+      r.high[static_cast<size_t>(a)] = m->actuator_ctrlrange[2 * a + 1];
+    }
+  }
+  return r;
+}
+
 void Recorder::add(Source::Kind kind, int id, int count, const std::vector<std::string>& names,
                    const std::string& unit, bool integer, bool input) {
   Source source{kind, id, count, width()};
@@ -58,14 +70,7 @@ void Recorder::add(Source::Kind kind, int id, int count, const std::vector<std::
 Recorder::Recorder(const mjModel* m, const ResolvedScenario& scenario, const Schedule& schedule) {
   columns_.push_back({"step", "", true, false});
   columns_.push_back({"time", "s", false, false});
-  ctrl_low_.assign(static_cast<size_t>(m->nu), -std::numeric_limits<double>::infinity());
-  ctrl_high_.assign(static_cast<size_t>(m->nu), std::numeric_limits<double>::infinity());
-  for (int a = 0; a < m->nu; ++a) {
-    if (m->actuator_ctrllimited[a] && !(m->opt.disableflags & mjDSBL_CLAMPCTRL)) {
-      ctrl_low_[static_cast<size_t>(a)] = m->actuator_ctrlrange[2 * a];
-      ctrl_high_[static_cast<size_t>(a)] = m->actuator_ctrlrange[2 * a + 1];
-    }
-  }
+  ctrl_range_ = ctrl_range(m);
   // Inputs: the ctrl of every controlled or recorded actuator, the force on
   // every disturbed body.
   std::set<int> ctrl_of;
@@ -121,8 +126,8 @@ void Recorder::before_step(double* row, std::int64_t step, const mjModel* m, con
     switch (s.kind) {
       case Source::kCtrl:
         // What MuJoCo applies: ctrl clamped to ctrlrange (it clamps a copy).
-        out[0] = inputs ? std::clamp(d->ctrl[s.id], ctrl_low_[static_cast<size_t>(s.id)],
-                                     ctrl_high_[static_cast<size_t>(s.id)])
+        out[0] = inputs ? std::clamp(d->ctrl[s.id], ctrl_range_.low[static_cast<size_t>(s.id)],
+                                     ctrl_range_.high[static_cast<size_t>(s.id)])
                         : kNone;
         break;
       case Source::kXfrc:

@@ -16,6 +16,13 @@
 
 namespace simloop {
 
+// The range MuJoCo clamps each actuator's ctrl to: its ctrlrange when
+// ctrllimited (and clamping is not disabled), else -inf..inf.
+struct CtrlRange {
+  std::vector<double> low, high;  // per actuator
+};
+[[nodiscard]] CtrlRange ctrl_range(const mjModel* m);
+
 // The columns of a resolved scenario, laid out once, and how to fill a row.
 //
 // A row holds the state entering its step and the inputs written for that
@@ -58,7 +65,7 @@ class Recorder {
            bool integer = false, bool input = false);
   std::vector<Column> columns_;
   std::vector<Source> before_, after_;
-  std::vector<double> ctrl_low_, ctrl_high_;  // per actuator; +-inf when not limited
+  CtrlRange ctrl_range_;
 };
 
 // A scenario run's outcome: the schedule it followed (the drawn forces and
@@ -126,7 +133,7 @@ class ScheduledInputs {
 // from ctrl (actuator forces, acceleration sensors); its force columns hold
 // the disturbances scheduled for this step. (mj_step1/mj_step2 around the
 // decision would save the extra mj_forward, but give no actuator forces or
-// acceleration-stage sensors to observe and only Euler's integration.)
+// acceleration-stage sensors to observe, and step RK4 scenes with Euler.)
 //
 // Who wins: with a policy, ctrl is the policy's, on every actuator, from
 // step 0 on; the scenario's controls are not written. Its disturbances

@@ -10,7 +10,7 @@ numpy views of the trajectory, and writes the rerun recording.
 """
 
 from ._api import Sim, draw_shove, load_model, run, run_batch, sweep
-from .scenario import Scenario, ScenarioResult, run_scenario, run_scenario_batch
+from .scenario import Observation, Scenario, ScenarioResult, run_scenario, run_scenario_batch
 from ._core import (
     COLUMN_NAMES,
     ENERGY_COLUMN_NAMES,
@@ -38,6 +38,7 @@ __all__ = [
     "Model",
     "MujocoError",
     "MujocoWarning",
+    "Observation",
     "RunResult",
     "Scenario",
     "ScenarioResult",
@@ -54,3 +55,46 @@ __all__ = [
     "run_scenario_batch",
     "sweep",
 ]
+
+
+# Gymnasium: simloop/Chapter-v0, simloop/PushT-v0, simloop/Scenario-v0
+# (simloop/gym.py). Registered once gymnasium is imported: importing it here
+# would cost every `import simloop` about 0.15 s, and nothing when it is not
+# installed.
+def _register_with_gymnasium() -> None:
+    import sys
+
+    if "gymnasium" in sys.modules:
+        from .gym import register_envs
+
+        register_envs()
+        return
+    import importlib.abc
+    import importlib.util
+
+    if importlib.util.find_spec("gymnasium") is None:
+        return
+
+    class _WhenGymnasiumLoads(importlib.abc.MetaPathFinder):
+        def find_spec(self, name, path, target=None):  # type: ignore[no-untyped-def]
+            if name != "gymnasium":
+                return None
+            sys.meta_path.remove(self)
+            spec = importlib.util.find_spec(name)
+            if spec is None or spec.loader is None:
+                return spec
+            execute = spec.loader.exec_module
+
+            def exec_module(module):  # type: ignore[no-untyped-def]
+                execute(module)
+                from .gym import register_envs
+
+                register_envs()
+
+            spec.loader.exec_module = exec_module  # type: ignore[method-assign]
+            return spec
+
+    sys.meta_path.insert(0, _WhenGymnasiumLoads())
+
+
+_register_with_gymnasium()

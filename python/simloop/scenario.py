@@ -21,10 +21,14 @@ import json
 import math
 import numbers
 import os
-from typing import Any, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple, Union
+from typing import TYPE_CHECKING, Any, Callable, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple, Union
 
 from . import _core
-from ._api import Progress, _check_bool, _sequence, _check_int, _check_progress, _check_timestep, _describe, _U64_MAX, RNGS
+from ._api import (Progress, _check_bool, _sequence, _check_int, _check_progress, _check_timestep, _describe,
+                   _show, _U64_MAX, RNGS)
+
+if TYPE_CHECKING:
+    import numpy as np  # imported where used: `import simloop` stays without numpy
 
 ScenarioResult = _core.ScenarioResult
 
@@ -196,10 +200,99 @@ def _scenario_and_scene(scenario: Union[Scenario, str, os.PathLike],
     return scenario, scene
 
 
+class Observation:
+    """What a policy sees at a decision step: the scenario's recorded
+    quantities for the state entering that step.
+
+    step: the decision step (0, K, 2K, ...). time: the sim time, s.
+    values: a read-only float64 vector, one value per name in `names`, which
+    are the run's trajectory columns after "step" and "time"
+    (result.column_names[2:]): ctrl inputs, disturbance forces, body poses
+    and velocities, joints, actuator forces, sensors, ncon. obs["tblock_x"]
+    reads one by name. The ctrl columns hold the ctrl in force until now (the
+    previous decision's; 0 before the first), and so do actuator forces; the
+    force columns hold the disturbances acting in this step.
+    """
+
+    __slots__ = ("step", "time", "values", "_index")
+
+    def __init__(self, step: int, time: float, values: np.ndarray, index: Mapping[str, int]) -> None:
+        self.step = step
+        self.time = time
+        self.values = values
+        self._index = index
+
+    @property
+    def names(self) -> Tuple[str, ...]:
+        return tuple(self._index)
+
+    def __getitem__(self, name: str) -> float:
+        return float(self.values[self._index[name]])
+
+    def __repr__(self) -> str:
+        return f"Observation(step={self.step}, time={self.time!r}, {len(self._index)} values)"
+
+
+Policy = Callable[[Observation], Any]
+
+
+def _with_decision_step(error: BaseException, step: int) -> None:
+    """Names the decision step in the message of an exception a policy raised."""
+    where = f"(policy at decision step {step})"
+    if len(error.args) == 1 and isinstance(error.args[0], str):
+        error.args = (f"{error.args[0]} {where}",)
+    elif not error.args:
+        error.args = (where,)
+    elif hasattr(error, "add_note"):  # several arguments (OSError's errno, ...): keep them
+        error.add_note(where)
+
+
+def _ctrl(value: object, nu: int, step: int) -> "np.ndarray":
+    import numpy as np
+
+    shape = f"{nu} ctrl values (shape ({nu},){', or a number' if nu == 1 else ''})"
+    try:
+        ctrl = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError(f"the policy must return {shape}, got {_describe(value)} at decision step {step}") from None
+    if ctrl.ndim == 0 and nu == 1:
+        ctrl = ctrl.reshape(1)
+    if ctrl.shape != (nu,):
+        raise ValueError(f"the policy must return {shape}, got shape {ctrl.shape} at decision step {step}")
+    if not np.isfinite(ctrl).all():
+        raise ValueError(f"the policy returned a ctrl that is not finite at decision step {step}: {_show(value)}")
+    return ctrl
+
+
+def _decider(policy: object, control_every: object, scene: _core.Model, scenario: Scenario,
+             config: "_core.ScenarioConfig") -> Tuple[Callable[[int, np.ndarray], np.ndarray], int]:
+    """The C++ loop's decide(step, row) around the user's policy(obs), and K."""
+    if not callable(policy):
+        raise TypeError(f"policy must be None or a callable policy(observation) -> ctrl, got {_describe(policy)}")
+    every = _check_int("control_every", control_every, 1, _core.MAX_STEPS)
+    # The run's columns (and its names checked) before the first step.
+    names = _core.Episodes(scene, scenario._core, config, 0).column_names[2:]
+    index = {name: i for i, name in enumerate(names)}
+    nu = scene.nu
+
+    def decide(step: int, row: np.ndarray) -> np.ndarray:
+        values = row[2:]
+        values.flags.writeable = False
+        try:
+            out = policy(Observation(step, float(row[1]), values, index))
+        except Exception as error:
+            _with_decision_step(error, step)
+            raise
+        return _ctrl(out, nu, step)
+
+    return decide, every
+
+
 def run_scenario(scenario: Union[Scenario, str, os.PathLike], *, seed: int = 0, rng: str = "mt19937_64",
                  timestep: Optional[float] = None, steps: Optional[int] = None, perturb: bool = True,
                  record_every: int = 1, model: Optional[_core.Model] = None,
-                 progress: Progress = None) -> ScenarioResult:
+                 progress: Progress = None, policy: Optional[Policy] = None,
+                 control_every: int = 1) -> ScenarioResult:
     """Runs a scenario (a Scenario or a scenario file's path) once.
 
     seed draws its random disturbances and nothing else; rng is "mt19937_64"
@@ -209,6 +302,18 @@ def run_scenario(scenario: Union[Scenario, str, os.PathLike], *, seed: int = 0, 
     ScenarioResult: column_names, trajectory (a read-only numpy view),
     column(name), metrics (a dict), disturbances, warnings, summary(),
     write(out). Unknown names raise ValueError listing what the scene has.
+
+    policy: None (open loop: the scenario's controls), or a callable
+    policy(obs) -> ctrl called every `control_every` steps (at steps 0, K,
+    2K, ...) with an Observation, returning the ctrl of every actuator (nu
+    numbers; a number when nu == 1), which MuJoCo then holds for the next K
+    steps. With a policy, ctrl is the policy's on every actuator from step 0
+    on: the scenario's controls are not written (its disturbances are). The
+    trajectory records the ctrl applied, as always. The C++ loop takes the
+    GIL only to call the policy. An exception the policy raises stops the
+    run and reaches the caller with "(policy at decision step N)" added to
+    its message; a ctrl of the wrong shape or not finite raises ValueError
+    naming the decision step.
     """
     scenario, scene = _scenario_and_scene(scenario, model)
     if rng not in RNGS:
@@ -218,6 +323,11 @@ def run_scenario(scenario: Union[Scenario, str, os.PathLike], *, seed: int = 0, 
         None if timestep is None else _check_timestep(timestep),
         None if steps is None else _check_int("steps", steps, 1, _core.MAX_STEPS),
         _check_bool("perturb", perturb), _check_int("record_every", record_every, 1, _core.MAX_RECORD_EVERY))
+    if policy is not None:
+        decide, every = _decider(policy, control_every, scene, scenario, config)
+        return _core.run_scenario_policy(scene, scenario._core, config, decide, every,
+                                         progress=_check_progress(progress))
+    _check_int("control_every", control_every, 1, _core.MAX_STEPS)
     return _core.run_scenario(scene, scenario._core, config, progress=_check_progress(progress))
 
 
@@ -225,7 +335,8 @@ def run_scenario_batch(scenario: Union[Scenario, str, os.PathLike], seeds: Itera
                        timesteps: Iterable[Optional[float]] = (None,), *, rng: str = "mt19937_64",
                        steps: Optional[int] = None, perturb: bool = True, record_every: int = 1,
                        model: Optional[_core.Model] = None, threads: Optional[int] = None,
-                       progress: Progress = None) -> List[ScenarioResult]:
+                       progress: Progress = None, policy: Optional[Policy] = None,
+                       control_every: int = 1) -> List[ScenarioResult]:
     """Runs a scenario once per (seed, timestep) pair, in parallel over one scene.
 
     Results come in the order of itertools.product(seeds, timesteps), and each
@@ -235,6 +346,11 @@ def run_scenario_batch(scenario: Union[Scenario, str, os.PathLike], seeds: Itera
     timestep and shared; each worker steps its own MuJoCo data. Every run is
     checked before any starts, and so is the memory all the kept trajectories
     take together. progress: as for run(), over the steps of all the runs.
+    policy, control_every: as for run_scenario(); one policy for every run,
+    called with the GIL held from whichever worker reaches a decision (the
+    others step on meanwhile). Results stay bitwise those of run_scenario()
+    whatever `threads` is, as long as the policy's answer depends only on
+    the observation it is given.
     """
     scenario, scene = _scenario_and_scene(scenario, model)
     if rng not in RNGS:
@@ -247,6 +363,11 @@ def run_scenario_batch(scenario: Union[Scenario, str, os.PathLike], seeds: Itera
     perturb = _check_bool("perturb", perturb)
     every = _check_int("record_every", record_every, 1, _core.MAX_RECORD_EVERY)
     configs = [_core.ScenarioConfig(s, rng, t, step_count, perturb, every) for s in seed_list for t in timestep_list]
+    if policy is not None and configs:
+        decide, decide_every = _decider(policy, control_every, scene, scenario, configs[0])
+        return _core.run_scenario_batch_policy(scene, scenario._core, configs, workers, decide, decide_every,
+                                               progress=_check_progress(progress))
+    _check_int("control_every", control_every, 1, _core.MAX_STEPS)
     return _core.run_scenario_batch(scene, scenario._core, configs, workers, progress=_check_progress(progress))
 
 
