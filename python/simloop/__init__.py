@@ -58,16 +58,27 @@ __all__ = [
 
 
 # Gymnasium: simloop/Chapter-v0, simloop/PushT-v0, simloop/Scenario-v0
-# (simloop/gym.py). Registered once gymnasium is imported: importing it here
-# would cost every `import simloop` about 0.15 s, and nothing when it is not
-# installed.
+# (simloop/gym.py, loaded by gymnasium.make through the entry points).
+# Registered once gymnasium is imported: importing it here would cost every
+# `import simloop` about 0.15 s, and nothing happens when it is not installed.
+_GYMNASIUM_IDS = {
+    "simloop/Chapter-v0": ("simloop.gym:chapter_env", "simloop.gym:chapter_vector_env"),
+    "simloop/PushT-v0": ("simloop.gym:pusht_env", "simloop.gym:pusht_vector_env"),
+    "simloop/Scenario-v0": ("simloop.gym:ScenarioEnv", "simloop.gym:ScenarioVectorEnv"),
+}
+
+
+def _register_envs(gymnasium) -> None:  # type: ignore[no-untyped-def]
+    for env_id, (entry_point, vector_entry_point) in _GYMNASIUM_IDS.items():
+        if env_id not in gymnasium.registry:
+            gymnasium.register(id=env_id, entry_point=entry_point, vector_entry_point=vector_entry_point)
+
+
 def _register_with_gymnasium() -> None:
     import sys
 
     if "gymnasium" in sys.modules:
-        from .gym import register_envs
-
-        register_envs()
+        _register_envs(sys.modules["gymnasium"])
         return
     import importlib.abc
     import importlib.util
@@ -87,9 +98,7 @@ def _register_with_gymnasium() -> None:
 
             def exec_module(module):  # type: ignore[no-untyped-def]
                 execute(module)
-                from .gym import register_envs
-
-                register_envs()
+                _register_envs(module)
 
             spec.loader.exec_module = exec_module  # type: ignore[method-assign]
             return spec

@@ -265,12 +265,7 @@ def pusht_vector_env(num_envs: int = 1, **kwargs: Any) -> ScenarioVectorEnv:
 
 def register_envs() -> None:
     """Registers simloop/Chapter-v0, simloop/PushT-v0 and simloop/Scenario-v0
-    (once; `import simloop` calls it when gymnasium is imported)."""
-    ids = {
-        "simloop/Chapter-v0": ("simloop.gym:chapter_env", "simloop.gym:chapter_vector_env"),
-        "simloop/PushT-v0": ("simloop.gym:pusht_env", "simloop.gym:pusht_vector_env"),
-        "simloop/Scenario-v0": ("simloop.gym:ScenarioEnv", "simloop.gym:ScenarioVectorEnv"),
-    }
-    for env_id, (entry_point, vector_entry_point) in ids.items():
-        if env_id not in gymnasium.registry:
-            gymnasium.register(id=env_id, entry_point=entry_point, vector_entry_point=vector_entry_point)
+    (once; `import simloop` does it as soon as gymnasium is imported)."""
+    from . import _register_envs
+
+    _register_envs(gymnasium)

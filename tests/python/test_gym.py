@@ -26,9 +26,11 @@ def test_import_simloop_leaves_gymnasium_alone_and_registers_once_it_loads():
             "print(type(gymnasium.make('simloop/PushT-v0').unwrapped).__name__)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.split() == ["50", "ScenarioEnv"]
-    # gymnasium first, then simloop: registered at once.
-    code = "import gymnasium, simloop; gymnasium.make('simloop/PushT-v0')"
-    subprocess.run([sys.executable, "-c", code], check=True)
+    # gymnasium first, then simloop: registered at once; simloop.gym first
+    # (it imports gymnasium itself): registered too.
+    for code in ("import gymnasium, simloop; gymnasium.make('simloop/PushT-v0')",
+                 "import simloop.gym, gymnasium; gymnasium.make('simloop/PushT-v0')"):
+        subprocess.run([sys.executable, "-c", code], check=True)
 
 
 @pytest.mark.parametrize("env_id", ["simloop/Chapter-v0", "simloop/PushT-v0"])
@@ -202,3 +204,15 @@ def test_make_vec_uses_the_vector_class():
     obs, rewards, terms, truncs, _ = venv.step(venv.action_space.sample())
     assert obs.shape[0] == 3 and rewards.shape == (3,) and terms.dtype == np.bool_
     venv.close()
+
+
+def test_the_readmes_random_policy_runs():
+    from pathlib import Path
+
+    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text(encoding="utf-8")
+    after = readme.split("A random policy:\n\n```python\n", 1)[1]
+    code = after.split("```", 1)[0]
+    assert "gymnasium.make(\"simloop/" in code and "env.step(env.action_space.sample())" in code
+    namespace = {}
+    exec(compile(code, "README.md", "exec"), namespace)
+    assert namespace["total"] == 0.0  # no reward function: 0.0 every step
