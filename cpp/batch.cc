@@ -43,6 +43,14 @@ void detail::run_jobs(const Model& model, std::size_t jobs, int threads, const s
   std::vector<Data> datas;
   datas.reserve(static_cast<std::size_t>(workers));
   for (int w = 0; w < workers; ++w) datas.emplace_back(model);
+  run_jobs(jobs, threads, steps, control, [&](std::size_t i, int worker, RunControl& ctl) {
+    job(i, datas[static_cast<std::size_t>(worker)], ctl);
+  });
+}
+
+void detail::run_jobs(std::size_t jobs, int threads, const std::vector<std::int64_t>& steps, RunControl* control,
+                      const std::function<void(std::size_t job, int worker, RunControl& control)>& job) {
+  const int workers = batch_workers(threads, jobs);
   RunControl own_control;
   RunControl& ctl = control ? *control : own_control;
   for (const std::int64_t s : steps) ctl.add_total(s);
@@ -53,7 +61,7 @@ void detail::run_jobs(const Model& model, std::size_t jobs, int threads, const s
   const auto work = [&](int worker) noexcept {
     for (std::size_t i; (i = next.fetch_add(1)) < jobs;) {
       try {
-        job(i, datas[static_cast<std::size_t>(worker)], ctl);
+        job(i, worker, ctl);
       } catch (...) {
         errors[i] = std::current_exception();
         next.store(jobs);

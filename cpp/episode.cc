@@ -135,7 +135,9 @@ void Episodes::step(const double* actions, std::int64_t every, const std::uint8_
     }
     steps[i] = std::min(every, e.schedule.steps - e.step);
   }
-  detail::run_jobs(s.model, count, threads, steps, control, [&](std::size_t i, Data&, RunControl& ctl) {
+  // Each episode has its own Data: the pool's per-worker Data (about 1 ms to
+  // make for PushT, longer than a decision's steps) is not wanted here.
+  detail::run_jobs(count, threads, steps, control, [&](std::size_t i, int, RunControl& ctl) {
     if (steps[i] == 0) return;
     Episode& e = s.episodes[i];
     const mjModel* m = s.model.get();
