@@ -157,3 +157,28 @@ def test_a_batch_policy_is_called_with_the_gil_and_workers_step_in_between():
     simloop.run_scenario_batch(constant_pusht(400), seeds=range(6), threads=2, policy=policy, control_every=10)
     assert overlap == []
     assert len(inside) == 6 * 40
+
+
+def test_between_decisions_the_gil_is_free():
+    # A run in another thread, a decision every 10,000 steps: meanwhile this
+    # thread keeps running Python.
+    decisions = []
+    worker = threading.Thread(target=lambda: simloop.run_scenario(
+        constant_pusht(30_000), policy=lambda obs: decisions.append(obs.step) or [0.1, 0.1], control_every=10_000))
+    worker.start()
+    spins = 0
+    while worker.is_alive():
+        spins += 1
+    worker.join()
+    assert decisions == [0, 10_000, 20_000]
+    assert spins > 1000
+
+
+def test_a_keyboard_interrupt_in_the_policy_stops_the_run():
+    def policy(obs):
+        if obs.step == 30:
+            raise KeyboardInterrupt
+        return [0.0, 0.0]
+
+    with pytest.raises(KeyboardInterrupt):
+        simloop.run_scenario(constant_pusht(), policy=policy, control_every=10)
