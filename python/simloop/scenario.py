@@ -149,12 +149,14 @@ class Scenario:
             text += "\n" + _toml_table("[record]", record)
         self._core = _core.Scenario.from_toml(text, "Scenario(...)", os.getcwd())
         self.toml = text
+        self._remake: Tuple[Any, ...] = (_from_toml, (text, os.getcwd()))
 
     @classmethod
     def from_file(cls, path: Union[str, os.PathLike]) -> "Scenario":
         """Reads a scenario file (TOML); a relative scene resolves against its folder."""
         self = cls.__new__(cls)
         self._core = _core.Scenario.from_file(os.fspath(path))
+        self._remake = (Scenario.from_file, (os.path.abspath(path),))
         with open(path, encoding="utf-8") as f:
             self.toml = f.read()
         return self
@@ -165,7 +167,20 @@ class Scenario:
         self = cls.__new__(cls)
         self._core = _core.Scenario.chapter()
         self.toml = ""
+        self._remake = (Scenario.chapter, ())
         return self
+
+    # A Scenario does not change once made: copies are itself, and a pickle
+    # makes it again the way it was made (Gymnasium deep-copies and pickles
+    # an environment's arguments: env.spec.make(), AsyncVectorEnv).
+    def __copy__(self) -> "Scenario":
+        return self
+
+    def __deepcopy__(self, memo: Dict[int, Any]) -> "Scenario":
+        return self
+
+    def __reduce__(self) -> Tuple[Any, ...]:
+        return self._remake
 
     @property
     def name(self) -> str:
@@ -186,6 +201,15 @@ class Scenario:
 
     def __repr__(self) -> str:
         return repr(self._core)
+
+
+def _from_toml(text: str, base: str) -> Scenario:
+    """A keyword Scenario made again (for pickling)."""
+    self = Scenario.__new__(Scenario)
+    self._core = _core.Scenario.from_toml(text, "Scenario(...)", base)
+    self.toml = text
+    self._remake = (_from_toml, (text, base))
+    return self
 
 
 def _scenario_and_scene(scenario: Union[Scenario, str, os.PathLike],

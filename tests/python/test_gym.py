@@ -61,6 +61,24 @@ def test_spaces_come_from_the_scenario():
     assert np.all(np.isinf(walker.action_space.low[~limited]))
 
 
+def test_scenario_v0_takes_a_scenario_object_which_copies_and_pickles():
+    import copy
+    import pickle
+
+    from gymnasium.utils.env_checker import check_env
+
+    scenario = simloop.Scenario(scene="tests/scenes/pusht.xml", steps=60, controls={"push_x": 0.5})
+    assert copy.deepcopy(scenario) is scenario  # it never changes
+    again = pickle.loads(pickle.dumps(scenario))
+    assert again.toml == scenario.toml
+    assert same_bits(simloop.run_scenario(again).trajectory, simloop.run_scenario(scenario).trajectory)
+    assert pickle.loads(pickle.dumps(simloop.Scenario.from_file(PUSHT_SCENARIO))).name == "pusht"
+    env = gymnasium.make("simloop/Scenario-v0", scenario=scenario, control_every=5)
+    with warnings.catch_warnings(record=True):
+        warnings.simplefilter("always")
+        check_env(env.unwrapped)  # remakes the env from its spec (a deep copy of its arguments)
+
+
 def test_scenario_v0_takes_any_scenario():
     env = gymnasium.make("simloop/Scenario-v0", scenario="tests/scenes/arm_push.toml", control_every=5)
     obs, info = env.reset(seed=0)
