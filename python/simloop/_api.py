@@ -20,7 +20,7 @@ import functools
 import math
 import numbers
 import os
-from typing import Callable, Iterable, List, Optional, Sequence, Union
+from typing import Callable, Iterable, List, Optional, Sequence, Union, overload
 
 from . import _core
 from ._core import Model, RunResult, SweepResult
@@ -170,6 +170,20 @@ def _check_progress(progress: object) -> object:
     if progress is not None and not callable(progress):
         raise TypeError(f"progress must be None or a callable progress(steps_done, steps_total), got {_describe(progress)}")
     return progress
+
+
+@overload
+def run(seed: int = 0, steps: int = 2000, timestep: float = 0.002, perturb: bool = True, smoke: bool = False,
+        model: ModelLike = None, record_every: int = 1, audit_energy: bool = False,
+        rng: str = "mt19937_64", *, progress: Progress = None, policy: None = None,
+        control_every: int = 1) -> RunResult: ...
+
+
+@overload
+def run(seed: int = 0, steps: int = 2000, timestep: float = 0.002, perturb: bool = True, smoke: bool = False,
+        model: ModelLike = None, record_every: int = 1, audit_energy: bool = False,
+        rng: str = "mt19937_64", *, progress: Progress = None, policy: Callable[..., object],
+        control_every: int = 1) -> "_core.ScenarioResult": ...
 
 
 def run(seed: int = 0, steps: int = 2000, timestep: float = 0.002, perturb: bool = True, smoke: bool = False,
