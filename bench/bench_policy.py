@@ -5,8 +5,11 @@ The PushT scenario (python/simloop/scenes/pusht.toml, recording two bodies,
 two joints, two actuators and two sensors) run by run_scenario open loop,
 and with a policy called every 50 steps (control_every=50) that returns a
 constant ctrl: paired rounds, alternating which goes first, on one scene
-compiled once. Wall-clock and process CPU time; the medians of the
-per-round ratios. Target: policy / open loop <= 1.10.
+compiled once. The policy writes what the scenario's controls write
+(push_x 0.8; push_y 0, 0.4 from 0.5 s, 2.0 from 1 s: changes at decision
+steps), so both runs do the same physics: the script checks that their
+trajectories are equal. Wall-clock and process CPU time; the
+medians of the per-round ratios. Target: policy / open loop <= 1.10.
 
     .venv/bin/python bench/bench_policy.py [--rounds 41] [--steps 5000] [--every 50]
 """
@@ -14,6 +17,8 @@ per-round ratios. Target: policy / open loop <= 1.10.
 import argparse
 import statistics
 import time
+
+import numpy as np
 
 import simloop
 from simloop.gym import PUSHT_SCENARIO
@@ -34,14 +39,19 @@ def main() -> int:
     scenario = simloop.Scenario.from_file(PUSHT_SCENARIO)
     scene = scenario.model()
 
+    def policy(obs):  # the scenario's own controls
+        return 0.8, (0.0 if obs.time < 0.5 - 1e-9 else 0.4 if obs.time < 1.0 - 1e-9 else 2.0)
+
     def open_loop():
-        simloop.run_scenario(scenario, steps=args.steps, model=scene)
+        return simloop.run_scenario(scenario, steps=args.steps, model=scene)
 
     def with_policy():
-        simloop.run_scenario(scenario, steps=args.steps, model=scene, policy=lambda obs: (0.8, 0.4),
-                             control_every=args.every)
+        return simloop.run_scenario(scenario, steps=args.steps, model=scene, policy=policy, control_every=args.every)
 
-    open_loop(), with_policy()  # warm up
+    if 250 % args.every or 500 % args.every:
+        parser.error("--every must divide 250 (the scenario's ctrl changes at steps 250 and 500)")
+    if not np.array_equal(open_loop().trajectory, with_policy().trajectory, equal_nan=True):
+        raise SystemExit("the policy run's trajectory differs from the open loop's")
     times = {"open": [], "policy": []}
     for r in range(args.rounds):
         order = [("open", open_loop), ("policy", with_policy)]

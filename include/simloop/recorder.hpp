@@ -90,8 +90,7 @@ struct ScenarioRunResult {
 // the ctrl changes and the forces that start or stop there (the sum of the
 // windows open on a body, an explicit zero when the last one closes;
 // xfrc_applied and ctrl persist in MuJoCo until overwritten). Steps are taken
-// in order from 0 (or from restart()); writing the same step twice writes it
-// once. Shared by run_schedule and Episodes (episode.hpp).
+// in order from 0; writing the same step twice writes it once. Shared by run_schedule and Episodes (episode.hpp).
 class ScheduledInputs {
  public:
   // controls = false: the schedule's ctrl changes are not written (a policy
@@ -107,7 +106,6 @@ class ScheduledInputs {
                 d->xfrc_applied + 6 * forces_[next_force_].body);
     }
   }
-  void restart() noexcept { next_control_ = next_force_ = 0; }
 
  private:
   struct ForceChange {  // from `step` on, xfrc_applied of `body` holds `wrench`
