@@ -234,3 +234,20 @@ def test_the_readmes_random_policy_runs():
     namespace = {}
     exec(compile(code, "README.md", "exec"), namespace)
     assert namespace["total"] == 0.0  # no reward function: 0.0 every step
+
+
+def test_vector_env_arguments_are_checked():
+    with pytest.raises(ValueError, match="num_envs"):
+        ScenarioVectorEnv(PUSHT_SCENARIO, 0)
+    with pytest.raises(ValueError, match="threads"):
+        ScenarioVectorEnv(PUSHT_SCENARIO, 2, threads=0)
+    venv = ScenarioVectorEnv(PUSHT_SCENARIO, 2)
+    with pytest.raises(ValueError, match="reset"):
+        venv.step(np.zeros((2, 2)))
+    with pytest.raises(ValueError, match="2 seeds"):
+        venv.reset(seed=[1, 2, 3])
+    venv.reset(seed=[5, None])
+    with pytest.raises(ValueError, match=r"shape \(2, 2\)"):
+        venv.step(np.zeros(2))
+    with pytest.raises(ValueError, match="finite"):
+        venv.step(np.full((2, 2), np.inf))
