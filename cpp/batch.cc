@@ -3,9 +3,11 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <exception>
 #include <functional>
 #include <map>
+#include <mutex>
 #include <string>
 #include <system_error>
 #include <thread>
@@ -58,6 +60,10 @@ void detail::run_jobs(std::size_t jobs, int threads, const std::vector<std::int6
   // Workers stop taking jobs once any job failed or a stop was requested.
   std::atomic<std::size_t> next{0};
   std::atomic<int> running{0};
+  // The last worker to finish wakes worker 0 at once: a short call (a vector
+  // environment's step, a few ms) would otherwise wait out a poll interval.
+  std::mutex finished_mutex;
+  std::condition_variable finished;
   const auto work = [&](int worker) noexcept {
     for (std::size_t i; (i = next.fetch_add(1)) < jobs;) {
       try {
@@ -67,7 +73,10 @@ void detail::run_jobs(std::size_t jobs, int threads, const std::vector<std::int6
         next.store(jobs);
       }
     }
-    running.fetch_sub(1);
+    if (running.fetch_sub(1) == 1) {
+      const std::lock_guard<std::mutex> lock(finished_mutex);
+      finished.notify_all();
+    }
   };
   std::vector<std::thread> pool;
   pool.reserve(static_cast<std::size_t>(std::max(workers - 1, 0)));
@@ -92,7 +101,8 @@ void detail::run_jobs(std::size_t jobs, int threads, const std::vector<std::int6
     } catch (const Interrupted&) {
       // Every worker sees the stop at its next chunk; wait for them.
     }
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    std::unique_lock<std::mutex> lock(finished_mutex);
+    finished.wait_for(lock, std::chrono::milliseconds(5), [&] { return running.load() == 0; });
   }
   for (std::thread& t : pool) t.join();
   if (ctl.stop_requested()) throw Interrupted("interrupted");
