@@ -208,7 +208,8 @@ class ScenarioVectorEnv(VectorEnv):
     def reset(self, *, seed: Union[int, Sequence[Optional[int]], None] = None,
               options: Optional[Dict[str, Any]] = None) -> Tuple[np.ndarray, Dict[str, Any]]:
         """seed: None, an int (env i gets seed + i, as Gymnasium's vector
-        environments do), or one seed (or None) per env."""
+        environments do), or one seed (or None) per env. options: not used
+        (every env is reset)."""
         if seed is None:
             seeds: List[Optional[int]] = [None] * self.num_envs
         elif isinstance(seed, (int, np.integer)) and not isinstance(seed, bool):
