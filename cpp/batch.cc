@@ -3,9 +3,11 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <exception>
 #include <functional>
 #include <map>
+#include <mutex>
 #include <string>
 #include <system_error>
 #include <thread>
@@ -43,6 +45,14 @@ void detail::run_jobs(const Model& model, std::size_t jobs, int threads, const s
   std::vector<Data> datas;
   datas.reserve(static_cast<std::size_t>(workers));
   for (int w = 0; w < workers; ++w) datas.emplace_back(model);
+  run_jobs(jobs, threads, steps, control, [&](std::size_t i, int worker, RunControl& ctl) {
+    job(i, datas[static_cast<std::size_t>(worker)], ctl);
+  });
+}
+
+void detail::run_jobs(std::size_t jobs, int threads, const std::vector<std::int64_t>& steps, RunControl* control,
+                      const std::function<void(std::size_t job, int worker, RunControl& control)>& job) {
+  const int workers = batch_workers(threads, jobs);
   RunControl own_control;
   RunControl& ctl = control ? *control : own_control;
   for (const std::int64_t s : steps) ctl.add_total(s);
@@ -50,16 +60,23 @@ void detail::run_jobs(const Model& model, std::size_t jobs, int threads, const s
   // Workers stop taking jobs once any job failed or a stop was requested.
   std::atomic<std::size_t> next{0};
   std::atomic<int> running{0};
+  // The last worker to finish wakes worker 0 at once: a short call (a vector
+  // environment's step, a few ms) would otherwise wait out a poll interval.
+  std::mutex finished_mutex;
+  std::condition_variable finished;
   const auto work = [&](int worker) noexcept {
     for (std::size_t i; (i = next.fetch_add(1)) < jobs;) {
       try {
-        job(i, datas[static_cast<std::size_t>(worker)], ctl);
+        job(i, worker, ctl);
       } catch (...) {
         errors[i] = std::current_exception();
         next.store(jobs);
       }
     }
-    running.fetch_sub(1);
+    if (running.fetch_sub(1) == 1) {
+      const std::lock_guard<std::mutex> lock(finished_mutex);
+      finished.notify_all();
+    }
   };
   std::vector<std::thread> pool;
   pool.reserve(static_cast<std::size_t>(std::max(workers - 1, 0)));
@@ -84,7 +101,8 @@ void detail::run_jobs(const Model& model, std::size_t jobs, int threads, const s
     } catch (const Interrupted&) {
       // Every worker sees the stop at its next chunk; wait for them.
     }
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    std::unique_lock<std::mutex> lock(finished_mutex);
+    finished.wait_for(lock, std::chrono::milliseconds(5), [&] { return running.load() == 0; });
   }
   for (std::thread& t : pool) t.join();
   if (ctl.stop_requested()) throw Interrupted("interrupted");

@@ -46,6 +46,18 @@ const char* joint_unit(int type, bool velocity) {
 
 }  // namespace
 
+CtrlRange ctrl_range(const mjModel* m) {
+  CtrlRange r{std::vector<double>(static_cast<size_t>(m->nu), -std::numeric_limits<double>::infinity()),
+              std::vector<double>(static_cast<size_t>(m->nu), std::numeric_limits<double>::infinity())};
+  for (int a = 0; a < m->nu; ++a) {
+    if (m->actuator_ctrllimited[a] && !(m->opt.disableflags & mjDSBL_CLAMPCTRL)) {
+      r.low[static_cast<size_t>(a)] = m->actuator_ctrlrange[2 * a];
+      r.high[static_cast<size_t>(a)] = m->actuator_ctrlrange[2 * a + 1];
+    }
+  }
+  return r;
+}
+
 void Recorder::add(Source::Kind kind, int id, int count, const std::vector<std::string>& names,
                    const std::string& unit, bool integer, bool input) {
   Source source{kind, id, count, width()};
@@ -58,14 +70,7 @@ void Recorder::add(Source::Kind kind, int id, int count, const std::vector<std::
 Recorder::Recorder(const mjModel* m, const ResolvedScenario& scenario, const Schedule& schedule) {
   columns_.push_back({"step", "", true, false});
   columns_.push_back({"time", "s", false, false});
-  ctrl_low_.assign(static_cast<size_t>(m->nu), -std::numeric_limits<double>::infinity());
-  ctrl_high_.assign(static_cast<size_t>(m->nu), std::numeric_limits<double>::infinity());
-  for (int a = 0; a < m->nu; ++a) {
-    if (m->actuator_ctrllimited[a] && !(m->opt.disableflags & mjDSBL_CLAMPCTRL)) {
-      ctrl_low_[static_cast<size_t>(a)] = m->actuator_ctrlrange[2 * a];
-      ctrl_high_[static_cast<size_t>(a)] = m->actuator_ctrlrange[2 * a + 1];
-    }
-  }
+  ctrl_range_ = ctrl_range(m);
   // Inputs: the ctrl of every controlled or recorded actuator, the force on
   // every disturbed body.
   std::set<int> ctrl_of;
@@ -121,8 +126,8 @@ void Recorder::before_step(double* row, std::int64_t step, const mjModel* m, con
     switch (s.kind) {
       case Source::kCtrl:
         // What MuJoCo applies: ctrl clamped to ctrlrange (it clamps a copy).
-        out[0] = inputs ? std::clamp(d->ctrl[s.id], ctrl_low_[static_cast<size_t>(s.id)],
-                                     ctrl_high_[static_cast<size_t>(s.id)])
+        out[0] = inputs ? std::clamp(d->ctrl[s.id], ctrl_range_.low[static_cast<size_t>(s.id)],
+                                     ctrl_range_.high[static_cast<size_t>(s.id)])
                         : kNone;
         break;
       case Source::kXfrc:
@@ -158,23 +163,15 @@ void Recorder::after_step(double* row, const mjModel* m, const mjData* d) const 
   }
 }
 
-namespace {
-
-// What xfrc_applied holds from a step on: the sum of the windows open then.
-struct ForceChange {
-  std::int64_t step;
-  int body;
-  std::array<double, 6> wrench;
-};
-
-std::vector<ForceChange> force_changes(const Schedule& schedule) {
+ScheduledInputs::ScheduledInputs(const Schedule& schedule, bool controls) {
+  if (controls) controls_ = schedule.control_changes;
+  // What xfrc_applied holds from a step on: the sum of the windows open then.
   std::set<std::pair<std::int64_t, int>> points;  // (step, body) where a window opens or closes
   for (const Schedule::Force& f : schedule.forces) {
     if (f.start >= f.end) continue;
     points.insert({f.start, f.body});
     points.insert({f.end, f.body});
   }
-  std::vector<ForceChange> out;
   for (const auto& [step, body] : points) {
     if (step >= schedule.steps) continue;
     ForceChange c{step, body, {}};
@@ -183,13 +180,16 @@ std::vector<ForceChange> force_changes(const Schedule& schedule) {
         for (int i = 0; i < 6; ++i) c.wrench[static_cast<size_t>(i)] += f.wrench[static_cast<size_t>(i)];
       }
     }
-    out.push_back(c);
+    forces_.push_back(c);  // sorted by step: std::set's order
   }
-  return out;  // sorted by step: std::set's order
 }
 
-
-}  // namespace
+Policy::Policy(std::int64_t every) : every_(every) {
+  if (every < 1 || every > kMaxSteps) {
+    throw InvalidArgument("control_every must be from 1 to " + std::to_string(kMaxSteps) + ", got " +
+                          std::to_string(every));
+  }
+}
 
 void detail::check_schedule_run(std::int64_t steps, std::int64_t record_every) {
   if (record_every < 1 || record_every > kMaxRecordEvery) {
@@ -202,6 +202,9 @@ void detail::check_schedule_run(std::int64_t steps, std::int64_t record_every) {
 }
 
 void check_inputs(const mjModel* m, const RunInputs& inputs, std::int64_t steps) {
+  if (inputs.controls && inputs.policy) {
+    throw InvalidArgument("controls and a policy both decide ctrl: give one of them");
+  }
   if (inputs.controls) {
     if (inputs.control_steps != steps || inputs.control_width != m->nu) {
       throw InvalidArgument("controls must have one row per step and one column per actuator, (" +
@@ -245,10 +248,9 @@ ScenarioRunResult detail::run_schedule_counted_elsewhere(const mjModel* m, mjDat
   check_inputs(m, inputs, schedule.steps);
   const Recorder recorder(m, scenario, schedule);
   if (sink == nullptr) detail::check_kept_rows(schedule.steps, record_every, recorder.width());
-  const std::vector<ForceChange> forces = force_changes(schedule);
-  // The caller's controls replace the schedule's: none of its changes apply.
-  static const std::vector<Schedule::ControlChange> kNoChanges;
-  const std::vector<Schedule::ControlChange>& controls = inputs.controls ? kNoChanges : schedule.control_changes;
+  Policy* const policy = inputs.policy;
+  // The caller's controls, or a policy, replace the schedule's ctrl changes.
+  ScheduledInputs scheduled(schedule, policy == nullptr && inputs.controls == nullptr);
   const double* own_controls = inputs.controls;
   const int nu = m->nu;
   const std::int64_t steps = schedule.steps;
@@ -266,6 +268,9 @@ ScenarioRunResult detail::run_schedule_counted_elsewhere(const mjModel* m, mjDat
   detail::RowBlock block(width, std::min(result.rows, RunControl::kChunkSteps / record_every + 2));
   detail::WarningCounter warnings;
   detail::DivergenceCheck divergence(m);
+  // Decision steps: 0, K, 2K, ... with a policy; none (the run's end) without.
+  std::int64_t next_decision = policy ? 0 : steps;
+  std::vector<double> observation(policy ? static_cast<std::size_t>(width) : 0);
 
   detail::mujoco_call([&] {
     mj_resetData(m, d);
@@ -275,23 +280,27 @@ ScenarioRunResult detail::run_schedule_counted_elsewhere(const mjModel* m, mjDat
       mj_forward(m, d);
     }
   });
-  std::size_t next_control = 0, next_force = 0;
   std::int64_t until_record = 0;
   for (std::int64_t step = 0; step < steps;) {
+    if (step == next_decision) {
+      // Outside MuJoCo's guard: the policy may throw (a Python exception).
+      detail::mujoco_call([&] {
+        scheduled.write(step, d);
+        forward_keeping_warmstart(m, d);
+      });
+      recorder.before_step(observation.data(), step, m, d, true);
+      recorder.after_step(observation.data(), m, d);
+      policy->decide(step, observation.data(), width, d->ctrl, m->nu);
+      next_decision = steps - step > policy->every() ? step + policy->every() : steps;
+    }
     const std::int64_t chunk_start = step;
-    const std::int64_t chunk_end = std::min(steps, step + RunControl::kChunkSteps);
+    const std::int64_t chunk_end = std::min({steps, step + RunControl::kChunkSteps, next_decision});
     detail::mujoco_call([&] {
       for (; step < chunk_end; ++step) {
         // The rhythm: write intent, write interference, step. The schedule
         // says what changes at this step; everything else persists.
-        for (; next_control < controls.size() && controls[next_control].step == step; ++next_control) {
-          d->ctrl[controls[next_control].actuator] = controls[next_control].value;
-        }
+        scheduled.write(step, d);
         if (own_controls) std::copy_n(own_controls + step * nu, nu, d->ctrl);
-        for (; next_force < forces.size() && forces[next_force].step == step; ++next_force) {
-          std::copy(forces[next_force].wrench.begin(), forces[next_force].wrench.end(),
-                    d->xfrc_applied + 6 * forces[next_force].body);
-        }
         double* row = nullptr;
         if (until_record-- == 0) {
           row = block.next();

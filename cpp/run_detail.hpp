@@ -10,6 +10,7 @@
 
 #include "simloop/recorder.hpp"
 #include "simloop/run.hpp"
+#include "simloop/scenario_run.hpp"
 
 namespace simloop::detail {
 
@@ -67,6 +68,12 @@ void check_schedule_run(std::int64_t steps, std::int64_t record_every);
                                                                RowSink* sink, RunControl* control,
                                                                const RunInputs& inputs = {});
 
+// A scenario as one run of `config` sees it: its length replaced by
+// config.steps, its disturbances dropped unless config.perturb.
+[[nodiscard]] Scenario configured_scenario(const Scenario& scenario, const ScenarioConfig& config);
+// The timestep such a run steps at: config's, else the scenario's, else the scene's own.
+[[nodiscard]] double run_timestep(const Model& scene, const Scenario& scenario, const ScenarioConfig& config);
+
 // run() without announcing its steps to the control: a batch announces all
 // of its runs' steps up front, so progress has its true total from the start.
 [[nodiscard]] RunResult run_counted_elsewhere(const Model& model, const RunConfig& config, Data& workspace,
@@ -84,6 +91,11 @@ void check_schedule_run(std::int64_t steps, std::int64_t record_every);
 void run_jobs(const Model& model, std::size_t jobs, int threads, const std::vector<std::int64_t>& steps,
               RunControl* control,
               const std::function<void(std::size_t job, Data& data, RunControl& control)>& job);
+
+// The same pool for jobs that bring their own Data (Episodes): job(i,
+// worker, control), worker in [0, batch_workers(threads, jobs)).
+void run_jobs(std::size_t jobs, int threads, const std::vector<std::int64_t>& steps, RunControl* control,
+              const std::function<void(std::size_t job, int worker, RunControl& control)>& job);
 
 // Tests only: from now on run_batch can start at most `threads` more threads
 // (as under a process limit, RLIMIT_NPROC); a negative count lifts the limit.

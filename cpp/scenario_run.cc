@@ -32,9 +32,7 @@ struct PreparedRun {
 };
 
 PreparedRun prepare(const Model& model, const Scenario& scenario, const ScenarioConfig& config) {
-  Scenario effective = scenario;
-  if (config.steps) effective.length = When::steps(*config.steps);
-  if (!config.perturb) effective.disturbances.clear();
+  const Scenario effective = detail::configured_scenario(scenario, config);
   PreparedRun run;
   run.resolved = resolve(effective, model.get());
   const std::unique_ptr<Draws> draws = make_draws(config.seed, config.rng);
@@ -55,11 +53,20 @@ ScenarioRunResult labelled(ScenarioRunResult result, const mjModel* m, const Sce
   return result;
 }
 
-double run_timestep(const Model& scene, const Scenario& scenario, const ScenarioConfig& config) {
-  return config.timestep.value_or(scenario.timestep.value_or(scene.timestep()));
-}
+using detail::run_timestep;
 
 }  // namespace
+
+Scenario detail::configured_scenario(const Scenario& scenario, const ScenarioConfig& config) {
+  Scenario effective = scenario;
+  if (config.steps) effective.length = When::steps(*config.steps);
+  if (!config.perturb) effective.disturbances.clear();
+  return effective;
+}
+
+double detail::run_timestep(const Model& scene, const Scenario& scenario, const ScenarioConfig& config) {
+  return config.timestep.value_or(scenario.timestep.value_or(scene.timestep()));
+}
 
 void check_scenario(const Model& scene, const Scenario& scenario, const ScenarioConfig& config) {
   const Model model = scene.for_run(run_timestep(scene, scenario, config), false);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <vector>
 
 namespace simloop {
 namespace {
@@ -28,14 +29,6 @@ auto places(D* d) noexcept {
 
 }  // namespace
 
-void forward_keeping_warmstart(const mjModel* m, mjData* d) {
-  // mj_forward leaves its solution in qacc_warmstart (MuJoCo 2.2), and the
-  // next mj_step starts its solver from there: put the old one back.
-  const std::vector<mjtNum> warmstart(d->qacc_warmstart, d->qacc_warmstart + m->nv);
-  mj_forward(m, d);
-  std::copy(warmstart.begin(), warmstart.end(), d->qacc_warmstart);
-}
-
 std::vector<std::pair<std::string, std::size_t>> state_layout(const mjModel* m) {
   const auto size = sizes(m);
   std::vector<std::pair<std::string, std::size_t>> layout;
@@ -61,14 +54,33 @@ std::vector<double> get_state(const mjModel* m, const mjData* d) {
   return state;
 }
 
-void set_state(const mjModel* m, mjData* d, const double* state) {
+namespace {
+void put_state(const mjModel* m, mjData* d, const double* state) noexcept {
   const auto size = sizes(m);
   const auto target = places(d);
   for (std::size_t i = 0; i < kParts; ++i) {
     std::copy_n(state, size[i], target[i]);
     state += size[i];
   }
+}
+}  // namespace
+
+void set_state(const mjModel* m, mjData* d, const double* state) {
+  put_state(m, d, state);
   forward_keeping_warmstart(m, d);
+}
+
+void forward_keeping_warmstart(const mjModel* m, mjData* d) {
+  // MuJoCo 2.2's mj_forward leaves its solution in qacc_warmstart, where the
+  // next mj_step's solver starts, and normalizes the quaternions of free and
+  // ball joints in qpos in place; normalizing is not idempotent in the last
+  // bit, and the next mj_step normalizes them again. Either changes the
+  // run's bits, so the whole state goes back as it was (the derived
+  // quantities are those of the normalized quaternions, as mj_step's own).
+  std::vector<double> state(state_size(m));
+  get_state(m, d, state.data());
+  mj_forward(m, d);
+  put_state(m, d, state.data());
 }
 
 }  // namespace simloop

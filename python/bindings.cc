@@ -28,10 +28,12 @@
 #include "warning_counter.hpp"
 #include "simloop/batch.hpp"
 #include "simloop/control.hpp"
+#include "simloop/episode.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/model.hpp"
 #include "simloop/number_format.hpp"
 #include "simloop/output.hpp"
+#include "simloop/recorder.hpp"
 #include "simloop/run.hpp"
 #include "simloop/scenario.hpp"
 #include "simloop/scenario_run.hpp"
@@ -630,6 +632,36 @@ Result unpickle_fields(const py::tuple& t, const char* what) {
   in.finish();
   return r;
 }
+
+// A Python callable as the loop's Policy: decide(step, row) -> ctrl, where
+// row is the recorder's row (a fresh float64 array) and ctrl an array of nu
+// float64 (simloop/scenario.py's wrapper checks what the user's policy
+// returned and adds the decision step to its exceptions). Called from
+// whichever thread steps the run: it takes the GIL for the call only.
+class PyPolicy final : public simloop::Policy {
+ public:
+  PyPolicy(py::object decide, std::int64_t every) : Policy(every), decide_(std::move(decide)) {}
+  ~PyPolicy() override {
+    py::gil_scoped_acquire gil;
+    decide_ = py::object();
+  }
+  PyPolicy(const PyPolicy&) = delete;
+  PyPolicy& operator=(const PyPolicy&) = delete;
+
+  void decide(std::int64_t step, const double* observation, int width, double* ctrl, int nu) override {
+    py::gil_scoped_acquire gil;
+    const py::array_t<double> row(width, observation);
+    const py::array_t<double, py::array::c_style | py::array::forcecast> out(decide_(step, row));
+    if (out.size() != nu) {
+      throw simloop::InvalidArgument("policy at decision step " + std::to_string(step) + ": " +
+                                     std::to_string(out.size()) + " ctrl values for " + std::to_string(nu) + " actuators");
+    }
+    std::copy(out.data(), out.data() + nu, ctrl);
+  }
+
+ private:
+  py::object decide_;
+};
 
 }  // namespace
 
@@ -1597,4 +1629,128 @@ PYBIND11_MODULE(_core, m) {
   m.def("sweep_steps", &simloop::sweep_steps, "duration"_a, "timestep"_a);
   m.def("check_scenario", &simloop::check_scenario, "scene"_a, "scenario"_a, "config"_a,
         "Everything run_scenario checks before its first step, without running.");
+
+  // Policies and episodes (the training code's side): a policy decides ctrl
+  // every `control_every` steps of a scenario run; Episodes steps N runs of a
+  // scenario from outside, one decision at a time (Gymnasium).
+  m.def(
+      "run_scenario_policy",
+      [](const simloop::Model& scene, const simloop::Scenario& scenario, const simloop::ScenarioConfig& config,
+         py::object decide, std::int64_t control_every, py::object progress) {
+        PyPolicy policy(std::move(decide), control_every);
+        Interruptible work(std::move(progress));
+        simloop::ScenarioRunResult result = work.run([&](simloop::RunControl* control) {
+          return naming_failures("run_scenario(" + scenario.name + ", policy=...)", [&] {
+            return simloop::run_scenario(scene, scenario, config, nullptr, nullptr, control, simloop::RunInputs::deciding(policy));
+          });
+        });
+        work.finish();
+        return result;
+      },
+      "scene"_a, "scenario"_a, "config"_a, "decide"_a, "control_every"_a, "progress"_a = py::none());
+  m.def(
+      "run_scenario_batch_policy",
+      [](const simloop::Model& scene, const simloop::Scenario& scenario,
+         const std::vector<simloop::ScenarioConfig>& configs, int threads, py::object decide,
+         std::int64_t control_every, py::object progress) {
+        PyPolicy policy(std::move(decide), control_every);
+        Interruptible work(std::move(progress));
+        std::vector<simloop::ScenarioRunResult> results = work.run([&](simloop::RunControl* control) {
+          return naming_failures(
+              "run_scenario_batch(" + scenario.name + ", policy=...) x " + std::to_string(configs.size()) + " runs",
+              [&] { return simloop::run_scenario_batch(scene, scenario, configs, threads, control,
+                                              std::vector<simloop::RunInputs>(configs.size(), simloop::RunInputs::deciding(policy))); });
+        });
+        work.finish();
+        return results;
+      },
+      "scene"_a, "scenario"_a, "configs"_a, "threads"_a, "decide"_a, "control_every"_a, "progress"_a = py::none());
+
+  // Observations live in one (count, width) buffer the Python side reads
+  // after each call (copied out: a returned array never changes later).
+  struct PyEpisodes {
+    PyEpisodes(const simloop::Model& scene, const simloop::Scenario& scenario, const simloop::ScenarioConfig& config,
+               std::size_t count)
+        : episodes(scene, scenario, config, count),
+          observations(static_cast<std::size_t>(episodes.width()) * count, 0.0) {}
+    simloop::Episodes episodes;
+    std::vector<double> observations;
+    std::mutex mutex;  // one call at a time (the GIL is released while stepping)
+  };
+  py::class_<PyEpisodes>(m, "Episodes", "N episodes of a scenario, stepped a decision at a time (gym.py).")
+      .def(py::init([](const simloop::Model& scene, const simloop::Scenario& scenario,
+                       const simloop::ScenarioConfig& config, std::size_t count) {
+             return naming_failures("Episodes", [&] { return std::make_unique<PyEpisodes>(scene, scenario, config, count); });
+           }),
+           "scene"_a, "scenario"_a, "config"_a, "count"_a)
+      .def_property_readonly("count", [](PyEpisodes& e) { return e.episodes.count(); })
+      .def_property_readonly("nu", [](PyEpisodes& e) { return e.episodes.nu(); })
+      .def_property_readonly("steps", [](PyEpisodes& e) { return e.episodes.steps(); })
+      .def_property_readonly("timestep", [](PyEpisodes& e) { return e.episodes.model().timestep(); })
+      .def_property_readonly("column_names",
+                             [](PyEpisodes& e) {
+                               py::tuple names(e.episodes.columns().size());
+                               for (size_t i = 0; i < e.episodes.columns().size(); ++i) {
+                                 names[i] = py::str(e.episodes.columns()[i].name);
+                               }
+                               return names;
+                             })
+      .def_property_readonly("ctrl_range",
+                             [](PyEpisodes& e) {
+                               const simloop::CtrlRange r = simloop::ctrl_range(e.episodes.model().get());
+                               return py::make_tuple(vec(r.low.data(), r.low.size()), vec(r.high.data(), r.high.size()));
+                             })
+      .def(
+          "reset",
+          [](PyEpisodes& e, std::size_t i, std::uint64_t seed) {
+            std::lock_guard<std::mutex> lock(e.mutex);
+            const auto width = static_cast<std::size_t>(e.episodes.width());
+            if (i >= e.episodes.count()) {
+              throw py::index_error("episode " + std::to_string(i) + " does not exist: there are " +
+                                    std::to_string(e.episodes.count()));
+            }
+            e.episodes.reset(i, seed, e.observations.data() + i * width);
+            return vec(e.observations.data() + i * width, width);
+          },
+          "i"_a, "seed"_a)
+      .def(
+          "step",
+          [](PyEpisodes& e, const py::array_t<double, py::array::c_style | py::array::forcecast>& actions,
+             std::int64_t every, const std::optional<py::array_t<std::uint8_t, py::array::c_style | py::array::forcecast>>& active,
+             int threads) {
+            std::lock_guard<std::mutex> lock(e.mutex);
+            const std::size_t n = e.episodes.count();
+            const auto width = static_cast<py::ssize_t>(e.episodes.width());
+            if (static_cast<std::size_t>(actions.size()) != n * static_cast<std::size_t>(e.episodes.nu())) {
+              throw py::value_error("actions must hold " + std::to_string(n) + " x " + std::to_string(e.episodes.nu()) +
+                                    " values, got " + std::to_string(actions.size()));
+            }
+            if (active && static_cast<std::size_t>(active->size()) != n) {
+              throw py::value_error("active must hold " + std::to_string(n) + " flags");
+            }
+            std::vector<std::uint8_t> terminated(n, 0), truncated(n, 0);
+            const std::uint8_t* mask = active ? active->data() : nullptr;
+            const auto work_steps = every > 0 ? static_cast<double>(every) * static_cast<double>(n) : 0.0;
+            const auto stepping = [&](simloop::RunControl* control) {
+              e.episodes.step(actions.data(), every, mask, e.observations.data(), terminated.data(), truncated.data(),
+                              threads, control);
+            };
+            if (work_steps <= static_cast<double>(simloop::RunControl::kChunkSteps)) {
+              py::gil_scoped_release release;  // nothing long to interrupt
+              stepping(nullptr);
+            } else {
+              Interruptible work{py::none()};
+              work.run(stepping);
+            }
+            py::array_t<double> observations({static_cast<py::ssize_t>(n), width});
+            std::copy(e.observations.begin(), e.observations.end(), observations.mutable_data());
+            py::array_t<bool> term(static_cast<py::ssize_t>(n)), trunc(static_cast<py::ssize_t>(n));
+            std::copy(terminated.begin(), terminated.end(), term.mutable_data());
+            std::copy(truncated.begin(), truncated.end(), trunc.mutable_data());
+            return py::make_tuple(observations, term, trunc);
+          },
+          "actions"_a, "every"_a, "active"_a = py::none(), "threads"_a = 1)
+      .def("steps_taken", [](PyEpisodes& e, std::size_t i) { return e.episodes.steps_taken(i); }, "i"_a)
+      .def("time", [](PyEpisodes& e, std::size_t i) { return e.episodes.time(i); }, "i"_a)
+      .def("warnings", [](PyEpisodes& e, std::size_t i) { return e.episodes.warnings(i); }, "i"_a);
 }

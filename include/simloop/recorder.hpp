@@ -1,6 +1,9 @@
 // What a scenario's run records, and the loop that only reads its schedule.
 #pragma once
 
+#include <algorithm>
+#include <array>
+#include <cstddef>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -12,6 +15,13 @@
 #include "simloop/scenario.hpp"
 
 namespace simloop {
+
+// The range MuJoCo clamps each actuator's ctrl to: its ctrlrange when
+// ctrllimited (and clamping is not disabled), else -inf..inf.
+struct CtrlRange {
+  std::vector<double> low, high;  // per actuator
+};
+[[nodiscard]] CtrlRange ctrl_range(const mjModel* m);
 
 // The columns of a resolved scenario, laid out once, and how to fill a row.
 //
@@ -55,7 +65,7 @@ class Recorder {
            bool integer = false, bool input = false);
   std::vector<Column> columns_;
   std::vector<Source> before_, after_;
-  std::vector<double> ctrl_low_, ctrl_high_;  // per actuator; +-inf when not limited
+  CtrlRange ctrl_range_;
 };
 
 // A scenario run's outcome: the schedule it followed (the drawn forces and
@@ -77,6 +87,74 @@ struct ScenarioRunResult {
   double sim_time = 0.0;
 };
 
+// The schedule's inputs as the loop writes them, step by step: at each step,
+// the ctrl changes and the forces that start or stop there (the sum of the
+// windows open on a body, an explicit zero when the last one closes;
+// xfrc_applied and ctrl persist in MuJoCo until overwritten). Steps are taken
+// in order from 0; writing the same step twice writes it once. Shared by run_schedule and Episodes (episode.hpp).
+class ScheduledInputs {
+ public:
+  // controls = false: the schedule's ctrl changes are not written (a policy
+  // sets ctrl instead); its forces still are.
+  explicit ScheduledInputs(const Schedule& schedule, bool controls = true);
+
+  void write(std::int64_t step, mjData* d) noexcept {
+    for (; next_control_ < controls_.size() && controls_[next_control_].step == step; ++next_control_) {
+      d->ctrl[controls_[next_control_].actuator] = controls_[next_control_].value;
+    }
+    for (; next_force_ < forces_.size() && forces_[next_force_].step == step; ++next_force_) {
+      std::copy(forces_[next_force_].wrench.begin(), forces_[next_force_].wrench.end(),
+                d->xfrc_applied + 6 * forces_[next_force_].body);
+    }
+  }
+
+ private:
+  struct ForceChange {  // from `step` on, xfrc_applied of `body` holds `wrench`
+    std::int64_t step;
+    int body;
+    std::array<double, 6> wrench;
+  };
+  std::vector<Schedule::ControlChange> controls_;
+  std::vector<ForceChange> forces_;
+  std::size_t next_control_ = 0, next_force_ = 0;
+};
+
+// A policy in the loop: every `every()` steps (a decision step: 0, K, 2K, ...)
+// the loop hands it the observation and takes back the ctrl of every
+// actuator, which MuJoCo then holds for the next K steps.
+//
+// The observation is the recorder's row for the state entering the decision
+// step (Recorder's columns, step and time first), computed before the
+// decision: its derived quantities come from forward_keeping_warmstart
+// (state.hpp), so deciding leaves the run's bits as they would be with the
+// same ctrl written open-loop; its ctrl columns hold the ctrl in force until
+// now (the previous decision's; 0 before the first), and so do what follows
+// from ctrl (actuator forces, acceleration sensors); its force columns hold
+// the disturbances scheduled for this step. (mj_step1/mj_step2 around the
+// decision would save the extra mj_forward, but give no actuator forces or
+// acceleration-stage sensors to observe, and step RK4 scenes with Euler.)
+//
+// Who wins: with a policy, ctrl is the policy's, on every actuator, from
+// step 0 on; the scenario's controls are not written. Its disturbances
+// apply as scheduled.
+//
+// decide() runs outside MuJoCo's error guard, on the thread stepping the
+// run (any worker of a batch: it must be safe to call from several threads
+// at once); it may throw, which stops the run and reaches the caller.
+class Policy {
+ public:
+  // every: 1 to kMaxSteps (InvalidArgument otherwise).
+  explicit Policy(std::int64_t every);
+  virtual ~Policy() = default;
+  [[nodiscard]] std::int64_t every() const noexcept { return every_; }
+  // observation: `width` doubles (the recorder's row); ctrl: the nu doubles
+  // MuJoCo will apply from this step on, holding the ctrl in force now.
+  virtual void decide(std::int64_t step, const double* observation, int width, double* ctrl, int nu) = 0;
+
+ private:
+  std::int64_t every_;
+};
+
 // A run's inputs of the caller's own, as mujoco.rollout takes them: read in
 // place (nothing is copied), so they must outlive the run and not change
 // during it. Either may be left null.
@@ -93,17 +171,31 @@ struct RunInputs {
   // state (time included) instead of the scene's reset pose.
   const double* initial_state = nullptr;
   std::size_t state_size = 0;
+  // Decides ctrl every policy->every() steps (see Policy); not with controls.
+  Policy* policy = nullptr;
+
+  // A run's inputs that are only a policy's decisions.
+  [[nodiscard]] static RunInputs deciding(Policy& policy) noexcept {
+    RunInputs inputs;
+    inputs.policy = &policy;
+    return inputs;
+  }
 };
 
 // Throws InvalidArgument naming `controls` or `initial_state` unless
 // `inputs` fit a run of `steps` steps of `m`: control_steps == steps,
-// control_width == nu, state_size == state_size(m), every value finite.
+// control_width == nu, state_size == state_size(m), every value finite, and
+// not both controls and a policy.
 void check_inputs(const mjModel* m, const RunInputs& inputs, std::int64_t steps);
 
 // The loop: reset (or set the initial state), mj_forward, then for each step
 // write the schedule's inputs (ctrl changes, or the caller's controls;
 // forces, explicit zeros when a window closes), record, mj_step. `m` and `d`
-// must belong together; `d` is reset first.
+// must belong together; `d` is reset first. With a policy in `inputs`, it
+// also decides ctrl every policy->every() steps (see Policy): chunks of
+// steps then end at decision steps, where the loop leaves MuJoCo's error
+// guard to call it. Without one the steps run exactly as before (one more
+// comparison per chunk of RunControl::kChunkSteps).
 [[nodiscard]] ScenarioRunResult run_schedule(const mjModel* m, mjData* d, const ResolvedScenario& scenario,
                                              const Schedule& schedule, std::int64_t record_every,
                                              RowSink* sink = nullptr, RunControl* control = nullptr,

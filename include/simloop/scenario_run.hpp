@@ -39,8 +39,9 @@ struct ScenarioConfig {
 // scene has), then the schedule is drawn, then the loop runs in `workspace`
 // (a fresh Data if null). Same scenario, scene, config: the same bits.
 // With `inputs` (recorder.hpp's RunInputs), the run follows the caller's
-// controls instead of the scenario's and starts from the caller's state;
-// both are checked first (InvalidArgument naming them).
+// controls, or a policy's decisions (Policy in recorder.hpp), instead of the
+// scenario's controls, and starts from the caller's state; all checked
+// first (InvalidArgument naming them).
 [[nodiscard]] ScenarioRunResult run_scenario(const Model& scene, const Scenario& scenario,
                                              const ScenarioConfig& config, Data* workspace = nullptr,
                                              RowSink* sink = nullptr, RunControl* control = nullptr,
@@ -62,7 +63,11 @@ void check_scenario(const Model& scene, const Scenario& scenario, const Scenario
 
 //
 // inputs: empty, or one RunInputs per config (run i follows inputs[i]; runs
-// may share the same arrays), checked with the rest before any run starts.
+// may share the same arrays, and the same policy, whose decide() is then
+// called from every worker thread and must allow that; each run's decisions
+// depend only on its own observations, so results stay bitwise those of
+// run_scenario whatever the thread count), checked with the rest before any
+// run starts.
 // keep_rows false: the runs keep no trajectory (each result still has its
 // final_row, final_state, warnings and schedule, which is all the metrics
 // need), so a batch's memory does not grow with its runs' lengths.

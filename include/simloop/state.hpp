@@ -43,7 +43,9 @@ void set_state(const mjModel* m, mjData* d, const double* state);
 // mj_forward without its side effect on the next step: MuJoCo 2.2's
 // mj_forward writes its constraint solution into qacc_warmstart, where the
 // next mj_step's solver starts, so a plain mj_forward between two steps
-// changes the run's bits. This puts the warmstart back. Use it to read
+// changes the run's bits; it also normalizes free and ball joints'
+// quaternions in qpos in place, which the next mj_step does again (not
+// idempotent in the last bit). This puts the whole state back as it was. Use it to read
 // derived quantities (poses, sensors, contacts) mid-run, as a policy does.
 //
 // Call it inside MuJoCo's error guard (mujoco_call), as any MuJoCo call.

@@ -21,7 +21,7 @@ import math
 import numbers
 import os
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Callable, Dict, Iterable, List, Optional, Sequence, Tuple, Union
+from typing import TYPE_CHECKING, Any, Callable, Dict, Iterable, List, Optional, Sequence, Tuple, Union, overload
 
 if TYPE_CHECKING:  # (importing numpy would cost every `import simloop` ~50 ms)
     import numpy as np
@@ -180,9 +180,24 @@ def _check_progress(progress: object) -> Progress:
     return progress
 
 
+@overload
 def run(seed: int = 0, steps: int = 2000, timestep: float = 0.002, perturb: bool = True, smoke: bool = False,
         model: ModelLike = None, record_every: int = 1, audit_energy: bool = False,
-        rng: str = "mt19937_64", *, progress: Progress = None) -> RunResult:
+        rng: str = "mt19937_64", *, progress: Progress = None, policy: None = None,
+        control_every: int = 1) -> RunResult: ...
+
+
+@overload
+def run(seed: int = 0, steps: int = 2000, timestep: float = 0.002, perturb: bool = True, smoke: bool = False,
+        model: ModelLike = None, record_every: int = 1, audit_energy: bool = False,
+        rng: str = "mt19937_64", *, progress: Progress = None, policy: Callable[..., object],
+        control_every: int = 1) -> "_core.ScenarioResult": ...
+
+
+def run(seed: int = 0, steps: int = 2000, timestep: float = 0.002, perturb: bool = True, smoke: bool = False,
+        model: ModelLike = None, record_every: int = 1, audit_energy: bool = False,
+        rng: str = "mt19937_64", *, progress: Progress = None, policy: Optional[Callable[..., object]] = None,
+        control_every: int = 1) -> "Union[RunResult, _core.ScenarioResult]":
     """Runs the chapter's loop once and returns what happened.
 
     seed: seeds the shove (0 to 2**64-1), and nothing else.
@@ -206,9 +221,32 @@ def run(seed: int = 0, steps: int = 2000, timestep: float = 0.002, perturb: bool
     read-only (rows, 22) float64 view, no copy) and .columns / .column(name),
     .shove, .warnings, .summary(), and .write(out) for metrics.json and
     trajectory.csv, byte-identical to `sim_loop` with the same flags.
+
+    policy, control_every: a policy in the loop (see run_scenario): the run
+    then goes through the chapter's scenario loop (Scenario.chapter(), with
+    this call's seed, steps, timestep, perturb, model, record_every, rng)
+    and returns a ScenarioResult (its columns named from the scene, its
+    metrics the scenario's). The policy's ctrl replaces the chapter's 1.0;
+    the shove acts as drawn. audit_energy is not available with a policy.
     """
     config = _config(seed, steps, timestep, perturb, smoke, record_every, audit_energy, rng)
+    if policy is not None:
+        return _run_chapter_with_policy(config, model, progress, policy, control_every)
+    _check_int("control_every", control_every, 1, MAX_STEPS)
     return _core.run(load_model(model), config, progress=_check_progress(progress))
+
+
+def _run_chapter_with_policy(config: "_core.RunConfig", model: ModelLike, progress: Progress,
+                             policy: Callable[..., object], control_every: int) -> "_core.ScenarioResult":
+    from .scenario import Scenario, run_scenario  # it imports this module
+
+    if config.audit_energy:
+        raise ValueError("audit_energy=True is not available with a policy (the audit is the chapter's open "
+                         "loop's); leave one of them out")
+    return run_scenario(Scenario.chapter(), seed=config.seed, rng=config.rng, timestep=config.timestep,
+                        steps=_core.SMOKE_STEPS if config.smoke else config.steps, perturb=config.perturb,
+                        record_every=config.record_every, model=load_model(model), progress=progress,
+                        policy=policy, control_every=control_every)
 
 
 def draw_shove(seed: int = 0, steps: int = 2000, rng: str = "mt19937_64") -> "_core.Shove":

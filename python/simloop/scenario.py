@@ -21,10 +21,11 @@ import json
 import math
 import numbers
 import os
-from typing import TYPE_CHECKING, Any, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple, Union
+from typing import TYPE_CHECKING, Any, Callable, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple, Union
 
 from . import _core
-from ._api import Progress, _check_bool, _sequence, _check_int, _check_progress, _check_timestep, _describe, _U64_MAX, RNGS
+from ._api import (Progress, _check_bool, _sequence, _check_int, _check_progress, _check_timestep, _describe,
+                   _show, _U64_MAX, RNGS)
 
 if TYPE_CHECKING:  # numpy and the tables load when used: `import simloop` stays quick
     import numpy as np
@@ -151,6 +152,7 @@ class Scenario:
         self._base = os.getcwd()  # where its relative paths resolve (sent along to workers)
         self._core = _core.Scenario.from_toml(text, "Scenario(...)", self._base)
         self.toml = text
+        self._remake: Tuple[Any, ...] = (_from_toml, (text, os.getcwd()))
 
     @classmethod
     def from_file(cls, path: Union[str, "os.PathLike[str]"]) -> "Scenario":
@@ -158,6 +160,7 @@ class Scenario:
         self = cls.__new__(cls)
         self._core = _core.Scenario.from_file(os.fspath(path))
         self._base = os.path.dirname(os.path.abspath(os.fspath(path)))
+        self._remake = (Scenario.from_file, (os.path.abspath(path),))
         with open(path, encoding="utf-8") as f:
             self.toml = f.read()
         return self
@@ -169,7 +172,20 @@ class Scenario:
         self._core = _core.Scenario.chapter()
         self._base = ""
         self.toml = ""
+        self._remake = (Scenario.chapter, ())
         return self
+
+    # A Scenario does not change once made: copies are itself, and a pickle
+    # makes it again the way it was made (Gymnasium deep-copies and pickles
+    # an environment's arguments: env.spec.make(), AsyncVectorEnv).
+    def __copy__(self) -> "Scenario":
+        return self
+
+    def __deepcopy__(self, memo: Dict[int, Any]) -> "Scenario":
+        return self
+
+    def __reduce__(self) -> Tuple[Any, ...]:
+        return self._remake
 
     @property
     def name(self) -> str:
@@ -190,6 +206,15 @@ class Scenario:
 
     def __repr__(self) -> str:
         return repr(self._core)
+
+
+def _from_toml(text: str, base: str) -> Scenario:
+    """A keyword Scenario made again (for pickling)."""
+    self = Scenario.__new__(Scenario)
+    self._core = _core.Scenario.from_toml(text, "Scenario(...)", base)
+    self.toml = text
+    self._remake = (_from_toml, (text, base))
+    return self
 
 
 def _scenario_and_scene(scenario: Union[Scenario, str, "os.PathLike[str]"],
@@ -225,10 +250,99 @@ def _inputs_array(name: str, value: object, shapes: Tuple[int, ...], described: 
     return np.ascontiguousarray(array, dtype=np.float64)
 
 
+class Observation:
+    """What a policy sees at a decision step: the scenario's recorded
+    quantities for the state entering that step.
+
+    step: the decision step (0, K, 2K, ...). time: the sim time, s.
+    values: a read-only float64 vector, one value per name in `names`, which
+    are the run's trajectory columns after "step" and "time"
+    (result.column_names[2:]): ctrl inputs, disturbance forces, body poses
+    and velocities, joints, actuator forces, sensors, ncon. obs["tblock_x"]
+    reads one by name. The ctrl columns hold the ctrl in force until now (the
+    previous decision's; 0 before the first), and so do actuator forces; the
+    force columns hold the disturbances acting in this step.
+    """
+
+    __slots__ = ("step", "time", "values", "_index")
+
+    def __init__(self, step: int, time: float, values: np.ndarray, index: Mapping[str, int]) -> None:
+        self.step = step
+        self.time = time
+        self.values = values
+        self._index = index
+
+    @property
+    def names(self) -> Tuple[str, ...]:
+        return tuple(self._index)
+
+    def __getitem__(self, name: str) -> float:
+        return float(self.values[self._index[name]])
+
+    def __repr__(self) -> str:
+        return f"Observation(step={self.step}, time={self.time!r}, {len(self._index)} values)"
+
+
+Policy = Callable[[Observation], Any]
+
+
+def _with_decision_step(error: BaseException, step: int) -> None:
+    """Names the decision step in the message of an exception a policy raised."""
+    where = f"(policy at decision step {step})"
+    if len(error.args) == 1 and isinstance(error.args[0], str):
+        error.args = (f"{error.args[0]} {where}",)
+    elif not error.args:
+        error.args = (where,)
+    elif hasattr(error, "add_note"):  # several arguments (OSError's errno, ...): keep them
+        error.add_note(where)
+
+
+def _ctrl(value: object, nu: int, step: int) -> "np.ndarray":
+    import numpy as np
+
+    shape = f"{nu} ctrl values (shape ({nu},){', or a number' if nu == 1 else ''})"
+    try:
+        ctrl = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError(f"the policy must return {shape}, got {_describe(value)} at decision step {step}") from None
+    if ctrl.ndim == 0 and nu == 1:
+        ctrl = ctrl.reshape(1)
+    if ctrl.shape != (nu,):
+        raise ValueError(f"the policy must return {shape}, got shape {ctrl.shape} at decision step {step}")
+    if not np.isfinite(ctrl).all():
+        raise ValueError(f"the policy returned a ctrl that is not finite at decision step {step}: {_show(value)}")
+    return ctrl
+
+
+def _decider(policy: object, control_every: object, scene: _core.Model, scenario: Scenario,
+             config: "_core.ScenarioConfig") -> Tuple[Callable[[int, np.ndarray], np.ndarray], int]:
+    """The C++ loop's decide(step, row) around the user's policy(obs), and K."""
+    if not callable(policy):
+        raise TypeError(f"policy must be None or a callable policy(observation) -> ctrl, got {_describe(policy)}")
+    every = _check_int("control_every", control_every, 1, _core.MAX_STEPS)
+    # The run's columns (and its names checked) before the first step.
+    names = _core.Episodes(scene, scenario._core, config, 0).column_names[2:]
+    index = {name: i for i, name in enumerate(names)}
+    nu = scene.nu
+
+    def decide(step: int, row: np.ndarray) -> np.ndarray:
+        values = row[2:]
+        values.flags.writeable = False
+        try:
+            out = policy(Observation(step, float(row[1]), values, index))
+        except Exception as error:
+            _with_decision_step(error, step)
+            raise
+        return _ctrl(out, nu, step)
+
+    return decide, every
+
+
 def run_scenario(scenario: Union[Scenario, str, "os.PathLike[str]"], *, seed: int = 0, rng: str = "mt19937_64",
                  timestep: Optional[float] = None, steps: Optional[int] = None, perturb: bool = True,
                  record_every: int = 1, model: Optional[_core.Model] = None,
-                 progress: Progress = None, controls: Any = None, initial_state: Any = None) -> ScenarioResult:
+                 progress: Progress = None, controls: Any = None, initial_state: Any = None,
+                 policy: Optional[Policy] = None, control_every: int = 1) -> ScenarioResult:
     """Runs a scenario (a Scenario or a scenario file's path) once.
 
     seed draws its random disturbances and nothing else; rng is "mt19937_64"
@@ -253,6 +367,18 @@ def run_scenario(scenario: Union[Scenario, str, "os.PathLike[str]"], *, seed: in
     scene's reset pose: the flat layout of include/simloop/state.hpp, as
     result.final_state gives it, so a run continued from a result's
     final_state gives the bits of one longer run.
+
+    policy: None (open loop: the scenario's controls), or a callable
+    policy(obs) -> ctrl called every `control_every` steps (at steps 0, K,
+    2K, ...) with an Observation, returning the ctrl of every actuator (nu
+    numbers; a number when nu == 1), which MuJoCo then holds for the next K
+    steps. With a policy, ctrl is the policy's on every actuator from step 0
+    on: the scenario's controls are not written (its disturbances are). The
+    trajectory records the ctrl applied, as always. The C++ loop takes the
+    GIL only to call the policy. An exception the policy raises stops the
+    run and reaches the caller with "(policy at decision step N)" added to
+    its message; a ctrl of the wrong shape or not finite raises ValueError
+    naming the decision step.
     """
     scenario, scene = _scenario_and_scene(scenario, model)
     if rng not in RNGS:
@@ -264,6 +390,14 @@ def run_scenario(scenario: Union[Scenario, str, "os.PathLike[str]"], *, seed: in
         _check_bool("perturb", perturb), _check_int("record_every", record_every, 1, _core.MAX_RECORD_EVERY))
     own = _inputs_array("controls", controls, (2,), "shaped (steps, nu)")
     start = _inputs_array("initial_state", initial_state, (1,), "shaped (state_size,)")
+    if policy is not None:
+        if own is not None or start is not None:
+            raise ValueError("policy with controls or initial_state is not supported: the policy decides ctrl, "
+                             "and its runs start from the scene's reset pose")
+        decide, every = _decider(policy, control_every, scene, scenario, config)
+        return _core.run_scenario_policy(scene, scenario._core, config, decide, every,
+                                         progress=_check_progress(progress))
+    _check_int("control_every", control_every, 1, _core.MAX_STEPS)
     if own is None and start is None:
         return _core.run_scenario(scene, scenario._core, config, progress=_check_progress(progress))
     return _core.run_scenario_with_inputs(scene, scenario._core, config, own, start,
@@ -275,8 +409,9 @@ def run_scenario_batch(scenario: Union[Scenario, str, "os.PathLike[str]"], seeds
                        steps: Optional[int] = None, perturb: bool = True, record_every: int = 1,
                        model: Optional[_core.Model] = None, threads: Optional[int] = None,
                        progress: Progress = None, controls: Any = None, initial_state: Any = None,
-                       metrics_only: bool = False, executor: object = None,
-                       chunk_size: Optional[int] = None) -> Union[List[ScenarioResult], BatchTable]:
+                       metrics_only: bool = False, executor: object = None, chunk_size: Optional[int] = None,
+                       policy: Optional[Policy] = None,
+                       control_every: int = 1) -> Union[List[ScenarioResult], BatchTable]:
     """Runs a scenario once per (seed, timestep) pair, in parallel over one scene.
 
     Results come in the order of itertools.product(seeds, timesteps), and each
@@ -300,12 +435,19 @@ def run_scenario_batch(scenario: Union[Scenario, str, "os.PathLike[str]"], seeds
     for run_batch(): chunks on workers, metrics only, a BatchTable back (the
     scenario travels as its TOML text; model must be None; controls and
     initial_state stay local).
+
+    policy, control_every: as for run_scenario(); one policy for every run,
+    called with the GIL held from whichever worker reaches a decision (the
+    others step on meanwhile). Results stay bitwise those of run_scenario()
+    whatever `threads` is, as long as the policy's answer depends only on
+    the observation it is given.
     """
     if executor is not None:
         if model is not None:
             raise TypeError("model must be None with executor= (the scenario's scene is compiled on each worker)")
-        if controls is not None or initial_state is not None:
-            raise ValueError("controls and initial_state are not sent to an executor: run such batches locally")
+        if controls is not None or initial_state is not None or policy is not None:
+            raise ValueError("controls, initial_state and policy are not sent to an executor: run such batches "
+                             "locally")
         scenario, scene = _scenario_and_scene(scenario, None)  # compiled here too: bad names fail before any work goes out
         _core.check_scenario_names(scenario._core, scene)
     else:
@@ -327,6 +469,16 @@ def run_scenario_batch(scenario: Union[Scenario, str, "os.PathLike[str]"], seeds
                                      progress=_check_progress(progress))
     configs = [_core.ScenarioConfig(s, rng, t, step_count, perturb, every) for s in seed_list for t in timestep_list]
     metrics_only = _check_bool("metrics_only", metrics_only)
+    if policy is not None:
+        if controls is not None or initial_state is not None or metrics_only:
+            raise ValueError("policy with controls, initial_state or metrics_only is not supported: give the "
+                             "policy alone (its runs keep their trajectories and start from the reset pose)")
+        if not configs:
+            return []
+        decide, decide_every = _decider(policy, control_every, scene, scenario, configs[0])
+        return _core.run_scenario_batch_policy(scene, scenario._core, configs, workers, decide, decide_every,
+                                               progress=_check_progress(progress))
+    _check_int("control_every", control_every, 1, _core.MAX_STEPS)
     own = _inputs_array("controls", controls, (2, 3), "shaped (runs, steps, nu) or (steps, nu)")
     start = _inputs_array("initial_state", initial_state, (1, 2), "shaped (runs, state_size) or (state_size,)")
     for name, array, ndim in (("controls", own, 3), ("initial_state", start, 2)):

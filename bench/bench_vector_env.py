@@ -1,0 +1,60 @@
+#!/usr/bin/env python3
+"""The vector environment's steps per second on 2 threads against 1.
+
+ScenarioVectorEnv over the PushT scenario (python/simloop/scenes/pusht.toml):
+--envs episodes (default 32), each env.step taking --every physics steps
+(default 50) per episode, random actions drawn up front; rounds alternate
+1 and 2 threads (two environments, reset with the same seed), each round
+--calls calls of step(). Physics steps per second, wall-clock, and process
+CPU time beside it; medians, and the median of the per-round ratios.
+Target: 2 threads >= 1.8 x 1 thread (on 2 cores).
+
+    .venv/bin/python bench/bench_vector_env.py [--rounds 15] [--envs 32] [--every 50] [--calls 20]
+"""
+
+import argparse
+import statistics
+import time
+
+import numpy as np
+
+from simloop.gym import PUSHT_SCENARIO, ScenarioVectorEnv
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--rounds", type=int, default=15)
+    parser.add_argument("--envs", type=int, default=32)
+    parser.add_argument("--every", type=int, default=50)
+    parser.add_argument("--calls", type=int, default=20)
+    args = parser.parse_args()
+    envs = {t: ScenarioVectorEnv(PUSHT_SCENARIO, args.envs, control_every=args.every, threads=t) for t in (1, 2)}
+    actions = np.random.default_rng(0).uniform(-1, 1, size=(args.calls, args.envs, 2))
+    steps = args.envs * args.every * args.calls
+
+    def timed(env):
+        env.reset(seed=0)
+        wall, cpu = time.perf_counter(), time.process_time()
+        for a in actions:
+            env.step(a)
+        return time.perf_counter() - wall, time.process_time() - cpu
+
+    timed(envs[1]), timed(envs[2])  # warm up
+    times = {1: [], 2: []}
+    for r in range(args.rounds):
+        for t in ((1, 2) if r % 2 else (2, 1)):
+            times[t].append(timed(envs[t]))
+    print(f"ScenarioVectorEnv(PushT): {args.envs} envs x {args.every} steps per call x {args.calls} calls "
+          f"= {steps} physics steps a round, {args.rounds} rounds")
+    for t in (1, 2):
+        wall = statistics.median(x[0] for x in times[t])
+        cpu = statistics.median(x[1] for x in times[t])
+        print(f"  {t} thread{'s' if t > 1 else ' '}: {steps / wall:10.0f} steps/s wall (median {wall * 1e3:7.2f} ms), "
+              f"cpu median {cpu * 1e3:7.2f} ms")
+    ratio = statistics.median(one[0] / two[0] for one, two in zip(times[1], times[2]))
+    print(f"  2 threads / 1 thread: {ratio:.3f} x the steps per second (median of per-round ratios; target >= 1.8)")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

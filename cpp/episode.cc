@@ -1,0 +1,190 @@
+#include "simloop/episode.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <optional>
+#include <string>
+
+#include "divergence.hpp"
+#include "mujoco_guard.hpp"
+#include "run_detail.hpp"
+#include "simloop/errors.hpp"
+#include "simloop/shove.hpp"
+#include "simloop/state.hpp"
+#include "warning_counter.hpp"
+
+namespace simloop {
+
+namespace {
+
+// One episode: its own Data, the schedule drawn at its reset, where it is.
+struct Episode {
+  explicit Episode(const Model& model) : data(model), divergence(model.get()) {}
+  Data data;
+  Schedule schedule;
+  std::optional<ScheduledInputs> inputs;  // empty until the first reset
+  std::int64_t step = 0;
+  detail::WarningCounter warnings;
+  detail::DivergenceCheck divergence;
+  bool reset_by_mujoco = false;  // MuJoCo found a bad state and reset it
+};
+
+}  // namespace
+
+struct Episodes::Impl {
+  Model model;
+  Scenario scenario;  // as configured (length, disturbances)
+  ScenarioConfig config;
+  ResolvedScenario resolved;
+  std::optional<Recorder> recorder;
+  std::int64_t length = 0;  // an episode's physics steps
+  std::vector<Episode> episodes;
+
+  // The row for the state entering the episode's next step: the inputs
+  // scheduled for it written, then what MuJoCo derives from the state.
+  void observe(Episode& e, double* observation) const {
+    const mjModel* m = model.get();
+    mjData* d = e.data.get();
+    detail::mujoco_call([&] {
+      if (e.step < e.schedule.steps) e.inputs->write(e.step, d);
+      forward_keeping_warmstart(m, d);
+    });
+    recorder->before_step(observation, e.step, m, d, true);
+    recorder->after_step(observation, m, d);
+  }
+
+  [[nodiscard]] bool terminated(const Episode& e) const noexcept { return e.reset_by_mujoco || e.divergence.diverged(); }
+};
+
+Episodes::Episodes(const Model& scene, const Scenario& scenario, const ScenarioConfig& config, std::size_t count)
+    : impl_(std::make_unique<Impl>(Impl{scene.for_run(detail::run_timestep(scene, scenario, config), false),
+                                        detail::configured_scenario(scenario, config), config, {}, std::nullopt, 0, {}})) {
+  Impl& s = *impl_;
+  s.resolved = resolve(s.scenario, s.model.get());
+  // The columns depend on which bodies are disturbed, not on the draws.
+  const std::unique_ptr<Draws> draws = make_draws(0, config.rng);
+  const Schedule schedule = build_schedule(s.resolved, s.scenario, s.model.timestep(), *draws);
+  detail::check_schedule_run(schedule.steps, 1);
+  s.recorder.emplace(s.model.get(), s.resolved, schedule);
+  s.length = schedule.steps;
+  s.episodes.reserve(count);
+  for (std::size_t i = 0; i < count; ++i) s.episodes.emplace_back(s.model);
+}
+
+Episodes::~Episodes() = default;
+
+std::size_t Episodes::count() const noexcept { return impl_->episodes.size(); }
+int Episodes::nu() const noexcept { return impl_->model.get()->nu; }
+int Episodes::width() const noexcept { return impl_->recorder->width(); }
+const std::vector<Column>& Episodes::columns() const noexcept { return impl_->recorder->columns(); }
+const Model& Episodes::model() const noexcept { return impl_->model; }
+
+std::int64_t Episodes::steps() const noexcept { return impl_->length; }
+
+namespace {
+void check_index(std::size_t i, std::size_t count) {
+  if (i >= count) {
+    throw InvalidArgument("episode " + std::to_string(i) + " does not exist: there are " + std::to_string(count));
+  }
+}
+}  // namespace
+
+void Episodes::reset(std::size_t i, std::uint64_t seed, double* observation) {
+  Impl& s = *impl_;
+  check_index(i, s.episodes.size());
+  Episode& e = s.episodes[i];
+  const std::unique_ptr<Draws> draws = make_draws(seed, s.config.rng);
+  e.schedule = build_schedule(s.resolved, s.scenario, s.model.timestep(), *draws);
+  e.inputs.emplace(e.schedule, false);  // ctrl is the actions'
+  e.step = 0;
+  e.warnings = detail::WarningCounter();
+  e.divergence = detail::DivergenceCheck(s.model.get());
+  e.reset_by_mujoco = false;
+  const mjModel* m = s.model.get();
+  mjData* d = e.data.get();
+  detail::mujoco_call([&] {
+    mj_resetData(m, d);
+    mj_forward(m, d);  // as run_schedule starts
+  });
+  s.observe(e, observation);
+}
+
+void Episodes::step(const double* actions, std::int64_t every, const std::uint8_t* active, double* observations,
+                    std::uint8_t* terminated, std::uint8_t* truncated, int threads, RunControl* control) {
+  Impl& s = *impl_;
+  if (every < 1 || every > kMaxSteps) {
+    throw InvalidArgument("control_every must be from 1 to " + std::to_string(kMaxSteps) + ", got " +
+                          std::to_string(every));
+  }
+  const std::size_t count = s.episodes.size();
+  const int nu = s.model.get()->nu;
+  const int width = s.recorder->width();
+  std::vector<std::int64_t> steps(count, 0);  // each job's steps, for progress
+  for (std::size_t i = 0; i < count; ++i) {
+    if (active && !active[i]) continue;
+    const Episode& e = s.episodes[i];
+    const std::string which = "episode " + std::to_string(i);
+    if (!e.inputs) throw InvalidArgument(which + " has not started: reset it first");
+    if (s.terminated(e) || e.step >= e.schedule.steps) {
+      throw InvalidArgument(which + " has ended (at step " + std::to_string(e.step) + "): reset it first");
+    }
+    for (int a = 0; a < nu; ++a) {
+      if (!std::isfinite(actions[i * static_cast<std::size_t>(nu) + static_cast<std::size_t>(a)])) {
+        throw InvalidArgument(which + ": action " + std::to_string(a) + " is not finite");
+      }
+    }
+    steps[i] = std::min(every, e.schedule.steps - e.step);
+  }
+  // Each episode has its own Data: the pool's per-worker Data (about 1 ms to
+  // make for PushT, longer than a decision's steps) is not wanted here.
+  detail::run_jobs(count, threads, steps, control, [&](std::size_t i, int, RunControl& ctl) {
+    if (steps[i] == 0) return;
+    Episode& e = s.episodes[i];
+    const mjModel* m = s.model.get();
+    mjData* d = e.data.get();
+    std::copy(actions + i * static_cast<std::size_t>(nu), actions + (i + 1) * static_cast<std::size_t>(nu), d->ctrl);
+    const std::int64_t end = e.step + steps[i];
+    while (e.step < end && !s.terminated(e)) {
+      const std::int64_t chunk_start = e.step;
+      const std::int64_t chunk_end = std::min(end, e.step + RunControl::kChunkSteps);
+      detail::mujoco_call([&] {
+        for (; e.step < chunk_end; ++e.step) {
+          e.inputs->write(e.step, d);
+          mj_step(m, d);
+          e.reset_by_mujoco = e.reset_by_mujoco || d->warning[mjWARN_BADQPOS].number > 0 ||
+                              d->warning[mjWARN_BADQVEL].number > 0 || d->warning[mjWARN_BADQACC].number > 0;
+          e.warnings.after_step(d, e.step);
+          e.divergence.after_step(d, e.step);
+          if (s.terminated(e)) {
+            ++e.step;
+            break;
+          }
+        }
+      });
+      ctl.advance(e.step - chunk_start);
+    }
+    s.observe(e, observations + i * static_cast<std::size_t>(width));
+    terminated[i] = s.terminated(e);
+    truncated[i] = !terminated[i] && e.step >= e.schedule.steps;
+  });
+}
+
+std::int64_t Episodes::steps_taken(std::size_t i) const {
+  check_index(i, impl_->episodes.size());
+  return impl_->episodes[i].step;
+}
+
+double Episodes::time(std::size_t i) const {
+  check_index(i, impl_->episodes.size());
+  return impl_->episodes[i].data.get()->time;
+}
+
+std::vector<Warning> Episodes::warnings(std::size_t i) const {
+  check_index(i, impl_->episodes.size());
+  const Episode& e = impl_->episodes[i];
+  std::vector<Warning> out = e.warnings.warnings();
+  if (e.divergence.diverged()) out.push_back(e.divergence.warning());
+  return out;
+}
+
+}  // namespace simloop

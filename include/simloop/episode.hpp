@@ -1,0 +1,82 @@
+// Episodes of a scenario stepped from outside, one decision at a time: what a
+// Gymnasium environment (one episode) and a vector environment (many, over
+// one compiled model, each with its own Data) need.
+//
+// Each episode is a run of the scenario driven by decisions: reset draws its
+// schedule from a seed (the disturbances; its controls give way to the
+// actions, as with a Policy in run_schedule), and each step writes an action
+// into ctrl and takes `every` physics steps. An episode stepped with the
+// actions a Policy would have returned follows the bits of run_schedule with
+// that policy: the same inputs, the same observations (the recorder's row
+// for the state entering the next decision, from forward_keeping_warmstart).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "simloop/control.hpp"
+#include "simloop/model.hpp"
+#include "simloop/recorder.hpp"
+#include "simloop/run.hpp"
+#include "simloop/scenario.hpp"
+#include "simloop/scenario_run.hpp"
+
+namespace simloop {
+
+class Episodes {
+ public:
+  // `count` episodes of `scenario` on `scene` (as load_scene made it).
+  // config: rng, timestep, steps (the episode's length) and perturb as for
+  // run_scenario; its seed and record_every play no part (reset takes the
+  // seed; nothing is recorded). Names are resolved here (InvalidArgument
+  // listing what the scene has). No episode has started: reset each first.
+  Episodes(const Model& scene, const Scenario& scenario, const ScenarioConfig& config, std::size_t count);
+  ~Episodes();
+  Episodes(const Episodes&) = delete;
+  Episodes& operator=(const Episodes&) = delete;
+
+  [[nodiscard]] std::size_t count() const noexcept;
+  [[nodiscard]] int nu() const noexcept;
+  // The observation's width and columns: the recorder's (step and time first).
+  [[nodiscard]] int width() const noexcept;
+  [[nodiscard]] const std::vector<Column>& columns() const noexcept;
+  // The length of an episode, in physics steps.
+  [[nodiscard]] std::int64_t steps() const noexcept;
+  // The model the episodes step (the scene at the run's timestep).
+  [[nodiscard]] const Model& model() const noexcept;
+
+  // Starts episode i afresh (t = 0, the model's initial state, ctrl 0) with
+  // its disturbances drawn from `seed`, and writes its first observation
+  // into observation[0 .. width()).
+  void reset(std::size_t i, std::uint64_t seed, double* observation);
+
+  // For each episode i with active[i] (all when `active` is null): writes
+  // actions[i*nu .. i*nu+nu) into its ctrl and takes `every` physics steps
+  // (fewer if the episode reaches its length, or ends on divergence first),
+  // then writes its observation into observations[i*width ..) and its flags:
+  // terminated[i] when it diverged (simloop_DIVERGED) or MuJoCo found a bad
+  // position, velocity or acceleration and reset the state
+  // (mjWARN_BADQPOS, BADQVEL, BADQACC); truncated[i] when it reached its
+  // length without that. Inactive episodes' rows and flags are left alone.
+  // Episodes step in parallel on `threads` workers (0: one per core; the
+  // batches' pool), each independent of the others: the same bits whatever
+  // the thread count. Checked before any step: every active episode was
+  // reset and has not ended, every action is finite, every is from 1 to
+  // kMaxSteps (InvalidArgument naming the episode or argument).
+  void step(const double* actions, std::int64_t every, const std::uint8_t* active, double* observations,
+            std::uint8_t* terminated, std::uint8_t* truncated, int threads = 1, RunControl* control = nullptr);
+
+  // Episode i's physics steps taken since its reset, its sim time, and the
+  // warnings it raised (MuJoCo's and simloop_DIVERGED).
+  [[nodiscard]] std::int64_t steps_taken(std::size_t i) const;
+  [[nodiscard]] double time(std::size_t i) const;
+  [[nodiscard]] std::vector<Warning> warnings(std::size_t i) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace simloop

@@ -1,0 +1,272 @@
+"""Gymnasium environments over any scenario (needs the `gym` extra: gymnasium).
+
+    >>> import gymnasium, simloop
+    >>> env = gymnasium.make("simloop/PushT-v0")
+    >>> obs, info = env.reset(seed=0)
+    >>> obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
+
+An episode is one run of the scenario driven by actions (the C++ loop's
+Episodes, include/simloop/episode.hpp):
+
+- reset(seed=s) seeds the scenario's generator with s: the disturbances are
+  drawn from it, as run_scenario(seed=s) draws them. It also seeds the
+  environment's np_random; a reset without a seed draws the episode's seed
+  from np_random, so a seeded sequence of episodes repeats.
+- step(action) writes the action into ctrl (every actuator, nu values) and
+  takes `control_every` physics steps (the frame skip), the disturbances
+  acting as scheduled; the scenario's own controls give way to the actions.
+  MuJoCo clamps ctrl to each actuator's ctrlrange.
+- action_space: Box(low, high, (nu,), float64) from the actuators' ctrlrange;
+  an actuator without one (not ctrllimited) is -inf..inf.
+- observation_space: Box(-inf, inf, (n,), float64) over the scenario's
+  recorded quantities: the trajectory's columns after "step" and "time"
+  (env.observation_names), read as the state entering the next step (see
+  simloop.Observation). step and time are in info.
+- reward: a scenario has none, so reward(obs, action, next_obs) -> float is
+  an argument (default: 0.0 every step).
+- truncated: the episode reached the scenario's length (its last step may
+  take fewer than control_every physics steps). terminated: the simulation
+  diverged (simloop_DIVERGED) or MuJoCo found a bad position, velocity or
+  acceleration and reset its state (mjWARN_BADQPOS, BADQVEL, BADQACC); the
+  episode stops at that physics step and info["warnings"] names them.
+
+ScenarioVectorEnv steps N such episodes over one compiled model, one MuJoCo
+data each, on C++ threads with the GIL released, with Gymnasium's default
+next-step autoreset. Registered ids (at `import simloop`, once gymnasium is
+imported): simloop/Chapter-v0 (the chapter's run, a decision every 50 steps:
+10 Hz over 500 Hz physics), simloop/PushT-v0 (the PushT scenario shipped in
+simloop/scenes/, a decision every 10 steps) and simloop/Scenario-v0
+(scenario=... required); each also as gymnasium.make_vec(..., num_envs=N)
+through the vector class.
+"""
+
+from __future__ import annotations
+
+import os
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union
+
+import gymnasium
+import numpy as np
+from gymnasium import spaces
+from gymnasium.utils import seeding
+from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector.utils import batch_space
+
+from . import _core
+from ._api import _check_bool, _check_int, _check_timestep, _describe, _U64_MAX, RNGS
+from .scenario import Scenario, _scenario_and_scene
+
+PUSHT_SCENARIO = os.path.join(os.path.dirname(os.path.abspath(__file__)), "scenes", "pusht.toml")
+
+Reward = Callable[[np.ndarray, np.ndarray, np.ndarray], float]
+ScenarioLike = Union[Scenario, str, "os.PathLike[str]"]
+
+# Episodes that end this way are terminated, not truncated (episode.hpp).
+_TERMINATING = ("simloop_DIVERGED", "mjWARN_BADQPOS", "mjWARN_BADQVEL", "mjWARN_BADQACC")
+
+
+class _Setup:
+    """What the single and the vector environment share: the episodes, the
+    spaces, the checks of actions."""
+
+    def __init__(self, scenario: ScenarioLike, count: int, control_every: int, reward: Optional[Reward], rng: str,
+                 timestep: Optional[float], steps: Optional[int], perturb: bool, model: Optional[_core.Model]) -> None:
+        scenario, scene = _scenario_and_scene(scenario, model)
+        if rng not in RNGS:
+            raise ValueError(f"rng must be 'mt19937_64' or 'numpy', got {rng!r}")
+        if reward is not None and not callable(reward):
+            raise TypeError(f"reward must be None or a callable reward(obs, action, next_obs) -> float, "
+                            f"got {_describe(reward)}")
+        self.control_every = _check_int("control_every", control_every, 1, _core.MAX_STEPS)
+        config = _core.ScenarioConfig(0, rng, None if timestep is None else _check_timestep(timestep),
+                                      None if steps is None else _check_int("steps", steps, 1, _core.MAX_STEPS),
+                                      _check_bool("perturb", perturb), 1)
+        self.scenario = scenario
+        self.reward = reward
+        self.episodes = _core.Episodes(scene, scenario._core, config, count)
+        self.nu = self.episodes.nu
+        self.names: Tuple[str, ...] = self.episodes.column_names[2:]
+        low, high = self.episodes.ctrl_range
+        self.action_space = spaces.Box(low, high, (self.nu,), np.float64)
+        self.observation_space = spaces.Box(-np.inf, np.inf, (len(self.names),), np.float64)
+
+    def actions(self, action: object, shape: Tuple[int, ...]) -> np.ndarray:
+        try:
+            values = np.asarray(action, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise TypeError(f"action must be {shape} numbers, got {_describe(action)}") from None
+        if shape == (1,) and values.ndim == 0:
+            values = values.reshape(1)
+        if values.shape != shape:
+            raise ValueError(f"action must have shape {shape}, got {values.shape}")
+        if not np.isfinite(values).all():
+            raise ValueError(f"action must be finite, got {action!r}")
+        return np.ascontiguousarray(values)
+
+    def rewards(self, before: np.ndarray, actions: np.ndarray, after: np.ndarray) -> np.ndarray:
+        if self.reward is None:
+            return np.zeros(len(after))
+        return np.array([float(self.reward(b, a, o)) for b, a, o in zip(before, actions, after)])
+
+    def info(self, i: int) -> Dict[str, Any]:
+        out: Dict[str, Any] = {"step": self.episodes.steps_taken(i), "time": self.episodes.time(i)}
+        ended = [w.name for w in self.episodes.warnings(i) if w.name in _TERMINATING]
+        if ended:
+            out["warnings"] = ended
+        return out
+
+
+def _episode_seed(np_random: np.random.Generator, seed: Optional[int]) -> int:
+    """The scenario's seed for an episode: reset's, else drawn from np_random."""
+    if seed is not None:
+        return _check_int("seed", seed, 0, _U64_MAX)
+    return int(np_random.integers(0, 2**64, dtype=np.uint64))
+
+
+class ScenarioEnv(gymnasium.Env):
+    """A Gymnasium environment over a scenario (a simloop.Scenario or a
+    scenario file's path); see the module's documentation.
+
+    control_every: physics steps per env.step (the frame skip). reward:
+    reward(obs, action, next_obs) -> float, default 0.0. rng, timestep,
+    steps, perturb, model: as for run_scenario (steps is the episode's
+    length). No rendering (render_mode None).
+    """
+
+    metadata = {"render_modes": []}
+
+    def __init__(self, scenario: ScenarioLike, *, control_every: int = 1, reward: Optional[Reward] = None,
+                 rng: str = "mt19937_64", timestep: Optional[float] = None, steps: Optional[int] = None,
+                 perturb: bool = True, model: Optional[_core.Model] = None, render_mode: Optional[str] = None) -> None:
+        if render_mode is not None:
+            raise ValueError(f"render_mode must be None (simloop environments do not render), got {render_mode!r}")
+        self._setup = _Setup(scenario, 1, control_every, reward, rng, timestep, steps, perturb, model)
+        self.action_space = self._setup.action_space
+        self.observation_space = self._setup.observation_space
+        self.observation_names = self._setup.names
+        self.control_every = self._setup.control_every
+        self._obs: Optional[np.ndarray] = None
+
+    def reset(self, *, seed: Optional[int] = None,
+              options: Optional[Dict[str, Any]] = None) -> Tuple[np.ndarray, Dict[str, Any]]:
+        super().reset(seed=seed)
+        episode_seed = _episode_seed(self.np_random, seed)
+        self._obs = self._setup.episodes.reset(0, episode_seed)[2:]
+        info = self._setup.info(0)
+        info["seed"] = episode_seed
+        return self._obs.copy(), info
+
+    def step(self, action: object) -> Tuple[np.ndarray, float, bool, bool, Dict[str, Any]]:
+        if self._obs is None:
+            raise ValueError("reset() the environment before step()")
+        actions = self._setup.actions(action, (self._setup.nu,))
+        rows, terminated, truncated = self._setup.episodes.step(actions.reshape(1, -1), self.control_every)
+        obs = rows[0, 2:]
+        reward = float(self._setup.rewards(self._obs[None], actions[None], obs[None])[0])
+        self._obs = obs
+        return obs.copy(), reward, bool(terminated[0]), bool(truncated[0]), self._setup.info(0)
+
+
+class ScenarioVectorEnv(VectorEnv):
+    """num_envs episodes of a scenario over one compiled model, one MuJoCo
+    data each, stepped together on `threads` C++ threads (None: one per
+    core) with the GIL released. Bitwise the same as num_envs ScenarioEnvs
+    reset with the same seeds and stepped with the same actions, whatever
+    the thread count. Autoreset: Gymnasium's next-step mode (the step after
+    an episode ends resets it, ignoring its action, with reward 0 and both
+    flags False); the new episode's seed is drawn from that env's own
+    np_random, as ScenarioEnv.reset() without a seed does. infos is {}.
+    Other arguments: as for ScenarioEnv.
+    """
+
+    metadata = {"render_modes": [], "autoreset_mode": AutoresetMode.NEXT_STEP}
+
+    def __init__(self, scenario: ScenarioLike, num_envs: int = 1, *, control_every: int = 1,
+                 reward: Optional[Reward] = None, threads: Optional[int] = None, rng: str = "mt19937_64",
+                 timestep: Optional[float] = None, steps: Optional[int] = None, perturb: bool = True,
+                 model: Optional[_core.Model] = None, render_mode: Optional[str] = None) -> None:
+        if render_mode is not None:
+            raise ValueError(f"render_mode must be None (simloop environments do not render), got {render_mode!r}")
+        self.num_envs = _check_int("num_envs", num_envs, 1, 1 << 20)
+        self._threads = 0 if threads is None else _check_int("threads", threads, 1, 4096)
+        self._setup = _Setup(scenario, self.num_envs, control_every, reward, rng, timestep, steps, perturb, model)
+        self.single_action_space = self._setup.action_space
+        self.single_observation_space = self._setup.observation_space
+        self.action_space = batch_space(self.single_action_space, self.num_envs)
+        self.observation_space = batch_space(self.single_observation_space, self.num_envs)
+        self.observation_names = self._setup.names
+        self.control_every = self._setup.control_every
+        self._rngs: List[Optional[np.random.Generator]] = [None] * self.num_envs
+        self._obs: Optional[np.ndarray] = None
+        self._autoreset = np.zeros(self.num_envs, dtype=bool)
+
+    def _reset_one(self, i: int, seed: Optional[int]) -> np.ndarray:
+        if seed is not None or self._rngs[i] is None:
+            self._rngs[i], _ = seeding.np_random(seed)  # as gymnasium.Env.reset seeds np_random
+        return self._setup.episodes.reset(i, _episode_seed(self._rngs[i], seed))[2:]
+
+    def reset(self, *, seed: Union[int, Sequence[Optional[int]], None] = None,
+              options: Optional[Dict[str, Any]] = None) -> Tuple[np.ndarray, Dict[str, Any]]:
+        """seed: None, an int (env i gets seed + i, as Gymnasium's vector
+        environments do), or one seed (or None) per env. options: not used
+        (every env is reset)."""
+        if seed is None:
+            seeds: List[Optional[int]] = [None] * self.num_envs
+        elif isinstance(seed, (int, np.integer)) and not isinstance(seed, bool):
+            seeds = [_check_int("seed", seed, 0, _U64_MAX - self.num_envs + 1) + i for i in range(self.num_envs)]
+        else:
+            seeds = list(seed)
+            if len(seeds) != self.num_envs:
+                raise ValueError(f"seed must be None, an int, or {self.num_envs} seeds, got {len(seeds)}")
+        self._obs = np.stack([self._reset_one(i, s) for i, s in enumerate(seeds)])
+        self._autoreset[:] = False
+        return self._obs.copy(), {}
+
+    def step(self, actions: object) -> Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, Dict[str, Any]]:
+        if self._obs is None:
+            raise ValueError("reset() the environment before step()")
+        values = self._setup.actions(actions, (self.num_envs, self._setup.nu))
+        for i in np.flatnonzero(self._autoreset):
+            self._reset_one(int(i), None)
+        active = ~self._autoreset
+        rows, terminated, truncated = self._setup.episodes.step(values, self.control_every, active.astype(np.uint8),
+                                                                self._threads)
+        obs = rows[:, 2:]
+        rewards = np.zeros(self.num_envs)
+        if active.any():
+            rewards[active] = self._setup.rewards(self._obs[active], values[active], obs[active])
+        terminated &= active
+        truncated &= active
+        self._obs = obs
+        self._autoreset = terminated | truncated
+        return obs.copy(), rewards, terminated, truncated, {}
+
+
+def chapter_env(**kwargs: Any) -> ScenarioEnv:
+    """simloop/Chapter-v0: the chapter's run, a decision every 50 steps."""
+    kwargs.setdefault("control_every", 50)
+    return ScenarioEnv(Scenario.chapter(), **kwargs)
+
+
+def chapter_vector_env(num_envs: int = 1, **kwargs: Any) -> ScenarioVectorEnv:
+    kwargs.setdefault("control_every", 50)
+    return ScenarioVectorEnv(Scenario.chapter(), num_envs, **kwargs)
+
+
+def pusht_env(**kwargs: Any) -> ScenarioEnv:
+    """simloop/PushT-v0: the PushT scenario shipped with simloop, a decision every 10 steps."""
+    kwargs.setdefault("control_every", 10)
+    return ScenarioEnv(PUSHT_SCENARIO, **kwargs)
+
+
+def pusht_vector_env(num_envs: int = 1, **kwargs: Any) -> ScenarioVectorEnv:
+    kwargs.setdefault("control_every", 10)
+    return ScenarioVectorEnv(PUSHT_SCENARIO, num_envs, **kwargs)
+
+
+def register_envs() -> None:
+    """Registers simloop/Chapter-v0, simloop/PushT-v0 and simloop/Scenario-v0
+    (once; `import simloop` does it as soon as gymnasium is imported)."""
+    from . import _register_envs
+
+    _register_envs(gymnasium)
