@@ -33,18 +33,14 @@ from typing import Any, Callable, Dict, Iterable, Iterator, List, Optional, Sequ
 import numpy as np
 
 from . import _core
+from .tables import DIVERGENCE_WARNINGS, WARNING_NAMES, BatchTable, table
 
-Columns = Dict[str, np.ndarray]
 # A scene parameter as it travels: ("friction" | "mass" | "damping", name or "", value).
 SceneParam = Tuple[str, str, float]
 # One run of a batch: its row index in the whole batch, seed, timestep (None:
 # the scenario's own) and scene parameters.
 Run = Tuple[int, int, Optional[float], Tuple[SceneParam, ...]]
 
-WARNING_NAMES: Tuple[str, ...] = tuple(_core.WARNING_NAMES)
-# The warnings that mean the run's state blew up or was reset by MuJoCo: a
-# table's `diverged` column is true when any of them was raised.
-DIVERGENCE_WARNINGS = ("mjWARN_BADQPOS", "mjWARN_BADQVEL", "mjWARN_BADQACC", "simloop_DIVERGED")
 MAX_CHUNK_SIZE = 64
 
 
@@ -119,152 +115,44 @@ def param_column(param: Tuple[str, str]) -> str:
 
 # ---- The chunk: runs on a worker, returns only metrics -------------------
 
-def run_chunk(job: Dict[str, Any], runs: Sequence[Run]) -> Columns:
-    """Runs `runs` of `job` with the C++ batch (job["threads"] threads) and
-    returns their metrics as columns (metrics_columns). Runs sharing scene
-    parameters share one modified model."""
+def run_chunk(job: Dict[str, Any], runs: Sequence[Run]) -> BatchTable:
+    """Runs `runs` of `job` as a metrics-only C++ batch (job["threads"]
+    threads; no trajectory kept) and returns their table (metrics_table).
+    Runs sharing scene parameters share one modified model."""
     _check_versions(job["versions"])
     groups: Dict[Tuple[SceneParam, ...], List[int]] = {}
     for i, run in enumerate(runs):
         groups.setdefault(run[3], []).append(i)
     results: List[Any] = [None] * len(runs)
-    every = _core.MAX_RECORD_EVERY  # the first and the final rows only: the metrics need nothing else
     for params, members in groups.items():
         if job["kind"] == "chapter":
             model = _with_params(_scene(job["scene"]), params)
-            configs = [_core.RunConfig(runs[i][1], job["steps"], runs[i][2], job["perturb"], job["smoke"], every,
+            configs = [_core.RunConfig(runs[i][1], job["steps"], runs[i][2], job["perturb"], job["smoke"], 1,
                                        job["audit_energy"], job["rng"]) for i in members]
-            out = _core.run_batch(model, configs, job["threads"])
+            out = _core.run_batch_metrics_only(model, configs, job["threads"])
         else:
             scenario, scene = _scenario(job["scenario"])
             model = _with_params(scene, params)
-            configs = [_core.ScenarioConfig(runs[i][1], job["rng"], runs[i][2], job["steps"], job["perturb"], every)
+            configs = [_core.ScenarioConfig(runs[i][1], job["rng"], runs[i][2], job["steps"], job["perturb"], 1)
                        for i in members]
-            out = _core.run_scenario_batch(model, scenario, configs, job["threads"])
+            out = _core.run_scenario_batch_with_inputs(model, scenario, configs, job["threads"], None, None, False)
         for i, result in zip(members, out):
             results[i] = result
-    return metrics_columns(job, runs, results)
+    return metrics_table(runs, results)
 
 
-def metrics_columns(job: Dict[str, Any], runs: Sequence[Run], results: Sequence[Any]) -> Columns:
-    """The table of a chunk: one row per run, flat numeric columns.
-
-    run (the row's index in the whole batch), seed, timestep (the run's), one
-    column per scene parameter of the job (param_column), steps, sim_time;
-    the metrics, unrounded where the final state gives them (chapter:
-    box_final_pos_x/_y/_z, box_final_speed, pusher_final_x, shove_newtons,
-    shove_sign, and lateral_drift and shove_moved_box as metrics.json has
-    them; a scenario: per recorded body <body>_final_pos_x/_y/_z and
-    <body>_final_speed, per disturbance disturbance<i>_force_x.. _torque_z
-    as applied and disturbance<i>_steps as it happened); energy_* with the
-    energy audit; warning_<name> (a count per name in WARNING_NAMES); and
-    diverged (any of DIVERGENCE_WARNINGS raised).
-
-    The one place rows are built: a metrics-only batch mode can replace the
-    results it reads without changing the table.
-    """
-    rows: List[Dict[str, Any]] = []
-    for run, r in zip(runs, results):
-        row: Dict[str, Any] = {"run": run[0], "seed": run[1], "timestep": float(r.timestep)}
-        for (kind, name, value) in run[3]:
-            row[param_column((kind, name))] = value
-        row["steps"] = int(r.steps) if job["kind"] != "chapter" else int(r.metrics["steps"])
-        row["sim_time"] = float(r.sim_time)
-        final = r.trajectory[-1]
-        if job["kind"] == "chapter":
-            names = _core.COLUMN_NAMES
-            at = {n: float(final[k]) for k, n in enumerate(names)}
-            vx, vy, vz = at["box_vx"], at["box_vy"], at["box_vz"]
-            row.update(box_final_pos_x=at["box_x"], box_final_pos_y=at["box_y"], box_final_pos_z=at["box_z"],
-                       box_final_speed=math.sqrt(vx * vx + vy * vy + vz * vz), pusher_final_x=at["pusher_x"],
-                       lateral_drift=r.metrics["lateral_drift"], shove_moved_box=bool(r.metrics["shove_moved_box"]),
-                       shove_newtons=float(r.shove.newtons), shove_sign=float(r.shove.sign))
-            if r.energy is not None:
-                row.update({f"energy_{k}": float(v) for k, v in r.energy.items()})
-        else:
-            for body, column in sorted(r.bodies.items()):
-                v = [float(x) for x in final[column:column + 10]]
-                row.update({f"{body}_final_pos_x": v[0], f"{body}_final_pos_y": v[1], f"{body}_final_pos_z": v[2],
-                            f"{body}_final_speed": math.sqrt(v[7] * v[7] + v[8] * v[8] + v[9] * v[9])})
-            for i, d in enumerate(r.disturbances):
-                for axis, k in zip("xyz", range(3)):
-                    row[f"disturbance{i}_force_{axis}"] = float(d["force"][k])
-                for axis, k in zip("xyz", range(3)):
-                    row[f"disturbance{i}_torque_{axis}"] = float(d["torque"][k])
-                row[f"disturbance{i}_steps"] = int(d["end_step"] - d["start_step"])
-        counts = {w.name: int(w.count) for w in r.warnings}
-        for name in WARNING_NAMES:
-            row[f"warning_{name}"] = counts.get(name, 0)
-        row["diverged"] = any(counts.get(name, 0) > 0 for name in DIVERGENCE_WARNINGS)
-        rows.append(row)
-    return _columns_of(rows)
-
-
-def _columns_of(rows: List[Dict[str, Any]]) -> Columns:
-    if not rows:
-        return {}
-    out: Columns = {}
-    for name in rows[0]:
-        values = [row[name] for row in rows]
-        first = values[0]
-        if name == "seed":
-            out[name] = np.array(values, dtype=np.uint64)
-        elif isinstance(first, bool):
-            out[name] = np.array(values, dtype=np.bool_)
-        elif isinstance(first, int):
-            out[name] = np.array(values, dtype=np.int64)
-        else:
-            out[name] = np.array(values, dtype=np.float64)
-    return out
-
-
-# ---- A table of metrics ---------------------------------------------------
-
-class MetricsTable:
-    """One row per run, in the batch's order: numpy columns by name.
-
-    table["box_final_pos_x"] is a column; len(table) the runs; to_arrow()
-    and to_pandas() convert (pyarrow and pandas are imported then).
-    """
-
-    def __init__(self, columns: Columns) -> None:
-        self.columns: Columns = dict(columns)
-
-    @classmethod
-    def concat(cls, chunks: Sequence[Columns]) -> "MetricsTable":
-        chunks = [c for c in chunks if c]
-        if not chunks:
-            return cls({})
-        return cls({name: np.concatenate([c[name] for c in chunks]) for name in chunks[0]})
-
-    @property
-    def column_names(self) -> List[str]:
-        return list(self.columns)
-
-    def __len__(self) -> int:
-        return len(next(iter(self.columns.values()))) if self.columns else 0
-
-    def __getitem__(self, name: str) -> np.ndarray:
-        if name not in self.columns:
-            raise KeyError(f"no column named {name!r}; see table.column_names")
-        return self.columns[name]
-
-    def to_arrow(self):
-        return columns_to_arrow(self.columns)
-
-    def to_pandas(self):
-        import pandas
-
-        return pandas.DataFrame(self.columns)
-
-    def __repr__(self) -> str:
-        return f"<simloop.MetricsTable {len(self)} runs x {len(self.columns)} columns>"
-
-
-def columns_to_arrow(columns: Columns):
-    import pyarrow
-
-    return pyarrow.table({name: pyarrow.array(values) for name, values in columns.items()})
+def metrics_table(runs: Sequence[Run], results: Sequence[Any]) -> BatchTable:
+    """The table of a chunk: `run` (the row's index in the whole batch), one
+    column per scene parameter of the run (param_column), then simloop.table's
+    columns for the results (the parameters, the metrics unrounded, warning
+    counts for every name in WARNING_NAMES, diverged): the same table a local
+    metrics-only batch gives, so chunks join and Parquet files append."""
+    local = table(list(results))
+    columns: Dict[str, np.ndarray] = {"run": np.array([run[0] for run in runs], dtype=np.int64)}
+    for j, (kind, name, _) in enumerate(runs[0][3] if runs else ()):
+        columns[param_column((kind, name))] = np.array([run[3][j][2] for run in runs], dtype=np.float64)
+    columns.update(local.columns)
+    return BatchTable(columns)
 
 
 # ---- Executors -------------------------------------------------------------
@@ -361,7 +249,7 @@ def chunk_ranges(total: int, chunk_size: int) -> List[Tuple[int, int]]:
 
 
 def iter_chunks(job: Dict[str, Any], runs: Sequence[Run], executor: object, *, chunk_size: Optional[int] = None,
-                skip: Iterable[int] = ()) -> Iterator[Tuple[int, Columns]]:
+                skip: Iterable[int] = ()) -> Iterator[Tuple[int, BatchTable]]:
     """Runs `runs` in chunks on `executor` and yields (chunk index, columns)
     as chunks finish (not in order). Chunks whose index is in `skip` are
     not run."""
@@ -375,16 +263,16 @@ def iter_chunks(job: Dict[str, Any], runs: Sequence[Run], executor: object, *, c
 
 
 def run_table(job: Dict[str, Any], runs: Sequence[Run], executor: object, *, chunk_size: Optional[int] = None,
-              progress: Optional[Callable[[int, int], object]] = None) -> MetricsTable:
+              progress: Optional[Callable[[int, int], object]] = None) -> BatchTable:
     """Every run's metrics, in the order of `runs`. progress(runs_done, runs_total) after each chunk."""
-    chunks: Dict[int, Columns] = {}
+    chunks: Dict[int, BatchTable] = {}
     done = 0
-    for index, columns in iter_chunks(job, runs, executor, chunk_size=chunk_size):
-        chunks[index] = columns
-        done += len(next(iter(columns.values()))) if columns else 0
+    for index, chunk in iter_chunks(job, runs, executor, chunk_size=chunk_size):
+        chunks[index] = chunk
+        done += len(chunk)
         if progress is not None:
             progress(done, len(runs))
-    return MetricsTable.concat([chunks[k] for k in sorted(chunks)])
+    return BatchTable.concat([chunks[k] for k in sorted(chunks)])
 
 
 def _threads(threads: Optional[int]) -> int:
@@ -402,7 +290,7 @@ def _chunk_size(chunk_size: Optional[int]) -> Optional[int]:
 # ---- The API's executor= paths (arguments already checked by the callers) --
 
 def run_batch_on(executor: object, configs: Sequence["_core.RunConfig"], model: object, threads: Optional[int],
-                 chunk_size: Optional[int], progress) -> MetricsTable:
+                 chunk_size: Optional[int], progress) -> BatchTable:
     """simloop.run_batch(..., executor=...): configs as run_batch built them."""
     first = configs[0] if configs else None
     job = {"kind": "chapter", "scene": scene_source(model), "versions": versions(), "threads": _threads(threads),
@@ -415,7 +303,7 @@ def run_batch_on(executor: object, configs: Sequence["_core.RunConfig"], model: 
 
 def run_scenario_batch_on(executor: object, scenario: Any, seeds: Sequence[int], timesteps: Sequence[Optional[float]],
                           *, rng: str, steps: Optional[int], perturb: bool, threads: Optional[int],
-                          chunk_size: Optional[int], progress) -> MetricsTable:
+                          chunk_size: Optional[int], progress) -> BatchTable:
     """simloop.run_scenario_batch(..., executor=...)."""
     job = scenario_job(scenario, rng=rng, steps=steps, perturb=perturb, threads=_threads(threads))
     runs = [(i, s, t, ()) for i, (s, t) in enumerate(itertools.product(seeds, timesteps))]
@@ -558,8 +446,8 @@ class ParquetBatch:
             flush()
             if progress is not None and done_runs:
                 progress(done_runs, len(self.runs))
-            for index, columns in iter_chunks(self.job, self.runs, executor, chunk_size=self.chunk_size, skip=ready):
-                table = columns_to_arrow(columns)
+            for index, chunk in iter_chunks(self.job, self.runs, executor, chunk_size=self.chunk_size, skip=ready):
+                table = chunk.to_arrow()
                 _write_atomically(self._part(index), lambda path: pq.write_table(table, path))
                 ready.add(index)
                 count = ranges[index][1] - ranges[index][0]

@@ -15,9 +15,13 @@ returns one directly. `to_pandas(results)` and `to_arrow(results)` are
 Columns are flat and typed: numbers only (no lists: box_final_pos is
 box_final_pos_x, _y, _z), integers as int64 (the seed as uint64), flags as
 bool, and the generator's and scenario's names as strings. Metrics are
-unrounded: rounding to 6 decimals is for metrics.json. Each warning a run
-raised is a column `warning_<name>` with its count (0 where it was not
-raised), and `diverged` says whether simloop_DIVERGED was among them.
+unrounded: rounding to 6 decimals is for metrics.json. Every warning simloop
+knows (WARNING_NAMES: MuJoCo's and simloop_DIVERGED) is a column
+`warning_<name>` with its count, 0 where it was not raised, so that every
+table of the same kind of run has the same columns (chunks of a batch join,
+Parquet files append); `diverged` says whether the run's state blew up:
+simloop_DIVERGED, or a MuJoCo warning after which MuJoCo resets the state
+(DIVERGENCE_WARNINGS).
 
 pandas and pyarrow are the `tables` extra (pip install 'simloop[tables]');
 they are imported only when a conversion asks for them.
@@ -32,7 +36,9 @@ import numpy as np
 
 from . import _core
 
-_DIVERGED = "simloop_DIVERGED"
+WARNING_NAMES = tuple(_core.WARNING_NAMES)
+# The warnings that mean the run's state blew up or was reset by MuJoCo.
+DIVERGENCE_WARNINGS = ("mjWARN_BADQPOS", "mjWARN_BADQVEL", "mjWARN_BADQACC", "simloop_DIVERGED")
 _ENERGY = ("energy_start", "energy_end", "work_actuator", "work_shove", "work_passive", "work_constraint",
            "work_constraint_positive", "unexplained")
 
@@ -125,9 +131,12 @@ class BatchTable:
 
 
 def _warning_counts(row: Dict[str, Any], warnings: Sequence[Any]) -> None:
+    counts = {name: 0 for name in WARNING_NAMES}
     for w in warnings:
-        row["warning_" + w.name] = row.get("warning_" + w.name, 0) + w.count
-    row["diverged"] = any(w.name == _DIVERGED for w in warnings)
+        counts[w.name] = counts.get(w.name, 0) + int(w.count)
+    for name, count in counts.items():
+        row["warning_" + name] = count
+    row["diverged"] = any(counts.get(name, 0) > 0 for name in DIVERGENCE_WARNINGS)
 
 
 def _run_row(r: Any) -> Dict[str, Any]:

@@ -63,7 +63,7 @@ def assert_same_as_local(table, local) -> None:
     assert np.array_equal(table["box_final_speed"], np.array(speed))
     # The metric, rounded as metrics.json rounds it, agrees too (a second, independent route).
     assert np.array_equal(np.round(table["box_final_speed"], 6), [r.metrics["box_final_speed"] for r in local])
-    assert np.array_equal(table["shove_newtons"], [r.shove.newtons for r in local])
+    assert np.array_equal(table["shove_force_y"], [r.shove.force_y for r in local])
     assert table["warning_mjWARN_BADQACC"].sum() == sum(w.count for r in local for w in r.warnings
                                                          if w.name == "mjWARN_BADQACC")
 
@@ -72,10 +72,13 @@ def test_a_local_cluster_gives_the_bits_of_a_local_batch(client, local):
     seen = []
     table = simloop.run_batch(SEEDS, TIMESTEPS, steps=STEPS, executor=client, chunk_size=7,
                               progress=lambda done, total: seen.append((done, total)))
-    assert isinstance(table, distributed.MetricsTable)
+    assert isinstance(table, simloop.BatchTable)
     assert_same_as_local(table, local)
     assert seen[-1] == (60, 60) and len(seen) == 9  # one call per chunk of 7 (the last has 4)
     assert table.to_arrow().num_rows == 60 and list(table.to_pandas().columns) == table.column_names
+    # The whole table is a local metrics-only batch's, column for column, bit for bit.
+    alone = simloop.run_batch(SEEDS, TIMESTEPS, steps=STEPS, metrics_only=True)
+    assert simloop.BatchTable({k: v for k, v in table.columns.items() if k != "run"}) == alone
 
 
 def test_scenario_batches_and_sweeps_on_a_cluster_are_the_local_bits(client):
@@ -86,7 +89,7 @@ def test_scenario_batches_and_sweeps_on_a_cluster_are_the_local_bits(client):
         for axis in "xyz":
             assert np.array_equal(table[f"{body}_final_pos_{axis}"],
                                   [r.column(f"{body}_{axis}")[-1] for r in local])
-    assert np.array_equal(table["disturbance0_force_y"], [r.disturbances[0]["force"][1] for r in local])
+    assert np.array_equal(table["disturbance0_fy"], [r.disturbances[0]["force"][1] for r in local])
     assert np.array_equal(table["steps"], [r.steps for r in local])
 
     timesteps = [0.004, 0.001, 0.05, 0.002, 0.004]
@@ -221,7 +224,7 @@ def test_the_batch_command_writes_one_row_per_run_of_the_grid(tmp_path):
                   tmp_path)
     assert plain.returncode == 0, plain.stderr
     plain_table = pq.read_table(tmp_path / "plain.parquet").to_pydict()
-    for name in ("box_final_pos_x", "box_final_pos_y", "box_final_speed", "disturbance0_force_y"):
+    for name in ("box_final_pos_x", "box_final_pos_y", "box_final_speed", "disturbance0_fy"):
         assert table[name][28:42] == plain_table[name]  # friction 1.0, mass 0.5
 
 
