@@ -204,3 +204,20 @@ def test_keyword_scenarios_refuse_odd_values_in_one_line_naming_them():
         simloop.run_scenario(simloop.Scenario(scene=pusht, disturbances=[dict(body="t\U0001F600", force=[0, 1, 0])]))
     with pytest.raises(ValueError, match="^scene must be text"):
         simloop.Scenario(scene="tests/\udcffx.xml")
+
+
+@pytest.mark.parametrize("seed, rng, timestep", [(0, "mt19937_64", None), (7, "numpy", None), (3, "mt19937_64", 0.05)])
+def test_the_chapters_scenario_is_the_chapters_run_bit_for_bit(seed, rng, timestep):
+    # Scenario.chapter() as data reproduces the chapter's run: the same inputs
+    # and the same states at every step (the chapter's files keep their own
+    # columns and metrics, written by its own loop).
+    chapter = simloop.run(seed=seed, rng=rng, timestep=0.002 if timestep is None else timestep)
+    scenario = simloop.run_scenario(simloop.Scenario.chapter(), seed=seed, rng=rng, timestep=timestep)
+    pairs = {"ctrl": "push_motor_ctrl", "shove_x": "box_fx", "shove_y": "box_fy", "shove_z": "box_fz",
+             "pusher_x": "pusher_slide_pos", "pusher_vx": "pusher_slide_vel"}
+    for axis in ("x", "y", "z", "vx", "vy", "vz"):
+        pairs["box_" + axis] = "box_" + axis
+    for ours, theirs in pairs.items():
+        assert np.array_equal(chapter.column(ours), scenario.column(theirs), equal_nan=True), ours
+    assert chapter.metrics["box_final_pos"] == scenario.metrics["bodies"]["box"]["final_pos"]
+    assert [w.name for w in chapter.warnings] == [w.name for w in scenario.warnings]
