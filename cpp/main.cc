@@ -482,6 +482,16 @@ int run_main(int argc, char** argv) {
   // From here on a file may exist that must go (the output directory's
   // probe, then the temporary outputs): a signal only requests a stop.
   g_exit_at_once = 0;
+  // A folder this run makes goes again if the run leaves nothing in it (a
+  // failed or interrupted run): remove() takes only an empty directory.
+  std::error_code out_check;
+  struct RemoveIfLeftEmpty {
+    std::filesystem::path dir;
+    ~RemoveIfLeftEmpty() {
+      std::error_code ignored;
+      if (!dir.empty()) std::filesystem::remove(dir, ignored);
+    }
+  } made{std::filesystem::exists(opts.out, out_check) ? std::filesystem::path() : opts.out};
   try {
     simloop::prepare_output_dir(opts.out);
   } catch (const std::exception& e) {

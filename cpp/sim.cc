@@ -66,6 +66,7 @@ std::string listing(const mjModel* m, mjtObj type, std::vector<std::string>& nam
       ++unnamed;
     }
   }
+  if (count == 0) return std::string("the scene has no ") + kind_of(type).many;
   std::string out = std::string("the scene's ") + kind_of(type).many + ": ";
   if (names.empty()) out += "(none named)";
   for (std::size_t i = 0; i < names.size(); ++i) out += (i ? ", " : "") + names[i];

@@ -339,11 +339,26 @@ def _main(argv: Optional[List[str]]) -> int:
     except (OSError, ValueError) as e:
         return _fail(EXIT_USAGE, str(e))
     out = Path(opts.out)
+    made = not out.exists()  # a folder this run makes goes again if the run leaves nothing in it
     try:
         _core.prepare_output_dir(out)
     except OSError as e:
         return _fail(EXIT_USAGE, f"--out: {e}")
+    try:
+        return _run_into(opts, model, scenario, out, started, args)
+    finally:
+        if made:
+            try:
+                out.rmdir()  # only when empty
+            except OSError:
+                pass
 
+
+def _run_into(opts: "_core.CommandLine", model: "_core.Model", scenario: "Optional[_core.Scenario]", out: Path,
+              started: float, args: List[str]) -> int:
+    """The run, scenario or sweep into the prepared folder `out`."""
+    global _outputs_written
+    from . import _core
     if opts.command == "sweep":
         try:
             _sweep(opts, model, out, scenario)

@@ -174,6 +174,15 @@ def _config(seed: object, steps: object, timestep: object, perturb: object, smok
     )
 
 
+def _check_no_control_every(control_every: object) -> None:
+    """control_every without a policy: there is nothing to decide, so a value
+    other than the default would be silently ignored."""
+    _check_int("control_every", control_every, 1, MAX_STEPS)
+    if control_every != 1:
+        raise ValueError(f"control_every={_show(control_every)} needs a policy (policy=f): without one the run "
+                         "follows the scenario's controls")
+
+
 def _check_progress(progress: object) -> Progress:
     if progress is not None and not callable(progress):
         raise TypeError(f"progress must be None or a callable progress(steps_done, steps_total), got {_describe(progress)}")
@@ -232,7 +241,7 @@ def run(seed: int = 0, steps: int = 2000, timestep: float = 0.002, perturb: bool
     config = _config(seed, steps, timestep, perturb, smoke, record_every, audit_energy, rng)
     if policy is not None:
         return _run_chapter_with_policy(config, model, progress, policy, control_every)
-    _check_int("control_every", control_every, 1, MAX_STEPS)
+    _check_no_control_every(control_every)
     return _core.run(load_model(model), config, progress=_check_progress(progress))
 
 
@@ -587,6 +596,10 @@ class Sim:
     @ctrl.setter
     def ctrl(self, value) -> None:
         if isinstance(value, numbers.Real) and not isinstance(value, bool):
+            nu = self.model.nu
+            if nu != 1:  # one number for several actuators would set only the first
+                raise ValueError(f"ctrl must be {nu} numbers, one per actuator (a single number is for a scene "
+                                 f"with one actuator, as the chapter's), got {_show(value)}")
             number = _check_real("ctrl", value)
             if not math.isfinite(number):
                 raise ValueError(f"ctrl must be finite, got {number!r}")
@@ -729,6 +742,9 @@ class Sim:
         size = sum(n for _, n in self.state_layout())
         if state.shape != (size,):
             raise ValueError(f"state must have shape ({size},) for this model, got shape {state.shape}")
+        bad = np.flatnonzero(~np.isfinite(state))
+        if bad.size:
+            raise ValueError(f"state must be finite, got {float(state[bad[0]])!r} at index {int(bad[0])}")
         self._sim.set_state(np.ascontiguousarray(state))
 
     def state_layout(self) -> "list[tuple[str, int]]":

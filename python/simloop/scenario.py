@@ -24,7 +24,7 @@ import os
 from typing import TYPE_CHECKING, Any, Callable, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple, Union
 
 from . import _core
-from ._api import (Progress, _check_bool, _sequence, _check_int, _check_progress, _check_timestep, _describe,
+from ._api import (Progress, _check_bool, _check_no_control_every, _sequence, _check_int, _check_progress, _check_timestep, _describe,
                    _show, _U64_MAX, RNGS)
 
 if TYPE_CHECKING:  # numpy and the tables load when used: `import simloop` stays quick
@@ -277,6 +277,13 @@ class Observation:
         return tuple(self._index)
 
     def __getitem__(self, name: str) -> float:
+        if name not in self._index:
+            import difflib
+
+            close = difflib.get_close_matches(str(name), list(self._index), n=1)
+            hint = f" (did you mean {close[0]!r}?)" if close else ""
+            raise KeyError(f"no observed quantity named {name!r}{hint}; the observation has: "
+                           + ", ".join(self._index))
         return float(self.values[self._index[name]])
 
     def __repr__(self) -> str:
@@ -289,7 +296,9 @@ Policy = Callable[[Observation], Any]
 def _with_decision_step(error: BaseException, step: int) -> None:
     """Names the decision step in the message of an exception a policy raised."""
     where = f"(policy at decision step {step})"
-    if len(error.args) == 1 and isinstance(error.args[0], str):
+    if isinstance(error, KeyError) and hasattr(error, "add_note"):  # its message is the key itself: keep it
+        error.add_note(where)
+    elif len(error.args) == 1 and isinstance(error.args[0], str):
         error.args = (f"{error.args[0]} {where}",)
     elif not error.args:
         error.args = (where,)
@@ -301,6 +310,8 @@ def _ctrl(value: object, nu: int, step: int) -> "np.ndarray":
     import numpy as np
 
     shape = f"{nu} ctrl values (shape ({nu},){', or a number' if nu == 1 else ''})"
+    if value is None or isinstance(value, (str, bytes)) or np.asarray(value).dtype.kind not in "iuf":
+        raise ValueError(f"the policy must return {shape}, got {_describe(value)} at decision step {step}")
     try:
         ctrl = np.asarray(value, dtype=np.float64)
     except (TypeError, ValueError):
@@ -397,7 +408,7 @@ def run_scenario(scenario: Union[Scenario, str, "os.PathLike[str]"], *, seed: in
         decide, every = _decider(policy, control_every, scene, scenario, config)
         return _core.run_scenario_policy(scene, scenario._core, config, decide, every,
                                          progress=_check_progress(progress))
-    _check_int("control_every", control_every, 1, _core.MAX_STEPS)
+    _check_no_control_every(control_every)
     if own is None and start is None:
         return _core.run_scenario(scene, scenario._core, config, progress=_check_progress(progress))
     return _core.run_scenario_with_inputs(scene, scenario._core, config, own, start,
@@ -478,7 +489,7 @@ def run_scenario_batch(scenario: Union[Scenario, str, "os.PathLike[str]"], seeds
         decide, decide_every = _decider(policy, control_every, scene, scenario, configs[0])
         return _core.run_scenario_batch_policy(scene, scenario._core, configs, workers, decide, decide_every,
                                                progress=_check_progress(progress))
-    _check_int("control_every", control_every, 1, _core.MAX_STEPS)
+    _check_no_control_every(control_every)
     own = _inputs_array("controls", controls, (2, 3), "shaped (runs, steps, nu) or (steps, nu)")
     start = _inputs_array("initial_state", initial_state, (1, 2), "shaped (runs, state_size) or (state_size,)")
     for name, array, ndim in (("controls", own, 3), ("initial_state", start, 2)):
