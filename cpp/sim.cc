@@ -129,7 +129,8 @@ int Sim::checked_index(mjtObj type, long long index) const {
   if (index >= 0 && index < count) return static_cast<int>(index);
   std::vector<std::string> names;
   throw InvalidArgument(std::string(kind_of(type).one) + " index " + std::to_string(index) +
-                        " is out of range: the scene has " + std::to_string(count) + " " + kind_of(type).many +
+                        " is out of range: the scene has " + std::to_string(count) + " " +
+                        (count == 1 ? kind_of(type).one : kind_of(type).many) +
                         (count > 0 ? "; " + listing(m, type, names) : std::string()));
 }
 

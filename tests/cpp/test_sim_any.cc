@@ -56,7 +56,7 @@ TEST(SimAny, UnknownNamesListWhatTheSceneHasWithALikelyFix) {
   EXPECT_EQ(message_of([&] { (void)sim.id(mjOBJ_BODY, "torsoo"); }),
             "no body named 'torsoo' (did you mean 'torso'?); the scene's bodies: world, torso, thigh_left, "
             "shin_left, thigh_right, shin_right");
-  EXPECT_EQ(message_of([&] { (void)sim.id(mjOBJ_KEY, "stand"); }), "no keyframe named 'stand'; the scene's keyframes: (none named)");
+  EXPECT_EQ(message_of([&] { (void)sim.id(mjOBJ_KEY, "stand"); }), "no keyframe named 'stand'; the scene has no keyframes");
   EXPECT_NE(message_of([&] { (void)sim.checked_index(mjOBJ_ACTUATOR, 4); })
                 .find("actuator index 4 is out of range: the scene has 4 actuators"),
             std::string::npos);
@@ -131,7 +131,7 @@ TEST(SimAny, ResetsToAKeyframe) {
   EXPECT_EQ(sim.data()->qpos[2], 3.0);
   EXPECT_EQ(sim.time(), 0.0);
   EXPECT_EQ(sim.steps_taken(), 0);
-  EXPECT_NE(message_of([&] { sim.reset_to_keyframe(1); }).find("keyframe index 1 is out of range: the scene has 1 keyframes; the scene's keyframes: high"),
+  EXPECT_NE(message_of([&] { sim.reset_to_keyframe(1); }).find("keyframe index 1 is out of range: the scene has 1 keyframe; the scene's keyframes: high"),
             std::string::npos);
 }
 
