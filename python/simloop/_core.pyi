@@ -6,7 +6,7 @@
 # naming what is missing or different.
 import os
 from pathlib import Path
-from typing import Any, Callable, Final, Literal, Optional, Sequence, TypedDict, Union
+from typing import Any, Callable, Final, Literal, Optional, Protocol, Sequence, TypedDict, Union
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -38,6 +38,13 @@ WARNING_NAMES: Final[tuple[str, ...]]
 SCENARIO_SWEEP_TOLERANCE: Final[float]
 # What the bindings read as a float64 array (copied or converted).
 _ArrayLike = ArrayLike
+# run_scenario_to_files's drawing (scenario_recording.ScenarioRecording): the
+# trajectory's column names once, then blocks of rows (each row the columns,
+# then x y z qw qx qy qz per moving body).
+class _Drawing(Protocol):
+    def columns(self, names: Sequence[str], /) -> object: ...
+    def rows(self, block: _Float64Array, /) -> object: ...
+
 # A policy: decide(observations) -> controls, called at the control rate.
 _Decide = Callable[..., Any]
 
@@ -334,7 +341,7 @@ def run_scenario_to_files(
     scenario: Scenario,
     config: ScenarioConfig,
     out: _PathLike,
-    drawing: Optional[Callable[..., Any]] = None,
+    drawing: Optional[_Drawing] = None,
     progress: _Progress = None,
 ) -> tuple[ScenarioResult, Path, Path]: ...
 def scenario_duration(scene: Model, scenario: Scenario) -> float: ...
