@@ -21,7 +21,7 @@ import math
 import numbers
 import os
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Callable, Dict, Iterable, List, Optional, Sequence, Tuple, Union, cast, overload
+from typing import TYPE_CHECKING, Any, Callable, Dict, Iterable, List, Literal, Optional, Sequence, Tuple, Union, cast, overload
 
 if TYPE_CHECKING:  # (importing numpy would cost every `import simloop` ~50 ms)
     import numpy as np
@@ -263,6 +263,31 @@ def _sequence(name: str, values: object) -> List[Any]:
     if isinstance(values, (str, bytes)) or not isinstance(values, Iterable):
         raise TypeError(f"{name} must be a sequence, got {_describe(values)}")
     return list(values)
+
+
+# Typed for the checker: full results unless metrics_only or an executor (then a BatchTable).
+@overload
+def run_batch(seeds: Iterable[int] = (0,), timesteps: Iterable[float] = (0.002,), *, steps: int = 2000,
+              perturb: bool = True, smoke: bool = False, model: ModelLike = None, record_every: int = 1,
+              audit_energy: bool = False, threads: Optional[int] = None, rng: str = "mt19937_64",
+              progress: Progress = None, metrics_only: Literal[False] = False, executor: None = None,
+              chunk_size: Optional[int] = None) -> List[RunResult]: ...
+
+
+@overload
+def run_batch(seeds: Iterable[int] = (0,), timesteps: Iterable[float] = (0.002,), *, steps: int = 2000,
+              perturb: bool = True, smoke: bool = False, model: ModelLike = None, record_every: int = 1,
+              audit_energy: bool = False, threads: Optional[int] = None, rng: str = "mt19937_64",
+              progress: Progress = None, metrics_only: Literal[True], executor: object = None,
+              chunk_size: Optional[int] = None) -> "BatchTable": ...
+
+
+@overload
+def run_batch(seeds: Iterable[int] = (0,), timesteps: Iterable[float] = (0.002,), *, steps: int = 2000,
+              perturb: bool = True, smoke: bool = False, model: ModelLike = None, record_every: int = 1,
+              audit_energy: bool = False, threads: Optional[int] = None, rng: str = "mt19937_64",
+              progress: Progress = None, metrics_only: bool = False, executor: object = None,
+              chunk_size: Optional[int] = None) -> "Union[List[RunResult], BatchTable]": ...
 
 
 def run_batch(seeds: Iterable[int] = (0,), timesteps: Iterable[float] = (0.002,), *, steps: int = 2000,
@@ -806,10 +831,25 @@ class Sim:
                 f"nq={model.nq} nv={model.nv} nu={model.nu} nbody={model.nbody}>")
 
 
+# Typed for the checker: the chapter's SweepResult, or a ScenarioSweepResult for scenario=.
+@overload
+def sweep(timesteps: Optional[Iterable[float]] = None, duration: Optional[float] = None,
+          threads: Optional[int] = None, model: ModelLike = None, *, scenario: None = None, seed: int = 0,
+          rng: str = "mt19937_64", perturb: bool = True, progress: Progress = None, executor: object = None,
+          chunk_size: Optional[int] = None) -> SweepResult: ...
+
+
+@overload
+def sweep(timesteps: Optional[Iterable[float]] = None, duration: Optional[float] = None,
+          threads: Optional[int] = None, model: ModelLike = None, *, scenario: object, seed: int = 0,
+          rng: str = "mt19937_64", perturb: bool = True, progress: Progress = None, executor: object = None,
+          chunk_size: Optional[int] = None) -> "_core.ScenarioSweepResult": ...
+
+
 def sweep(timesteps: Optional[Iterable[float]] = None, duration: Optional[float] = None,
           threads: Optional[int] = None, model: ModelLike = None, *, scenario: Any = None, seed: int = 0,
           rng: str = "mt19937_64", perturb: bool = True, progress: Progress = None, executor: object = None,
-          chunk_size: Optional[int] = None) -> Any:
+          chunk_size: Optional[int] = None) -> "Union[SweepResult, _core.ScenarioSweepResult]":
     """The baseline (no shove) at many timesteps over the same span of sim time.
 
     timesteps: None for the default: 25 round timesteps (1, 2, 3, 4, 5, 6 and
@@ -864,7 +904,7 @@ def sweep(timesteps: Optional[Iterable[float]] = None, duration: Optional[float]
 
 
 def _sweep_scenario(scenario: Any, timesteps: Optional[List[float]], duration: Optional[float], workers: int,
-                    model: Any, seed: int, rng: str, perturb: bool, progress: Progress) -> Any:
+                    model: Any, seed: int, rng: str, perturb: bool, progress: Progress) -> "_core.ScenarioSweepResult":
     """sweep(scenario=...): the arguments checked, then the C++ sweep."""
     from .scenario import _scenario_and_scene
 
