@@ -456,9 +456,10 @@ def _parse_numbers(flag: str, text: str) -> List[float]:
 
 def _parse_batch_args(args: List[str]) -> Dict[str, Any]:
     # Any: each option's own type (str, list of seeds, timesteps, parameters, bool, ...), checked as parsed.
-    opts: Dict[str, Any] = {"scenario": None, "seeds": [0], "timesteps": [None], "params": [], "steps": None, "rng": "mt19937_64",
-            "perturb": True, "scheduler": None, "threads": None, "chunk_size": None,
-            "out": "outputs/batch.parquet", "resume": False, "help": False}
+    opts: Dict[str, Any] = {
+        "scenario": None, "seeds": [0], "timesteps": [None], "params": [], "steps": None, "rng": "mt19937_64",
+        "perturb": True, "scheduler": None, "threads": None, "chunk_size": None,
+        "out": "outputs/batch.parquet", "resume": False, "help": False}
     with_value = {"--scenario", "--seeds", "--timestep", "--friction", "--mass", "--damping", "--steps", "--rng",
                   "--scheduler", "--threads", "--chunk-size", "--out"}
     i = 0

@@ -21,7 +21,8 @@ import math
 import numbers
 import os
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Callable, Dict, Iterable, List, Literal, Optional, Sequence, Tuple, Union, cast, overload
+from typing import (TYPE_CHECKING, Any, Callable, Dict, Iterable, List, Literal, Optional, Sequence, Tuple, Union, cast,
+                    overload)
 
 if TYPE_CHECKING:  # (importing numpy would cost every `import simloop` ~50 ms)
     import numpy as np

@@ -129,8 +129,8 @@ def run_chunk(job: Dict[str, Any], runs: Sequence[Run]) -> BatchTable:
         if job["kind"] == "chapter":
             model = _with_params(_scene(job["scene"]), params)
             # cast: the chapter's runs always have a timestep (run_batch_on); RunConfig checks it anyway.
-            configs = [_core.RunConfig(runs[i][1], job["steps"], cast(float, runs[i][2]), job["perturb"], job["smoke"], 1,
-                                       job["audit_energy"], job["rng"]) for i in members]
+            configs = [_core.RunConfig(runs[i][1], job["steps"], cast(float, runs[i][2]), job["perturb"], job["smoke"],
+                                       1, job["audit_energy"], job["rng"]) for i in members]
             out = _core.run_batch_metrics_only(model, configs, job["threads"])
         else:
             scenario, scene = _scenario(job["scenario"])

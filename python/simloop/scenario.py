@@ -21,7 +21,8 @@ import json
 import math
 import numbers
 import os
-from typing import TYPE_CHECKING, Any, Callable, Dict, Iterable, List, Literal, Mapping, Optional, Sequence, Tuple, Union, overload
+from typing import (TYPE_CHECKING, Any, Callable, Dict, Iterable, List, Literal, Mapping, Optional, Sequence, Tuple, Union,
+                    overload)
 
 from . import _core
 from ._api import (Progress, _check_bool, _sequence, _check_int, _check_progress, _check_timestep, _describe,
