@@ -15,12 +15,13 @@ import threading
 import time
 from pathlib import Path
 from types import FrameType
-from typing import TYPE_CHECKING, Any, List, NoReturn, Optional, TextIO
+from typing import TYPE_CHECKING, Any, Dict, List, NoReturn, Optional, TextIO, Union
 
 from .progress import progress_bar
 
 if TYPE_CHECKING:
     from . import _core
+    from .distributed import ParquetBatch
 
 PROGRAM = "sim-loop"
 EXIT_RUN_FAILED = 1
@@ -182,6 +183,7 @@ def _sweep(opts: "_core.CommandLine", model: "_core.Model", out: Path,
     from . import _core
 
     global _outputs_written
+    result: Union[_core.ScenarioSweepResult, _core.SweepResult]
     with progress_bar("sweeping") as progress:
         if scenario is not None:  # sweep --scenario, --body, --ctrl
             result = _core.sweep_scenario(model, scenario, opts.sweep_timesteps, opts.sweep_duration,
@@ -467,10 +469,12 @@ def _parse_numbers(flag: str, text: str) -> List[float]:
     return values
 
 
-def _parse_batch_args(args: List[str]) -> dict:
-    opts = {"scenario": None, "seeds": [0], "timesteps": [None], "params": [], "steps": None, "rng": "mt19937_64",
-            "perturb": True, "scheduler": None, "threads": None, "chunk_size": None,
-            "out": "outputs/batch.parquet", "resume": False, "help": False}
+def _parse_batch_args(args: List[str]) -> Dict[str, Any]:
+    # Any: each option's own type (str, list of seeds, timesteps, parameters, bool, ...), checked as parsed.
+    opts: Dict[str, Any] = {
+        "scenario": None, "seeds": [0], "timesteps": [None], "params": [], "steps": None, "rng": "mt19937_64",
+        "perturb": True, "scheduler": None, "threads": None, "chunk_size": None,
+        "out": "outputs/batch.parquet", "resume": False, "help": False}
     with_value = {"--scenario", "--seeds", "--timestep", "--friction", "--mass", "--damping", "--steps", "--rng",
                   "--scheduler", "--threads", "--chunk-size", "--out"}
     i = 0
@@ -612,7 +616,7 @@ def _batch_command(args: List[str]) -> int:
             client.close()
 
 
-def _run_batch(batch, client, earlier: int, started: float) -> int:
+def _run_batch(batch: "ParquetBatch", client: Any, earlier: int, started: float) -> int:
     from .distributed import VersionMismatch
 
     total = len(batch.runs)

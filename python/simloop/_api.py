@@ -21,7 +21,8 @@ import math
 import numbers
 import os
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Callable, Dict, Iterable, List, Optional, Sequence, Tuple, Union, overload
+from typing import (TYPE_CHECKING, Any, Callable, Dict, Iterable, List, Literal, Optional, Sequence, Tuple, Union, cast,
+                    overload)
 
 if TYPE_CHECKING:  # (importing numpy would cost every `import simloop` ~50 ms)
     import numpy as np
@@ -274,6 +275,31 @@ def _sequence(name: str, values: object) -> List[Any]:
     return list(values)
 
 
+# Typed for the checker: full results unless metrics_only or an executor (then a BatchTable).
+@overload
+def run_batch(seeds: Iterable[int] = (0,), timesteps: Iterable[float] = (0.002,), *, steps: int = 2000,
+              perturb: bool = True, smoke: bool = False, model: ModelLike = None, record_every: int = 1,
+              audit_energy: bool = False, threads: Optional[int] = None, rng: str = "mt19937_64",
+              progress: Progress = None, metrics_only: Literal[False] = False, executor: None = None,
+              chunk_size: Optional[int] = None) -> List[RunResult]: ...
+
+
+@overload
+def run_batch(seeds: Iterable[int] = (0,), timesteps: Iterable[float] = (0.002,), *, steps: int = 2000,
+              perturb: bool = True, smoke: bool = False, model: ModelLike = None, record_every: int = 1,
+              audit_energy: bool = False, threads: Optional[int] = None, rng: str = "mt19937_64",
+              progress: Progress = None, metrics_only: Literal[True], executor: object = None,
+              chunk_size: Optional[int] = None) -> "BatchTable": ...
+
+
+@overload
+def run_batch(seeds: Iterable[int] = (0,), timesteps: Iterable[float] = (0.002,), *, steps: int = 2000,
+              perturb: bool = True, smoke: bool = False, model: ModelLike = None, record_every: int = 1,
+              audit_energy: bool = False, threads: Optional[int] = None, rng: str = "mt19937_64",
+              progress: Progress = None, metrics_only: bool = False, executor: object = None,
+              chunk_size: Optional[int] = None) -> "Union[List[RunResult], BatchTable]": ...
+
+
 def run_batch(seeds: Iterable[int] = (0,), timesteps: Iterable[float] = (0.002,), *, steps: int = 2000,
               perturb: bool = True, smoke: bool = False, model: ModelLike = None, record_every: int = 1,
               audit_energy: bool = False, threads: Optional[int] = None, rng: str = "mt19937_64",
@@ -316,7 +342,7 @@ def run_batch(seeds: Iterable[int] = (0,), timesteps: Iterable[float] = (0.002,)
     return _core.run_batch(load_model(model), configs, workers, progress=_check_progress(progress))
 
 
-def _finite_vector(name: str, value: object, size: int, what: str) -> "Sequence[float]":
+def _finite_vector(name: str, value: object, size: int, what: str) -> "Union[Sequence[float], NDArray[np.float64]]":
     """A vector of `size` finite numbers from a sequence or a numeric numpy array;
     TypeError or ValueError naming `name`, its shape and the size wanted."""
     import numpy as np
@@ -337,7 +363,8 @@ def _finite_vector(name: str, value: object, size: int, what: str) -> "Sequence[
     bad = np.flatnonzero(~np.isfinite(array))
     if bad.size:
         raise ValueError(f"{name}[{bad[0]}] must be finite, got {float(array[bad[0]])!r}")
-    return array.tolist()
+    values: List[float] = array.tolist()
+    return values
 
 
 _JOINT_TYPES = ("free", "ball", "slide", "hinge")
@@ -354,7 +381,7 @@ class _Named:
         self.id = id
         self.name = name
 
-    def _info(self) -> dict:
+    def _info(self) -> Dict[str, Any]:
         return self._sim.model.object_info(self._kind, self.id)
 
     def __repr__(self) -> str:
@@ -373,33 +400,37 @@ class BodyView(_Named):
     _kind = "body"
 
     @property
-    def xpos(self):
+    def xpos(self) -> NDArray[np.float64]:
         """Position of the body's frame, world, m (a copy)."""
-        return self._sim._views["xpos"][self.id].copy()
+        xpos: NDArray[np.float64] = self._sim._views["xpos"][self.id].copy()
+        return xpos
 
     @property
-    def xquat(self):
+    def xquat(self) -> NDArray[np.float64]:
         """Orientation (w, x, y, z), world (a copy)."""
-        return self._sim._views["xquat"][self.id].copy()
+        xquat: NDArray[np.float64] = self._sim._views["xquat"][self.id].copy()
+        return xquat
 
     @property
-    def angular_velocity(self):
+    def angular_velocity(self) -> NDArray[np.float64]:
         """rad/s, world frame (from cvel, mj_objectVelocity)."""
         return self._sim._sim.body_velocity(self.id)[:3]
 
     @property
-    def linear_velocity(self):
+    def linear_velocity(self) -> NDArray[np.float64]:
         """m/s of the body's origin, world frame (from cvel, mj_objectVelocity)."""
         return self._sim._sim.body_velocity(self.id)[3:]
 
     @property
     def mass(self) -> float:
-        return self._info()["mass"]
+        mass: float = self._info()["mass"]
+        return mass
 
     @property
-    def xfrc_applied(self):
+    def xfrc_applied(self) -> NDArray[np.float64]:
         """(fx, fy, fz, tx, ty, tz) applied on this body: a writable view; it persists."""
-        return self._sim._views["xfrc_applied"][self.id]
+        row: NDArray[np.float64] = self._sim._views["xfrc_applied"][self.id]
+        return row
 
     def _details(self) -> str:
         return f" mass={self.mass!r}"
@@ -414,15 +445,16 @@ class JointView(_Named):
     @property
     def type(self) -> str:
         """'free', 'ball', 'slide' or 'hinge'."""
-        return self._info()["type"]
+        kind: str = self._info()["type"]
+        return kind
 
     @property
-    def qpos(self):
+    def qpos(self) -> NDArray[np.float64]:
         info = self._info()
         return self._sim._views["qpos"][info["qposadr"]:info["qposadr"] + info["nq"]]
 
     @property
-    def qvel(self):
+    def qvel(self) -> NDArray[np.float64]:
         info = self._info()
         return self._sim._views["qvel"][info["dofadr"]:info["dofadr"] + info["nv"]]
 
@@ -438,7 +470,7 @@ class ActuatorView(_Named):
     _kind = "actuator"
 
     @property
-    def ctrl(self):
+    def ctrl(self) -> NDArray[np.float64]:
         return self._sim._views["ctrl"][self.id:self.id + 1]
 
     @property
@@ -447,7 +479,7 @@ class ActuatorView(_Named):
         return float(self._sim._views["actuator_force"][self.id])
 
     @property
-    def ctrlrange(self) -> Optional[tuple]:
+    def ctrlrange(self) -> Optional[Tuple[float, float]]:
         """(low, high) MuJoCo clamps ctrl to, or None if unlimited."""
         info = self._info()
         return info["ctrlrange"] if info["ctrllimited"] else None
@@ -463,14 +495,14 @@ class SensorView(_Named):
     _kind = "sensor"
 
     @property
-    def data(self):
+    def data(self) -> NDArray[np.float64]:
         info = self._info()
         return self._sim._views["sensordata"][info["adr"]:info["adr"] + info["dim"]]
 
 
 def _view_property(name: str, doc: str, settable: bool = False) -> property:
     """A Sim property giving its view `name`; settable: assigning writes into the view (checked)."""
-    def get(self: "Sim"):
+    def get(self: "Sim") -> NDArray[np.float64]:
         return self._views[name]
 
     def set(self: "Sim", value: object) -> None:
@@ -534,7 +566,8 @@ class Sim:
             if timestep is None:
                 timestep = model.timestep
             model = model.model()
-        self._sim = _core.Sim(load_model(model))
+        # load_model checks what model is at runtime (TypeError naming it).
+        self._sim = _core.Sim(load_model(cast(ModelLike, model)))
         self._make_views()
         if timestep is not None:
             self.timestep = timestep
@@ -552,13 +585,13 @@ class Sim:
     def __copy__(self) -> "Sim":
         return Sim._wrapping(self._sim.copy())
 
-    def __deepcopy__(self, memo: dict) -> "Sim":
+    def __deepcopy__(self, memo: Dict[int, Any]) -> "Sim":
         return Sim._wrapping(self._sim.copy())
 
-    def __getstate__(self) -> dict:
+    def __getstate__(self) -> Dict[str, Any]:
         return {"sim": self._sim}
 
-    def __setstate__(self, state: dict) -> None:
+    def __setstate__(self, state: Dict[str, Any]) -> None:
         self._sim = state["sim"]
         self._make_views()
 
@@ -586,7 +619,7 @@ class Sim:
     qvel = _view_property("qvel", "Joint velocities (nv), a writable view.", settable=True)
 
     @property
-    def ctrl(self):
+    def ctrl(self) -> Union[float, NDArray[np.float64]]:
         """The chapter's scene: the motor command ctrl[0], a float (MuJoCo clamps it to
         [-1, 1]). Any other scene: every actuator's ctrl (nu), a writable view."""
         if self.model.has_chapter_layout:
@@ -594,7 +627,7 @@ class Sim:
         return self._views["ctrl"]
 
     @ctrl.setter
-    def ctrl(self, value) -> None:
+    def ctrl(self, value: object) -> None:
         if isinstance(value, numbers.Real) and not isinstance(value, bool):
             nu = self.model.nu
             if nu != 1:  # one number for several actuators would set only the first
@@ -622,7 +655,8 @@ class Sim:
             name = _check_text(kind, key)  # ValueError for text UTF-8 cannot hold
             if b"\0" in name:
                 raise ValueError(f"{kind} must not contain a NUL character, got {_show(key)}")
-            index = self._sim.id(kind, name)
+            # _check_text gives UTF-8 bytes, which pybind11's std::string takes as well as str.
+            index = self._sim.id(kind, name)  # type: ignore[arg-type]
         elif isinstance(key, numbers.Integral) and not isinstance(key, bool):
             number = int(key)
             if not -2**63 <= number < 2**63:
@@ -723,14 +757,14 @@ class Sim:
 
     # --- State.
 
-    def get_state(self):
+    def get_state(self) -> NDArray[np.float64]:
         """The full physics state as a flat float64 array (a copy): time, qpos,
         qvel, act, qacc_warmstart, ctrl, qfrc_applied, xfrc_applied, mocap_pos,
         mocap_quat, userdata (see state_layout()). set_state() of it continues
         bit for bit, in this Sim or another on the same model."""
         return self._sim.get_state()
 
-    def set_state(self, state) -> None:
+    def set_state(self, state: object) -> None:
         """Restores a state from get_state() (a float64 array of state_size values).
         steps_taken and warnings are left as they are."""
         import numpy as np
@@ -814,10 +848,25 @@ class Sim:
                 f"nq={model.nq} nv={model.nv} nu={model.nu} nbody={model.nbody}>")
 
 
+# Typed for the checker: the chapter's SweepResult, or a ScenarioSweepResult for scenario=.
+@overload
+def sweep(timesteps: Optional[Iterable[float]] = None, duration: Optional[float] = None,
+          threads: Optional[int] = None, model: ModelLike = None, *, scenario: None = None, seed: int = 0,
+          rng: str = "mt19937_64", perturb: bool = True, progress: Progress = None, executor: object = None,
+          chunk_size: Optional[int] = None) -> SweepResult: ...
+
+
+@overload
+def sweep(timesteps: Optional[Iterable[float]] = None, duration: Optional[float] = None,
+          threads: Optional[int] = None, model: ModelLike = None, *, scenario: object, seed: int = 0,
+          rng: str = "mt19937_64", perturb: bool = True, progress: Progress = None, executor: object = None,
+          chunk_size: Optional[int] = None) -> "_core.ScenarioSweepResult": ...
+
+
 def sweep(timesteps: Optional[Iterable[float]] = None, duration: Optional[float] = None,
           threads: Optional[int] = None, model: ModelLike = None, *, scenario: Any = None, seed: int = 0,
           rng: str = "mt19937_64", perturb: bool = True, progress: Progress = None, executor: object = None,
-          chunk_size: Optional[int] = None) -> Any:
+          chunk_size: Optional[int] = None) -> "Union[SweepResult, _core.ScenarioSweepResult]":
     """The baseline (no shove) at many timesteps over the same span of sim time.
 
     timesteps: None for the default: 25 round timesteps (1, 2, 3, 4, 5, 6 and
@@ -872,7 +921,7 @@ def sweep(timesteps: Optional[Iterable[float]] = None, duration: Optional[float]
 
 
 def _sweep_scenario(scenario: Any, timesteps: Optional[List[float]], duration: Optional[float], workers: int,
-                    model: Any, seed: int, rng: str, perturb: bool, progress: Progress) -> Any:
+                    model: Any, seed: int, rng: str, perturb: bool, progress: Progress) -> "_core.ScenarioSweepResult":
     """sweep(scenario=...): the arguments checked, then the C++ sweep."""
     from .scenario import _scenario_and_scene
 

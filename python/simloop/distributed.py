@@ -28,7 +28,7 @@ import math
 import os
 import socket
 import uuid
-from typing import Any, Callable, Dict, Iterable, Iterator, List, Optional, Sequence, Tuple
+from typing import Any, Callable, Dict, Iterable, Iterator, List, Optional, Sequence, Tuple, Union, cast
 
 import numpy as np
 
@@ -125,17 +125,20 @@ def run_chunk(job: Dict[str, Any], runs: Sequence[Run]) -> BatchTable:
         groups.setdefault(run[3], []).append(i)
     results: List[Any] = [None] * len(runs)
     for params, members in groups.items():
+        out: Union[List[_core.RunResult], List[_core.ScenarioResult]]
         if job["kind"] == "chapter":
             model = _with_params(_scene(job["scene"]), params)
-            configs = [_core.RunConfig(runs[i][1], job["steps"], runs[i][2], job["perturb"], job["smoke"], 1,
-                                       job["audit_energy"], job["rng"]) for i in members]
+            # cast: the chapter's runs always have a timestep (run_batch_on); RunConfig checks it anyway.
+            configs = [_core.RunConfig(runs[i][1], job["steps"], cast(float, runs[i][2]), job["perturb"], job["smoke"],
+                                       1, job["audit_energy"], job["rng"]) for i in members]
             out = _core.run_batch_metrics_only(model, configs, job["threads"])
         else:
             scenario, scene = _scenario(job["scenario"])
             model = _with_params(scene, params)
-            configs = [_core.ScenarioConfig(runs[i][1], job["rng"], runs[i][2], job["steps"], job["perturb"], 1)
-                       for i in members]
-            out = _core.run_scenario_batch_with_inputs(model, scenario, configs, job["threads"], None, None, False)
+            scenario_configs = [_core.ScenarioConfig(runs[i][1], job["rng"], runs[i][2], job["steps"], job["perturb"],
+                                                     1) for i in members]
+            out = _core.run_scenario_batch_with_inputs(model, scenario, scenario_configs, job["threads"], None, None,
+                                                       False)
         for i, result in zip(members, out):
             results[i] = result
     return metrics_table(runs, results)
@@ -167,7 +170,8 @@ class _Pool:
     with the C++ threads (and Ctrl-C is heard within a chunk of steps)."""
 
     def __init__(self, executor: object) -> None:
-        self.executor = executor
+        # Any: a dask.distributed Client (untyped), a concurrent.futures.Executor or None, told apart by self.dask.
+        self.executor: Any = executor
         self.dask = _is_dask_client(executor)
         self.token = uuid.uuid4().hex  # dask keys: unique to this batch
         if executor is not None and not self.dask and not isinstance(executor, concurrent.futures.Executor):
@@ -178,7 +182,8 @@ class _Pool:
         if self.executor is None:
             return 1
         if self.dask:
-            return max(1, sum(self.executor.nthreads().values()))
+            threads: int = max(1, sum(self.executor.nthreads().values()))
+            return threads
         return max(1, int(getattr(self.executor, "_max_workers", 0) or os.cpu_count() or 1))
 
     def check_workers(self) -> None:
@@ -198,7 +203,8 @@ class _Pool:
                 raise VersionMismatch(f"worker {address} has simloop {theirs[0]} ({theirs[1]}), the client simloop "
                                       f"{mine[0]} ({mine[1]}): install the same simloop on every machine")
 
-    def map_unordered(self, fn: Callable, tasks: Iterable[Tuple[int, tuple]], window: int) -> Iterator[Tuple[int, Any]]:
+    def map_unordered(self, fn: Callable[..., Any], tasks: Iterable[Tuple[int, Tuple[Any, ...]]],
+                      window: int) -> Iterator[Tuple[int, Any]]:
         """Yields (key, fn(*args)) as tasks finish, with at most `window` in flight."""
         tasks = iter(tasks)
         if self.executor is None:
@@ -208,6 +214,7 @@ class _Pool:
         if self.dask:
             from distributed import as_completed
         pending: Dict[Any, int] = {}
+        done: Iterable[Any]
         waiter = as_completed() if self.dask else None
         try:
             for key, args in itertools.islice(tasks, window):
@@ -233,7 +240,7 @@ class _Pool:
             for future in pending:
                 future.cancel()
 
-    def _submit(self, fn: Callable, key: int, args: tuple):
+    def _submit(self, fn: Callable[..., Any], key: int, args: Tuple[Any, ...]) -> Any:
         if self.dask:
             return self.executor.submit(fn, *args, pure=False, key=f"simloop-chunk-{self.token}-{key}")
         return self.executor.submit(fn, *args)
@@ -290,7 +297,7 @@ def _chunk_size(chunk_size: Optional[int]) -> Optional[int]:
 # ---- The API's executor= paths (arguments already checked by the callers) --
 
 def run_batch_on(executor: object, configs: Sequence["_core.RunConfig"], model: object, threads: Optional[int],
-                 chunk_size: Optional[int], progress) -> BatchTable:
+                 chunk_size: Optional[int], progress: Optional[Callable[[int, int], object]]) -> BatchTable:
     """simloop.run_batch(..., executor=...): configs as run_batch built them."""
     first = configs[0] if configs else None
     job = {"kind": "chapter", "scene": scene_source(model), "versions": versions(), "threads": _threads(threads),
@@ -303,7 +310,7 @@ def run_batch_on(executor: object, configs: Sequence["_core.RunConfig"], model: 
 
 def run_scenario_batch_on(executor: object, scenario: Any, seeds: Sequence[int], timesteps: Sequence[Optional[float]],
                           *, rng: str, steps: Optional[int], perturb: bool, threads: Optional[int],
-                          chunk_size: Optional[int], progress) -> BatchTable:
+                          chunk_size: Optional[int], progress: Optional[Callable[[int, int], object]]) -> BatchTable:
     """simloop.run_scenario_batch(..., executor=...)."""
     job = scenario_job(scenario, rng=rng, steps=steps, perturb=perturb, threads=_threads(threads))
     runs = [(i, s, t, ()) for i, (s, t) in enumerate(itertools.product(seeds, timesteps))]
@@ -317,14 +324,14 @@ def scenario_job(scenario: Any, *, rng: str = "mt19937_64", steps: Optional[int]
 
 
 def _sweep_chunk(scene: Tuple[str, str], versions_expected: Sequence[str], timesteps: Sequence[float],
-                 duration: float, threads: int) -> List[tuple]:
+                 duration: float, threads: int) -> List[Tuple[Any, ...]]:
     _check_versions(versions_expected)
     result = _core.sweep(_scene(scene), list(timesteps), duration, threads)
     return [_core.sweep_point_fields(p) for p in result.points]
 
 
 def sweep_on(executor: object, timesteps: Sequence[float], duration: float, model: object, threads: Optional[int],
-             chunk_size: Optional[int], progress) -> "_core.SweepResult":
+             chunk_size: Optional[int], progress: Optional[Callable[[int, int], object]]) -> "_core.SweepResult":
     """simloop.sweep(..., executor=...): the same SweepResult as a local sweep,
     its timesteps run in chunks on the executor's workers."""
     ordered = sorted(set(timesteps))  # as the C++ sweep orders them: ascending, duplicates dropped
@@ -336,7 +343,7 @@ def sweep_on(executor: object, timesteps: Sequence[float], duration: float, mode
     source, count = scene_source(model), _threads(threads)
     ranges = chunk_ranges(len(ordered), size)
     tasks = ((k, (source, versions(), ordered[a:b], duration, count)) for k, (a, b) in enumerate(ranges))
-    points: Dict[int, List[tuple]] = {}
+    points: Dict[int, List[Tuple[Any, ...]]] = {}
     done = 0
     for key, fields in pool.map_unordered(_sweep_chunk, tasks, window=max(8, 4 * pool.workers())):
         points[key] = fields
@@ -431,7 +438,7 @@ class ParquetBatch:
         computed = 0
         directory = os.path.dirname(os.path.abspath(self.out))
         temporary = os.path.join(directory, f".{os.path.basename(self.out)}.tmp.{os.getpid()}")
-        writer = None
+        writer: Any = None  # a pyarrow.parquet.ParquetWriter once the first chunk is written
         written = 0  # chunks appended to the temporary file, in order
         try:
             def flush() -> None:

@@ -43,7 +43,7 @@ through the vector class.
 from __future__ import annotations
 
 import os
-from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union, cast
 
 import gymnasium
 import numpy as np
@@ -201,9 +201,11 @@ class ScenarioVectorEnv(VectorEnv):
         self._autoreset = np.zeros(self.num_envs, dtype=bool)
 
     def _reset_one(self, i: int, seed: Optional[int]) -> np.ndarray:
-        if seed is not None or self._rngs[i] is None:
-            self._rngs[i], _ = seeding.np_random(seed)  # as gymnasium.Env.reset seeds np_random
-        return self._setup.episodes.reset(i, _episode_seed(self._rngs[i], seed))[2:]
+        rng = self._rngs[i]
+        if seed is not None or rng is None:
+            rng, _ = seeding.np_random(seed)  # as gymnasium.Env.reset seeds np_random
+            self._rngs[i] = rng
+        return self._setup.episodes.reset(i, _episode_seed(rng, seed))[2:]
 
     def reset(self, *, seed: Union[int, Sequence[Optional[int]], None] = None,
               options: Optional[Dict[str, Any]] = None) -> Tuple[np.ndarray, Dict[str, Any]]:
@@ -215,7 +217,8 @@ class ScenarioVectorEnv(VectorEnv):
         elif isinstance(seed, (int, np.integer)) and not isinstance(seed, bool):
             seeds = [_check_int("seed", seed, 0, _U64_MAX - self.num_envs + 1) + i for i in range(self.num_envs)]
         else:
-            seeds = list(seed)
+            # (a bool is not iterable here: list() raises TypeError for it, as before)
+            seeds = list(cast(Sequence[Optional[int]], seed))
             if len(seeds) != self.num_envs:
                 raise ValueError(f"seed must be None, an int, or {self.num_envs} seeds, got {len(seeds)}")
         self._obs = np.stack([self._reset_one(i, s) for i, s in enumerate(seeds)])

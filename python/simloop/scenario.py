@@ -21,7 +21,8 @@ import json
 import math
 import numbers
 import os
-from typing import TYPE_CHECKING, Any, Callable, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple, Union
+from typing import (TYPE_CHECKING, Any, Callable, Dict, Iterable, List, Literal, Mapping, Optional, Sequence, Tuple, Union,
+                    overload)
 
 from . import _core
 from ._api import (Progress, _check_bool, _check_no_control_every, _sequence, _check_int, _check_progress, _check_timestep, _describe,
@@ -413,6 +414,40 @@ def run_scenario(scenario: Union[Scenario, str, "os.PathLike[str]"], *, seed: in
         return _core.run_scenario(scene, scenario._core, config, progress=_check_progress(progress))
     return _core.run_scenario_with_inputs(scene, scenario._core, config, own, start,
                                           progress=_check_progress(progress))
+
+
+# Typed for the checker: full results unless metrics_only or an executor (then a BatchTable).
+@overload
+def run_scenario_batch(scenario: Union[Scenario, str, "os.PathLike[str]"], seeds: Iterable[int] = (0,),
+                       timesteps: Iterable[Optional[float]] = (None,), *, rng: str = "mt19937_64",
+                       steps: Optional[int] = None, perturb: bool = True, record_every: int = 1,
+                       model: Optional[_core.Model] = None, threads: Optional[int] = None,
+                       progress: Progress = None, controls: Any = None, initial_state: Any = None,
+                       metrics_only: Literal[False] = False, executor: None = None, chunk_size: Optional[int] = None,
+                       policy: Optional[Policy] = None,
+                       control_every: int = 1) -> List[ScenarioResult]: ...
+
+
+@overload
+def run_scenario_batch(scenario: Union[Scenario, str, "os.PathLike[str]"], seeds: Iterable[int] = (0,),
+                       timesteps: Iterable[Optional[float]] = (None,), *, rng: str = "mt19937_64",
+                       steps: Optional[int] = None, perturb: bool = True, record_every: int = 1,
+                       model: Optional[_core.Model] = None, threads: Optional[int] = None,
+                       progress: Progress = None, controls: Any = None, initial_state: Any = None,
+                       metrics_only: Literal[True], executor: object = None, chunk_size: Optional[int] = None,
+                       policy: Optional[Policy] = None,
+                       control_every: int = 1) -> BatchTable: ...
+
+
+@overload
+def run_scenario_batch(scenario: Union[Scenario, str, "os.PathLike[str]"], seeds: Iterable[int] = (0,),
+                       timesteps: Iterable[Optional[float]] = (None,), *, rng: str = "mt19937_64",
+                       steps: Optional[int] = None, perturb: bool = True, record_every: int = 1,
+                       model: Optional[_core.Model] = None, threads: Optional[int] = None,
+                       progress: Progress = None, controls: Any = None, initial_state: Any = None,
+                       metrics_only: bool = False, executor: object = None, chunk_size: Optional[int] = None,
+                       policy: Optional[Policy] = None,
+                       control_every: int = 1) -> Union[List[ScenarioResult], BatchTable]: ...
 
 
 def run_scenario_batch(scenario: Union[Scenario, str, "os.PathLike[str]"], seeds: Iterable[int] = (0,),

@@ -88,7 +88,8 @@ class ScenarioRecording:
         self._pending: list = []
         self._pending_rows = 0
         run_id = uuid.uuid5(uuid.NAMESPACE_URL, "simloop-scenario:" + run_key)
-        self._rec = rr.RecordingStream(APPLICATION_ID, recording_id=str(run_id), send_properties=False)
+        # Any: None once closed (close() checks), a RecordingStream until then.
+        self._rec: Any = rr.RecordingStream(APPLICATION_ID, recording_id=str(run_id), send_properties=False)
         blueprint = rrb.Blueprint(
             rrb.Horizontal(rrb.Spatial3DView(name="the scene", origin="/world"),
                            rrb.TimeSeriesView(name="what was recorded", origin="/plots"), column_shares=[3, 2]),

@@ -101,7 +101,7 @@ class BatchTable:
         shown = ", ".join(names[:6]) + (f", ... ({len(names)} columns)" if len(names) > 6 else "")
         return f"BatchTable(rows={self._rows}, columns=[{shown}])"
 
-    def to_dict(self) -> Dict[str, list]:
+    def to_dict(self) -> Dict[str, List[Any]]:
         return {name: values.tolist() for name, values in self._columns.items()}
 
     def to_pandas(self) -> Any:
@@ -267,8 +267,9 @@ def _install() -> None:
 
     sweep_to_pandas.__doc__ = "A pandas.DataFrame: one row per timestep (see simloop.tables)."
     sweep_to_arrow.__doc__ = "A pyarrow.Table: one row per timestep (see simloop.tables)."
-    _core.SweepResult.to_pandas = sweep_to_pandas
-    _core.SweepResult.to_arrow = sweep_to_arrow
+    # setattr: the stub declares both as SweepResult's methods (mypy refuses assigning to a method).
+    setattr(_core.SweepResult, "to_pandas", sweep_to_pandas)
+    setattr(_core.SweepResult, "to_arrow", sweep_to_arrow)
 
 
 _install()

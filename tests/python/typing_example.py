@@ -7,6 +7,7 @@ asserts are also what the calls return (the isinstance checks).
 
 from __future__ import annotations
 
+import copy
 from pathlib import Path
 from typing import Any, Dict, List, Optional, Tuple
 
@@ -15,6 +16,7 @@ from numpy.typing import NDArray
 from typing_extensions import assert_type
 
 import simloop
+import simloop.gym
 
 result = simloop.run(seed=1, steps=300, audit_energy=True, progress=lambda done, total: None)
 assert_type(result, simloop.RunResult)
@@ -83,3 +85,41 @@ assert isinstance(sweep.points[0].stable, bool)
 
 def write_where(out: Path) -> Tuple[Path, Path]:
     return result.write(out)
+
+
+# ---- Sim on any scene, state, policies, metrics-only batches, Gymnasium ----
+
+pusht = simloop.Scenario.from_file(simloop.gym.PUSHT_SCENARIO)
+scene_sim = simloop.Sim(pusht)
+assert_type(scene_sim.model, simloop.Model)
+assert_type(scene_sim.state_layout(), List[Tuple[str, int]])
+state = scene_sim.get_state()
+assert_type(state, NDArray[np.float64])
+scene_sim.step(20)
+scene_sim.set_state(state)
+assert np.array_equal(scene_sim.get_state(), state)
+assert_type(scene_sim.body(0).mass, float)
+assert_type(copy.copy(scene_sim), simloop.Sim)
+
+
+def hold(observation: simloop.Observation) -> List[float]:
+    return [0.25]
+
+
+policy_result = simloop.run_scenario(scenario, seed=1, steps=100, policy=hold, control_every=10)
+assert_type(policy_result, simloop.ScenarioResult)
+assert_type(policy_result.final_state, NDArray[np.float64])
+
+table = simloop.run_scenario_batch(scenario, seeds=[0, 1], steps=50, metrics_only=True, threads=1)
+assert_type(table, simloop.BatchTable)
+assert isinstance(table, simloop.BatchTable)
+assert_type(table.to_dict(), Dict[str, List[Any]])
+
+
+env = simloop.gym.chapter_env()
+env_observation, env_info = env.reset(seed=0)
+assert_type(env_observation, NDArray[Any])
+assert_type(env_info, Dict[str, Any])
+_step_observation, reward, terminated, truncated, _step_info = env.step(np.zeros(1))
+assert_type(reward, float)
+assert isinstance(reward, float) and isinstance(terminated, bool)

@@ -5,7 +5,9 @@ from __future__ import annotations
 
 import simloop
 
-result = simloop.run(seed="0")  # error: arg-type
+# run is overloaded (a policy makes it a scenario run), so a wrong argument matches no overload.
+simloop.run(seed="0")  # error: call-overload
+result = simloop.run(seed=0)
 drift: str = result.metrics["lateral_drift"]  # error: assignment
 result.metrics["no_such_metric"]  # error: typeddict-item
 rows: str = result.rows  # error: assignment
