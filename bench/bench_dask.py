@@ -3,8 +3,7 @@
     .venv/bin/python bench/bench_dask.py [--runs 10000] [--rounds 3]
 
 Each round runs, each in a fresh process (so peak memory is that case's own):
-  local: simloop.run_batch(range(RUNS), threads=2, record_every=2000) (the
-         first and final rows only: metrics-only until a metrics mode exists);
+  local: simloop.run_batch(range(RUNS), threads=2, metrics_only=True);
   dask:  the same runs with executor= a LocalCluster of 2 worker processes x
          1 thread (scheduler in the client's process), default chunks.
   dask-quiet: the same with the workers' statistical profiler off.
@@ -36,9 +35,9 @@ CASE = textwrap.dedent("""
     workers_cpu = 0.0
     if case == "local":
         started, cpu = time.perf_counter(), time.process_time()
-        results = simloop.run_batch(range(runs), threads=2, record_every=2000)
+        table = simloop.run_batch(range(runs), threads=2, metrics_only=True)
         wall, cpu = time.perf_counter() - started, time.process_time() - cpu
-        final_x = np.array([r.trajectory[-1][6] for r in results])
+        final_x = table["box_final_pos_x"]
     else:
         import dask, psutil
         from distributed import Client, LocalCluster
