@@ -10,6 +10,26 @@ from pathlib import Path
 
 import pytest
 
+
+def _why_no_worker_processes() -> str:
+    """'' if this machine lets Python's multiprocessing make the POSIX
+    semaphores every worker process (ProcessPoolExecutor, a Dask nanny)
+    needs; else why not. A chroot that does not mount /dev/shm, for one,
+    refuses them to every user but root: such a machine cannot run worker
+    processes at all, so the tests that start them are skipped, saying so."""
+    import multiprocessing
+
+    try:
+        multiprocessing.get_context("spawn").Lock()
+    except OSError as e:
+        return f"this machine cannot make the semaphores worker processes need ({e}; is /dev/shm mounted and writable?)"
+    return ""
+
+
+NO_WORKER_PROCESSES = _why_no_worker_processes()
+# For tests that start worker processes.
+needs_worker_processes = pytest.mark.skipif(bool(NO_WORKER_PROCESSES), reason=NO_WORKER_PROCESSES)
+
 ROOT = Path(__file__).resolve().parents[2]
 
 

@@ -26,7 +26,7 @@ import pytest
 import simloop
 from simloop import _core, distributed
 
-from conftest import ROOT, run_python
+from conftest import NO_WORKER_PROCESSES, ROOT, run_python
 
 SEEDS = range(30)
 TIMESTEPS = [0.002, 0.004]
@@ -42,6 +42,9 @@ def local():
 @pytest.fixture(scope="module")
 def client():
     from distributed import Client, LocalCluster
+
+    if NO_WORKER_PROCESSES:
+        pytest.skip(NO_WORKER_PROCESSES)
 
     with LocalCluster(n_workers=2, processes=True, threads_per_worker=1, dashboard_address=None) as cluster:
         with Client(cluster) as c:
@@ -130,10 +133,12 @@ def test_a_worker_of_another_version_is_refused_before_any_work(client, monkeypa
 
 
 def test_concurrent_futures_executors(local):
-    with ProcessPoolExecutor(2, mp_context=multiprocessing.get_context("spawn")) as pool:
-        assert_same_as_local(simloop.run_batch(SEEDS, TIMESTEPS, steps=STEPS, executor=pool, chunk_size=16), local)
     with ThreadPoolExecutor(3) as pool:
         assert_same_as_local(simloop.run_batch(SEEDS, TIMESTEPS, steps=STEPS, executor=pool), local)
+    if NO_WORKER_PROCESSES:
+        pytest.skip(NO_WORKER_PROCESSES)
+    with ProcessPoolExecutor(2, mp_context=multiprocessing.get_context("spawn")) as pool:
+        assert_same_as_local(simloop.run_batch(SEEDS, TIMESTEPS, steps=STEPS, executor=pool, chunk_size=16), local)
 
 
 def test_dask_is_imported_only_for_a_dask_client():
@@ -329,6 +334,8 @@ def wait_for_port(port: int, process: subprocess.Popen, timeout: float = 60) -> 
 
 @pytest.fixture
 def dask_cluster(tmp_path):
+    if NO_WORKER_PROCESSES:
+        pytest.skip(NO_WORKER_PROCESSES)
     """`dask scheduler` and two `dask worker` processes on 127.0.0.1, each in
     its own process group, all stopped (and their children) afterwards."""
     dask = Path(sys.executable).with_name("dask")

@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 import simloop
+from conftest import needs_worker_processes
 
 SCENES = Path(__file__).resolve().parents[1] / "scenes"
 
@@ -84,6 +85,7 @@ def test_results_pickle_field_by_field():
     assert again.final_state.size > 0
 
 
+@needs_worker_processes
 def test_results_come_back_from_worker_processes():
     spawn = multiprocessing.get_context("spawn")
     sim = simloop.Sim(SCENES / "pusht.xml")
