@@ -107,8 +107,8 @@ inline constexpr double kScenarioSweepTolerance = 0.10;
 struct ScenarioSweepPoint {
   double timestep = 0.0;
   std::int64_t steps = 0;
-  int mujoco_warnings = 0;   // MuJoCo's warnings raised, all kinds
-  int diverged = 0;          // simloop_DIVERGED raised
+  std::int64_t mujoco_warnings = 0;  // MuJoCo's warnings raised, all kinds
+  std::int64_t diverged = 0;         // simloop_DIVERGED raised
   double peak_speed = 0.0;   // largest linear speed of any recorded body over the run, m/s
   std::vector<std::array<double, 3>> final_positions;  // per recorded body (ScenarioSweepResult::bodies), m
   std::vector<double> offsets;  // each one's distance from the reference's final position, m
