@@ -47,7 +47,7 @@ struct Episodes::Impl {
     mjData* d = e.data.get();
     detail::mujoco_call([&] {
       if (e.step < e.schedule.steps) e.inputs->write(e.step, d);
-      forward_keeping_warmstart(m, d);
+      forward_keeping_state(m, d);
     });
     recorder->before_step(observation, e.step, m, d, true);
     recorder->after_step(observation, m, d);

@@ -275,7 +275,7 @@ ScenarioRunResult detail::run_schedule_counted_elsewhere(const mjModel* m, mjDat
   detail::mujoco_call([&] {
     mj_resetData(m, d);
     if (inputs.initial_state) {
-      set_state(m, d, inputs.initial_state);  // forward, keeping the state's own warmstart
+      set_state(m, d, inputs.initial_state);  // forward, keeping the state as given
     } else {
       mj_forward(m, d);
     }
@@ -286,7 +286,7 @@ ScenarioRunResult detail::run_schedule_counted_elsewhere(const mjModel* m, mjDat
       // Outside MuJoCo's guard: the policy may throw (a Python exception).
       detail::mujoco_call([&] {
         scheduled.write(step, d);
-        forward_keeping_warmstart(m, d);
+        forward_keeping_state(m, d);
       });
       recorder.before_step(observation.data(), step, m, d, true);
       recorder.after_step(observation.data(), m, d);

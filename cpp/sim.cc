@@ -192,7 +192,7 @@ void Sim::clear_forces() noexcept {
 void Sim::forward() {
   const mjModel* m = model_.get();
   mjData* d = data_.get();
-  detail::mujoco_call([&] { forward_keeping_warmstart(m, d); });
+  detail::mujoco_call([&] { forward_keeping_state(m, d); });
 }
 
 std::vector<double> Sim::state() const { return get_state(model_.get(), data_.get()); }

@@ -67,10 +67,10 @@ void put_state(const mjModel* m, mjData* d, const double* state) noexcept {
 
 void set_state(const mjModel* m, mjData* d, const double* state) {
   put_state(m, d, state);
-  forward_keeping_warmstart(m, d);
+  forward_keeping_state(m, d);
 }
 
-void forward_keeping_warmstart(const mjModel* m, mjData* d) {
+void forward_keeping_state(const mjModel* m, mjData* d) {
   // MuJoCo 2.2's mj_forward leaves its solution in qacc_warmstart, where the
   // next mj_step's solver starts, and normalizes the quaternions of free and
   // ball joints in qpos in place; normalizing is not idempotent in the last

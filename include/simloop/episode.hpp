@@ -8,7 +8,7 @@
 // into ctrl and takes `every` physics steps. An episode stepped with the
 // actions a Policy would have returned follows the bits of run_schedule with
 // that policy: the same inputs, the same observations (the recorder's row
-// for the state entering the next decision, from forward_keeping_warmstart).
+// for the state entering the next decision, from forward_keeping_state).
 #pragma once
 
 #include <cstddef>

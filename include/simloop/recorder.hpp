@@ -125,7 +125,7 @@ class ScheduledInputs {
 //
 // The observation is the recorder's row for the state entering the decision
 // step (Recorder's columns, step and time first), computed before the
-// decision: its derived quantities come from forward_keeping_warmstart
+// decision: its derived quantities come from forward_keeping_state
 // (state.hpp), so deciding leaves the run's bits as they would be with the
 // same ctrl written open-loop; its ctrl columns hold the ctrl in force until
 // now (the previous decision's; 0 before the first), and so do what follows

@@ -87,7 +87,7 @@ class Sim {
 
   // Brings what MuJoCo derives from the state (xpos, xquat, cvel, sensors,
   // contacts) up to the current qpos/qvel without changing the next step's
-  // bits (forward_keeping_warmstart). After mj_step they describe the state
+  // bits (forward_keeping_state). After mj_step they describe the state
   // at the start of the step just taken, as in MuJoCo.
   void forward();
 

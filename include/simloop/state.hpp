@@ -33,22 +33,23 @@ namespace simloop {
 void get_state(const mjModel* m, const mjData* d, double* state) noexcept;
 [[nodiscard]] std::vector<double> get_state(const mjModel* m, const mjData* d);
 
-// Writes state[0 .. state_size(m)) into d and runs forward_keeping_warmstart,
+// Writes state[0 .. state_size(m)) into d and runs forward_keeping_state,
 // so that what MuJoCo derives from the state (poses, contacts, sensors) is
 // current. The caller checks the size; values are taken as they are (a state
 // is data MuJoCo itself produced, or the caller's responsibility). Inside
-// MuJoCo's error guard, as forward_keeping_warmstart.
+// MuJoCo's error guard, as forward_keeping_state.
 void set_state(const mjModel* m, mjData* d, const double* state);
 
-// mj_forward without its side effect on the next step: MuJoCo 2.2's
+// mj_forward without its side effects on the next step: MuJoCo 2.2's
 // mj_forward writes its constraint solution into qacc_warmstart, where the
 // next mj_step's solver starts, so a plain mj_forward between two steps
 // changes the run's bits; it also normalizes free and ball joints'
 // quaternions in qpos in place, which the next mj_step does again (not
-// idempotent in the last bit). This puts the whole state back as it was. Use it to read
-// derived quantities (poses, sensors, contacts) mid-run, as a policy does.
+// idempotent in the last bit). This puts the whole state back as it was.
+// Use it to read derived quantities (poses, sensors, contacts) mid-run, as a
+// policy does.
 //
 // Call it inside MuJoCo's error guard (mujoco_call), as any MuJoCo call.
-void forward_keeping_warmstart(const mjModel* m, mjData* d);
+void forward_keeping_state(const mjModel* m, mjData* d);
 
 }  // namespace simloop

@@ -129,7 +129,7 @@ TEST(Policy, DecidesEveryKStepsOnTheRecordersRowAndItsCtrlWinsOverTheSchedules) 
   }
 }
 
-TEST(Policy, ForwardKeepingWarmstartLeavesTheStateBitForBit) {
+TEST(Policy, ForwardKeepingStateLeavesTheStateBitForBit) {
   // MuJoCo 2.2's mj_forward normalizes the T-block's quaternion in qpos in
   // place (the next mj_step would again: one bit off after 250 steps).
   const simloop::Model scene = simloop::Model::from_file(std::string(SIMLOOP_TEST_SCENES) + "/pusht.xml");
@@ -140,7 +140,7 @@ TEST(Policy, ForwardKeepingWarmstartLeavesTheStateBitForBit) {
   d->ctrl[1] = 0.3;
   for (int i = 0; i < 250; ++i) mj_step(m, d);
   const std::vector<double> before = simloop::get_state(m, d);
-  simloop::forward_keeping_warmstart(m, d);
+  simloop::forward_keeping_state(m, d);
   EXPECT_TRUE(same_bits(before.data(), simloop::get_state(m, d).data(), before.size()));
 }
 
