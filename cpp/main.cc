@@ -29,7 +29,9 @@
 #include "simloop/number_format.hpp"
 #include "simloop/model.hpp"
 #include "simloop/output.hpp"
+#include "simloop/output_lock.hpp"
 #include "simloop/run.hpp"
+#include "simloop/signals.hpp"
 #include "simloop/sweep.hpp"
 #include "simloop/version.hpp"
 
@@ -39,8 +41,10 @@ namespace {
 
 constexpr int kExitRunFailed = 1;
 constexpr int kExitUsage = 2;
-// SIGINT and SIGTERM stop the work: exit 128 + the signal's number, as a
-// shell reports a process the signal ended (130 for Ctrl-C, 143 for SIGTERM).
+// A terminating signal (SIGINT, SIGTERM, SIGHUP, SIGQUIT, SIGPIPE, ...:
+// simloop::kTerminatingSignals) stops the work: exit 128 + the signal's
+// number, as a shell reports a process the signal ended (130 for Ctrl-C, 143
+// for SIGTERM, 129 for SIGHUP).
 constexpr int kExitSignalBase = 128;
 
 // A progress bar on stderr while the work runs, when stderr is a terminal
@@ -111,7 +115,7 @@ class TerminalProgress {
 };
 TerminalProgress g_progress;
 
-// The command's one control: SIGINT and SIGTERM request a stop, the loops
+// The command's one control: a terminating signal requests a stop, the loops
 // throw Interrupted within a chunk of steps, and the outputs' temporary files
 // go with the stack. Made at startup, on the main thread (its owner). Its
 // poll draws the progress bar; without a terminal there is no poll at all,
@@ -131,11 +135,13 @@ bool g_outputs_written = false;
 extern "C" void on_stop_signal(int sig) {
   if (g_signal == 0) g_signal = sig;
   if (g_exit_at_once) {
-    static const char kInt[] = "sim_loop: interrupted (SIGINT); nothing was written\n";
-    static const char kTerm[] = "sim_loop: interrupted (SIGTERM); nothing was written\n";
-    const bool term = sig == SIGTERM;
-    [[maybe_unused]] const ssize_t n =
-        ::write(STDERR_FILENO, term ? kTerm : kInt, (term ? sizeof kTerm : sizeof kInt) - 1);
+    // Only async-signal-safe calls: write(2) of fixed pieces, then _exit.
+    const auto put = [](const char* text) {
+      [[maybe_unused]] const ssize_t n = ::write(STDERR_FILENO, text, std::strlen(text));
+    };
+    put("sim_loop: interrupted (");
+    put(simloop::signal_name(sig));
+    put("); nothing was written\n");
     ::_exit(kExitSignalBase + sig);
   }
   g_control.request_stop();
@@ -145,8 +151,11 @@ void install_signal_handlers() {
   struct sigaction action {};
   action.sa_handler = on_stop_signal;
   sigemptyset(&action.sa_mask);
+  // While the handler runs, the other terminating signals wait: the first
+  // one names the stop.
+  for (int sig : simloop::kTerminatingSignals) sigaddset(&action.sa_mask, sig);
   action.sa_flags = SA_RESTART;
-  for (int sig : {SIGINT, SIGTERM}) {
+  for (int sig : simloop::kTerminatingSignals) {
     // A signal we were started ignoring stays ignored (a shell's background
     // job, nohup), as Python and the shell's own tools leave it.
     struct sigaction inherited {};
@@ -230,10 +239,10 @@ std::string doing(const simloop::cli::Options& opts) {
          ", --record-every " + std::to_string(run.record_every) + ")";
 }
 
-// The line and exit code for a stop on SIGINT or SIGTERM.
+// The line and exit code for a stop on a terminating signal.
 int interrupted() {
   const int sig = g_signal != 0 ? g_signal : SIGINT;
-  return fail(kExitSignalBase + sig, std::string("interrupted (") + (sig == SIGTERM ? "SIGTERM" : "SIGINT") + "); " +
+  return fail(kExitSignalBase + sig, std::string("interrupted (") + simloop::signal_name(sig) + "); " +
                                          (g_outputs_written ? "after the outputs were written"
                                                             : "the earlier outputs were left as they were"));
 }
@@ -482,18 +491,27 @@ int run_main(int argc, char** argv) {
   // From here on a file may exist that must go (the output directory's
   // probe, then the temporary outputs): a signal only requests a stop.
   g_exit_at_once = 0;
+  std::error_code out_check;
+  const bool out_existed = std::filesystem::exists(opts.out, out_check);
+  // The run holds --out's lock for the rest of its life (one run at a time
+  // in a folder); declared first, it is released last, after the folder's
+  // removal below.
+  std::optional<simloop::OutputLock> out_lock;
   // A folder this run makes goes again if the run leaves nothing in it (a
   // failed or interrupted run): remove() takes only an empty directory.
-  std::error_code out_check;
   struct RemoveIfLeftEmpty {
     std::filesystem::path dir;
     ~RemoveIfLeftEmpty() {
       std::error_code ignored;
       if (!dir.empty()) std::filesystem::remove(dir, ignored);
     }
-  } made{std::filesystem::exists(opts.out, out_check) ? std::filesystem::path() : opts.out};
+  } made{out_existed ? std::filesystem::path() : opts.out};
   try {
     simloop::prepare_output_dir(opts.out);
+    out_lock.emplace(opts.out);
+  } catch (const simloop::OutputInUse& e) {
+    made.dir.clear();  // the other run's folder now
+    return fail(kExitUsage, "--out: " + std::string(e.what()));
   } catch (const std::exception& e) {
     return fail(kExitUsage, "--out: " + std::string(e.what()));
   }

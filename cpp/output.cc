@@ -17,6 +17,7 @@
 #include "simloop/errors.hpp"
 #include "json_text.hpp"
 #include "simloop/number_format.hpp"
+#include "simloop/signals.hpp"
 
 namespace simloop {
 namespace {
@@ -60,7 +61,7 @@ class BlockTerminatingSignals {
   BlockTerminatingSignals() {
     sigset_t set;
     sigemptyset(&set);
-    for (int sig : {SIGINT, SIGTERM, SIGHUP, SIGQUIT}) sigaddset(&set, sig);
+    for (int sig : kTerminatingSignals) sigaddset(&set, sig);
     blocked_ = ::pthread_sigmask(SIG_BLOCK, &set, &previous_) == 0;
   }
   ~BlockTerminatingSignals() {
@@ -213,7 +214,7 @@ void PendingFile::finish() {
   if (err != 0) throw_io(target_, "cannot write", err);
 }
 
-void commit_together(std::initializer_list<PendingFile*> files, const RunControl* control) {
+void commit_together(const std::vector<PendingFile*>& files, const RunControl* control) {
   struct Step {
     PendingFile* file;
     std::string backup;  // empty: there was no old file
@@ -344,19 +345,24 @@ OutputFiles prepared(const std::filesystem::path& dir) {
 
 OutputWriter::OutputWriter(const std::filesystem::path& dir, std::vector<Column> columns)
     : files_(prepared(dir)),
+      lock_(dir),
       trajectory_file_(files_.trajectory),
       csv_(trajectory_file_, std::move(columns)) {}
 
-OutputFiles OutputWriter::commit(const Metrics& metrics, const RunControl* control) {
-  return commit(metrics_json(metrics), control);
+OutputFiles OutputWriter::commit(const Metrics& metrics, const RunControl* control,
+                                 const std::vector<PendingFile*>& also) {
+  return commit(metrics_json(metrics), control, also);
 }
 
-OutputFiles OutputWriter::commit(std::string_view metrics_text, const RunControl* control) {
+OutputFiles OutputWriter::commit(std::string_view metrics_text, const RunControl* control,
+                                 const std::vector<PendingFile*>& also) {
   csv_.finish();
   PendingFile metrics_file(files_.metrics);
   metrics_file.append(metrics_text);
   metrics_file.finish();
-  commit_together({&trajectory_file_, &metrics_file}, control);
+  std::vector<PendingFile*> files = {&trajectory_file_, &metrics_file};
+  files.insert(files.end(), also.begin(), also.end());
+  commit_together(files, control);
   return files_;
 }
 

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "simloop/control.hpp"
+#include "simloop/output_lock.hpp"
 #include "simloop/run.hpp"
 
 namespace simloop {
@@ -52,14 +53,14 @@ class PendingFile;
 // ones before it are rolled back from the backups (or removed, where there
 // was no old file), so the directory holds all the old files or all the
 // new ones. A destination that is a directory, or that cannot be replaced
-// (an immutable file), fails before anything is renamed. SIGINT, SIGTERM,
-// SIGHUP and SIGQUIT are blocked in the calling thread during the renames,
-// so a signal cannot cut the commit in half. With a `control` whose stop was
+// (an immutable file), fails before anything is renamed. The terminating
+// signals (kTerminatingSignals, simloop/signals.hpp) are blocked in the
+// calling thread during the renames, so a signal cannot cut the commit in half. With a `control` whose stop was
 // requested, nothing is committed and Interrupted is thrown. Readers never
 // see a half-written file. Throws IoError
 // naming the destination that failed; the temporary files remain the
 // PendingFiles' to remove.
-void commit_together(std::initializer_list<PendingFile*> files, const RunControl* control = nullptr);
+void commit_together(const std::vector<PendingFile*>& files, const RunControl* control = nullptr);
 
 // A file being written beside its destination: a temporary file
 // ".<name>.tmp.XXXXXX" in the same directory, filled by append(), closed by
@@ -81,7 +82,7 @@ class PendingFile {
   [[nodiscard]] const std::filesystem::path& target() const noexcept { return target_; }
 
  private:
-  friend void commit_together(std::initializer_list<PendingFile*> files, const RunControl* control);
+  friend void commit_together(const std::vector<PendingFile*>& files, const RunControl* control);
   std::filesystem::path target_;
   std::string temp_;
   int fd_ = -1;
@@ -121,22 +122,26 @@ struct OutputFiles {
 };
 
 // A run's two outputs, written as the run goes: construct it (the directory
-// is prepared, trajectory.csv's temporary file made), hand trajectory() to
-// simloop::run as its RowSink, then commit() writes metrics.json's temporary
-// file and puts both in place together (commit_together). Destroyed without
-// a commit (an error, an Interrupted run) it removes its temporary files and
-// leaves the earlier outputs as they were.
+// is prepared and locked for this process, OutputLock, trajectory.csv's
+// temporary file made), hand trajectory() to simloop::run as its RowSink,
+// then commit() writes metrics.json's temporary file and puts both in place
+// together (commit_together), with any finished files `also` given (the
+// recording). Destroyed without a commit (an error, an Interrupted run) it
+// removes its temporary files and leaves the earlier outputs as they were.
 class OutputWriter {
  public:
   // `columns` as for TrajectoryCsvSink: empty for the chapter's.
   explicit OutputWriter(const std::filesystem::path& dir, std::vector<Column> columns = {});
   [[nodiscard]] RowSink& trajectory() noexcept { return csv_; }
-  OutputFiles commit(const Metrics& metrics, const RunControl* control = nullptr);
+  OutputFiles commit(const Metrics& metrics, const RunControl* control = nullptr,
+                     const std::vector<PendingFile*>& also = {});
   // The same with metrics.json's text already made (a scenario's metrics).
-  OutputFiles commit(std::string_view metrics_text, const RunControl* control = nullptr);
+  OutputFiles commit(std::string_view metrics_text, const RunControl* control = nullptr,
+                     const std::vector<PendingFile*>& also = {});
 
  private:
   OutputFiles files_;
+  OutputLock lock_;
   PendingFile trajectory_file_;
   TrajectoryCsvSink csv_;
 };
