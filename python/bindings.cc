@@ -24,6 +24,7 @@
 #include <utility>
 #include <vector>
 
+#include "bindings_common.hpp"
 #include "cli_options.hpp"
 #include "warning_counter.hpp"
 #include "simloop/batch.hpp"
@@ -47,6 +48,12 @@ namespace py = pybind11;
 using namespace pybind11::literals;
 
 namespace {
+
+using simloop_py::Interruptible;
+using simloop_py::naming_failures;
+using simloop_py::OutOfMemory;
+using simloop_py::ResourceFailure;
+using simloop_py::RowsToPython;
 
 using simloop::RunResult;
 using simloop::Trajectory;
@@ -138,96 +145,10 @@ void set_error_fs(PyObject* type, const char* what) {
   Py_DECREF(message);
 }
 
-// The standard library's resource failures, said with what was being done
-// (pybind11 alone would say "std::bad_alloc"). Raised as MemoryError and
-// RuntimeError.
-class OutOfMemory : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
-class ResourceFailure : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
-
-template <class Work>
-auto naming_failures(const std::string& what, Work&& work) -> decltype(work()) {
-  try {
-    return work();
-  } catch (const std::bad_alloc&) {
-    throw OutOfMemory(what + ": out of memory");
-  } catch (const std::system_error& e) {
-    throw ResourceFailure(what + ": " + e.what());
-  }
-}
-
 std::string run_call(const char* name, const simloop::RunConfig& c) {
   return std::string(name) + "(steps=" + std::to_string(c.num_steps()) +
          ", record_every=" + std::to_string(c.record_every) + ")";
 }
-
-// Long C++ work that Ctrl-C can stop. The work runs with the GIL released;
-// between its chunks of steps the RunControl polls (on this thread, at most
-// every 20 ms): the poll takes the GIL, runs Python's signal handlers
-// (PyErr_CheckSignals) and the caller's progress(steps_done, steps_total).
-// If either raises, the poll keeps that Python exception and requests a
-// stop; the loop throws simloop::Interrupted at its next chunk, and the
-// kept exception (KeyboardInterrupt, say) is what the caller sees. Python
-// runs signal handlers only on the main thread, so elsewhere, without a
-// progress callback, there is nothing to poll and the GIL is left alone.
-class Interruptible {
- public:
-  explicit Interruptible(py::object progress)
-      : progress_(progress.is_none() ? py::object() : std::move(progress)),
-        control_(progress_ || on_main_thread() ? simloop::RunControl::Poll(
-                                                     [this](std::int64_t done, std::int64_t total) { poll(done, total); })
-                                               : simloop::RunControl::Poll()) {}
-
-  template <class Work>
-  auto run(Work&& work) -> decltype(work(static_cast<simloop::RunControl*>(nullptr))) {
-    try {
-      py::gil_scoped_release release;
-      return work(&control_);
-    } catch (...) {
-      // Interrupted, normally; whatever ended the work, a Ctrl-C the user
-      // pressed (or progress's exception) is what they hear about.
-      if (!error_) throw;
-      py::error_already_set error = std::move(*error_);
-      error_.reset();
-      throw error;
-    }
-  }
-
-  // After the work is done: one last progress call, at its full count.
-  void finish() {
-    if (progress_) progress_(control_.steps_done(), control_.steps_total());
-  }
-
- private:
-  static bool on_main_thread() {
-    return py::module_::import("threading").attr("main_thread")().attr("ident").cast<unsigned long>() ==
-           PyThread_get_thread_ident();
-  }
-
-  void poll(std::int64_t done, std::int64_t total) noexcept {
-    if (control_.stop_requested()) return;
-    py::gil_scoped_acquire gil;
-    try {
-      if (PyErr_CheckSignals() != 0) throw py::error_already_set();
-      if (progress_) progress_(done, total);
-    } catch (py::error_already_set& e) {
-      error_.emplace(std::move(e));
-      control_.request_stop();
-    } catch (...) {
-      // Not from Python (a bad_alloc, say): stop; the caller sees Interrupted.
-      control_.request_stop();
-    }
-  }
-
-  py::object progress_;
-  std::optional<py::error_already_set> error_;
-  simloop::RunControl control_;
-};
 
 // A Sim that any Python thread may call. Every call holds the Sim's lock for
 // its whole length, GIL released or not, so no call sees another half done
@@ -357,58 +278,6 @@ std::vector<simloop::RunInputs> run_inputs(std::size_t runs, const std::optional
 }
 
 py::array vector_array(const std::vector<double>& values) { return vec(values.data(), values.size()); }
-
-// The rows of a run handed to Python as they come (for a recording made
-// while the run streams its files): `to.columns(names)` once, then
-// `to.rows(array)` per block, each a (rows, columns) float64 copy, called with
-// the GIL. An exception there stops the run and reaches the caller
-// (raise_if_failed, once the run is over).
-class RowsToPython final : public simloop::RowSink {
- public:
-  struct Failed {};
-  explicit RowsToPython(py::object to) : to_(std::move(to)) {}
-  ~RowsToPython() override {
-    py::gil_scoped_acquire gil;
-    to_ = py::object();
-    error_.reset();
-  }
-  void describe(const std::vector<simloop::Column>& columns) override {
-    call([&] {
-      py::list names;
-      for (const simloop::Column& c : columns) names.append(c.name);
-      to_.attr("columns")(names);
-    });
-  }
-  void start(int columns, std::int64_t /*rows*/) override { columns_ = columns; }
-  void write(const double* rows, std::int64_t count) override {
-    call([&] {
-      py::array_t<double> block({static_cast<py::ssize_t>(count), static_cast<py::ssize_t>(columns_)});
-      std::copy(rows, rows + count * columns_, block.mutable_data());
-      to_.attr("rows")(block);
-    });
-  }
-  void raise_if_failed() {
-    if (!error_) return;
-    py::error_already_set error = std::move(*error_);
-    error_.reset();
-    throw error;
-  }
-
- private:
-  template <class Call>
-  void call(Call&& c) {
-    py::gil_scoped_acquire gil;
-    try {
-      c();
-    } catch (py::error_already_set& e) {
-      error_.emplace(std::move(e));
-      throw Failed{};
-    }
-  }
-  py::object to_;
-  int columns_ = 0;
-  std::optional<py::error_already_set> error_;
-};
 
 // --- Sim for any scene: views into mjData and mjModel, names, pickling.
 
@@ -665,6 +534,8 @@ class PyPolicy final : public simloop::Policy {
 
 }  // namespace
 
+void bind_outputs(py::module_& m);  // bindings_outputs.cc
+
 PYBIND11_MODULE(_core, m) {
   m.doc() = "simloop's compiled core: the chapter's MuJoCo loop in C++ (use the simloop package).";
   m.attr("__version__") = simloop::kVersion;
@@ -818,8 +689,8 @@ PYBIND11_MODULE(_core, m) {
             return std::move(d);
           },
           "The energy audit's totals, J (None unless audit_energy).")
-      .def_property_readonly("rows", [](const RunResult& r) { return r.trajectory.rows(); },
-                             "Trajectory rows (without building a numpy view).")
+      .def_property_readonly("rows", [](const RunResult& r) { return std::max(r.trajectory.rows(), r.rows); },
+                             "Trajectory rows the run recorded, kept or streamed (without building a numpy view).")
       .def_property_readonly("shove", [](const RunResult& r) { return r.shove; })
       .def_property_readonly("warnings", [](const RunResult& r) { return r.warnings; })
       .def_property_readonly("config", [](const RunResult& r) { return r.config; })
@@ -1477,35 +1348,8 @@ PYBIND11_MODULE(_core, m) {
   m.def("default_scenario_sweep_timesteps", &simloop::default_scenario_sweep_timesteps, "duration"_a);
   m.attr("SCENARIO_SWEEP_TOLERANCE") = simloop::kScenarioSweepTolerance;
   m.def("moving_bodies", &simloop::moving_bodies, "scene"_a);
-  m.def(
-      "run_scenario_to_files",
-      [](const simloop::Model& scene, const simloop::Scenario& scenario, const simloop::ScenarioConfig& config,
-         const std::filesystem::path& out, py::object drawing, py::object progress) {
-        std::optional<RowsToPython> to_python;
-        if (!drawing.is_none()) to_python.emplace(drawing);
-        Interruptible work(std::move(progress));
-        try {
-          auto done = work.run([&](simloop::RunControl* control) {
-            return naming_failures("run_scenario(" + scenario.name + ")", [&] {
-              simloop::OutputWriter writer(out);
-              simloop::ScenarioRunResult result =
-                  to_python ? simloop::run_scenario_drawn(scene, scenario, config, writer.trajectory(), *to_python,
-                                                          control)
-                            : simloop::run_scenario(scene, scenario, config, nullptr, &writer.trajectory(), control);
-              const simloop::OutputFiles files = writer.commit(simloop::scenario_metrics_json(result), control);
-              return std::make_tuple(std::move(result), files.metrics, files.trajectory);
-            });
-          });
-          work.finish();
-          return done;
-        } catch (const RowsToPython::Failed&) {
-          to_python->raise_if_failed();
-          throw;
-        }
-      },
-      "scene"_a, "scenario"_a, "config"_a, "out"_a, "drawing"_a = py::none(), "progress"_a = py::none(),
-      "Runs a scenario, writing trajectory.csv as it steps and then metrics.json (both or neither); "
-      "drawing.columns(names) and drawing.rows(array) get the rows and every moving body's pose.");
+  // run_to_files, run_scenario_to_files, OutputLock, PipedFile: bindings_outputs.cc
+  bind_outputs(m);
   // --- Model views and names, and pickling Model, RunResult, ScenarioResult
   // (Sim pickles above). Results pickle field by field, bits unchanged, so
   // they come back from multiprocessing workers as they were.

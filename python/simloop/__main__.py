@@ -26,7 +26,8 @@ if TYPE_CHECKING:
 PROGRAM = "sim-loop"
 EXIT_RUN_FAILED = 1
 EXIT_USAGE = 2
-# Ctrl-C and SIGTERM stop the work: 128 + the signal's number, as for sim_loop.
+# Ctrl-C, SIGTERM and the other terminating signals stop the work: 128 + the
+# signal's number, as for sim_loop.
 EXIT_SIGINT = 128 + signal.SIGINT
 EXIT_SIGTERM = 128 + signal.SIGTERM
 
@@ -35,12 +36,38 @@ _outputs_written = False
 
 
 class _Terminated(KeyboardInterrupt):
-    """SIGTERM, raised like Ctrl-C's KeyboardInterrupt so both stop the work
-    the same way (the C++ calls check for signals between chunks)."""
+    """A terminating signal other than Ctrl-C (SIGTERM, SIGHUP, SIGQUIT, ...:
+    _core.TERMINATING_SIGNALS), raised like Ctrl-C's KeyboardInterrupt so
+    that each stops the work the same way (the C++ calls check for signals
+    between chunks, and every temporary file goes with the stack)."""
+
+    def __init__(self, signum: int = signal.SIGTERM) -> None:
+        super().__init__(signum)
+        self.signum = signum
 
 
-def _on_sigterm(signum: int, frame: Optional[FrameType]) -> NoReturn:
-    raise _Terminated()
+def _on_signal(signum: int, frame: Optional[FrameType]) -> NoReturn:
+    raise _Terminated(signum)
+
+
+def _stopped_by(e: KeyboardInterrupt) -> "tuple[str, int]":
+    """The signal's name and the exit code for a stop."""
+    signum = e.signum if isinstance(e, _Terminated) else int(signal.SIGINT)
+    return signal.Signals(signum).name, 128 + signum
+
+
+def _catch_terminating_signals() -> Dict[int, Any]:
+    """Installs _on_signal for every terminating signal whose action is still
+    the default (one the command was started ignoring stays ignored, as
+    nohup wants; SIGINT keeps Python's KeyboardInterrupt; Python ignores
+    SIGPIPE itself). Returns what to restore."""
+    from . import _core
+
+    previous = {}
+    for signum in _core.TERMINATING_SIGNALS:
+        if signal.getsignal(signum) == signal.SIG_DFL:
+            previous[signum] = signal.signal(signum, _on_signal)
+    return previous
 
 
 class _ReportLost(Exception):
@@ -201,23 +228,24 @@ def _sweep(opts: "_core.CommandLine", model: "_core.Model", out: Path,
 
 
 def main(argv: Optional[List[str]] = None) -> int:
-    """The command: SIGTERM stops it as Ctrl-C does; either one ends it with one
-    line and exit 130 (SIGINT) or 143 (SIGTERM), the earlier outputs kept (the
-    library writes both outputs together, or neither, and no temporary file)."""
+    """The command: SIGTERM, SIGHUP, SIGQUIT (every terminating signal) stop
+    it as Ctrl-C does; each ends it with one line and exit 128 + the signal's
+    number (130 for SIGINT, 143 for SIGTERM), the earlier outputs kept (the
+    library writes the outputs together, or none, and no temporary file)."""
     global _outputs_written
     _outputs_written = False
     if sys.stdout is None:  # started with stdout closed
         return _fail(EXIT_RUN_FAILED, "standard output is closed; nothing was run (the report would be lost)")
-    previous = None
-    if threading.current_thread() is threading.main_thread():
-        previous = signal.signal(signal.SIGTERM, _on_sigterm)
+    previous: Dict[int, Any] = {}
     stdout = sys.stdout
-    sys.stdout = _Report(stdout)
     try:
+        if threading.current_thread() is threading.main_thread():
+            previous = _catch_terminating_signals()
+        sys.stdout = _Report(stdout)
         code = _main(argv)
         sys.stdout.flush()
     except KeyboardInterrupt as e:
-        name, code = ("SIGTERM", EXIT_SIGTERM) if isinstance(e, _Terminated) else ("SIGINT", EXIT_SIGINT)
+        name, code = _stopped_by(e)
         kept = "after the outputs were written" if _outputs_written else "the earlier outputs were left as they were"
         code = _fail(code, f"interrupted ({name}); {kept}")
     except _ReportLost as e:
@@ -225,9 +253,32 @@ def main(argv: Optional[List[str]] = None) -> int:
         code = _fail(EXIT_RUN_FAILED, f"cannot write the report to standard output ({e}); {done}")
     finally:
         sys.stdout = stdout
-        if previous is not None:
-            signal.signal(signal.SIGTERM, previous)
-    return _finish_stdout(code)
+        for signum, handler in previous.items():
+            # The command itself (not a call from Python): a signal while the
+            # interpreter shuts down ends it at once, as sim_loop does, saying
+            # so; else the caller's handlers come back.
+            signal.signal(signum, _exit_at_once if argv is None else handler)
+    code = _finish_stdout(code)
+    if argv is None:
+        # The command ends its process itself: the interpreter's shutdown
+        # (rerun's threads, the modules) takes a while, and once it has begun
+        # Python puts every signal back to its default action, so a signal
+        # then would kill the process unannounced. The report and the
+        # outputs are complete; nothing is left to clean up.
+        try:
+            sys.stderr.flush()
+        finally:
+            os._exit(code)
+    return code
+
+
+def _exit_at_once(signum: int, frame: Optional[FrameType]) -> None:
+    """A terminating signal after the work: one line, exit 128 + the signal."""
+    kept = "after the outputs were written" if _outputs_written else "the earlier outputs were left as they were"
+    try:
+        os.write(2, f"{PROGRAM}: interrupted ({signal.Signals(signum).name}); {kept}\n".encode())
+    finally:
+        os._exit(128 + signum)
 
 
 def _run_key(args: List[str], opts: "_core.CommandLine") -> str:
@@ -259,26 +310,21 @@ def _scenario(opts: "_core.CommandLine", scenario: "_core.Scenario", model: "_co
 
     config = _core.scenario_config_from_flags(opts)
     try:
-        if opts.rerun:
-            from .recording import replacing
+        rrd = out / "sim_loop.rrd"
+        recording = None
+        if opts.rerun:  # rerun imported, and the recording's file begun, before anything is written
             from .scenario_recording import ScenarioRecording
 
-            rrd = out / "sim_loop.rrd"
-            with replacing(rrd) as temp_name:
-                recording = ScenarioRecording(model, temp_name, _run_key(args, opts))
-                try:
-                    with progress_bar("running") as progress:
-                        result, metrics_path, trajectory_path = _core.run_scenario_to_files(
-                            model, scenario, config, out, drawing=recording, progress=progress)
-                    _outputs_written = True
-                    recording.finish(result)
-                finally:
-                    recording.close()
-        else:
+            recording = ScenarioRecording(model, rrd, _run_key(args, opts))
+        try:
             with progress_bar("running") as progress:
                 result, metrics_path, trajectory_path = _core.run_scenario_to_files(
-                    model, scenario, config, out, progress=progress)
-            _outputs_written = True
+                    model, scenario, config, out, drawing=recording,
+                    also=recording.files if recording is not None else [], progress=progress)
+        finally:
+            if recording is not None:
+                recording.close()
+        _outputs_written = True
         print(result.summary(), end="")
         print(f"metrics: {metrics_path}")
         print(f"trajectory: {trajectory_path} ({result.rows} rows, {len(result.column_names)} columns)")
@@ -344,16 +390,20 @@ def _main(argv: Optional[List[str]]) -> int:
     made = not out.exists()  # a folder this run makes goes again if the run leaves nothing in it
     try:
         _core.prepare_output_dir(out)
+        # One run at a time in a folder (the lock sim_loop takes too): held
+        # until the end, released after the folder's removal below.
+        lock = _core.OutputLock(out)
     except OSError as e:
         return _fail(EXIT_USAGE, f"--out: {e}")
-    try:
-        return _run_into(opts, model, scenario, out, started, args)
-    finally:
-        if made:
-            try:
-                out.rmdir()  # only when empty
-            except OSError:
-                pass
+    with lock:
+        try:
+            return _run_into(opts, model, scenario, out, started, args)
+        finally:
+            if made:
+                try:
+                    out.rmdir()  # only when empty
+                except OSError:
+                    pass
 
 
 def _run_into(opts: "_core.CommandLine", model: "_core.Model", scenario: "Optional[_core.Scenario]", out: Path,
@@ -373,18 +423,31 @@ def _run_into(opts: "_core.CommandLine", model: "_core.Model", scenario: "Option
 
     if scenario is not None:
         return _scenario(opts, scenario, model, out, started, args)
+    rrd = out / "sim_loop.rrd"
     try:
-        with progress_bar("running") as progress:
-            result = _core.run(model, opts.run, progress)
-        metrics_path, trajectory_path = result.write(out)
+        recording = None
+        try:
+            if opts.rerun:  # rerun imported, and the recording's file begun, before anything is written
+                from .recording import ChapterRecording
+
+                recording = ChapterRecording(opts.run, opts.model_path or None, model, rrd)
+        except ImportError as e:
+            return _fail(EXIT_RUN_FAILED, f"{e} (nothing was written; --no-rerun runs without the recording)")
+        # trajectory.csv written as the loop steps (in bounded memory, as
+        # sim_loop does), the recording beside it, all put in place together.
+        try:
+            with progress_bar("running") as progress:
+                result, metrics_path, trajectory_path = _core.run_to_files(
+                    model, opts.run, out, drawing=recording,
+                    also=recording.files if recording is not None else [], progress=progress)
+        finally:
+            if recording is not None:
+                recording.close()
         _outputs_written = True
         print(result.summary(), end="")
         print(f"metrics: {metrics_path}")
         print(f"trajectory: {trajectory_path} ({result.rows} rows)")
         if opts.rerun:
-            from .recording import record
-
-            rrd = record(result, out / "sim_loop.rrd", opts.model_path or None)
             print(f"recording: {rrd} -- open it with: {_viewer()} {rrd}")
         if opts.plot:
             from .plots import trajectory_png
@@ -392,7 +455,7 @@ def _run_into(opts: "_core.CommandLine", model: "_core.Model", scenario: "Option
             print(f"plot: {trajectory_png(trajectory_path, out / 'trajectory.png')}")
     except (OSError, _core.MujocoError, ValueError) as e:
         return _fail(EXIT_RUN_FAILED, str(e))
-    except ImportError as e:  # matplotlib for --plot, rerun for the recording
+    except ImportError as e:  # matplotlib for --plot
         return _fail(EXIT_RUN_FAILED, f"{e} (metrics.json and trajectory.csv were written)")
     elapsed = time.perf_counter() - started
     print(f"wall-clock: {elapsed * 1e3:.1f} ms, peak memory: {_peak_memory_mib():.1f} MiB")
@@ -633,7 +696,7 @@ def _run_batch(batch: "ParquetBatch", client: Any, earlier: int, started: float)
     try:
         computed = batch.run(client, progress)
     except KeyboardInterrupt as e:
-        name, code = ("SIGTERM", EXIT_SIGTERM) if isinstance(e, _Terminated) else ("SIGINT", EXIT_SIGINT)
+        name, code = _stopped_by(e)
         return _fail(code, f"interrupted ({name}); {batch.out} not written; {batch.kept_runs()} of {total} runs kept "
                            f"in {batch.parts}/ (add --resume to finish)")
     except VersionMismatch as e:

@@ -36,21 +36,24 @@ Two choices differ from the chapter's listing, on purpose:
   with the world-frame shove rotated into the box's frame.
 
 Frames are sent as columns (rerun's send_columns), one call per entity, which
-is what makes every step cheap. rerun is imported only here, only when
-recording; the stream writes to a file sink, so no viewer is spawned and no
-connection is made.
+is what makes every step cheap. The command records as the run goes
+(ChapterRecording, run_to_files's drawing): rows come in blocks, each sent
+and written before the next, so memory does not grow with the run; the
+floor, the z axis's range and the recording's name, which need the whole
+run, are logged at its end. rerun is imported only here, only when
+recording; its file sink writes into a pipe whose bytes simloop writes to
+the file and checks (RrdFile), so no viewer is spawned, no connection is
+made, and a full disk is an error, not a hang or a truncated file.
 """
 
 from __future__ import annotations
 
-import contextlib
 import hashlib
 import json
 import os
-import tempfile
 import uuid
 from pathlib import Path
-from typing import Iterator, Union
+from typing import Any, Mapping, Optional, Union
 
 from . import _core
 from ._api import ModelLike, _pusher_scene, load_model
@@ -107,13 +110,13 @@ def _model_key(model: ModelLike) -> str:
     return f"model:nq={model.nq},nv={model.nv},nu={model.nu}"
 
 
-def run_parameters(result: _core.RunResult, model: ModelLike = None) -> dict:
-    """The parameters that make a run what it is (what the recording id is made of)."""
-    config = result.config
+def config_parameters(config: _core.RunConfig, model: ModelLike = None) -> dict:
+    """The parameters that make a run what it is (what the recording id is
+    made of), from the run's config: known before it runs."""
     return {
         "seed": config.seed,
-        "steps": result.metrics["steps"],
-        "timestep": result.timestep,
+        "steps": _core.SMOKE_STEPS if config.smoke else config.steps,
+        "timestep": config.timestep,
         "perturb": config.perturb,
         "rng": config.rng,
         "record_every": config.record_every,
@@ -122,9 +125,19 @@ def run_parameters(result: _core.RunResult, model: ModelLike = None) -> dict:
     }
 
 
+def run_parameters(result: _core.RunResult, model: ModelLike = None) -> dict:
+    """The parameters that make a run what it is (what the recording id is made of)."""
+    return config_parameters(result.config, model)
+
+
 def recording_id(result: _core.RunResult, model: ModelLike = None) -> str:
     """The run's recording id: the same for the same run, different otherwise."""
-    text = json.dumps(run_parameters(result, model), sort_keys=True)
+    return config_recording_id(result.config, model)
+
+
+def config_recording_id(config: _core.RunConfig, model: ModelLike = None) -> str:
+    """recording_id, from the run's config (before it runs)."""
+    text = json.dumps(config_parameters(config, model), sort_keys=True)
     return str(uuid.uuid5(RECORDING_NAMESPACE, text))
 
 
@@ -146,8 +159,10 @@ def _rotate_into_body(quat_wxyz, vectors):
     return vectors + w * t + np.cross(u, t)
 
 
-def frames(result: _core.RunResult, model: ModelLike = None) -> dict:
-    """What record() logs, as arrays: one row per trajectory row.
+def frames(cols: Mapping[str, Any], pusher_track: tuple) -> dict:
+    """What the recording logs for a block of trajectory rows, as arrays: one
+    row per trajectory row. `cols`: {column name: values};
+    `pusher_track`: _core.pusher_track(model).
 
     Keys: step, sim_time, box_translation, box_quaternion_xyzw,
     pusher_translation, shove_vector (box frame, scaled), shove_world (scaled),
@@ -155,10 +170,9 @@ def frames(result: _core.RunResult, model: ModelLike = None) -> dict:
     """
     import numpy as np
 
-    cols = result.columns
     box = np.column_stack([cols["box_x"], cols["box_y"], cols["box_z"]])
     quat_wxyz = np.column_stack([cols[c] for c in ("box_qw", "box_qx", "box_qy", "box_qz")])
-    rest, axis, q0 = _core.pusher_track(load_model(model))
+    rest, axis, q0 = pusher_track
     pusher = rest + np.outer(cols["pusher_x"] - q0, axis)
     # The final row has no step after it, so no shove (its input cells are NaN).
     shove_world = SHOVE_ARROW_SCALE * np.nan_to_num(np.column_stack([cols["shove_x"], cols["shove_y"],
@@ -175,7 +189,7 @@ def frames(result: _core.RunResult, model: ModelLike = None) -> dict:
         if name in cols:
             series["energy/" + name] = cols[name]
     return {
-        "step": cols["step"].astype(np.int64),
+        "step": np.asarray(cols["step"]).astype(np.int64),
         "sim_time": cols["time"],
         "box_translation": box,
         # MuJoCo stores quaternions w-x-y-z; rerun wants x-y-z-w.
@@ -187,14 +201,42 @@ def frames(result: _core.RunResult, model: ModelLike = None) -> dict:
     }
 
 
-def floor_slab(data: dict) -> tuple:
+class Extents:
+    """What the floor and the z axis need to know of a whole run, gathered
+    block by block: the smallest and largest finite x, y of the box and the
+    pusher, and of the box's z."""
+
+    def __init__(self) -> None:
+        self.xy_low: Any = None  # numpy arrays of 2, once a finite point came
+        self.xy_high: Any = None
+        self.z_low: Optional[float] = None
+        self.z_high: Optional[float] = None
+
+    def add(self, data: dict) -> None:
+        import numpy as np
+
+        xy = np.vstack([data["box_translation"][:, :2], data["pusher_translation"][:, :2]])
+        xy = xy[np.all(np.isfinite(xy), axis=1)]
+        if len(xy):
+            low, high = xy.min(axis=0), xy.max(axis=0)
+            self.xy_low = low if self.xy_low is None else np.minimum(self.xy_low, low)
+            self.xy_high = high if self.xy_high is None else np.maximum(self.xy_high, high)
+        z = data["series"]["box/z"]
+        z = z[np.isfinite(z)]
+        if z.size:
+            self.z_low = float(z.min()) if self.z_low is None else min(self.z_low, float(z.min()))
+            self.z_high = float(z.max()) if self.z_high is None else max(self.z_high, float(z.max()))
+
+
+def floor_slab(extents: Extents) -> tuple:
     """(centre, half sizes) of a slab whose top is z = 0, under everything the run did."""
     import numpy as np
 
-    xy = np.vstack([data["box_translation"][:, :2], data["pusher_translation"][:, :2]])
-    xy = xy[np.all(np.isfinite(xy), axis=1)]
-    lo = np.minimum(xy.min(axis=0) - 0.5, -FLOOR_HALF_SIZE) if len(xy) else np.full(2, -FLOOR_HALF_SIZE)
-    hi = np.maximum(xy.max(axis=0) + 0.5, FLOOR_HALF_SIZE) if len(xy) else np.full(2, FLOOR_HALF_SIZE)
+    if extents.xy_low is None:
+        lo, hi = np.full(2, -FLOOR_HALF_SIZE), np.full(2, FLOOR_HALF_SIZE)
+    else:
+        lo = np.minimum(extents.xy_low - 0.5, -FLOOR_HALF_SIZE)
+        hi = np.maximum(extents.xy_high + 0.5, FLOOR_HALF_SIZE)
     centre = [(lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, -FLOOR_THICKNESS / 2]
     half = [(hi[0] - lo[0]) / 2, (hi[1] - lo[1]) / 2, FLOOR_THICKNESS / 2]
     return centre, half
@@ -223,60 +265,126 @@ def blueprint(energy: bool, z_range: tuple):
                          collapse_panels=False)
 
 
-def z_axis_range(z) -> tuple:
+def z_axis_range(extents: Extents) -> tuple:
     """The box z plot's range: a fixed 0.04 to 0.12 m, so a sound run looks flat
     beside Break It, widened only if the box leaves it."""
-    import numpy as np
-
-    finite = z[np.isfinite(z)]
-    low = min(0.04, float(finite.min()) - 0.005) if finite.size else 0.04
-    high = max(0.12, float(finite.max()) + 0.005) if finite.size else 0.12
-    return (low, high)
+    if extents.z_low is None or extents.z_high is None:
+        return (0.04, 0.12)
+    return (min(0.04, extents.z_low - 0.005), max(0.12, extents.z_high + 0.005))
 
 
-@contextlib.contextmanager
-def replacing(target: Path) -> Iterator[str]:
-    """A temporary file's name beside `target`, renamed onto it when the block
-    succeeds and removed when it fails: a failure leaves any earlier file as it was."""
-    fd, temp_name = tempfile.mkstemp(prefix="." + target.name + ".", suffix=".tmp", dir=target.parent)
-    os.close(fd)
-    try:
-        yield temp_name
-        os.chmod(temp_name, 0o644)
-        os.replace(temp_name, target)
-    except BaseException:
-        Path(temp_name).unlink(missing_ok=True)
-        raise
+class RrdFile:
+    """A RecordingStream whose file simloop writes. rerun's file sink writes
+    to a pipe (_core.PipedFile); a thread of simloop's appends every byte,
+    each write checked, to a temporary file beside `target`, which is put in
+    place together with the run's other outputs (pass `piped` to
+    run_to_files's `also`) once finish() has checked it whole. A full disk or
+    a file-size limit is an OSError naming the file, and rerun itself never
+    sees it (the pipe is drained whatever happens), so nothing hangs in
+    rerun and nothing half-written is put in place. Waiting for rerun takes
+    at most FINISH_TIMEOUT seconds, and Ctrl-C and SIGTERM act during it."""
+
+    FINISH_TIMEOUT = 60.0
+
+    def __init__(self, rr: Any, application_id: str, recording_id: str, target: Path, blueprint: Any = None) -> None:
+        self.target = Path(target)
+        self.piped: Any = _core.PipedFile(self.target)
+        self.rec: Any = None
+        try:
+            self.rec = rr.RecordingStream(application_id, recording_id=recording_id, send_properties=False)
+            self.rec.save(self.piped.writer_path, default_blueprint=blueprint)
+        except BaseException:
+            self.close()
+            raise
+        finally:
+            if self.piped is not None:
+                self.piped.close_writer()  # rerun holds its own end now
+
+    @property
+    def files(self) -> list:
+        """What run_to_files's `also` takes: the file, until it is closed."""
+        return [] if self.piped is None else [self.piped]
+
+    def flush(self) -> None:
+        """Waits for rerun to have written what was sent (keeps its queue short)."""
+        try:
+            self.rec.flush(timeout_sec=self.FINISH_TIMEOUT)
+        except RuntimeError as e:
+            raise OSError(f"{self.target}: rerun could not write the recording ({e})") from None
+
+    def finish(self) -> None:
+        """Every byte rerun wrote is in the temporary file, checked; OSError if not."""
+        self.flush()
+        self.rec.disconnect()  # rerun closes its end: the end of the stream
+        self.rec = None
+        if not self.piped.wait(self.FINISH_TIMEOUT):
+            raise OSError(f"{self.target}: rerun did not finish writing the recording within "
+                          f"{self.FINISH_TIMEOUT:g} s")
+        self.piped.finish()
+
+    def close(self) -> None:
+        """Abandons the file if it was not finished: the temporary file goes at
+        once, and what rerun still writes is drained and dropped."""
+        rec, self.rec = self.rec, None
+        self.piped = None
+        if rec is not None:
+            rec.disconnect()
 
 
-def record(result: _core.RunResult, path: Union[str, "os.PathLike[str]"], model: ModelLike = None) -> Path:
-    """Writes the run to `path` as an .rrd recording and returns the path.
+class ChapterRecording:
+    """The chapter's .rrd of one run, written as the run goes: pass it as
+    run_to_files's `drawing` and `recording.files` as its `also`; the rows
+    come in blocks, are sent as columns every BLOCK_ROWS rows, and each block
+    is written before the next is gathered, so memory stays bounded however
+    long the run. finish(result) (called by run_to_files once the run is
+    done) logs what needs the whole run (the floor under everywhere it went,
+    the z axis's range, the recording's name) and checks the file; close()
+    abandons it if it was not finished."""
 
-    The file is written beside its destination and renamed into place, so a
-    failure leaves any earlier recording as it was. `model` is the one the
-    run used (None: the chapter's scene; a path identifies a file's model in
-    the recording id better than a Model object can); it places the pusher.
-    """
-    import numpy as np
-    import rerun as rr
+    BLOCK_ROWS = 4096
 
-    target = Path(path)
-    data = frames(result, model)
-    energy = result.config.audit_energy
-    with replacing(target) as temp_name:
-        rec = rr.RecordingStream(APPLICATION_ID, recording_id=recording_id(result, model), send_properties=False)
-        rec.save(temp_name, default_blueprint=blueprint(energy, z_axis_range(data["series"]["box/z"])))
-        rec.send_recording_name(recording_name(result))
-        # Shapes, colours and series styles never change: static, logged once.
-        centre, half = floor_slab(data)
-        rec.log("world/floor", rr.Boxes3D(centers=[centre], half_sizes=[half], colors=[FLOOR_COLOR],
-                                          fill_mode="solid"), static=True)
-        rec.log("world/objects/box", rr.Boxes3D(half_sizes=[BOX_HALF_SIZES], colors=[BOX_COLOR]), static=True)
-        rec.log("world/robot/pusher", rr.Boxes3D(half_sizes=[PUSHER_HALF_SIZES], colors=[PUSHER_COLOR]),
-                static=True)
-        for name in data["series"]:
-            label, color = series_style(name)
-            rec.log("plots/" + name, rr.SeriesLines(names=[label], colors=[color]), static=True)
+    def __init__(self, config: _core.RunConfig, model_key: ModelLike, model: _core.Model, target: Path) -> None:
+        import rerun as rr
+
+        self._rr = rr
+        self._energy = config.audit_energy
+        self._names = list(_core.COLUMN_NAMES) + (list(_core.ENERGY_COLUMN_NAMES) if self._energy else [])
+        self._track = _core.pusher_track(model)
+        self._extents = Extents()
+        self._pending: list = []
+        self._pending_rows = 0
+        self.file = RrdFile(rr, APPLICATION_ID, config_recording_id(config, model_key), target)
+        rec = self.file.rec
+        try:
+            # Shapes, colours and series styles never change: static, logged once.
+            rec.log("world/objects/box", rr.Boxes3D(half_sizes=[BOX_HALF_SIZES], colors=[BOX_COLOR]), static=True)
+            rec.log("world/robot/pusher", rr.Boxes3D(half_sizes=[PUSHER_HALF_SIZES], colors=[PUSHER_COLOR]),
+                    static=True)
+            series = list(SERIES) + (["energy/" + name for name in ENERGY_COLORS] if self._energy else [])
+            for name in series:
+                label, color = series_style(name)
+                rec.log("plots/" + name, rr.SeriesLines(names=[label], colors=[color]), static=True)
+        except BaseException:
+            self.file.close()
+            raise
+
+    # run_to_files's drawing: rows(block) per block, finish(result) at the end.
+    def rows(self, block: Any) -> None:
+        self._pending.append(block)
+        self._pending_rows += len(block)
+        if self._pending_rows >= self.BLOCK_ROWS:
+            self._send()
+
+    def _send(self) -> None:
+        import numpy as np
+
+        if not self._pending:
+            return
+        rr, rec = self._rr, self.file.rec
+        block = np.concatenate(self._pending)
+        self._pending, self._pending_rows = [], 0
+        data = frames({name: block[:, c] for c, name in enumerate(self._names)}, self._track)
+        self._extents.add(data)
         times = [rr.TimeColumn("sim_time", duration=data["sim_time"]), rr.TimeColumn("step", sequence=data["step"])]
         rec.send_columns("world/objects/box", indexes=times,
                          columns=rr.Transform3D.columns(translation=data["box_translation"],
@@ -287,7 +395,46 @@ def record(result: _core.RunResult, path: Union[str, "os.PathLike[str]"], model:
                          columns=rr.Arrows3D.columns(origins=np.zeros_like(data["shove_vector"]),
                                                      vectors=data["shove_vector"]))
         for name, values in data["series"].items():
-            rec.send_columns("plots/" + name, indexes=times, columns=rr.Scalars.columns(scalars=values))
-        rec.flush()
-        rec.disconnect()
+            rec.send_columns("plots/" + name, indexes=times,
+                             columns=rr.Scalars.columns(scalars=np.ascontiguousarray(values)))
+        # rerun writes on a thread of its own and queues what it has not
+        # written yet: waiting for it here keeps that queue to one block.
+        self.file.flush()
+
+    def finish(self, result: _core.RunResult) -> None:
+        self._send()
+        rr, rec = self._rr, self.file.rec
+        centre, half = floor_slab(self._extents)
+        rec.log("world/floor", rr.Boxes3D(centers=[centre], half_sizes=[half], colors=[FLOOR_COLOR],
+                                          fill_mode="solid"), static=True)
+        rec.send_blueprint(blueprint(self._energy, z_axis_range(self._extents)), make_active=False,
+                           make_default=True)
+        rec.send_recording_name(recording_name(result))
+        self.file.finish()
+
+    @property
+    def files(self) -> list:
+        """run_to_files's `also`: the recording's file."""
+        return self.file.files
+
+    def close(self) -> None:
+        self.file.close()
+
+
+def record(result: _core.RunResult, path: Union[str, "os.PathLike[str]"], model: ModelLike = None) -> Path:
+    """Writes an in-memory run to `path` as an .rrd recording and returns the path.
+
+    The file is written beside its destination and renamed into place, so a
+    failure leaves any earlier recording as it was. `model` is the one the
+    run used (None: the chapter's scene; a path identifies a file's model in
+    the recording id better than a Model object can); it places the pusher.
+    """
+    target = Path(path)
+    recording = ChapterRecording(result.config, model, load_model(model), target)
+    try:
+        recording.rows(result.trajectory)
+        recording.finish(result)
+        _core.commit_files(recording.files)
+    finally:
+        recording.close()
     return target

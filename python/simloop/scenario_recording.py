@@ -74,13 +74,17 @@ def _pose(rr, geom: Mapping[str, Any]):
 
 class ScenarioRecording:
     """The .rrd of one scenario run, written as the run goes: pass it as
-    run_scenario_to_files's `drawing`, then finish(result) once the run is
-    done, or close() to abandon it. It writes to `path` (the command gives a
-    temporary name beside the destination, see recording.replacing)."""
+    run_scenario_to_files's `drawing` and `recording.files` as its `also`;
+    run_scenario_to_files calls finish(result) once the run is done, before
+    it puts the outputs in place, all together. close() abandons the file if
+    it was not finished. `path` is where the recording goes; it is written
+    beside it and checked first (recording.RrdFile)."""
 
     def __init__(self, model: _core.Model, path: Union[str, "os.PathLike[str]"], run_key: str) -> None:
         import rerun as rr
         import rerun.blueprint as rrb
+
+        from .recording import RrdFile
 
         self._rr = rr
         self.moving_bodies: List[str] = list(_core.moving_bodies(model))
@@ -88,26 +92,29 @@ class ScenarioRecording:
         self._pending: list = []
         self._pending_rows = 0
         run_id = uuid.uuid5(uuid.NAMESPACE_URL, "simloop-scenario:" + run_key)
-        # Any: None once closed (close() checks), a RecordingStream until then.
-        self._rec: Any = rr.RecordingStream(APPLICATION_ID, recording_id=str(run_id), send_properties=False)
         blueprint = rrb.Blueprint(
             rrb.Horizontal(rrb.Spatial3DView(name="the scene", origin="/world"),
                            rrb.TimeSeriesView(name="what was recorded", origin="/plots"), column_shares=[3, 2]),
             collapse_panels=False)
-        self._rec.save(os.fspath(path), default_blueprint=blueprint)
-        moving = set(self.moving_bodies)
-        for geom in _core.scene_geometry(model):
-            if geom["body"] == "world":
-                entity = f"world/static/{geom['name']}"
-            elif geom["body"] in moving:
-                entity = f"world/bodies/{geom['body']}/{geom['name']}"
-            else:
-                continue  # welded to the world under a body of its own: it never moves
-            shape = _shape(rr, geom)
-            if shape is None:
-                continue
-            self._rec.log(entity, _pose(rr, geom), static=True)
-            self._rec.log(entity, shape, static=True)
+        self.file = RrdFile(rr, APPLICATION_ID, str(run_id), Path(os.fspath(path)), blueprint)
+        self._rec: Any = self.file.rec
+        try:
+            moving = set(self.moving_bodies)
+            for geom in _core.scene_geometry(model):
+                if geom["body"] == "world":
+                    entity = f"world/static/{geom['name']}"
+                elif geom["body"] in moving:
+                    entity = f"world/bodies/{geom['body']}/{geom['name']}"
+                else:
+                    continue  # welded to the world under a body of its own: it never moves
+                shape = _shape(rr, geom)
+                if shape is None:
+                    continue
+                self._rec.log(entity, _pose(rr, geom), static=True)
+                self._rec.log(entity, shape, static=True)
+        except BaseException:
+            self.file.close()
+            raise
 
     # The drawing sink's two calls (see run_scenario_to_files).
     def columns(self, names: Sequence[str]) -> None:
@@ -146,17 +153,20 @@ class ScenarioRecording:
         # rerun writes the file on a thread of its own and queues what it has
         # not written yet: waiting for it here keeps that queue to one block
         # (10^6 rows of 35 columns sent as fast as they came: 280 MiB more without).
-        self._rec.flush()
+        self.file.flush()
 
     def finish(self, result: _core.ScenarioResult) -> None:
-        """Sends what is left, names the recording after the run, closes the file."""
+        """Sends what is left, names the recording after the run, checks the file."""
         self._send()
         self._rec.send_recording_name(
             f"{result.name or 'scenario'}: {result.steps} steps of {result.timestep:g} s, seed {result.seed}")
-        self.close()
+        self.file.finish()
+
+    @property
+    def files(self) -> list:
+        """run_scenario_to_files's `also`: the recording's file."""
+        return self.file.files
 
     def close(self) -> None:
-        if self._rec is not None:
-            self._rec.flush()
-            self._rec.disconnect()
-            self._rec = None
+        """Abandons the file if it was not finished."""
+        self.file.close()

@@ -34,7 +34,7 @@ def test_ctrl_c_is_one_line_and_exit_130_and_keeps_the_earlier_outputs(earlier_o
     def interrupted_run(*args, **kwargs):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(simloop._core, "run", interrupted_run)
+    monkeypatch.setattr(simloop._core, "run_to_files", interrupted_run)
     try:
         code = command.main(["--seed", "3", "--no-rerun", "--out", str(earlier_outputs)])
     except KeyboardInterrupt:
@@ -51,7 +51,7 @@ def test_ctrl_c_is_one_line_and_exit_130_and_keeps_the_earlier_outputs(earlier_o
 SLEEPING_COMMAND = textwrap.dedent("""
     import sys, time
     import simloop._core, simloop.__main__
-    simloop._core.run = lambda *args, **kwargs: time.sleep(60)
+    simloop._core.run_to_files = lambda *args, **kwargs: time.sleep(60)
     sys.exit(simloop.__main__.main(sys.argv[1:]))
 """)
 
@@ -62,8 +62,10 @@ def _as_from_a_terminal():
     signal.signal(signal.SIGINT, signal.SIG_DFL)
 
 
-@pytest.mark.parametrize("sig, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
-def test_a_signal_stops_the_command_at_once_with_one_line(earlier_outputs, sig, code):
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM, signal.SIGHUP, signal.SIGQUIT, signal.SIGUSR1,
+                                 signal.SIGALRM])
+def test_a_signal_stops_the_command_at_once_with_one_line(earlier_outputs, sig):
+    code = 128 + sig
     before = snapshot(earlier_outputs)
     with subprocess.Popen([sys.executable, "-c", SLEEPING_COMMAND, "--no-rerun", "--out", str(earlier_outputs)],
                           stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
@@ -82,8 +84,7 @@ def test_a_signal_stops_the_command_at_once_with_one_line(earlier_outputs, sig, 
         err = proc.stderr.read()
     assert proc.returncode == code, err
     assert took < 0.2
-    name = "SIGINT" if sig == signal.SIGINT else "SIGTERM"
-    assert err == f"sim-loop: interrupted ({name}); the earlier outputs were left as they were\n"
+    assert err == f"sim-loop: interrupted ({sig.name}); the earlier outputs were left as they were\n"
     assert snapshot(earlier_outputs) == before
 
 

@@ -1,0 +1,199 @@
+// simloop._core, continued: the commands' outputs. A run written to its
+// folder as it steps (run_to_files, run_scenario_to_files), the folder's
+// lock (OutputLock), the recording's file (PipedFile), and the signals the
+// commands stop on. Glue only, as in bindings.cc.
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
+
+#include <chrono>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <tuple>
+#include <utility>
+#include <vector>
+
+#include "bindings_common.hpp"
+#include "simloop/model.hpp"
+#include "simloop/output.hpp"
+#include "simloop/output_lock.hpp"
+#include "simloop/piped_file.hpp"
+#include "simloop/run.hpp"
+#include "simloop/scenario.hpp"
+#include "simloop/scenario_run.hpp"
+#include "simloop/signals.hpp"
+
+namespace py = pybind11;
+using namespace pybind11::literals;
+
+namespace {
+
+using simloop_py::Interruptible;
+using simloop_py::naming_failures;
+using simloop_py::RowsToPython;
+
+// The chapter's rows to trajectory.csv and, with a drawing, to Python too.
+class Tee final : public simloop::RowSink {
+ public:
+  Tee(simloop::RowSink& first, simloop::RowSink* second) : first_(first), second_(second) {}
+  void describe(const std::vector<simloop::Column>& columns) override {
+    first_.describe(columns);
+    if (second_) second_->describe(columns);
+  }
+  void start(int columns, std::int64_t rows) override {
+    first_.start(columns, rows);
+    if (second_) second_->start(columns, rows);
+  }
+  void write(const double* rows, std::int64_t count) override {
+    first_.write(rows, count);
+    if (second_) second_->write(rows, count);
+  }
+
+ private:
+  simloop::RowSink& first_;
+  simloop::RowSink* second_;
+};
+
+// The finished files to put in place with the run's two.
+std::vector<simloop::PendingFile*> pending(const std::vector<simloop::PipedFile*>& also) {
+  std::vector<simloop::PendingFile*> files;
+  for (simloop::PipedFile* f : also) {
+    if (f == nullptr) throw py::value_error("also: None is not a PipedFile");
+    files.push_back(&f->pending());
+  }
+  return files;
+}
+
+// An OutputLock that Python can release when it chooses (a with block).
+struct PyOutputLock {
+  std::optional<simloop::OutputLock> lock;
+};
+
+}  // namespace
+
+void bind_outputs(py::module_& m) {
+  py::list signals;
+  for (const int sig : simloop::kTerminatingSignals) signals.append(sig);
+  m.attr("TERMINATING_SIGNALS") = py::tuple(signals);
+
+  py::class_<PyOutputLock>(m, "OutputLock",
+                           "One run at a time in an output folder (include/simloop/output_lock.hpp): held until "
+                           "release() or the end of a with block; OSError if another process holds it.")
+      .def(py::init([](const std::filesystem::path& dir) {
+             auto held = std::make_unique<PyOutputLock>();
+             py::gil_scoped_release release;
+             held->lock.emplace(dir);
+             return held;
+           }),
+           "dir"_a)
+      .def("release", [](PyOutputLock& l) { l.lock.reset(); })
+      .def("__enter__", [](PyOutputLock& l) -> PyOutputLock& { return l; }, py::return_value_policy::reference)
+      .def("__exit__", [](PyOutputLock& l, const py::args&) { l.lock.reset(); });
+
+  py::class_<simloop::PipedFile>(m, "PipedFile",
+                                 "A file another library writes through writer_path while simloop writes and checks "
+                                 "its bytes (include/simloop/piped_file.hpp); committed with the run's outputs.")
+      .def(py::init<std::filesystem::path>(), "target"_a)
+      .def_property_readonly("writer_path", &simloop::PipedFile::writer_path)
+      .def_property_readonly("target", &simloop::PipedFile::target)
+      .def_property_readonly("bytes_written", &simloop::PipedFile::bytes_written)
+      .def("close_writer", &simloop::PipedFile::close_writer)
+      .def(
+          "wait",
+          [](simloop::PipedFile& f, double timeout) {
+            // In slices, between which Python's signal handlers run: Ctrl-C
+            // and SIGTERM act while the other side finishes writing.
+            const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout);
+            for (;;) {
+              bool ended = false;
+              {
+                py::gil_scoped_release release;
+                ended = f.wait_for_end(simloop::RunControl::kPollInterval);
+              }
+              if (ended) return true;
+              if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+              if (std::chrono::steady_clock::now() >= deadline) return false;
+            }
+          },
+          "timeout"_a, "Waits up to timeout seconds for the writer to close its end; True once it did.")
+      .def("finish", &simloop::PipedFile::finish,
+           "After the end of the stream: OSError if a write failed, else ready to be committed.");
+
+  m.def(
+      "commit_files",
+      [](const std::vector<simloop::PipedFile*>& files) {
+        const std::vector<simloop::PendingFile*> list = pending(files);
+        py::gil_scoped_release release;
+        simloop::commit_together(list);
+      },
+      "files"_a, "Puts finished PipedFiles in place, all or none (commit_together).");
+
+  m.def(
+      "run_to_files",
+      [](const simloop::Model& model, const simloop::RunConfig& config, const std::filesystem::path& out,
+         py::object drawing, const std::vector<simloop::PipedFile*>& also, py::object progress) {
+        std::optional<RowsToPython> to_python;
+        if (!drawing.is_none()) to_python.emplace(drawing);
+        const std::vector<simloop::PendingFile*> extra = pending(also);
+        Interruptible work(std::move(progress));
+        try {
+          auto done = work.run([&](simloop::RunControl* control) {
+            return naming_failures("run(steps=" + std::to_string(config.num_steps()) + ")", [&] {
+              simloop::OutputWriter writer(out);
+              simloop::Data workspace(model);
+              Tee rows(writer.trajectory(), to_python ? &*to_python : nullptr);
+              simloop::RunResult result = simloop::run(model, config, workspace, &rows, control);
+              if (to_python) to_python->finish(result);
+              const simloop::OutputFiles files = writer.commit(result.metrics, control, extra);
+              return std::make_tuple(std::move(result), files.metrics, files.trajectory);
+            });
+          });
+          work.finish();
+          return done;
+        } catch (const RowsToPython::Failed&) {
+          to_python->raise_if_failed();
+          throw;
+        }
+      },
+      "model"_a, "config"_a, "out"_a, "drawing"_a = py::none(), "also"_a = std::vector<simloop::PipedFile*>{},
+      "progress"_a = py::none(),
+      "The chapter's run, writing trajectory.csv as it steps and then metrics.json, with the finished files in "
+      "`also`, all or none; drawing.columns/rows/finish(result) get the rows (sim_loop's run, from Python).");
+
+  m.def(
+      "run_scenario_to_files",
+      [](const simloop::Model& scene, const simloop::Scenario& scenario, const simloop::ScenarioConfig& config,
+         const std::filesystem::path& out, py::object drawing, const std::vector<simloop::PipedFile*>& also,
+         py::object progress) {
+        std::optional<RowsToPython> to_python;
+        if (!drawing.is_none()) to_python.emplace(drawing);
+        const std::vector<simloop::PendingFile*> extra = pending(also);
+        Interruptible work(std::move(progress));
+        try {
+          auto done = work.run([&](simloop::RunControl* control) {
+            return naming_failures("run_scenario(" + scenario.name + ")", [&] {
+              simloop::OutputWriter writer(out);
+              simloop::ScenarioRunResult result =
+                  to_python ? simloop::run_scenario_drawn(scene, scenario, config, writer.trajectory(), *to_python,
+                                                          control)
+                            : simloop::run_scenario(scene, scenario, config, nullptr, &writer.trajectory(), control);
+              if (to_python) to_python->finish(result);
+              const simloop::OutputFiles files =
+                  writer.commit(simloop::scenario_metrics_json(result), control, extra);
+              return std::make_tuple(std::move(result), files.metrics, files.trajectory);
+            });
+          });
+          work.finish();
+          return done;
+        } catch (const RowsToPython::Failed&) {
+          to_python->raise_if_failed();
+          throw;
+        }
+      },
+      "scene"_a, "scenario"_a, "config"_a, "out"_a, "drawing"_a = py::none(),
+      "also"_a = std::vector<simloop::PipedFile*>{}, "progress"_a = py::none(),
+      "Runs a scenario, writing trajectory.csv as it steps and then metrics.json, with the finished files in "
+      "`also`, all or none; drawing.columns(names) and drawing.rows(array) get the rows and every moving body's "
+      "pose, drawing.finish(result) the result before the files are put in place.");
+}

@@ -1,0 +1,110 @@
+"""Every terminating signal, at random moments, in both commands: the run
+ends as Ctrl-C ends it (exit 128 + the signal, one line), and the folder
+holds all the old outputs or all the new ones, never a temporary file."""
+
+import os
+import random
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from conftest import sim_loop_exe
+
+OUTPUTS = {"metrics.json", "trajectory.csv"}
+# sim_loop's: Python ignores SIGPIPE (a closed pipe is an EPIPE error there).
+SIGNALS = [signal.SIGHUP, signal.SIGINT, signal.SIGQUIT, signal.SIGTERM, signal.SIGPIPE, signal.SIGUSR1]
+MOMENTS = 3  # per signal and command: a handful, seeded
+
+
+def command(which: str):
+    if which == "sim_loop":
+        return [str(sim_loop_exe())]
+    return [sys.executable, "-m", "simloop"]  # with its recording
+
+
+def _defaults():
+    """Every signal at its default action in the child, as a terminal's shell
+    starts it (a background job's SIGINT and SIGQUIT are ignored otherwise)."""
+    for sig in SIGNALS:
+        signal.signal(sig, signal.SIG_DFL)
+
+
+def state(out: Path) -> tuple:
+    """What a test compares: the pair's bytes and the recording's inode (its
+    bytes differ between identical runs: rerun stamps time-based ids)."""
+    names = {p.name for p in out.iterdir()}
+    rrd = out / "sim_loop.rrd"
+    return (names, (out / "metrics.json").read_bytes(), (out / "trajectory.csv").read_bytes(),
+            rrd.stat().st_ino if rrd.exists() else None)
+
+
+@pytest.mark.parametrize("which", ["sim_loop", "python"])
+def test_each_signal_at_random_moments_leaves_all_old_or_all_new(tmp_path, which):
+    args = ["--steps", "20000"]
+    new, old = tmp_path / "new", tmp_path / "old"
+    started = time.perf_counter()
+    assert subprocess.run(command(which) + args + ["--seed", "2", "--out", str(new)], capture_output=True,
+                          timeout=120).returncode == 0
+    seconds = time.perf_counter() - started
+    assert subprocess.run(command(which) + args + ["--seed", "1", "--out", str(old)], capture_output=True,
+                          timeout=120).returncode == 0
+    expected = OUTPUTS | ({"sim_loop.rrd"} if which == "python" else set())
+    random_moment = random.Random(20)  # the same moments every time
+    tally = {"old": 0, "new": 0}
+    for sig in SIGNALS if which == "sim_loop" else [s for s in SIGNALS if s != signal.SIGPIPE]:
+        for _ in range(MOMENTS):
+            out = tmp_path / "out"
+            subprocess.run(["rm", "-rf", str(out)], check=True)
+            subprocess.run(["cp", "-a", str(old), str(out)], check=True)
+            before = state(out)
+            moment = random_moment.uniform(0.0, seconds * 1.2)
+            with subprocess.Popen(command(which) + args + ["--seed", "2", "--out", str(out)],
+                                  stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                                  text=True, preexec_fn=_defaults) as proc:
+                time.sleep(moment)
+                proc.send_signal(sig)
+                try:
+                    _, err = proc.communicate(timeout=30)
+                except subprocess.TimeoutExpired:
+                    proc.kill()
+                    pytest.fail(f"{which}: {sig.name} at {moment:.2f} s: still running 30 s later")
+            what = f"{which}: {sig.name} at {moment:.2f} s: exit {proc.returncode}, {err!r}"
+            after = state(out)
+            if proc.returncode == -sig:
+                # Killed by the default action before the command could catch
+                # anything (the interpreter still starting): nothing touched.
+                assert after == before, what
+                tally["old"] += 1
+                continue
+            assert proc.returncode in (0, 128 + sig), what
+            if proc.returncode:
+                assert err.count("\n") == 1 and f"interrupted ({sig.name})" in err, what
+            assert after[0] == expected, f"{what}: left {sorted(after[0] - expected)}"
+            all_old = after == before
+            all_new = (after[1] == (new / "metrics.json").read_bytes()
+                       and after[2] == (new / "trajectory.csv").read_bytes()
+                       and (which == "sim_loop" or after[3] != before[3]))
+            assert all_old or all_new, f"{what}: a mix of old and new outputs"
+            tally["old" if all_old else "new"] += 1
+    print(f"{which}: {tally['old']} runs kept the old outputs, {tally['new']} wrote the new")
+
+
+@pytest.mark.parametrize("which", ["sim_loop", "python"])
+def test_a_signal_the_command_was_started_ignoring_stays_ignored(tmp_path, which):
+    # nohup: SIGHUP ignored from the start; the run goes on to the end.
+    def ignoring_hup():
+        _defaults()
+        signal.signal(signal.SIGHUP, signal.SIG_IGN)
+
+    with subprocess.Popen(command(which) + ["--steps", "3000", "--no-rerun", "--out", str(tmp_path / "o")],
+                          stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                          preexec_fn=ignoring_hup) as proc:
+        proc.stdout.readline()  # the banner
+        proc.send_signal(signal.SIGHUP)
+        _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 0, err
+    assert {p.name for p in (tmp_path / "o").iterdir()} == OUTPUTS
