@@ -5,9 +5,9 @@
 #pragma once
 
 #include <chrono>
-#include <condition_variable>
+#include <cstdint>
 #include <filesystem>
-#include <mutex>
+#include <memory>
 #include <string>
 #include <thread>
 
@@ -29,8 +29,7 @@ class PipedFile {
   explicit PipedFile(std::filesystem::path target);
   PipedFile(const PipedFile&) = delete;
   PipedFile& operator=(const PipedFile&) = delete;
-  // Stops the thread and removes the temporary file unless it was committed.
-  // Close the other side first: writing into a pipe nobody reads fails there.
+  // Removes the temporary file unless it was committed (see above).
   ~PipedFile();
 
   [[nodiscard]] const std::string& writer_path() const noexcept { return writer_path_; }
@@ -49,18 +48,12 @@ class PipedFile {
   [[nodiscard]] PendingFile& pending() noexcept { return file_; }
   [[nodiscard]] const std::filesystem::path& target() const noexcept { return file_.target(); }
 
+  struct Stream;  // what the thread shares with this object (and may outlive it with)
+
  private:
-  void drain() noexcept;
   PendingFile file_;
-  int read_fd_ = -1;
-  int write_fd_ = -1;
-  int stop_fd_ = -1;  // an eventfd: the destructor's word to the thread
+  std::shared_ptr<Stream> stream_;
   std::string writer_path_;
-  mutable std::mutex mutex_;
-  std::condition_variable ended_cv_;
-  bool ended_ = false;
-  std::string error_;  // the first failed write's message
-  std::int64_t written_ = 0;
   std::thread thread_;
 };
 
