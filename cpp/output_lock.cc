@@ -20,6 +20,7 @@ namespace simloop {
 struct OutputLock::Held {
   std::pair<dev_t, ino_t> key{};
   int fd = -1;
+  pid_t pid = 0;  // the process that took it (a forked child is another run)
   Held() = default;
   Held(const Held&) = delete;
   Held& operator=(const Held&) = delete;
@@ -29,7 +30,8 @@ struct OutputLock::Held {
 namespace {
 
 // The folders this process holds, so that a second lock on one shares the
-// first. Guarded by g_mutex, under which a lock is also taken and released,
+// first (not in a forked child, which is a run of its own: it inherits this
+// map but not the right to the lock). Guarded by g_mutex, under which a lock is also taken and released,
 // so two threads never race to flock the same folder. Never destroyed: a
 // lock may be released during the process's exit.
 std::mutex g_mutex;
@@ -81,7 +83,8 @@ OutputLock::OutputLock(const std::filesystem::path& dir) {
     const std::lock_guard<std::mutex> lock(g_mutex);
     const auto it = registry().find(key);
     if (it != registry().end()) {
-      if (std::shared_ptr<Held> held = it->second.lock()) {
+      std::shared_ptr<Held> held = it->second.lock();
+      if (held && held->pid == ::getpid()) {
         ::close(fd);
         held_ = std::move(held);
         return;
@@ -116,6 +119,7 @@ OutputLock::OutputLock(const std::filesystem::path& dir) {
     auto held = std::make_shared<Held>();
     held->key = key;
     held->fd = fd;
+    held->pid = ::getpid();
     registry()[key] = held;
     held_ = std::move(held);
     return;
