@@ -68,9 +68,17 @@ void detail::run_jobs(std::size_t jobs, int threads, const std::vector<std::int6
     for (std::size_t i; (i = next.fetch_add(1)) < jobs;) {
       try {
         job(i, worker, ctl);
+      } catch (const Interrupted&) {
+        // Stopped on request, or cut short because another run failed (then
+        // that run's failure is the batch's, not this).
+        if (ctl.stop_requested() || !ctl.batch_abandoned()) errors[i] = std::current_exception();
+        next.store(jobs);
       } catch (...) {
         errors[i] = std::current_exception();
         next.store(jobs);
+        // The runs still going stop at their next chunk rather than at their
+        // end: a policy's exception (Ctrl-C inside it, say) acts at once.
+        ctl.abandon_batch(true);
       }
     }
     if (running.fetch_sub(1) == 1) {
@@ -105,6 +113,7 @@ void detail::run_jobs(std::size_t jobs, int threads, const std::vector<std::int6
     finished.wait_for(lock, std::chrono::milliseconds(5), [&] { return running.load() == 0; });
   }
   for (std::thread& t : pool) t.join();
+  ctl.abandon_batch(false);
   if (ctl.stop_requested()) throw Interrupted("interrupted");
   for (const std::exception_ptr& e : errors) {
     if (e) std::rethrow_exception(e);

@@ -15,7 +15,7 @@ void RunControl::advance(std::int64_t steps) {
       std::chrono::steady_clock::now() - last_poll_ >= kPollInterval) {
     poll_now();
   }
-  if (stop_requested()) throw Interrupted("interrupted");
+  if (stop_requested() || batch_abandoned()) throw Interrupted("interrupted");
 }
 
 void RunControl::check() {

@@ -14,8 +14,9 @@ namespace simloop {
 // Data, so result i is bitwise identical to run(model, configs[i]), whatever
 // the thread count. All configs are validated before any run starts
 // (InvalidArgument naming the config's index); if runs fail, the failure of
-// the lowest index is rethrown after all workers have stopped, and no new run
-// starts once one has failed. If threads cannot be created, fewer workers do
+// the lowest index is rethrown after all workers have stopped, no new run
+// starts once one has failed, and the runs still going stop at their next
+// chunk of steps (RunControl::abandon_batch). If threads cannot be created, fewer workers do
 // the work (the results are the same). With a `control`, the batch can be
 // stopped (Interrupted) and watched; its poll runs on the calling thread.
 // Batches keep their runs' trajectories in memory: the whole batch is

@@ -37,6 +37,14 @@ class RunControl {
   void request_stop() noexcept { stop_.store(true, std::memory_order_relaxed); }
   [[nodiscard]] bool stop_requested() const noexcept { return stop_.load(std::memory_order_relaxed); }
 
+  // For the library's batches: one run failed (a policy raised, Ctrl-C
+  // arrived inside it), so the runs still going stop at their next chunk
+  // (advance() throws Interrupted) instead of running to their end, without
+  // marking the control stopped for its owner. The batch clears it when its
+  // workers are done.
+  void abandon_batch(bool abandoned) noexcept { abandoned_.store(abandoned, std::memory_order_relaxed); }
+  [[nodiscard]] bool batch_abandoned() const noexcept { return abandoned_.load(std::memory_order_relaxed); }
+
   // For the library's loops: announces `steps` more steps of work.
   void add_total(std::int64_t steps) noexcept { total_.fetch_add(steps, std::memory_order_relaxed); }
   // For the library's loops: `steps` more steps are done. Polls when due (on
@@ -52,6 +60,7 @@ class RunControl {
  private:
   void poll_now();
   std::atomic<bool> stop_{false};
+  std::atomic<bool> abandoned_{false};
   std::atomic<std::int64_t> done_{0};
   std::atomic<std::int64_t> total_{0};
   Poll poll_;

@@ -2,7 +2,9 @@
 // running each config alone.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cstring>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -135,6 +137,42 @@ TEST(ScenarioBatch, AStopEndsTheBatchAndProgressCountsEveryRun) {
   simloop::RunControl stopped;
   stopped.request_stop();
   EXPECT_THROW((void)simloop::run_scenario_batch(scene, scenario, cs, 2, &stopped), simloop::Interrupted);
+}
+
+// A policy that fails in one run of a batch: the others stop at their next
+// chunk instead of running to their end (Ctrl-C raised inside a Python
+// policy is such a failure), and the failure is what the batch throws.
+TEST(ScenarioBatch, AFailingRunStopsTheOthersAtTheirNextChunk) {
+  const simloop::Scenario scenario = scene_file("pusht.toml");
+  const simloop::Model scene = simloop::load_scene(scenario);
+  std::vector<simloop::ScenarioConfig> cs(2);
+  for (auto& c : cs) c.steps = 50'000'000;  // minutes each, if not stopped
+  // One policy per run: run 1's fails at step 2000.
+  class Counting final : public simloop::Policy {
+   public:
+    explicit Counting(bool fail) : Policy(1), fail_(fail) {}
+    void decide(std::int64_t step, const double*, int, double* ctrl, int nu) override {
+      if (fail_ && step == 2000) throw std::runtime_error("the policy failed (test)");
+      for (int a = 0; a < nu; ++a) ctrl[a] = 0.5;
+    }
+
+   private:
+    bool fail_;
+  } runs_on(false), fails(true);
+  const std::vector<simloop::RunInputs> inputs = {simloop::RunInputs::deciding(runs_on),
+                                                   simloop::RunInputs::deciding(fails)};
+  simloop::RunControl control;
+  const auto started = std::chrono::steady_clock::now();
+  try {
+    (void)simloop::run_scenario_batch(scene, scenario, cs, 2, &control, inputs, false);
+    FAIL() << "the batch did not fail";
+  } catch (const std::runtime_error& e) {
+    EXPECT_STREQ(e.what(), "the policy failed (test)");
+  }
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  EXPECT_LT(seconds, 5.0) << "the other run went on after the failure";
+  EXPECT_FALSE(control.stop_requested()) << "a failure is not the owner's stop";
+  EXPECT_FALSE(control.batch_abandoned()) << "cleared for the control's next batch";
 }
 
 }  // namespace

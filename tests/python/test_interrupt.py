@@ -145,3 +145,43 @@ def test_ctrl_c_reaches_a_thread_waiting_for_a_sim_another_thread_steps():
     _, latency, _ = interrupt(code)
     print(f"waiting for a Sim: KeyboardInterrupt {latency * 1e3:.1f} ms after SIGINT")
     assert latency < RAISE_BUDGET_S
+
+
+# Calls a policy (or a vector environment) makes long, each with a daemon
+# thread present that runs Python code now and then (a logger, a watchdog):
+# Ctrl-C still acts within the budget, whatever the thread count.
+POLICY_CALLS = {
+    "run_scenario policy": "simloop.run_scenario(simloop.Scenario.chapter(), steps=10**8, record_every=10**6, "
+                           "policy=lambda obs: [1.0], control_every=10)",
+    "policy batch, 1 thread": "simloop.run_scenario_batch(simloop.Scenario.chapter(), seeds=range(2), steps=10**8, "
+                              "record_every=10**6, threads=1, policy=lambda obs: [1.0], control_every=10)",
+    "policy batch, 2 threads": "simloop.run_scenario_batch(simloop.Scenario.chapter(), seeds=range(2), "
+                               "steps=10**8, record_every=10**6, threads=2, policy=lambda obs: [1.0], "
+                               "control_every=10)",
+    "vector env, 2 threads": "env = simloop.gym.ScenarioVectorEnv(simloop.Scenario.chapter(), num_envs=4, "
+                             "threads=2, control_every=10**7, steps=10**8); env.reset(seed=0); "
+                             "env.step(__import__('numpy').ones((4, 1)))",
+}
+DAEMON = """
+import threading
+def _busy():
+    while True:
+        sum(range(1000))
+        time.sleep(0.001)
+threading.Thread(target=_busy, daemon=True).start()
+"""
+
+
+@pytest.mark.parametrize("daemon", [False, True], ids=["alone", "with a daemon thread"])
+@pytest.mark.parametrize("name", list(POLICY_CALLS))
+def test_ctrl_c_stops_policy_batches_and_vector_envs_promptly(name, daemon):
+    call = POLICY_CALLS[name]
+    if name.startswith("vector env"):
+        call = "import simloop.gym; " + call
+    code = CHILD.replace("import simloop\n", "import simloop\n" + (DAEMON if daemon else ""), 1)
+    words, latency, exit_after = interrupt(code.format(call=call).replace("sys.exit(0)", "os._exit(0)")
+                                           .replace("import sys, time", "import os, sys, time"))
+    print(f"{name} ({'with' if daemon else 'without'} a daemon thread): KeyboardInterrupt {latency * 1e3:.1f} ms "
+          f"after SIGINT")
+    assert latency < RAISE_BUDGET_S
+    assert exit_after < EXIT_BUDGET_S
