@@ -12,9 +12,11 @@
 namespace simloop::detail {
 namespace {
 
-// Per thread: where to jump on a MuJoCo error, and the message it carried.
+// Per thread: where to jump on a MuJoCo error, and the message it carried;
+// where warnings go (a CaptureWarnings), if anywhere.
 thread_local std::jmp_buf* t_error_target = nullptr;
 thread_local char t_error_message[1024] = "";
+thread_local std::vector<std::string>* t_warnings = nullptr;
 
 extern "C" void on_mujoco_error(const char* message) {
   std::snprintf(t_error_message, sizeof t_error_message, "%s", message ? message : "");
@@ -28,12 +30,34 @@ extern "C" void on_mujoco_error(const char* message) {
   std::abort();
 }
 
-extern "C" void on_mujoco_warning(const char* /*message*/) {
+extern "C" void on_mujoco_warning(const char* message) {
   // Stepping warnings are read back from mjData::warning (counts, first step,
-  // info) by the run loop; nothing is printed or logged here.
+  // info) by the run loop; nothing is printed or logged here. A load keeps
+  // what comes while it listens.
+  if (t_warnings == nullptr) return;
+  try {
+    t_warnings->emplace_back(message ? message : "");
+  } catch (...) {  // out of memory: the warning is lost, nothing else
+  }
 }
 
 }  // namespace
+
+// MuJoCo's thread-local handler hooks (exported by libmujoco 2.2, not in its
+// public headers); weak, so a MuJoCo without them links and skips the reset.
+extern "C" {
+__attribute__((weak)) void _mjPRIVATE__set_tls_error_fn(void (*h)(const char*));
+__attribute__((weak)) void _mjPRIVATE__set_tls_warning_fn(void (*h)(const char*));
+}
+
+CaptureWarnings::CaptureWarnings() noexcept : previous_(t_warnings) { t_warnings = &warnings_; }
+
+CaptureWarnings::~CaptureWarnings() { t_warnings = previous_; }
+
+void reset_mujoco_thread_handlers() noexcept {
+  if (_mjPRIVATE__set_tls_error_fn != nullptr) _mjPRIVATE__set_tls_error_fn(nullptr);
+  if (_mjPRIVATE__set_tls_warning_fn != nullptr) _mjPRIVATE__set_tls_warning_fn(nullptr);
+}
 
 void install_mujoco_handlers() {
   static std::once_flag once;

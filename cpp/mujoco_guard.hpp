@@ -2,9 +2,10 @@
 //
 // MuJoCo 2.2's default error handler appends to MUJOCO_LOG.TXT in the working
 // directory, waits for Enter and exits the process; its warning handler also
-// writes that file. We install process-wide handlers once: warnings are
-// dropped here (the library reads them from mjData's warning counters, which
-// is where they belong per run), and an error jumps back with longjmp to the
+// writes that file. We install process-wide handlers once: warnings go to the
+// CaptureWarnings of the thread, if one is listening (loading a model), and
+// are dropped otherwise (the library reads stepping warnings from mjData's
+// warning counters, which is where they belong per run), and an error jumps back with longjmp to the
 // innermost `call_catching_mujoco_error` on this thread, which then reports
 // failure so the caller can throw a C++ exception from ordinary C++ frames.
 // No C++ exception ever unwinds through MuJoCo's C frames.
@@ -14,6 +15,7 @@
 #include <string>
 #include <string_view>
 #include <type_traits>
+#include <vector>
 
 #include "simloop/errors.hpp"
 
@@ -30,6 +32,29 @@ void install_mujoco_handlers();
 
 // The message of the last MuJoCo error caught on this thread.
 [[nodiscard]] const char* last_mujoco_error() noexcept;
+
+// While it lives, the warnings MuJoCo reports through its warning handler on
+// this thread are kept (the XML parser's "XML contains a 'NaN'", for one).
+class CaptureWarnings {
+ public:
+  CaptureWarnings() noexcept;
+  ~CaptureWarnings();
+  CaptureWarnings(const CaptureWarnings&) = delete;
+  CaptureWarnings& operator=(const CaptureWarnings&) = delete;
+  [[nodiscard]] std::vector<std::string> take() { return std::move(warnings_); }
+
+ private:
+  std::vector<std::string> warnings_;
+  std::vector<std::string>* previous_;
+};
+
+// MuJoCo 2.2's compiler installs thread-local error and warning handlers of
+// its own and puts the previous ones back only when it returns or fails with
+// a compile error: a C++ exception out of it (std::bad_alloc) leaves its
+// error handler in place, and the next MuJoCo error on the thread would
+// longjmp into the compiler's finished frame (the process aborts). Clears
+// them, for after such an exception.
+void reset_mujoco_thread_handlers() noexcept;
 
 // `text` on one line: each run of line breaks becomes "; " (MuJoCo's XML
 // errors span lines), and surrounding blanks are dropped.

@@ -11,6 +11,7 @@
 #include <memory>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include <mujoco/mujoco.h>
 
@@ -75,14 +76,22 @@ class Model {
   [[nodiscard]] bool has_chapter_layout() const noexcept { return layout_.missing.empty(); }
   // Why the scene lacks the chapter's layout, naming the model ("" if it has it).
   [[nodiscard]] const std::string& missing_layout() const noexcept { return layout_.missing; }
+  // What MuJoCo warned while it parsed and compiled the scene (its parser's
+  // "XML contains a 'NaN'", its compiler's test step's warnings), each on
+  // one line; the commands report them as they report stepping warnings.
+  [[nodiscard]] const std::vector<std::string>& load_warnings() const noexcept {
+    static const std::vector<std::string> none;
+    return load_warnings_ ? *load_warnings_ : none;
+  }
 
  private:
   // Takes ownership of a freshly loaded model and resolves its layout.
-  static Model adopt(mjModel* raw, std::string_view source);
+  static Model adopt(mjModel* raw, std::string_view source, std::vector<std::string> load_warnings = {});
   Model(std::shared_ptr<const mjModel> model, SceneLayout layout)
       : model_(std::move(model)), layout_(layout) {}
   std::shared_ptr<const mjModel> model_;
   SceneLayout layout_;
+  std::shared_ptr<const std::vector<std::string>> load_warnings_;
 };
 
 // One simulation's state, sized for a model. A Data may be reused for any
