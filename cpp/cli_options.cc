@@ -209,7 +209,7 @@ Options parse(int argc, const char* const* argv) {
       opts.scenario_path = std::string(v);
     } else if (arg == "--body") {
       const std::string_view v = value();
-      if (v.empty()) throw UsageError("--body must name a body of the scene, got ''");
+      if (v.empty()) throw UsageError("--body must name a body of the scene (or give its index), got ''");
       opts.body = std::string(v);
     } else if (arg == "--ctrl") {
       opts.ctrls.push_back(parse_ctrl(arg, value()));
@@ -321,16 +321,24 @@ Scenario scenario_from_flags(const Options& opts, const Model* scene) {
     s.controls.clear();
     if (scene != nullptr && scene->get()->nu > 0) s.controls.push_back({"0", {{When::steps(0), 1.0}}});
   }
-  if (!opts.body.empty()) s.disturbances[0].body = opts.body;
-  // Record what moves freely, what is pushed, and every actuator.
+  if (!opts.body.empty()) {
+    s.disturbances[0].body = opts.body;
+  } else if (!opts.model_path.empty()) {
+    s.disturbances.clear();  // another scene: no shove unless --body names what to shove
+  }
+  // Record what moves freely, what is pushed (by name, or by index when the
+  // scene left it unnamed), and every actuator.
   s.record = RecordSpec{};
   if (scene != nullptr) {
     const mjModel* m = scene->get();
+    const std::string pushed = s.disturbances.empty() ? std::string() : s.disturbances[0].body;
     for (int b = 1; b < m->nbody; ++b) {
       const char* name = mj_id2name(m, mjOBJ_BODY, b);
-      if (name == nullptr || *name == '\0') continue;
+      const std::string id = name != nullptr && *name != '\0' ? std::string(name) : std::to_string(b);
       const bool free = m->body_jntnum[b] >= 1 && m->jnt_type[m->body_jntadr[b]] == mjJNT_FREE;
-      if (free || name == s.disturbances[0].body) s.record.bodies.push_back(name);
+      if (free || id == pushed || (name != nullptr && *name != '\0' && std::to_string(b) == pushed)) {
+        s.record.bodies.push_back(id);
+      }
     }
     for (int a = 0; a < m->nu; ++a) s.record.actuators.push_back(std::to_string(a));
   }
@@ -442,8 +450,9 @@ options:
                     is given (default: the chapter's pusher scene). Alone it
                     runs the chapter's loop: a body "box" on a free joint and
                     an actuator 0 on a slide or hinge joint
-  --body NAME       the body the chapter's shove acts on (default box): runs
-                    a scenario on any scene (see below)
+  --body BODY       the body (a name or an index) the chapter's shove acts on
+                    (default box; on a --model scene, no shove unless given):
+                    runs a scenario on any scene (see below)
   --ctrl ACT=VALUE  drive actuator ACT (a name or an index) at VALUE, held
                     for the whole run; repeatable (default: actuator 0 at 1.0)
   --scenario FILE   a scenario file (TOML): the scene, timestep, length,

@@ -59,7 +59,9 @@ class UsageError : public std::runtime_error {
 
 // The scenario the quick flags describe (--body, --ctrl; a --scenario file
 // is read with Scenario::from_toml_file): the chapter's run on `scene` (the
-// --model, or the chapter's): the chapter's shove on --body (default box),
+// --model, or the chapter's): the chapter's shove on --body, a body's name
+// or index (default box on the chapter's scene; on a --model, no shove
+// without --body),
 // the --ctrl values held from step 0 (default: actuator 0 at 1.0, as the
 // chapter writes ctrl[0]), recording every body on a free joint, the pushed
 // body and every actuator. The scene's own timestep unless --timestep.
@@ -82,6 +84,14 @@ void complete_scenario_sweep(Options& opts, const Model& scene, const Scenario& 
 // What --seed, --rng, --timestep, --steps/--smoke, --no-perturb and
 // --record-every ask of a scenario run.
 [[nodiscard]] ScenarioConfig scenario_config(const Options& opts);
+
+// What the command was doing, with which inputs, for its error lines
+// (cpp/cli_doing.cc): "running 2000 steps of --model x.xml (--steps 2000,
+// --timestep 0.002, --record-every 1)" or "sweeping ...". With the scene and
+// scenario of a scenario run, the timestep and steps it ran with: the
+// flags', else the scenario's, else the scene's own.
+[[nodiscard]] std::string doing(const Options& opts, const Model* scene = nullptr,
+                                const Scenario* scenario = nullptr);
 
 // --help for `program`; `recording` says what --rerun does there, `plot`
 // what --plot does.

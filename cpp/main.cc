@@ -218,27 +218,6 @@ double peak_memory_mib() {
   return kib < 0 ? -1.0 : kib / 1024.0;
 }
 
-// What the command was doing, and with which inputs, for error lines:
-// "running 10000000 steps of the pusher scene (--steps 10000000, ...)".
-std::string doing(const simloop::cli::Options& opts) {
-  const std::string model = !opts.scenario_path.empty() ? "--scenario " + opts.scenario_path
-                            : opts.model_path.empty()    ? "the pusher scene"
-                                                         : "--model " + opts.model_path;
-  if (opts.command == simloop::cli::Command::kSweep) {
-    const std::string count = opts.sweep_timesteps.empty()
-                                  ? "the default timesteps"
-                                  : std::to_string(opts.sweep_timesteps.size()) + " timesteps";
-    return "sweeping " + count + " of " + model + " (--duration " + simloop::python_float_repr(opts.sweep_duration) +
-           ", --threads " + (opts.threads > 0 ? std::to_string(opts.threads) : std::string("auto")) + ")";
-  }
-  const simloop::RunConfig& run = opts.run;
-  const std::string steps = std::to_string(run.num_steps());
-  return "running " + steps + " steps of " + model + " (" +
-         (run.smoke ? std::string("--smoke") : "--steps " + steps) +
-         ", --timestep " + simloop::python_float_repr(run.timestep) +
-         ", --record-every " + std::to_string(run.record_every) + ")";
-}
-
 // The line and exit code for a stop on a terminating signal.
 int interrupted() {
   const int sig = g_signal != 0 ? g_signal : SIGINT;
@@ -479,6 +458,9 @@ int run_main(int argc, char** argv) {
     g_exit_at_once = 0;
     return fail(kExitRunFailed, model_flag + ": while loading the model: " + e.what());
   }
+  // What MuJoCo said while it loaded the scene, as it says what it warns
+  // while stepping: on the report.
+  std::fputs(simloop::load_warnings_text(*model).c_str(), stdout);
   // What runs: a scenario (its names checked now, in the flags' words), or
   // the chapter's loop, which needs the chapter's box and pusher.
   try {
@@ -516,6 +498,8 @@ int run_main(int argc, char** argv) {
     return fail(kExitUsage, "--out: " + std::string(e.what()));
   }
 
+  // For error lines: what ran, with the timestep and steps it ran with.
+  const auto doing_now = [&] { return simloop::cli::doing(opts, &*model, scenario ? &*scenario : nullptr); };
   try {
     check_stop();
     g_progress.start();
@@ -528,15 +512,15 @@ int run_main(int argc, char** argv) {
   } catch (const simloop::Interrupted&) {
     return interrupted();
   } catch (const simloop::MujocoError& e) {
-    return fail(kExitRunFailed, "MuJoCo error while " + doing(opts) + ": " + e.what());
+    return fail(kExitRunFailed, "MuJoCo error while " + doing_now() + ": " + e.what());
   } catch (const simloop::Error& e) {  // IoError names its file; InvalidArgument its input
     return fail(kExitRunFailed, e.what());
   } catch (const std::bad_alloc&) {
-    return fail(kExitRunFailed, "out of memory while " + doing(opts));
+    return fail(kExitRunFailed, "out of memory while " + doing_now());
   } catch (const std::system_error& e) {  // threads that cannot be made, for one
-    return fail(kExitRunFailed, "while " + doing(opts) + ": " + e.what());
+    return fail(kExitRunFailed, "while " + doing_now() + ": " + e.what());
   } catch (const std::exception& e) {
-    return fail(kExitRunFailed, "while " + doing(opts) + ": " + e.what());
+    return fail(kExitRunFailed, "while " + doing_now() + ": " + e.what());
   }
   if (g_control.stop_requested()) return interrupted();  // after the outputs were put in place
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();

@@ -115,6 +115,12 @@ std::string warning_line(const Warning& w) {
   return line;
 }
 
+std::string load_warnings_text(const Model& model) {
+  std::string out;
+  for (const std::string& w : model.load_warnings()) out += "MuJoCo warning while loading the model: " + w + "\n";
+  return out;
+}
+
 std::string summary_text(const RunResult& r) {
   const Metrics& m = r.metrics;
   char line[512];

@@ -287,8 +287,10 @@ DisturbanceSpec read_disturbance(const TableReader& t) {
   t.allow_only({"body", "force", "torque", "newtons", "direction", "random_sign", "start", "start_step",
                 "start_fraction", "duration", "steps"});
   DisturbanceSpec d;
-  const auto body = t.string("body");
-  if (!body) t.fail("body", "missing: name the body to push");
+  // A body by name, or by index (a scene may leave its bodies unnamed).
+  const auto body = t.is_integer("body") ? std::optional<std::string>(std::to_string(*t.integer("body", 0)))
+                                         : t.string("body");
+  if (!body) t.fail("body", "missing: name the body to push (or give its index)");
   d.body = *body;
   if (const auto f = t.numbers("force", 3)) std::copy(f->begin(), f->end(), d.force.begin());
   if (const auto q = t.numbers("torque", 3)) std::copy(q->begin(), q->end(), d.torque.begin());
@@ -468,15 +470,42 @@ std::string join(const std::vector<std::string>& names) {
   return out;
 }
 
+// What a lookup could have named: the names, and the unnamed by index.
+std::string listing(const mjModel* m, mjtObj type, int count, bool (*keep)(const mjModel*, int)) {
+  std::string unnamed;
+  for (int i = 0; i < count; ++i) {
+    const char* name = mj_id2name(m, type, i);
+    if ((name == nullptr || *name == '\0') && (keep == nullptr || keep(m, i))) {
+      unnamed += (unnamed.empty() ? "" : ", ") + std::to_string(i);
+    }
+  }
+  const std::vector<std::string> named = names_of(m, type, count, keep);
+  if (unnamed.empty()) return join(named);
+  return (named.empty() ? std::string() : join(named) + "; ") + "unnamed, by index: " + unnamed;
+}
+
+bool is_index(const std::string& name) {
+  return !name.empty() && name.size() <= 9 &&
+         std::all_of(name.begin(), name.end(), [](char c) { return c >= '0' && c <= '9'; });
+}
+
+// A name, or (if no object has that name) an index.
 int find(const mjModel* m, mjtObj type, const char* kind, const char* what_listed, int count,
          bool (*listed)(const mjModel*, int), const std::string& name, const std::string& context) {
   const int id = mj_name2id(m, type, name.c_str());
   if (id >= 0) return id;
+  if (is_index(name)) {
+    const long index = std::stol(name);
+    if (index < count) return static_cast<int>(index);
+    throw InvalidArgument(context + ": " + kind + " index " + name + " is out of range; the scene has " +
+                          std::to_string(count) + " (0 to " + std::to_string(count - 1) + "); " + what_listed + ": " +
+                          listing(m, type, count, listed));
+  }
   const std::vector<std::string> all = names_of(m, type, count, nullptr);
   const std::string hint = did_you_mean(name, all);
   throw InvalidArgument(context + ": no " + kind + " named '" + name + "'" +
                         (hint.empty() ? "" : " (did you mean '" + hint + "'?)") + "; " + what_listed + ": " +
-                        join(names_of(m, type, count, listed)));
+                        listing(m, type, count, listed));
 }
 
 int find_actuator(const mjModel* m, const std::string& name, const std::string& context) {

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "bindings_common.hpp"
+#include "cli_options.hpp"
 #include "simloop/model.hpp"
 #include "simloop/output.hpp"
 #include "simloop/output_lock.hpp"
@@ -76,6 +77,22 @@ void bind_outputs(py::module_& m) {
   py::list signals;
   for (const int sig : simloop::kTerminatingSignals) signals.append(sig);
   m.attr("TERMINATING_SIGNALS") = py::tuple(signals);
+
+  // What MuJoCo warned while it loaded a scene, and the report's lines for it.
+  auto model_class = py::reinterpret_borrow<py::class_<simloop::Model>>(m.attr("Model"));
+  model_class.def_property_readonly(
+      "load_warnings", [](const simloop::Model& model) { return model.load_warnings(); },
+      "What MuJoCo warned while it parsed and compiled the scene, a line each.");
+  m.def("load_warnings_text", &simloop::load_warnings_text, "model"_a,
+        "The report's lines for Model.load_warnings (both commands print them).");
+
+  m.def(
+      "doing",
+      [](const simloop::cli::Options& opts, const simloop::Model* scene, const simloop::Scenario* scenario) {
+        return simloop::cli::doing(opts, scene, scenario);
+      },
+      "opts"_a, "scene"_a = nullptr, "scenario"_a = nullptr,
+      "What the command was doing, with which inputs, for its error lines (as sim_loop words them).");
 
   py::class_<PyOutputLock>(m, "OutputLock",
                            "One run at a time in an output folder (include/simloop/output_lock.hpp): held until "

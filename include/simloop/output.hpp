@@ -40,6 +40,10 @@ namespace simloop {
 // times, first in step 1043: ..." (or "simloop warning ..." for simloop's own).
 [[nodiscard]] std::string warning_line(const Warning& warning);
 
+// The warnings MuJoCo gave while it loaded `model` (Model::load_warnings), a
+// line each: "MuJoCo warning while loading the model: ...\n"; "" if none.
+[[nodiscard]] std::string load_warnings_text(const Model& model);
+
 // Creates `dir` (and parents) if missing and checks that files can be
 // created in it. Throws IoError naming the directory.
 void prepare_output_dir(const std::filesystem::path& dir);

@@ -330,7 +330,11 @@ def _scenario(opts: "_core.CommandLine", scenario: "_core.Scenario", model: "_co
         print(f"trajectory: {trajectory_path} ({result.rows} rows, {len(result.column_names)} columns)")
         if opts.rerun:
             print(f"recording: {rrd} -- open it with: {_viewer()} {rrd}")
-    except (OSError, _core.MujocoError, ValueError) as e:
+    except _core.MujocoError as e:
+        return _fail(EXIT_RUN_FAILED, f"MuJoCo error while {_core.doing(opts, model, scenario)}: {e}")
+    except MemoryError:
+        return _fail(EXIT_RUN_FAILED, f"out of memory while {_core.doing(opts, model, scenario)}")
+    except (OSError, ValueError) as e:
         return _fail(EXIT_RUN_FAILED, str(e))
     except ImportError as e:  # rerun for the recording, imported before anything is written
         return _fail(EXIT_RUN_FAILED, f"{e} (nothing was written; --no-rerun runs without the recording)")
@@ -380,6 +384,8 @@ def _main(argv: Optional[List[str]]) -> int:
         theirs = bool(scenario.scene) if scenario is not None else bool(opts.model_path)
         flag = "--scenario" if scenario is not None else "--model"
         return _fail(EXIT_USAGE if theirs else EXIT_RUN_FAILED, f"{flag}: {e}")
+    # What MuJoCo said while it loaded the scene, as sim_loop reports it.
+    print(_core.load_warnings_text(model), end="")
     try:
         if opts.is_scenario and scenario is None:
             scenario = _core.scenario_from_flags(opts, model)
@@ -414,7 +420,11 @@ def _run_into(opts: "_core.CommandLine", model: "_core.Model", scenario: "Option
     if opts.command == "sweep":
         try:
             _sweep(opts, model, out, scenario)
-        except (OSError, _core.MujocoError, ValueError) as e:
+        except _core.MujocoError as e:
+            return _fail(EXIT_RUN_FAILED, f"MuJoCo error while {_core.doing(opts)}: {e}")
+        except MemoryError:
+            return _fail(EXIT_RUN_FAILED, f"out of memory while {_core.doing(opts)}")
+        except (OSError, ValueError) as e:
             return _fail(EXIT_RUN_FAILED, str(e))
         except ImportError as e:  # matplotlib, for sweep.png
             return _fail(EXIT_RUN_FAILED, f"plot: {e} (sweep.csv was written)")
@@ -453,7 +463,11 @@ def _run_into(opts: "_core.CommandLine", model: "_core.Model", scenario: "Option
             from .plots import trajectory_png
 
             print(f"plot: {trajectory_png(trajectory_path, out / 'trajectory.png')}")
-    except (OSError, _core.MujocoError, ValueError) as e:
+    except _core.MujocoError as e:
+        return _fail(EXIT_RUN_FAILED, f"MuJoCo error while {_core.doing(opts)}: {e}")
+    except MemoryError:
+        return _fail(EXIT_RUN_FAILED, f"out of memory while {_core.doing(opts)}")
+    except (OSError, ValueError) as e:
         return _fail(EXIT_RUN_FAILED, str(e))
     except ImportError as e:  # matplotlib for --plot
         return _fail(EXIT_RUN_FAILED, f"{e} (metrics.json and trajectory.csv were written)")

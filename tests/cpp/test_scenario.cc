@@ -135,7 +135,29 @@ TEST(Scenario, UnknownNamesListWhatTheSceneHasWithADidYouMean) {
   s = Scenario::chapter();
   s.record.joints = {"pusher_slid"};
   EXPECT_EQ(error_of([&] { (void)simloop::resolve(s, chapter_model()); }),
-            "record.joints: no joint named 'pusher_slid' (did you mean 'pusher_slide'?); its joints: pusher_slide");
+            "record.joints: no joint named 'pusher_slid' (did you mean 'pusher_slide'?); its joints: pusher_slide; "
+            "unnamed, by index: 0");
+  // A scene whose moving bodies are unnamed (MuJoCo's tendon_arm/arm26.xml):
+  // they are listed, and taken, by index.
+  const simloop::Model arm = simloop::Model::from_xml_string(
+      "<mujoco><worldbody><body><joint type=\"hinge\"/><geom size=\".1\"/>"
+      "<body pos=\"0.5 0 0\"><joint type=\"hinge\"/><geom size=\".1\"/></body></body></worldbody></mujoco>",
+      "arm");
+  s = Scenario::chapter();
+  s.controls.clear();
+  s.record = simloop::RecordSpec{};
+  s.disturbances[0].body = "upper";
+  EXPECT_EQ(error_of([&] { (void)simloop::resolve(s, arm.get()); }),
+            "disturbance[0]: no body named 'upper'; bodies that can move: unnamed, by index: 1, 2");
+  s.disturbances[0].body = "3";
+  EXPECT_EQ(error_of([&] { (void)simloop::resolve(s, arm.get()); }),
+            "disturbance[0]: body index 3 is out of range; the scene has 3 (0 to 2); bodies that can move: unnamed, "
+            "by index: 1, 2");
+  s.disturbances[0].body = "2";
+  EXPECT_EQ(simloop::resolve(s, arm.get()).disturbances.at(0).body, 2);
+  s.disturbances[0].body = "0";
+  EXPECT_EQ(error_of([&] { (void)simloop::resolve(s, arm.get()); }),
+            "disturbance[0]: the world body cannot be pushed");
 }
 
 TEST(Scenario, ResolvesNamesAndIndicesAndDefaultsToFreeBodiesAndActuators) {

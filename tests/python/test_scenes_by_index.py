@@ -1,0 +1,101 @@
+"""Any scene from the quick flags, in both commands: bodies and actuators by
+index as well as by name (a scene may leave its bodies unnamed, as MuJoCo's
+tendon_arm/arm26.xml does), --ctrl alone with no shove, a MuJoCo error while
+stepping quoting the timestep that ran, and MuJoCo's load-time warnings on
+the report."""
+
+import pytest
+
+import simloop
+from conftest import run_command
+
+# Two links on hinges, the bodies unnamed, driven by one unnamed motor; the scene's own timestep
+# is 0.004 s.
+ARM = """<mujoco model="arm">
+  <option timestep="0.004" gravity="0 0 0"/>
+  <worldbody>
+    <body pos="0 0 0"><joint name="shoulder" type="hinge" axis="0 0 1"/><geom type="capsule" fromto="0 0 0 0.5 0 0" size="0.04"/>
+      <body pos="0.5 0 0"><joint type="hinge" axis="0 0 1"/><geom type="capsule" fromto="0 0 0 0.4 0 0" size="0.03"/>
+      </body>
+    </body>
+  </worldbody>
+  <actuator><motor joint="shoulder" gear="1"/></actuator>
+</mujoco>
+"""
+# A stack too small once the boxes land: MuJoCo's "Stack overflow" while stepping.
+FALLS = """<mujoco model="falls">
+  <option timestep="0.004"/>
+  <size nstack="600"/>
+  <worldbody>
+    <geom type="plane" size="2 2 0.1"/>
+    <body name="b1" pos="0 0 0.5"><freejoint/><geom type="box" size="0.05 0.05 0.05"/></body>
+    <body name="b2" pos="0.3 0 0.5"><freejoint/><geom type="box" size="0.05 0.05 0.05"/></body>
+  </worldbody>
+</mujoco>
+"""
+BOTH = pytest.mark.parametrize("python", [True, False], ids=["python-m-simloop", "sim_loop"])
+
+
+def write(tmp_path, name, text):
+    (tmp_path / name).write_text(text)
+    return name
+
+
+@BOTH
+def test_an_unnamed_body_is_shoved_by_its_index(tmp_path, python):
+    arm = write(tmp_path, "arm.xml", ARM)
+    proc = run_command(["--model", arm, "--body", "2", "--no-rerun", "--out", "o"], tmp_path, python)
+    assert proc.returncode == 0, proc.stderr
+    assert "disturbance on body2: force [+0.00, +6.96, +0.00] N" in proc.stdout
+    header = (tmp_path / "o" / "trajectory.csv").read_text().splitlines()[0].split(",")
+    assert "body2_fy" in header and "body2_x" in header
+    refused = run_command(["--model", arm, "--body", "3", "--out", "o"], tmp_path, python)
+    assert refused.returncode == 2
+    assert refused.stderr.endswith("--body: body index 3 is out of range; the scene has 3 (0 to 2); bodies that can "
+                                   "move: unnamed, by index: 1, 2\n"), refused.stderr
+    assert refused.stderr.count("\n") == 1
+
+
+@BOTH
+def test_ctrl_alone_runs_any_scene_without_a_shove(tmp_path, python):
+    arm = write(tmp_path, "arm.xml", ARM)
+    proc = run_command(["--model", arm, "--ctrl", "0=0.5", "--no-rerun", "--out", "o"], tmp_path, python)
+    assert proc.returncode == 0, proc.stderr
+    assert "disturbance" not in proc.stdout, proc.stdout
+    header = (tmp_path / "o" / "trajectory.csv").read_text().splitlines()
+    assert header[0].split(",")[:3] == ["step", "time", "actuator0_ctrl"]
+    assert header[1].split(",")[2] == "0.5"
+    # The chapter's own scene keeps the chapter's shove on its box.
+    chapter = run_command(["--ctrl", "push_motor=0.5", "--smoke", "--no-rerun", "--out", "c"], tmp_path, python)
+    assert chapter.returncode == 0, chapter.stderr
+    assert "disturbance on box" in chapter.stdout
+
+
+@BOTH
+def test_a_mujoco_error_while_stepping_quotes_the_timestep_that_ran(tmp_path, python):
+    falls = write(tmp_path, "falls.xml", FALLS)
+    proc = run_command(["--model", falls, "--body", "b1", "--no-rerun", "--out", "o"], tmp_path, python)
+    assert proc.returncode == 1
+    prefix = "sim-loop: " if python else "sim_loop: "
+    assert proc.stderr == (f"{prefix}MuJoCo error while running 2000 steps of --model falls.xml (the scenario's length, "
+                           "timestep 0.004 s: the scene's own, --record-every 1): Stack overflow\n")
+    given = run_command(["--model", falls, "--body", "b1", "--steps", "3000", "--timestep", "0.003", "--no-rerun",
+                         "--out", "o"], tmp_path, python)
+    assert "(--steps 3000, --timestep 0.003, --record-every 1): Stack overflow" in given.stderr, given.stderr
+
+
+@BOTH
+def test_load_time_warnings_are_on_the_report(tmp_path, python):
+    scene = simloop._core.PUSHER_SCENE_XML
+    nan = write(tmp_path, "nan.xml", scene.replace('rgba="0.85 0.3 0.25 1"', 'rgba="nan 0.3 0.25 1"'))
+    full = write(tmp_path, "full.xml", scene.replace('<compiler autolimits="true"/>',
+                                                     '<compiler autolimits="true"/><size nconmax="1"/>'))
+    for name, warning in ((nan, "XML contains a 'NaN'. Please check it carefully."),
+                          (full, "Pre-allocated contact buffer is full. Increase nconmax above 1. Time = 0.0000.")):
+        proc = run_command(["--model", name, "--smoke", "--no-rerun", "--out", "o"], tmp_path, python)
+        assert proc.returncode == 0, proc.stderr
+        assert proc.stdout.splitlines()[1] == f"MuJoCo warning while loading the model: {warning}", proc.stdout
+        assert simloop.Model.from_file(tmp_path / name).load_warnings == [warning]
+    assert simloop.Model.from_file(tmp_path / "nan.xml").load_warnings != []
+    plain = run_command(["--smoke", "--no-rerun", "--out", "p"], tmp_path, python)
+    assert "while loading" not in plain.stdout
