@@ -370,6 +370,10 @@ class ParquetBatch:
     batch stops (Ctrl-C, a failure), the temporary file is removed and
     OUT.parts/ kept with a manifest (manifest.json: the batch it belongs to);
     resume=True then reads the chunks found there and runs only the others.
+    Each part file is stamped (its schema's metadata) with the batch's digest
+    and its chunk's index; resuming refuses (ResumeError) a part file that is
+    another batch's, cut short, or out of place, rather than join it, and
+    OUT carries no stamp.
     The finished file has the same bytes either way (the same chunks, read
     back from the same part files, in the same row groups); the chunk size
     of a resumed batch is the manifest's.
@@ -416,10 +420,41 @@ class ParquetBatch:
                               f"simloop version); remove it, or resume with that batch's arguments")
         self.chunk_size = int(theirs["chunk_size"])
         self.manifest["chunk_size"] = self.chunk_size
-        count = len(chunk_ranges(len(self.runs), self.chunk_size))
-        self.done = [k for k in range(count) if os.path.isfile(self._part(k))]
         ranges = chunk_ranges(len(self.runs), self.chunk_size)
+        # Every chunk found must be this batch's, whole: one copied from
+        # another batch's folder, or cut short (a full disk, a copy that
+        # stopped), would be joined into FILE otherwise.
+        for name in sorted(os.listdir(self.parts)):
+            if not (name.startswith("chunk-") and name.endswith(".parquet")):
+                continue
+            path = os.path.join(self.parts, name)
+            index = name[len("chunk-"):-len(".parquet")]
+            if not index.isdigit() or int(index) >= len(ranges) or path != self._part(int(index)):
+                raise ResumeError(f"--resume: {path}: not a chunk of this batch (it has {len(ranges)} chunks); "
+                                  f"remove it, or {self.parts}/ to start again")
+            problem = self._chunk_problem(path, int(index), ranges[int(index)][1] - ranges[int(index)][0])
+            if problem:
+                raise ResumeError(f"--resume: {path}: {problem}; remove it to run that chunk again, or {self.parts}/ "
+                                  "to start again")
+        self.done = [k for k in range(len(ranges)) if os.path.isfile(self._part(k))]
         return sum(ranges[k][1] - ranges[k][0] for k in self.done)
+
+    def _chunk_problem(self, path: str, index: int, rows: int) -> str:
+        """'' if the part file is chunk `index` of this batch, whole; else what is wrong."""
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+
+        try:
+            meta = pq.read_metadata(path)
+            stamp = meta.schema.to_arrow_schema().metadata or {}
+        except (OSError, pa.ArrowException) as e:
+            return f"truncated or damaged (pyarrow cannot read it: {e})"
+        if stamp.get(_STAMP_BATCH) != self.manifest["batch"].encode():
+            return "written for another batch (other parameters, or another simloop or MuJoCo version)"
+        if stamp.get(_STAMP_CHUNK) != str(index).encode() or meta.num_rows != rows:
+            return (f"not chunk {index} of this batch (it holds {meta.num_rows} rows, stamped chunk "
+                    f"{stamp.get(_STAMP_CHUNK, b'?').decode(errors='replace')}; chunk {index} has {rows})")
+        return ""
 
     def run(self, executor: object, progress: Optional[Callable[[int, int], object]] = None) -> int:
         """Runs what is left and writes OUT; returns the runs computed now."""
@@ -444,7 +479,7 @@ class ParquetBatch:
             def flush() -> None:
                 nonlocal writer, written
                 while written in ready:
-                    table = pq.read_table(self._part(written))
+                    table = _unstamped(pq.read_table(self._part(written)))
                     if writer is None:
                         writer = pq.ParquetWriter(temporary, table.schema)
                     writer.write_table(table)
@@ -454,7 +489,12 @@ class ParquetBatch:
             if progress is not None and done_runs:
                 progress(done_runs, len(self.runs))
             for index, chunk in iter_chunks(self.job, self.runs, executor, chunk_size=self.chunk_size, skip=ready):
+                # Stamped with the batch and its place in it (checked by --resume,
+                # taken off again in FILE).
                 table = chunk.to_arrow()
+                table = table.replace_schema_metadata({**(table.schema.metadata or {}),
+                                                       _STAMP_BATCH: self.manifest["batch"].encode(),
+                                                       _STAMP_CHUNK: str(index).encode()})
                 _write_atomically(self._part(index), lambda path: pq.write_table(table, path))
                 ready.add(index)
                 count = ranges[index][1] - ranges[index][0]
@@ -479,6 +519,16 @@ class ParquetBatch:
         """Runs whose chunks are in the parts folder now (after a stop)."""
         ranges = chunk_ranges(len(self.runs), self.chunk_size)
         return sum(b - a for k, (a, b) in enumerate(ranges) if os.path.isfile(self._part(k)))
+
+
+# The stamp a part file carries in its schema's metadata.
+_STAMP_BATCH, _STAMP_CHUNK = b"simloop_batch", b"simloop_chunk"
+
+
+def _unstamped(table: Any) -> Any:
+    """A part file's table without the stamp (FILE has the bytes it always had)."""
+    kept = {k: v for k, v in (table.schema.metadata or {}).items() if k not in (_STAMP_BATCH, _STAMP_CHUNK)}
+    return table.replace_schema_metadata(kept or None)
 
 
 def _write_text(path: str, text: str) -> None:
