@@ -27,8 +27,10 @@ def interrupted(args, cwd: Path, out: str, chunks: int) -> Path:
     """Runs the batch into `out` until it has `chunks` finished chunks, then Ctrl-C: its parts folder."""
     parts = cwd / f"{out}.parts"
     with contextlib.ExitStack() as stack:
+        # SIGINT at its default in the child, even when the tests run as a background job.
         runner = subprocess.Popen([sys.executable, "-m", "simloop", "batch", *args, "--out", out], cwd=cwd,
-                                  stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                                  stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                                  preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
         stack.callback(lambda: runner.poll() is None and (runner.kill(), runner.wait()))
         deadline = time.monotonic() + 120
         while not (parts.is_dir() and len(list(parts.glob("chunk-*.parquet"))) >= chunks):

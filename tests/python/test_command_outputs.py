@@ -57,9 +57,11 @@ SLEEPING_COMMAND = textwrap.dedent("""
 
 
 def _as_from_a_terminal():
-    """SIGINT not ignored in the child, even when the tests run as a
-    background job (which ignores it, and Python then leaves it ignored)."""
-    signal.signal(signal.SIGINT, signal.SIG_DFL)
+    """SIGINT, SIGQUIT and SIGHUP not ignored in the child, even when the tests
+    run as a background job (which ignores the first two) or under nohup (the
+    third), which the command would then leave ignored."""
+    for sig in (signal.SIGINT, signal.SIGQUIT, signal.SIGHUP):
+        signal.signal(sig, signal.SIG_DFL)
 
 
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM, signal.SIGHUP, signal.SIGQUIT, signal.SIGUSR1,
