@@ -392,6 +392,7 @@ class ParquetBatch:
         for run in runs:  # repr: floats exactly, without building one huge string
             hasher.update(repr(run).encode())
         digest = hasher.hexdigest()
+        self.digest = digest  # stamped on every part file
         self.manifest = {"format": 1, "batch": digest, "runs": len(runs), "chunk_size": chunk_size,
                          "description": description}
         self.chunk_size = chunk_size
@@ -449,7 +450,7 @@ class ParquetBatch:
             stamp = meta.schema.to_arrow_schema().metadata or {}
         except (OSError, pa.ArrowException) as e:
             return f"truncated or damaged (pyarrow cannot read it: {e})"
-        if stamp.get(_STAMP_BATCH) != self.manifest["batch"].encode():
+        if stamp.get(_STAMP_BATCH) != self.digest.encode():
             return "written for another batch (other parameters, or another simloop or MuJoCo version)"
         if stamp.get(_STAMP_CHUNK) != str(index).encode() or meta.num_rows != rows:
             return (f"not chunk {index} of this batch (it holds {meta.num_rows} rows, stamped chunk "
@@ -493,7 +494,7 @@ class ParquetBatch:
                 # taken off again in FILE).
                 table = chunk.to_arrow()
                 table = table.replace_schema_metadata({**(table.schema.metadata or {}),
-                                                       _STAMP_BATCH: self.manifest["batch"].encode(),
+                                                       _STAMP_BATCH: self.digest.encode(),
                                                        _STAMP_CHUNK: str(index).encode()})
                 _write_atomically(self._part(index), lambda path: pq.write_table(table, path))
                 ready.add(index)
