@@ -77,7 +77,7 @@ SceneLayout resolve_layout(const mjModel* m, std::string_view source) {
 // mj_loadXML reads from a file name; text in memory goes through a one-file
 // virtual file system. The VFS is 2 MB of fixed arrays, so it lives on the heap.
 // A scene from outside is compiled in a child process (isolated_load.hpp: a
-// failed compile leaves this one as it was; 6 to 10 ms more), here if no
+// failed compile leaves this one as it was; about 6 ms more), here if no
 // child can be made; the chapter's own scene, known to compile, here.
 mjModel* load_xml(const char* filename, const mjVFS* vfs, std::string_view source, std::vector<std::string>& warnings,
                   bool isolated = true) {
