@@ -140,7 +140,9 @@ TEST(PipedFile, DestroyedBeforeTheWriterClosedItLeavesNoFileAndTheWriterGoesOn) 
   EXPECT_TRUE(fs::is_empty(dir.path())) << "the temporary file was left";
   // The pipe is still drained: far more than its 64 KiB, no EPIPE, no block.
   const std::string block(1 << 20, 'y');
-  for (int i = 0; i < 8; ++i) EXPECT_EQ(::write(writer, block.data(), block.size()), static_cast<ssize_t>(block.size()));
+  for (int i = 0; i < 8; ++i) {
+    EXPECT_EQ(::write(writer, block.data(), block.size()), static_cast<ssize_t>(block.size()));
+  }
   ::close(writer);
   EXPECT_TRUE(fs::is_empty(dir.path()));
 }

@@ -14,7 +14,8 @@ from conftest import run_command
 ARM = """<mujoco model="arm">
   <option timestep="0.004" gravity="0 0 0"/>
   <worldbody>
-    <body pos="0 0 0"><joint name="shoulder" type="hinge" axis="0 0 1"/><geom type="capsule" fromto="0 0 0 0.5 0 0" size="0.04"/>
+    <body pos="0 0 0"><joint name="shoulder" type="hinge" axis="0 0 1"/>
+      <geom type="capsule" fromto="0 0 0 0.5 0 0" size="0.04"/>
       <body pos="0.5 0 0"><joint type="hinge" axis="0 0 1"/><geom type="capsule" fromto="0 0 0 0.4 0 0" size="0.03"/>
       </body>
     </body>
@@ -77,8 +78,8 @@ def test_a_mujoco_error_while_stepping_quotes_the_timestep_that_ran(tmp_path, py
     proc = run_command(["--model", falls, "--body", "b1", "--no-rerun", "--out", "o"], tmp_path, python)
     assert proc.returncode == 1
     prefix = "sim-loop: " if python else "sim_loop: "
-    assert proc.stderr == (f"{prefix}MuJoCo error while running 2000 steps of --model falls.xml (the scenario's length, "
-                           "timestep 0.004 s: the scene's own, --record-every 1): Stack overflow\n")
+    assert proc.stderr == (f"{prefix}MuJoCo error while running 2000 steps of --model falls.xml (the scenario's "
+                           "length, timestep 0.004 s: the scene's own, --record-every 1): Stack overflow\n")
     given = run_command(["--model", falls, "--body", "b1", "--steps", "3000", "--timestep", "0.003", "--no-rerun",
                          "--out", "o"], tmp_path, python)
     assert "(--steps 3000, --timestep 0.003, --record-every 1): Stack overflow" in given.stderr, given.stderr
