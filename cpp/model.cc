@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "model_detail.hpp"
+#include "mujoco_compat.hpp"
 #include "mujoco_guard.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/number_format.hpp"
@@ -74,7 +75,7 @@ SceneLayout resolve_layout(const mjModel* m, std::string_view source) {
 }
 
 // mj_loadXML reads from a file name; text in memory goes through a one-file
-// virtual file system. The VFS is 2 MB of fixed arrays, so it lives on the heap.
+// virtual file system (compat::OneFileVfs).
 mjModel* load_xml(const char* filename, const mjVFS* vfs, std::string_view source) {
   char error[1024] = "";
   mjModel* m = nullptr;
@@ -124,42 +125,11 @@ void detail::check_xml_size(std::size_t size, std::string_view source) {
   }
 }
 
-namespace {
-
-struct VfsDeleter {
-  void operator()(mjVFS* v) const noexcept {
-    mj_deleteVFS(v);
-    delete v;
-  }
-};
-using Vfs = std::unique_ptr<mjVFS, VfsDeleter>;
-
-// A virtual file system holding one file, `name`, with `contents` (which
-// the caller has checked fits in an int). `what` says what it holds, for errors.
-Vfs one_file_vfs(const char* name, std::string_view contents, std::string_view source, const char* what) {
-  Vfs vfs(new mjVFS);
-  mj_defaultVFS(vfs.get());
-  int status = 0;
-  const int size = static_cast<int>(contents.size());
-  try {
-    detail::mujoco_call([&] { status = mj_makeEmptyFileVFS(vfs.get(), name, size); });
-  } catch (const MujocoError& e) {
-    throw MujocoError(std::string(source) + ": holding the " + what + " in memory: " + e.what());
-  }
-  if (status != 0) {
-    throw Error(std::string(source) + ": could not hold the " + what + " in MuJoCo's virtual file system");
-  }
-  std::memcpy(vfs->filedata[vfs->nfile - 1], contents.data(), contents.size());
-  return vfs;
-}
-
-}  // namespace
-
 Model Model::from_xml_string(std::string_view xml, std::string_view source) {
   detail::check_xml_size(xml.size(), source);
   detail::install_mujoco_handlers();
   constexpr const char* kName = "model.xml";
-  const Vfs vfs = one_file_vfs(kName, xml, source, "XML");
+  const detail::compat::OneFileVfs vfs(kName, xml, source, "XML");
   mjModel* raw = load_xml(kName, vfs.get(), source);
   return adopt(raw, source);
 }
@@ -221,7 +191,7 @@ bool Data::fits(const Model& model) const noexcept {
 std::string Model::to_bytes() const {
   const mjModel* m = model_.get();
   int size = 0;
-  detail::mujoco_call([&] { size = mj_sizeModel(m); });
+  detail::mujoco_call([&] { size = detail::compat::as_int(mj_sizeModel(m)); });
   std::string bytes(static_cast<std::size_t>(size), '\0');
   char* buffer = bytes.data();
   try {
@@ -239,7 +209,7 @@ Model Model::from_bytes(std::string_view bytes, std::string_view source) {
   }
   detail::install_mujoco_handlers();
   constexpr const char* kName = "model.mjb";
-  const Vfs vfs = one_file_vfs(kName, bytes, source, "saved model");
+  const detail::compat::OneFileVfs vfs(kName, bytes, source, "saved model");
   mjModel* raw = nullptr;
   const mjVFS* files = vfs.get();
   try {
@@ -248,10 +218,21 @@ Model Model::from_bytes(std::string_view bytes, std::string_view source) {
     throw MujocoError(std::string(source) + ": loading the saved model: " + e.what());
   }
   if (raw == nullptr) {
-    throw MujocoError(std::string(source) + ": not a model MuJoCo " + std::to_string(mj_version()) +
+    throw MujocoError(std::string(source) + ": not a model MuJoCo " + detail::compat::version_string() +
                       " saved (mj_loadModel refused it)");
   }
   return adopt(raw, source);
+}
+
+Model Model::copy_of(const mjModel* m, std::string_view source) {
+  detail::install_mujoco_handlers();
+  mjModel* copy = nullptr;
+  try {
+    detail::mujoco_call([&] { copy = mj_copyModel(nullptr, m); });
+  } catch (const MujocoError& e) {
+    throw MujocoError(std::string(source) + ": copying the model: " + e.what());
+  }
+  return adopt(copy, source);
 }
 
 std::string Model::name() const {
@@ -260,9 +241,6 @@ std::string Model::name() const {
   return m->nnames > 0 ? std::string(m->names) : std::string();
 }
 
-std::string mujoco_version() {
-  const int v = mj_version();  // 222 for 2.2.2
-  return "MuJoCo " + std::to_string(v / 100) + "." + std::to_string(v / 10 % 10) + "." + std::to_string(v % 10);
-}
+std::string mujoco_version() { return "MuJoCo " + detail::compat::version_string(); }
 
 }  // namespace simloop

@@ -1,0 +1,240 @@
+#include "mujoco_compat.hpp"
+
+#include <link.h>
+
+#include <algorithm>
+#include <array>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <iterator>
+#include <mutex>
+#include <system_error>
+
+#include "mujoco_guard.hpp"
+#include "simloop/errors.hpp"
+
+namespace simloop::detail::compat {
+namespace {
+
+constexpr const char* kWarningNames[] = {
+#include "simloop/mujoco_warning_names.inc"
+};
+static_assert(std::size(kWarningNames) == mjNWARNING, "the warning names read from the headers are MuJoCo's");
+
+}  // namespace
+
+std::string version_string() { return mj_versionString(); }
+
+const char* warning_name(int warning) noexcept {
+  return warning >= 0 && warning < mjNWARNING ? kWarningNames[warning] : "mjWARN_UNKNOWN";
+}
+
+#if mjVERSION_HEADER >= 300
+// ---------------------------------------------------------------- MuJoCo 3.3 .. 4.x
+
+OneFileVfs::OneFileVfs(const char* name, std::string_view contents, std::string_view source, const char* what)
+    : vfs_(new mjVFS) {
+  mj_defaultVFS(vfs_.get());
+  int status = 0;
+  mjVFS* vfs = vfs_.get();
+  const int size = static_cast<int>(contents.size());  // the caller checked it fits
+  const char* bytes = contents.data();
+  try {
+    mujoco_call([&] { status = mj_addBufferVFS(vfs, name, bytes, size); });
+  } catch (const MujocoError& e) {
+    throw MujocoError(std::string(source) + ": holding the " + what + " in memory: " + e.what());
+  }
+  if (status != 0) {
+    throw Error(std::string(source) + ": could not hold the " + what + " in MuJoCo's virtual file system");
+  }
+}
+
+OneFileVfs::~OneFileVfs() { mj_deleteVFS(vfs_.get()); }
+
+std::string warning_text(int warning, int info) {
+  // Thread-local in MuJoCo since 2.3.1: safe while batches step in threads.
+  return mju_warningText(warning, static_cast<std::size_t>(std::max(info, 0)));
+}
+
+namespace {
+
+constexpr int kStateSignature = mjSTATE_INTEGRATION;
+constexpr const char* kStateNames[] = {
+#include "simloop/mujoco_state_names.inc"
+};
+static_assert(std::size(kStateNames) == mjNSTATE, "the state names read from the headers are MuJoCo's");
+
+// MuJoCo 3.4 put bodies to sleep: d->tree_asleep counts each kinematic tree
+// towards sleep and is not part of mj_getState, so a state without it wakes
+// every sleeping tree on restore. It goes after MuJoCo's own state, as doubles.
+#if mjVERSION_HEADER >= 340
+std::size_t sleep_size(const mjModel* m) noexcept { return count(m->ntree); }
+#else
+std::size_t sleep_size(const mjModel*) noexcept { return 0; }
+#endif
+
+std::size_t mujoco_state_size(const mjModel* m) noexcept {
+  return static_cast<std::size_t>(mj_stateSize(m, kStateSignature));
+}
+
+}  // namespace
+
+std::vector<std::pair<std::string, std::size_t>> state_layout(const mjModel* m) {
+  std::vector<std::pair<std::string, std::size_t>> layout;
+  for (int i = 0; i < mjNSTATE; ++i) {
+    const int element = 1 << i;
+    if ((kStateSignature & element) == 0) continue;
+    std::string name = kStateNames[i] + std::strlen("mjSTATE_");
+    std::transform(name.begin(), name.end(), name.begin(), [](char c) { return c >= 'A' && c <= 'Z' ? char(c + 32) : c; });
+    layout.emplace_back(std::move(name), static_cast<std::size_t>(mj_stateSize(m, element)));
+  }
+  if (sleep_size(m) > 0) layout.emplace_back("tree_asleep", sleep_size(m));
+  return layout;
+}
+
+std::size_t state_size(const mjModel* m) noexcept { return mujoco_state_size(m) + sleep_size(m); }
+
+void get_state(const mjModel* m, const mjData* d, double* state) noexcept {
+  mj_getState(m, d, state, kStateSignature);
+#if mjVERSION_HEADER >= 340
+  std::copy_n(d->tree_asleep, sleep_size(m), state + mujoco_state_size(m));
+#endif
+}
+
+void put_state(const mjModel* m, mjData* d, const double* state) noexcept {
+  mj_setState(m, d, state, kStateSignature);
+#if mjVERSION_HEADER >= 340
+  const double* asleep = state + mujoco_state_size(m);
+  for (std::size_t i = 0; i < sleep_size(m); ++i) d->tree_asleep[i] = static_cast<int>(asleep[i]);
+#endif
+}
+
+namespace {
+// The folder of the libmujoco this process runs: the one whose file name
+// starts with libmujoco.so among the loaded objects.
+int find_libmujoco(dl_phdr_info* info, std::size_t, void* out) {
+  const char* path = info->dlpi_name;
+  if (path == nullptr || *path == '\0') return 0;
+  const std::filesystem::path file(path);
+  if (file.filename().string().rfind("libmujoco.so", 0) != 0) return 0;
+  *static_cast<std::filesystem::path*>(out) = file.parent_path();
+  return 1;
+}
+}  // namespace
+
+void load_plugins_once() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    std::filesystem::path folder;
+    dl_iterate_phdr(find_libmujoco, &folder);
+    if (folder.empty()) return;
+    const std::string plugins = (folder / "plugin").string();
+    std::error_code error;
+    if (!std::filesystem::is_directory(plugins, error)) return;
+    // A plugin library that fails to load leaves its plugins unknown; the
+    // scene that names one then fails to load with MuJoCo's own message.
+    const char* dir = plugins.c_str();
+    (void)call_catching_mujoco_error([](void* p) { mj_loadAllPluginLibraries(static_cast<const char*>(p), nullptr); },
+                                     const_cast<char*>(dir));
+  });
+}
+
+#else
+// ---------------------------------------------------------------- MuJoCo 2.2
+
+// 2.2's mjVFS is fixed arrays (2 MB): made empty, then filled in place.
+OneFileVfs::OneFileVfs(const char* name, std::string_view contents, std::string_view source, const char* what)
+    : vfs_(new mjVFS) {
+  mj_defaultVFS(vfs_.get());
+  int status = 0;
+  mjVFS* vfs = vfs_.get();
+  const int size = static_cast<int>(contents.size());  // the caller checked it fits
+  try {
+    mujoco_call([&] { status = mj_makeEmptyFileVFS(vfs, name, size); });
+  } catch (const MujocoError& e) {
+    throw MujocoError(std::string(source) + ": holding the " + what + " in memory: " + e.what());
+  }
+  if (status != 0) {
+    throw Error(std::string(source) + ": could not hold the " + what + " in MuJoCo's virtual file system");
+  }
+  std::memcpy(vfs->filedata[vfs->nfile - 1], contents.data(), contents.size());
+}
+
+OneFileVfs::~OneFileVfs() { mj_deleteVFS(vfs_.get()); }
+
+// 2.2's texts (mju_warningText), rebuilt because that function writes one
+// shared static buffer and batches step in threads.
+std::string warning_text(int warning, int info) {
+  static constexpr const char* kFormats[mjNWARNING] = {
+      "Inertia matrix is too close to singular at DOF %d. Check model.",
+      "Pre-allocated contact buffer is full. Increase nconmax above %d.",
+      "Pre-allocated constraint buffer is full. Increase njmax above %d.",
+      "Pre-allocated visual geom buffer is full. Increase maxgeom above %d.",
+      "Nan, Inf or huge value in QPOS at DOF %d. The simulation is unstable.",
+      "Nan, Inf or huge value in QVEL at DOF %d. The simulation is unstable.",
+      "Nan, Inf or huge value in QACC at DOF %d. The simulation is unstable.",
+      "Nan, Inf or huge value in CTRL at ACTUATOR %d. The simulation is unstable."};
+  if (warning < 0 || warning >= mjNWARNING) return "Unknown warning type " + std::to_string(warning) + ".";
+  char text[160];
+  std::snprintf(text, sizeof text, kFormats[warning], info);
+  return text;
+}
+
+namespace {
+
+// MuJoCo 2.2 has no mj_getState; this is the same idea as later MuJoCo's
+// mjSTATE_INTEGRATION, in this order. These two lists serve get, put and
+// the layout, so they cannot disagree.
+constexpr std::size_t kParts = 11;
+constexpr std::array<const char*, kParts> kNames = {
+    "time", "qpos", "qvel", "act", "qacc_warmstart", "ctrl", "qfrc_applied", "xfrc_applied",
+    "mocap_pos", "mocap_quat", "userdata"};
+
+std::array<std::size_t, kParts> sizes(const mjModel* m) noexcept {
+  return {1, count(m->nq), count(m->nv), count(m->na), count(m->nv), count(m->nu), count(m->nv),
+          6 * count(m->nbody), 3 * count(m->nmocap), 4 * count(m->nmocap), count(m->nuserdata)};
+}
+
+template <typename D>
+auto places(D* d) noexcept {
+  return std::array<decltype(&d->time), kParts>{&d->time, d->qpos, d->qvel, d->act, d->qacc_warmstart,
+                                                 d->ctrl, d->qfrc_applied, d->xfrc_applied, d->mocap_pos,
+                                                 d->mocap_quat, d->userdata};
+}
+
+}  // namespace
+
+std::vector<std::pair<std::string, std::size_t>> state_layout(const mjModel* m) {
+  const auto size = sizes(m);
+  std::vector<std::pair<std::string, std::size_t>> layout;
+  for (std::size_t i = 0; i < kParts; ++i) layout.emplace_back(kNames[i], size[i]);
+  return layout;
+}
+
+std::size_t state_size(const mjModel* m) noexcept {
+  std::size_t total = 0;
+  for (const std::size_t size : sizes(m)) total += size;
+  return total;
+}
+
+void get_state(const mjModel* m, const mjData* d, double* state) noexcept {
+  const auto size = sizes(m);
+  const auto source = places(d);
+  for (std::size_t i = 0; i < kParts; ++i) state = std::copy_n(source[i], size[i], state);
+}
+
+void put_state(const mjModel* m, mjData* d, const double* state) noexcept {
+  const auto size = sizes(m);
+  const auto target = places(d);
+  for (std::size_t i = 0; i < kParts; ++i) {
+    std::copy_n(state, size[i], target[i]);
+    state += size[i];
+  }
+}
+
+void load_plugins_once() {}
+
+#endif
+
+}  // namespace simloop::detail::compat
