@@ -80,7 +80,7 @@ mjModel* load_xml(const char* filename, const mjVFS* vfs, std::string_view sourc
   char error[1024] = "";
   mjModel* m = nullptr;
   try {
-    detail::mujoco_call([&] { m = mj_loadXML(filename, vfs, error, sizeof error); });
+    detail::mujoco_call([&] { m = detail::compat::load_xml(filename, vfs, error, sizeof error); });
   } catch (const MujocoError& e) {
     throw MujocoError(std::string(source) + ": loading the model: " + e.what());
   }

@@ -26,6 +26,26 @@ static_assert(std::size(kWarningNames) == mjNWARNING, "the warning names read fr
 
 std::string version_string() { return mj_versionString(); }
 
+mjModel* load_xml(const char* filename, const mjVFS* vfs, char* error, int error_size) {
+#if mjVERSION_HEADER >= 300
+  mjSpec* spec = mj_parseXML(filename, vfs, error, error_size);
+  if (spec == nullptr) return nullptr;
+  mjModel* m = nullptr;
+  if (spec->nkey > kMaxKeyframes) {
+    std::snprintf(error, static_cast<std::size_t>(error_size),
+                  "<size nkey=\"%d\"> asks for %d keyframes; simloop loads at most %d", spec->nkey, spec->nkey,
+                  kMaxKeyframes);
+  } else {
+    m = mj_compile(spec, vfs);
+    if (m == nullptr) std::snprintf(error, static_cast<std::size_t>(error_size), "%s", mjs_getError(spec));
+  }
+  mj_deleteSpec(spec);
+  return m;
+#else
+  return mj_loadXML(filename, vfs, error, error_size);
+#endif
+}
+
 const char* warning_name(int warning) noexcept {
   return warning >= 0 && warning < mjNWARNING ? kWarningNames[warning] : "mjWARN_UNKNOWN";
 }
@@ -33,24 +53,12 @@ const char* warning_name(int warning) noexcept {
 #if mjVERSION_HEADER >= 300
 // ---------------------------------------------------------------- MuJoCo 3.3 .. 4.x
 
-OneFileVfs::OneFileVfs(const char* name, std::string_view contents, std::string_view source, const char* what)
-    : vfs_(new mjVFS) {
-  mj_defaultVFS(vfs_.get());
-  int status = 0;
-  mjVFS* vfs = vfs_.get();
-  const int size = static_cast<int>(contents.size());  // the caller checked it fits
-  const char* bytes = contents.data();
-  try {
-    mujoco_call([&] { status = mj_addBufferVFS(vfs, name, bytes, size); });
-  } catch (const MujocoError& e) {
-    throw MujocoError(std::string(source) + ": holding the " + what + " in memory: " + e.what());
-  }
-  if (status != 0) {
-    throw Error(std::string(source) + ": could not hold the " + what + " in MuJoCo's virtual file system");
-  }
+namespace {
+// Adds `contents` to vfs as the file `name`; MuJoCo's status, 0 when done.
+int add_file(mjVFS* vfs, const char* name, std::string_view contents) {
+  return mj_addBufferVFS(vfs, name, contents.data(), static_cast<int>(contents.size()));
 }
-
-OneFileVfs::~OneFileVfs() { mj_deleteVFS(vfs_.get()); }
+}  // namespace
 
 std::string warning_text(int warning, int info) {
   // Thread-local in MuJoCo since 2.3.1: safe while batches step in threads.
@@ -70,6 +78,13 @@ static_assert(std::size(kStateNames) == mjNSTATE, "the state names read from the
 // every sleeping tree on restore. It goes after MuJoCo's own state, as doubles.
 #if mjVERSION_HEADER >= 340
 std::size_t sleep_size(const mjModel* m) noexcept { return count(m->ntree); }
+}  // namespace
+// Recomputes d's derived sleep arrays (tree_awake, body_awake, ...) from
+// tree_asleep. Exported by libmujoco since 3.4 but not declared in its
+// headers; without it the next step sees trees asleep by tree_asleep yet
+// awake by tree_awake, and wakes them ("perturbation").
+extern "C" void mj_updateSleep(const mjModel* m, mjData* d);
+namespace {
 #else
 std::size_t sleep_size(const mjModel*) noexcept { return 0; }
 #endif
@@ -107,6 +122,15 @@ void put_state(const mjModel* m, mjData* d, const double* state) noexcept {
 #if mjVERSION_HEADER >= 340
   const double* asleep = state + mujoco_state_size(m);
   for (std::size_t i = 0; i < sleep_size(m); ++i) d->tree_asleep[i] = static_cast<int>(asleep[i]);
+  mj_updateSleep(m, d);
+#endif
+}
+
+void put_state_awake(const mjModel* m, mjData* d, const double* state) noexcept {
+  mj_setState(m, d, state, kStateSignature);
+#if mjVERSION_HEADER >= 340
+  std::fill_n(d->tree_asleep, sleep_size(m), -(1 + mjMINAWAKE));  // MuJoCo's "fully awake"
+  mj_updateSleep(m, d);
 #endif
 }
 
@@ -143,25 +167,14 @@ void load_plugins_once() {
 #else
 // ---------------------------------------------------------------- MuJoCo 2.2
 
-// 2.2's mjVFS is fixed arrays (2 MB): made empty, then filled in place.
-OneFileVfs::OneFileVfs(const char* name, std::string_view contents, std::string_view source, const char* what)
-    : vfs_(new mjVFS) {
-  mj_defaultVFS(vfs_.get());
-  int status = 0;
-  mjVFS* vfs = vfs_.get();
-  const int size = static_cast<int>(contents.size());  // the caller checked it fits
-  try {
-    mujoco_call([&] { status = mj_makeEmptyFileVFS(vfs, name, size); });
-  } catch (const MujocoError& e) {
-    throw MujocoError(std::string(source) + ": holding the " + what + " in memory: " + e.what());
-  }
-  if (status != 0) {
-    throw Error(std::string(source) + ": could not hold the " + what + " in MuJoCo's virtual file system");
-  }
-  std::memcpy(vfs->filedata[vfs->nfile - 1], contents.data(), contents.size());
+namespace {
+// 2.2's mjVFS is fixed arrays (2 MB): a file is made empty, then filled in place.
+int add_file(mjVFS* vfs, const char* name, std::string_view contents) {
+  const int status = mj_makeEmptyFileVFS(vfs, name, static_cast<int>(contents.size()));
+  if (status == 0) std::memcpy(vfs->filedata[vfs->nfile - 1], contents.data(), contents.size());
+  return status;
 }
-
-OneFileVfs::~OneFileVfs() { mj_deleteVFS(vfs_.get()); }
+}  // namespace
 
 // 2.2's texts (mju_warningText), rebuilt because that function writes one
 // shared static buffer and batches step in threads.
@@ -233,8 +246,30 @@ void put_state(const mjModel* m, mjData* d, const double* state) noexcept {
   }
 }
 
+void put_state_awake(const mjModel* m, mjData* d, const double* state) noexcept { put_state(m, d, state); }
+
 void load_plugins_once() {}
 
 #endif
+
+// ---------------------------------------------------------------- both
+
+OneFileVfs::OneFileVfs(const char* name, std::string_view contents, std::string_view source, const char* what)
+    : vfs_(new mjVFS) {
+  mj_defaultVFS(vfs_.get());
+  int status = 0;
+  mjVFS* vfs = vfs_.get();
+  try {
+    // The caller checked that contents' size fits MuJoCo's int.
+    mujoco_call([&] { status = add_file(vfs, name, contents); });
+  } catch (const MujocoError& e) {
+    throw MujocoError(std::string(source) + ": holding the " + what + " in memory: " + e.what());
+  }
+  if (status != 0) {
+    throw Error(std::string(source) + ": could not hold the " + what + " in MuJoCo's virtual file system");
+  }
+}
+
+OneFileVfs::~OneFileVfs() { mj_deleteVFS(vfs_.get()); }
 
 }  // namespace simloop::detail::compat

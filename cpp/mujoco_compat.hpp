@@ -59,6 +59,15 @@ class OneFileVfs {
   std::unique_ptr<mjVFS> vfs_;
 };
 
+// mj_loadXML, with simloop's own bound on what MuJoCo would take hours to
+// compile: MuJoCo 3 and later add <size nkey="N"> keyframes one at a time
+// (2^31 of them ran for hours where 2.2 ran out of memory at once), so from
+// 3.x the XML is parsed first and more than kMaxKeyframes refused, with
+// the reason in `error`. Returns nullptr with `error` set on failure. Call it
+// inside MuJoCo's error guard.
+inline constexpr int kMaxKeyframes = 1000000;
+[[nodiscard]] mjModel* load_xml(const char* filename, const mjVFS* vfs, char* error, int error_size);
+
 // MuJoCo's warnings: how many, each one's name ("mjWARN_BADQACC", from the
 // headers) and its message for a given info, as mju_warningText words it.
 inline constexpr int kWarningCount = mjNWARNING;
@@ -71,6 +80,9 @@ inline constexpr int kWarningCount = mjNWARNING;
 [[nodiscard]] std::size_t state_size(const mjModel* m) noexcept;
 void get_state(const mjModel* m, const mjData* d, double* state) noexcept;
 void put_state(const mjModel* m, mjData* d, const double* state) noexcept;
+// put_state with every kinematic tree awake (no sleep on 2.2: the same), so
+// that an mj_forward after it derives every body's pose, sleeping or not.
+void put_state_awake(const mjModel* m, mjData* d, const double* state) noexcept;
 
 // Loads the plugin libraries that ship beside libmujoco (its plugin/
 // folder), once per process, so scenes that use MuJoCo's first-party

@@ -21,8 +21,13 @@ std::vector<double> get_state(const mjModel* m, const mjData* d) {
 }
 
 void set_state(const mjModel* m, mjData* d, const double* state) {
+  // MuJoCo skips sleeping bodies when it derives poses, so derive them all
+  // with every tree awake, then put the state back exactly, sleep and all
+  // (mj_forward also moves the warmstart and renormalizes quaternions: see
+  // forward_keeping_state).
+  detail::compat::put_state_awake(m, d, state);
+  mj_forward(m, d);
   detail::compat::put_state(m, d, state);
-  forward_keeping_state(m, d);
 }
 
 void forward_keeping_state(const mjModel* m, mjData* d) {

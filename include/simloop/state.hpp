@@ -37,7 +37,7 @@ namespace simloop {
 void get_state(const mjModel* m, const mjData* d, double* state) noexcept;
 [[nodiscard]] std::vector<double> get_state(const mjModel* m, const mjData* d);
 
-// Writes state[0 .. state_size(m)) into d and runs forward_keeping_state,
+// Writes state[0 .. state_size(m)) into d, derives what MuJoCo derives from it,
 // so that what MuJoCo derives from the state (poses, contacts, sensors) is
 // current. The caller checks the size; values are taken as they are (a state
 // is data MuJoCo itself produced, or the caller's responsibility). Inside

@@ -11,6 +11,7 @@ Nothing here imports mujoco (it loads numpy and a renderer).
 from __future__ import annotations
 
 import glob
+import importlib
 import importlib.util
 import os
 
@@ -60,7 +61,7 @@ def mujoco_model_address(model: object, simloop_mujoco: str) -> int:
     come from the very libmujoco simloop runs: the PyPI build, and the same
     version (then one library file serves both, see load_failure_message).
     """
-    import mujoco  # loaded already: the model is one of its objects
+    mujoco = importlib.import_module("mujoco")  # loaded already: the model is one of its objects
 
     theirs = f"MuJoCo {mujoco.mj_versionString()}"
     if MUJOCO_BUILD != "pypi":

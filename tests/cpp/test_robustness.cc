@@ -153,6 +153,24 @@ TEST(Robustness, ACppExceptionInsideTheGuardBecomesOneMujocoError) {
   }
 }
 
+TEST(Robustness, AHugeKeyframeCountIsRefusedBeforeCompiling) {
+  // MuJoCo 3's compiler adds <size nkey> keyframes one at a time: 2^31 of
+  // them ran for hours (a fuzzed scene). simloop refuses more than it can
+  // use before compiling; MuJoCo 2.2 has no separate parse step to check.
+  SIMLOOP_EXPECTED(bool, refused, "errors.huge_nkey_refused_before_compiling");
+  if (!refused) GTEST_SKIP() << "MuJoCo " << mj_versionString() << " parses and compiles in one call";
+  std::string xml(simloop::pusher_scene_xml());
+  const std::string compiler = "<compiler autolimits=\"true\"/>";
+  xml.replace(xml.find(compiler), compiler.size(), compiler + "<size nkey=\"2147483647\"/>");
+  try {
+    (void)simloop::Model::from_xml_string(xml, "many_keys");
+    ADD_FAILURE() << "loaded";
+  } catch (const simloop::MujocoError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "many_keys: <size nkey=\"2147483647\"> asks for 2147483647 keyframes; simloop loads at most 1000000");
+  }
+}
+
 TEST(Robustness, OutOfMemoryWhileCompilingIsAnErrorNamingTheModel) {
 #if defined(__SANITIZE_ADDRESS__)
   GTEST_SKIP() << "RLIMIT_AS cannot cap a process under AddressSanitizer";
