@@ -42,7 +42,17 @@ mjModel* load_xml(const char* filename, const mjVFS* vfs, char* error, int error
   mj_deleteSpec(spec);
   return m;
 #else
-  return mj_loadXML(filename, vfs, error, error_size);
+  mjModel* m = mj_loadXML(filename, vfs, error, error_size);
+  // Today's scenes use words 2.2 does not know (implicitfast, <size memory>,
+  // actuatorfrcrange, ...): say which MuJoCo this is and how to get the other.
+  if (m == nullptr && (std::strstr(error, "Schema violation") != nullptr || std::strstr(error, "invalid keyword") != nullptr)) {
+    const std::size_t used = std::strlen(error);
+    std::snprintf(error + used, static_cast<std::size_t>(error_size) - used,
+                  " (this simloop runs MuJoCo %s; for a scene written for newer MuJoCo, build it on the mujoco "
+                  "package: SIMLOOP_MUJOCO=pypi scripts/run.sh)",
+                  mj_versionString());
+  }
+  return m;
 #endif
 }
 

@@ -122,6 +122,25 @@ TEST(Model, InvalidXmlRaisesMujocosOwnMessageAndWritesNoLog) {
   EXPECT_FALSE(fs::exists(dir.path() / "MUJOCO_LOG.TXT"));
 }
 
+TEST(Model, ASceneForNewerMujocoSaysHowToGetIt) {
+  // implicitfast came in MuJoCo 2.3.3: 2.2 refuses the word, and the message
+  // says which MuJoCo this is and how to build on the other.
+  SIMLOOP_EXPECTED(bool, refused, "errors.implicitfast_refused");
+  const std::string xml = scene_with("<compiler autolimits=\"true\"/>",
+                                     "<compiler autolimits=\"true\"/><option integrator=\"implicitfast\"/>");
+  if (!refused) {
+    EXPECT_NE(simloop::Model::from_xml_string(xml, "new.xml").get(), nullptr);
+    return;
+  }
+  const std::string msg = message_of<simloop::MujocoError>([&] { (void)simloop::Model::from_xml_string(xml, "new.xml"); });
+  EXPECT_NE(msg.find("implicitfast"), std::string::npos) << msg;
+  EXPECT_NE(msg.find(std::string("this simloop runs MuJoCo ") + mj_versionString() + "; for a scene written for newer "
+                     "MuJoCo, build it on the mujoco package: SIMLOOP_MUJOCO=pypi scripts/run.sh)"),
+            std::string::npos)
+      << msg;
+  EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
+}
+
 TEST(Model, FromFile) {
   test::TempDir dir;
   const fs::path path = dir.path() / "scene.xml";
