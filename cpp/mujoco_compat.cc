@@ -31,10 +31,22 @@ mjModel* load_xml(const char* filename, const mjVFS* vfs, char* error, int error
   mjSpec* spec = mj_parseXML(filename, vfs, error, error_size);
   if (spec == nullptr) return nullptr;
   mjModel* m = nullptr;
+  // Sizes MuJoCo 3's compiler fills element by element (2^31 user numbers a
+  // body allocated for minutes, then crashed): refused before compiling.
+  const std::pair<const char*, int> user_sizes[] = {
+      {"nuserdata", spec->nuserdata},     {"nuser_body", spec->nuser_body}, {"nuser_jnt", spec->nuser_jnt},
+      {"nuser_geom", spec->nuser_geom},   {"nuser_site", spec->nuser_site}, {"nuser_cam", spec->nuser_cam},
+      {"nuser_tendon", spec->nuser_tendon}, {"nuser_actuator", spec->nuser_actuator},
+      {"nuser_sensor", spec->nuser_sensor}};
+  const auto too_big = std::find_if(std::begin(user_sizes), std::end(user_sizes),
+                                    [](const auto& size) { return size.second > kMaxUserNumbers; });
   if (spec->nkey > kMaxKeyframes) {
     std::snprintf(error, static_cast<std::size_t>(error_size),
                   "<size nkey=\"%d\"> asks for %d keyframes; simloop loads at most %d", spec->nkey, spec->nkey,
                   kMaxKeyframes);
+  } else if (too_big != std::end(user_sizes)) {
+    std::snprintf(error, static_cast<std::size_t>(error_size), "<size %s=\"%d\"> is more than simloop loads (%d)",
+                  too_big->first, too_big->second, kMaxUserNumbers);
   } else {
     m = mj_compile(spec, vfs);
     if (m == nullptr) std::snprintf(error, static_cast<std::size_t>(error_size), "%s", mjs_getError(spec));

@@ -66,6 +66,7 @@ class OneFileVfs {
 // the reason in `error`. Returns nullptr with `error` set on failure. Call it
 // inside MuJoCo's error guard.
 inline constexpr int kMaxKeyframes = 1000000;
+inline constexpr int kMaxUserNumbers = 1000000;  // <size nuserdata>, <size nuser_body> and the like
 [[nodiscard]] mjModel* load_xml(const char* filename, const mjVFS* vfs, char* error, int error_size);
 
 // MuJoCo's warnings: how many, each one's name ("mjWARN_BADQACC", from the
