@@ -36,18 +36,22 @@ else()
   endif()
 endif()
 
-# OpenGL first: mujocoConfig.cmake's find_dependency(OpenGL) then reuses it.
-find_package(OpenGL QUIET)
-if(NOT OPENGL_FOUND)
-  _simloop_lacks("the OpenGL development files that MuJoCo's CMake config asks for (libgl-dev, libopengl-dev)"
-                 libgl-dev libopengl-dev)
-endif()
+# Debian's MuJoCo (SIMLOOP_MUJOCO=system). The PyPI package's headers need
+# neither OpenGL nor qhull; cmake/MujocoFromPypi.cmake checks that build.
+if(SIMLOOP_MUJOCO STREQUAL "system")
+  # OpenGL first: mujocoConfig.cmake's find_dependency(OpenGL) then reuses it.
+  find_package(OpenGL QUIET)
+  if(NOT OPENGL_FOUND)
+    _simloop_lacks("the OpenGL development files that MuJoCo's CMake config asks for (libgl-dev, libopengl-dev)"
+                   libgl-dev libopengl-dev)
+  endif()
 
-# mujoco_DIR is set when the config file exists, even when its OpenGL
-# dependency made it report not found.
-find_package(mujoco 2.2 CONFIG QUIET)
-if(NOT mujoco_DIR)
-  _simloop_lacks("MuJoCo 2.2's development files (libmujoco-dev)" libmujoco-dev)
+  # mujoco_DIR is set when the config file exists, even when its OpenGL
+  # dependency made it report not found.
+  find_package(mujoco 2.2 CONFIG QUIET)
+  if(NOT mujoco_DIR)
+    _simloop_lacks("MuJoCo 2.2's development files (libmujoco-dev)" libmujoco-dev)
+  endif()
 endif()
 
 # Scenario files are TOML, read with toml++.
@@ -62,7 +66,7 @@ endif()
 find_path(SIMLOOP_QHULL_INCLUDE_DIR libqhull_r/libqhull_r.h)
 find_path(SIMLOOP_GTEST_INCLUDE_DIR gtest/gtest.h)
 mark_as_advanced(SIMLOOP_QHULL_INCLUDE_DIR SIMLOOP_GTEST_INCLUDE_DIR)
-if(NOT SIMLOOP_QHULL_INCLUDE_DIR)
+if(NOT SIMLOOP_QHULL_INCLUDE_DIR AND SIMLOOP_MUJOCO STREQUAL "system")
   _simloop_lacks("the qhull headers that MuJoCo's headers include (libqhull-dev)" libqhull-dev)
 endif()
 if(NOT SIMLOOP_GTEST_INCLUDE_DIR AND SIMLOOP_BUILD_TESTS AND (BUILD_TESTING OR NOT DEFINED BUILD_TESTING))

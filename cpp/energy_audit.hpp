@@ -17,6 +17,7 @@
 #include <mujoco/mujoco.h>
 
 #include "simloop/run.hpp"
+#include "mujoco_compat.hpp"
 
 namespace simloop::detail {
 
@@ -41,7 +42,7 @@ class EnergyAudit {
 
   // After mj_step (and observe): adds the work done during the step.
   void add_step_work(const mjModel* m, mjData* d, int box_body) noexcept {
-    const int nv = m->nv;
+    const int nv = compat::as_int(m->nv);
     const double dt = m->opt.timestep;
     for (int i = 0; i < nv; ++i) vmid_[static_cast<size_t>(i)] = 0.5 * (v0_[static_cast<size_t>(i)] + d->qvel[i]);
     totals_.work_actuator += dt * mju_dot(d->qfrc_actuator, vmid_.data(), nv);

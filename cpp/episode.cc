@@ -1,4 +1,5 @@
 #include "simloop/episode.hpp"
+#include "mujoco_compat.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -74,7 +75,7 @@ Episodes::Episodes(const Model& scene, const Scenario& scenario, const ScenarioC
 Episodes::~Episodes() = default;
 
 std::size_t Episodes::count() const noexcept { return impl_->episodes.size(); }
-int Episodes::nu() const noexcept { return impl_->model.get()->nu; }
+int Episodes::nu() const noexcept { return detail::compat::as_int(impl_->model.get()->nu); }
 int Episodes::width() const noexcept { return impl_->recorder->width(); }
 const std::vector<Column>& Episodes::columns() const noexcept { return impl_->recorder->columns(); }
 const Model& Episodes::model() const noexcept { return impl_->model; }
@@ -117,7 +118,7 @@ void Episodes::step(const double* actions, std::int64_t every, const std::uint8_
                           std::to_string(every));
   }
   const std::size_t count = s.episodes.size();
-  const int nu = s.model.get()->nu;
+  const int nu = detail::compat::as_int(s.model.get()->nu);
   const int width = s.recorder->width();
   std::vector<std::int64_t> steps(count, 0);  // each job's steps, for progress
   for (std::size_t i = 0; i < count; ++i) {

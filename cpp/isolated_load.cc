@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <signal.h>
+#include <sys/mman.h>
 #include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -15,6 +16,7 @@
 #include <mutex>
 #include <new>
 
+#include "mujoco_compat.hpp"
 #include "mujoco_guard.hpp"
 #include "simloop/errors.hpp"
 
@@ -35,7 +37,7 @@ mjModel* load_unlocked(const char* filename, const mjVFS* vfs, std::string_view 
   mjModel* m = nullptr;
   CaptureWarnings capture;
   try {
-    mujoco_call([&] { m = mj_loadXML(filename, vfs, error, sizeof error); });
+    mujoco_call([&] { m = compat::load_xml(filename, vfs, error, sizeof error); });
   } catch (const MujocoError& e) {
     reset_mujoco_thread_handlers();
     for (std::string& w : capture.take()) warnings.push_back(one_line(w));
@@ -119,7 +121,7 @@ bool read_all(int fd, void* data, std::size_t size) {
   if (m != nullptr) {
     try {
       int size = 0;
-      mujoco_call([&] { size = mj_sizeModel(m); });
+      mujoco_call([&] { size = compat::as_int(mj_sizeModel(m)); });
       std::string bytes(static_cast<std::size_t>(size), '\0');
       char* buffer = bytes.data();
       mujoco_call([&] { mj_saveModel(m, nullptr, buffer, size); });
@@ -133,12 +135,26 @@ bool read_all(int fd, void* data, std::size_t size) {
   ::_exit(send(out, kError, failure) ? 0 : 1);
 }
 
-struct VfsDeleter {
-  void operator()(mjVFS* v) const noexcept {
-    mj_deleteVFS(v);
-    delete v;
+struct FdCloser {
+  int fd;
+  ~FdCloser() {
+    if (fd >= 0) ::close(fd);
   }
 };
+
+// The last non-empty line of what was written to `fd` (at most its last 4 KiB).
+std::string last_line(int fd) {
+  if (fd < 0) return {};
+  const off_t end = ::lseek(fd, 0, SEEK_END);
+  if (end <= 0) return {};
+  const off_t from = std::max<off_t>(0, end - 4096);
+  std::string text(static_cast<std::size_t>(end - from), '\0');
+  const ssize_t n = ::pread(fd, text.data(), text.size(), from);
+  text.resize(n > 0 ? static_cast<std::size_t>(n) : 0);
+  while (!text.empty() && (text.back() == '\n' || text.back() == '\r' || text.back() == ' ')) text.pop_back();
+  const std::size_t newline = text.find_last_of('\n');
+  return newline == std::string::npos ? text : text.substr(newline + 1);
+}
 
 }  // namespace
 
@@ -154,6 +170,10 @@ mjModel* load_xml_in_child(const char* filename, const mjVFS* vfs, std::string_v
   install_mujoco_handlers();
   int ends[2];
   if (::pipe2(ends, O_CLOEXEC) != 0) return nullptr;
+  // The child's stderr, read only if it dies: what a library that ends the
+  // process says on the way out (MuJoCo 4's libc++ names an uncaught
+  // std::bad_alloc there) goes into the error, not onto the user's terminal.
+  const int child_stderr = ::memfd_create("simloop-compile-stderr", MFD_CLOEXEC);
   pid_t pid = -1;
   {
     const std::lock_guard<std::mutex> lock(load_mutex());
@@ -165,17 +185,19 @@ mjModel* load_xml_in_child(const char* filename, const mjVFS* vfs, std::string_v
     pid = ::fork();
     if (pid == 0) {
       ::close(ends[0]);
+      if (child_stderr >= 0) ::dup2(child_stderr, STDERR_FILENO);
       child(ends[1], parent, filename, vfs, source);
     }
     ::pthread_sigmask(SIG_SETMASK, &previous, nullptr);
   }
   ::close(ends[1]);
+  const FdCloser close_stderr{child_stderr};
   if (pid < 0) {
     ::close(ends[0]);
     return nullptr;
   }
   // What the child sends, until it closes the pipe.
-  std::unique_ptr<mjVFS, VfsDeleter> compiled;
+  std::string compiled;
   std::string error;
   std::vector<std::string> sent_warnings;
   bool complete = false;
@@ -186,12 +208,8 @@ mjModel* load_xml_in_child(const char* filename, const mjVFS* vfs, std::string_v
       if (!read_all(ends[0], &kind, 1) || !read_all(ends[0], &size, sizeof size)) break;
       if (kind == kModel) {
         if (size == 0 || size > static_cast<std::uint64_t>(INT_MAX)) break;
-        compiled.reset(new mjVFS);
-        mj_defaultVFS(compiled.get());
-        int status = 0;
-        mujoco_call([&] { status = mj_makeEmptyFileVFS(compiled.get(), "model.mjb", static_cast<int>(size)); });
-        if (status != 0) throw MujocoError(std::string(source) + ": could not hold the compiled model in memory");
-        complete = read_all(ends[0], compiled->filedata[compiled->nfile - 1], static_cast<std::size_t>(size));
+        compiled.resize(static_cast<std::size_t>(size));
+        complete = read_all(ends[0], compiled.data(), compiled.size());
         break;
       }
       std::string text(static_cast<std::size_t>(std::min<std::uint64_t>(size, 1u << 20)), '\0');
@@ -216,17 +234,24 @@ mjModel* load_xml_in_child(const char* filename, const mjVFS* vfs, std::string_v
   }
   warnings.insert(warnings.end(), sent_warnings.begin(), sent_warnings.end());
   if (!complete) {
+    const std::string said = last_line(child_stderr);
+    if (said.find("bad_alloc") != std::string::npos) {
+      throw MujocoError(std::string(source) + ": loading the model: MuJoCo ran out of memory (" + said + ")");
+    }
     const std::string how = WIFSIGNALED(status)
-                                ? "was killed by signal " + std::to_string(WTERMSIG(status)) +
-                                      (WTERMSIG(status) == SIGKILL ? " (out of memory?)" : "")
+                                ? "was killed by signal " + std::to_string(WTERMSIG(status)) + " (" +
+                                      ::strsignal(WTERMSIG(status)) +
+                                      (WTERMSIG(status) == SIGKILL ? "; out of memory?)" : ")")
                                 : "ended early (exit " + std::to_string(WEXITSTATUS(status)) + ")";
-    throw MujocoError(std::string(source) + ": loading the model: the process compiling it " + how);
+    throw MujocoError(std::string(source) + ": loading the model: the process compiling it " + how +
+                      (said.empty() ? "" : ": " + said));
   }
-  if (!error.empty() || !compiled) {
+  if (!error.empty() || compiled.empty()) {
     throw MujocoError(error.empty() ? std::string(source) + ": loading the model failed" : error);
   }
   mjModel* m = nullptr;
-  const mjVFS* files = compiled.get();
+  const compat::OneFileVfs vfs_back("model.mjb", compiled, source, "compiled model");
+  const mjVFS* files = vfs_back.get();
   try {
     mujoco_call([&] { m = mj_loadModel("model.mjb", files); });
   } catch (const MujocoError& e) {

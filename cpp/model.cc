@@ -10,6 +10,7 @@
 
 #include "isolated_load.hpp"
 #include "model_detail.hpp"
+#include "mujoco_compat.hpp"
 #include "mujoco_guard.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/number_format.hpp"
@@ -75,10 +76,10 @@ SceneLayout resolve_layout(const mjModel* m, std::string_view source) {
 }
 
 // mj_loadXML reads from a file name; text in memory goes through a one-file
-// virtual file system. The VFS is 2 MB of fixed arrays, so it lives on the heap.
-// A scene from outside is compiled in a child process (isolated_load.hpp: a
-// failed compile leaves this one as it was; about 6 ms more), here if no
-// child can be made; the chapter's own scene, known to compile, here.
+// virtual file system (compat::OneFileVfs). A scene from outside is compiled
+// in a child process (isolated_load.hpp: a failed compile leaves this one as
+// it was; about 6 ms more), here if no child can be made; the chapter's own
+// scene, known to compile, here.
 mjModel* load_xml(const char* filename, const mjVFS* vfs, std::string_view source, std::vector<std::string>& warnings,
                   bool isolated = true) {
   if (isolated) {
@@ -121,42 +122,11 @@ void detail::check_xml_size(std::size_t size, std::string_view source) {
   }
 }
 
-namespace {
-
-struct VfsDeleter {
-  void operator()(mjVFS* v) const noexcept {
-    mj_deleteVFS(v);
-    delete v;
-  }
-};
-using Vfs = std::unique_ptr<mjVFS, VfsDeleter>;
-
-// A virtual file system holding one file, `name`, with `contents` (which
-// the caller has checked fits in an int). `what` says what it holds, for errors.
-Vfs one_file_vfs(const char* name, std::string_view contents, std::string_view source, const char* what) {
-  Vfs vfs(new mjVFS);
-  mj_defaultVFS(vfs.get());
-  int status = 0;
-  const int size = static_cast<int>(contents.size());
-  try {
-    detail::mujoco_call([&] { status = mj_makeEmptyFileVFS(vfs.get(), name, size); });
-  } catch (const MujocoError& e) {
-    throw MujocoError(std::string(source) + ": holding the " + what + " in memory: " + e.what());
-  }
-  if (status != 0) {
-    throw Error(std::string(source) + ": could not hold the " + what + " in MuJoCo's virtual file system");
-  }
-  std::memcpy(vfs->filedata[vfs->nfile - 1], contents.data(), contents.size());
-  return vfs;
-}
-
-}  // namespace
-
 Model Model::from_xml_string(std::string_view xml, std::string_view source) {
   detail::check_xml_size(xml.size(), source);
   detail::install_mujoco_handlers();
   constexpr const char* kName = "model.xml";
-  const Vfs vfs = one_file_vfs(kName, xml, source, "XML");
+  const detail::compat::OneFileVfs vfs(kName, xml, source, "XML");
   std::vector<std::string> warnings;
   mjModel* raw = load_xml(kName, vfs.get(), source, warnings);
   return adopt(raw, source, std::move(warnings));
@@ -164,7 +134,7 @@ Model Model::from_xml_string(std::string_view xml, std::string_view source) {
 
 Model Model::pusher_scene() {
   detail::install_mujoco_handlers();
-  const Vfs vfs = one_file_vfs("model.xml", kPusherSceneXml, "pusher scene", "XML");
+  const detail::compat::OneFileVfs vfs("model.xml", kPusherSceneXml, "pusher scene", "XML");
   std::vector<std::string> warnings;
   return adopt(load_xml("model.xml", vfs.get(), "pusher scene", warnings, false), "pusher scene", std::move(warnings));
 }
@@ -229,7 +199,7 @@ bool Data::fits(const Model& model) const noexcept {
 std::string Model::to_bytes() const {
   const mjModel* m = model_.get();
   int size = 0;
-  detail::mujoco_call([&] { size = mj_sizeModel(m); });
+  detail::mujoco_call([&] { size = detail::compat::as_int(mj_sizeModel(m)); });
   std::string bytes(static_cast<std::size_t>(size), '\0');
   char* buffer = bytes.data();
   try {
@@ -247,7 +217,7 @@ Model Model::from_bytes(std::string_view bytes, std::string_view source) {
   }
   detail::install_mujoco_handlers();
   constexpr const char* kName = "model.mjb";
-  const Vfs vfs = one_file_vfs(kName, bytes, source, "saved model");
+  const detail::compat::OneFileVfs vfs(kName, bytes, source, "saved model");
   mjModel* raw = nullptr;
   const mjVFS* files = vfs.get();
   try {
@@ -256,10 +226,21 @@ Model Model::from_bytes(std::string_view bytes, std::string_view source) {
     throw MujocoError(std::string(source) + ": loading the saved model: " + e.what());
   }
   if (raw == nullptr) {
-    throw MujocoError(std::string(source) + ": not a model MuJoCo " + std::to_string(mj_version()) +
+    throw MujocoError(std::string(source) + ": not a model MuJoCo " + detail::compat::version_string() +
                       " saved (mj_loadModel refused it)");
   }
   return adopt(raw, source);
+}
+
+Model Model::copy_of(const mjModel* m, std::string_view source) {
+  detail::install_mujoco_handlers();
+  mjModel* copy = nullptr;
+  try {
+    detail::mujoco_call([&] { copy = mj_copyModel(nullptr, m); });
+  } catch (const MujocoError& e) {
+    throw MujocoError(std::string(source) + ": copying the model: " + e.what());
+  }
+  return adopt(copy, source);
 }
 
 std::string Model::name() const {
@@ -268,9 +249,6 @@ std::string Model::name() const {
   return m->nnames > 0 ? std::string(m->names) : std::string();
 }
 
-std::string mujoco_version() {
-  const int v = mj_version();  // 222 for 2.2.2
-  return "MuJoCo " + std::to_string(v / 100) + "." + std::to_string(v / 10 % 10) + "." + std::to_string(v % 10);
-}
+std::string mujoco_version() { return "MuJoCo " + detail::compat::version_string(); }
 
 }  // namespace simloop

@@ -9,6 +9,8 @@
 
 #include <mujoco/mujoco.h>
 
+#include "mujoco_compat.hpp"
+
 namespace simloop::detail {
 namespace {
 
@@ -59,16 +61,25 @@ void reset_mujoco_thread_handlers() noexcept {
   if (_mjPRIVATE__set_tls_warning_fn != nullptr) _mjPRIVATE__set_tls_warning_fn(nullptr);
 }
 
-void install_mujoco_handlers() {
+namespace {
+void set_handlers_once() {
   static std::once_flag once;
   std::call_once(once, [] {
     mju_user_error = on_mujoco_error;
     mju_user_warning = on_mujoco_warning;
   });
 }
+}  // namespace
+
+void install_mujoco_handlers() {
+  set_handlers_once();
+  // Plugins load under the handlers (and call_catching_mujoco_error): a
+  // failing plugin library must not reach MuJoCo's default error handler.
+  compat::load_plugins_once();
+}
 
 bool call_catching_mujoco_error(void (*fn)(void*), void* context) noexcept {
-  install_mujoco_handlers();
+  set_handlers_once();
   std::jmp_buf target;
   std::jmp_buf* const enclosing = t_error_target;
   if (setjmp(target) != 0) {

@@ -21,7 +21,8 @@
 
 namespace simloop::detail {
 
-// Installs the handlers (idempotent, thread-safe). Every entry point that
+// Installs the handlers and, on MuJoCo 3, loads the plugin libraries that
+// ship beside libmujoco (idempotent, thread-safe). Every entry point that
 // creates a model calls it, so users never have to.
 void install_mujoco_handlers();
 

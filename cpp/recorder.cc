@@ -1,4 +1,5 @@
 #include "simloop/recorder.hpp"
+#include "mujoco_compat.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -252,7 +253,7 @@ ScenarioRunResult detail::run_schedule_counted_elsewhere(const mjModel* m, mjDat
   // The caller's controls, or a policy, replace the schedule's ctrl changes.
   ScheduledInputs scheduled(schedule, policy == nullptr && inputs.controls == nullptr);
   const double* own_controls = inputs.controls;
-  const int nu = m->nu;
+  const int nu = detail::compat::as_int(m->nu);
   const std::int64_t steps = schedule.steps;
   const int width = recorder.width();
 
@@ -290,7 +291,7 @@ ScenarioRunResult detail::run_schedule_counted_elsewhere(const mjModel* m, mjDat
       });
       recorder.before_step(observation.data(), step, m, d, true);
       recorder.after_step(observation.data(), m, d);
-      policy->decide(step, observation.data(), width, d->ctrl, m->nu);
+      policy->decide(step, observation.data(), width, d->ctrl, detail::compat::as_int(m->nu));
       next_decision = steps - step > policy->every() ? step + policy->every() : steps;
     }
     const std::int64_t chunk_start = step;

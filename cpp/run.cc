@@ -1,4 +1,5 @@
 #include "simloop/run.hpp"
+#include "mujoco_compat.hpp"
 
 #include <sys/resource.h>
 #include <unistd.h>
@@ -240,7 +241,7 @@ RunResult detail::run_counted_elsewhere(const Model& model_in, const RunConfig& 
   detail::RowBlock block(columns, std::min(result.rows, RunControl::kChunkSteps / every + 2));
   detail::WarningCounter warnings;
   detail::DivergenceCheck divergence(m);
-  detail::EnergyAudit energy(m->nv);
+  detail::EnergyAudit energy(detail::compat::as_int(m->nv));
   double box_pos_at_push[3] = {};
 
   double* box_force = d->xfrc_applied + 6 * at.box_body;

@@ -1,4 +1,5 @@
 #include "simloop/scenario.hpp"
+#include "mujoco_compat.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -513,11 +514,11 @@ int find_actuator(const mjModel* m, const std::string& name, const std::string& 
     const long index = name.size() > 9 ? -1 : std::stol(name);
     if (index < 0 || index >= m->nu) {
       throw InvalidArgument(context + ": actuator index " + name + " is out of range; the scene has " +
-                            std::to_string(m->nu) + " actuators: " + join(names_of(m, mjOBJ_ACTUATOR, m->nu, nullptr)));
+                            std::to_string(m->nu) + " actuators: " + join(names_of(m, mjOBJ_ACTUATOR, detail::compat::as_int(m->nu), nullptr)));
     }
     return static_cast<int>(index);
   }
-  return find(m, mjOBJ_ACTUATOR, "actuator", "its actuators", m->nu, nullptr, name, context);
+  return find(m, mjOBJ_ACTUATOR, "actuator", "its actuators", detail::compat::as_int(m->nu), nullptr, name, context);
 }
 
 }  // namespace
@@ -538,21 +539,21 @@ ResolvedScenario resolve(const Scenario& scenario, const mjModel* m) {
   }
   for (std::size_t i = 0; i < scenario.disturbances.size(); ++i) {
     const DisturbanceSpec& d = scenario.disturbances[i];
-    const int body = find(m, mjOBJ_BODY, "body", "bodies that can move", m->nbody, body_moves, d.body,
+    const int body = find(m, mjOBJ_BODY, "body", "bodies that can move", detail::compat::as_int(m->nbody), body_moves, d.body,
                           "disturbance[" + std::to_string(i) + "]");
     if (body == 0) throw InvalidArgument("disturbance[" + std::to_string(i) + "]: the world body cannot be pushed");
     r.disturbances.push_back({body, d});
   }
   const RecordSpec& rec = scenario.record;
   for (const std::string& n : rec.bodies) {
-    r.bodies.push_back(find(m, mjOBJ_BODY, "body", "bodies that can move", m->nbody, body_moves, n, "record.bodies"));
+    r.bodies.push_back(find(m, mjOBJ_BODY, "body", "bodies that can move", detail::compat::as_int(m->nbody), body_moves, n, "record.bodies"));
   }
   for (const std::string& n : rec.joints) {
-    r.joints.push_back(find(m, mjOBJ_JOINT, "joint", "its joints", m->njnt, nullptr, n, "record.joints"));
+    r.joints.push_back(find(m, mjOBJ_JOINT, "joint", "its joints", detail::compat::as_int(m->njnt), nullptr, n, "record.joints"));
   }
   for (const std::string& n : rec.actuators) r.actuators.push_back(find_actuator(m, n, "record.actuators"));
   for (const std::string& n : rec.sensors) {
-    r.sensors.push_back(find(m, mjOBJ_SENSOR, "sensor", "its sensors", m->nsensor, nullptr, n, "record.sensors"));
+    r.sensors.push_back(find(m, mjOBJ_SENSOR, "sensor", "its sensors", detail::compat::as_int(m->nsensor), nullptr, n, "record.sensors"));
   }
   // Defaults when nothing is named: every body on a free joint, every actuator.
   if (rec.bodies.empty() && rec.joints.empty() && rec.actuators.empty() && rec.sensors.empty()) {

@@ -1,4 +1,5 @@
 #include "simloop/scene_params.hpp"
+#include "mujoco_compat.hpp"
 
 #include <cmath>
 #include <string>
@@ -46,14 +47,14 @@ void check_value(const SceneParam& p) {
 bool apply(mjModel* m, const SceneParam& p) {
   switch (p.kind) {
     case SceneParam::Kind::kFriction: {
-      const int first = p.name.empty() ? 0 : find_named(m, mjOBJ_GEOM, m->ngeom, "geom", "geoms", p);
-      const int end = p.name.empty() ? m->ngeom : first + 1;
+      const int first = p.name.empty() ? 0 : find_named(m, mjOBJ_GEOM, detail::compat::as_int(m->ngeom), "geom", "geoms", p);
+      const int end = p.name.empty() ? detail::compat::as_int(m->ngeom) : first + 1;
       for (int g = first; g < end; ++g) m->geom_friction[3 * g] = p.value;
       return false;
     }
     case SceneParam::Kind::kDamping: {
-      const int first = p.name.empty() ? 0 : find_named(m, mjOBJ_JOINT, m->njnt, "joint", "joints", p);
-      const int end = p.name.empty() ? m->njnt : first + 1;
+      const int first = p.name.empty() ? 0 : find_named(m, mjOBJ_JOINT, detail::compat::as_int(m->njnt), "joint", "joints", p);
+      const int end = p.name.empty() ? detail::compat::as_int(m->njnt) : first + 1;
       for (int j = first; j < end; ++j) {
         for (int v = 0; v < m->nv; ++v) {
           if (m->dof_jntid[v] == j) m->dof_damping[v] = p.value;
@@ -63,7 +64,7 @@ bool apply(mjModel* m, const SceneParam& p) {
     }
     case SceneParam::Kind::kMass: {
       if (p.name.empty()) throw InvalidArgument(describe(p) + ": a mass needs a body's name");
-      const int body = find_named(m, mjOBJ_BODY, m->nbody, "body", "bodies", p);
+      const int body = find_named(m, mjOBJ_BODY, detail::compat::as_int(m->nbody), "body", "bodies", p);
       if (body == 0) throw InvalidArgument(describe(p) + ": the world body has no mass to set");
       const double old_mass = m->body_mass[body];
       if (!(old_mass > 0.0)) {

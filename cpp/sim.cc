@@ -1,4 +1,5 @@
 #include "simloop/sim.hpp"
+#include "mujoco_compat.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -43,13 +44,13 @@ Kind kind_of(mjtObj type) {
 
 int count_of(const mjModel* m, mjtObj type) {
   switch (type) {
-    case mjOBJ_BODY: return m->nbody;
-    case mjOBJ_JOINT: return m->njnt;
-    case mjOBJ_ACTUATOR: return m->nu;
-    case mjOBJ_SENSOR: return m->nsensor;
-    case mjOBJ_KEY: return m->nkey;
-    case mjOBJ_GEOM: return m->ngeom;
-    case mjOBJ_SITE: return m->nsite;
+    case mjOBJ_BODY: return detail::compat::as_int(m->nbody);
+    case mjOBJ_JOINT: return detail::compat::as_int(m->njnt);
+    case mjOBJ_ACTUATOR: return detail::compat::as_int(m->nu);
+    case mjOBJ_SENSOR: return detail::compat::as_int(m->nsensor);
+    case mjOBJ_KEY: return detail::compat::as_int(m->nkey);
+    case mjOBJ_GEOM: return detail::compat::as_int(m->ngeom);
+    case mjOBJ_SITE: return detail::compat::as_int(m->nsite);
     default: throw InvalidArgument("Sim: objects of MuJoCo type " + std::to_string(type) + " are not looked up by name");
   }
 }

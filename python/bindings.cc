@@ -584,6 +584,14 @@ PYBIND11_MODULE(_core, m) {
                                    [&] { return simloop::Model::from_file(path.string()); });
           },
           "path"_a, "Compiles an MJCF file.")
+      .def_static(
+          "_copy_of_address",
+          [](std::uintptr_t address, std::string_view source) {
+            // simloop.load_model checked that the address is a mujoco.MjModel's
+            // of this very libmujoco (simloop/_mujoco_check.py).
+            return simloop::Model::copy_of(reinterpret_cast<const mjModel*>(address), source);
+          },
+          "address"_a, "source"_a, "A copy of the mjModel at `address` (a mujoco.MjModel's _address).")
       .def("with_timestep", &simloop::Model::with_timestep, "timestep"_a, "A copy with opt.timestep set.")
       .def_property_readonly("timestep", &simloop::Model::timestep)
       .def_property_readonly("nq", [](const simloop::Model& model) { return model.get()->nq; })

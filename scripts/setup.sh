@@ -1,22 +1,39 @@
 #!/usr/bin/env bash
 # Installs what simloop needs on Debian 12 and is missing (apt-get, through
-# sudo when not root), then builds the C++ tree into build/. With --python,
-# also makes the virtual environment .venv and installs the package into it
-# (pip install ".[test]": scikit-build-core builds the module from the same
-# CMake tree). Called by scripts/run.sh and scripts/test.sh; safe to rerun.
+# sudo when not root), then builds the C++ tree. With --python, also makes a
+# virtual environment and installs the package into it (pip install
+# ".[test]": scikit-build-core builds the module from the same CMake tree).
+# Called by scripts/run.sh and scripts/test.sh; safe to rerun.
+#
+# Which MuJoCo: SIMLOOP_MUJOCO=system (the default) builds on Debian's
+# libmujoco-dev 2.2.2 into build/ and .venv; SIMLOOP_MUJOCO=pypi builds on
+# the PyPI mujoco package (the version pyproject.toml's `mujoco` extra pins)
+# into build-pypi/ and .venv-pypi, which then holds that mujoco too.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 with_python=0
 [[ ${1:-} == --python ]] && with_python=1
 
 python=${PYTHON:-python3}
-# libmujoco-dev's CMake config asks for OpenGL (find_dependency) and its target
-# for /usr/include/libqhull_r, but the package depends on neither dev package.
-apt_packages=(libmujoco-dev libqhull-dev libgl-dev libopengl-dev libtomlplusplus-dev libgtest-dev)
+mujoco=${SIMLOOP_MUJOCO:-system}
+case $mujoco in
+  system) build=build venv=.venv ;;
+  pypi) build=build-pypi venv=.venv-pypi ;;
+  *) echo "setup: SIMLOOP_MUJOCO must be system or pypi, got '$mujoco'" >&2; exit 2 ;;
+esac
+
+apt_packages=(libtomlplusplus-dev libgtest-dev)
+if [[ $mujoco == system ]]; then
+  # libmujoco-dev's CMake config asks for OpenGL (find_dependency) and its
+  # target for /usr/include/libqhull_r, but it depends on neither dev package.
+  apt_packages+=(libmujoco-dev libqhull-dev libgl-dev libopengl-dev)
+else
+  with_venv=1  # the C++ build reads MuJoCo from the venv's mujoco package
+fi
 command -v g++ >/dev/null 2>&1 || apt_packages+=(g++)
 command -v make >/dev/null 2>&1 || command -v ninja >/dev/null 2>&1 || apt_packages+=(make)
 command -v cmake >/dev/null 2>&1 || apt_packages+=(cmake)
-if ((with_python)); then
+if ((with_python || ${with_venv:-0})); then
   if ! command -v "$python" >/dev/null 2>&1; then
     apt_packages+=(python3 python3-venv python3-dev)
   else
@@ -44,11 +61,21 @@ if ((${#missing[@]})); then
   DEBIAN_FRONTEND=noninteractive "${sudo[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 fi
 
-cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null
-cmake --build build -j "$(nproc)"
+pip=(-m pip install -q --disable-pip-version-check)
+cmake_args=()
+if [[ $mujoco == pypi ]]; then
+  [[ -x $venv/bin/python ]] || "$python" -m venv "$venv"
+  # The one pin: pyproject.toml's `mujoco` extra.
+  pin=$("$venv/bin/python" -c "import tomllib; print(tomllib.load(open('pyproject.toml', 'rb'))['project']['optional-dependencies']['mujoco'][0])")
+  echo "setup: pip install $pin into $venv"
+  "$venv/bin/python" "${pip[@]}" "$pin"
+  cmake_args=(-DSIMLOOP_MUJOCO=pypi "-DSIMLOOP_MUJOCO_PYTHON=$PWD/$venv/bin/python")
+fi
+cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release "${cmake_args[@]}" >/dev/null
+cmake --build "$build" -j "$(nproc)"
 
 if ((with_python)); then
-  [[ -x .venv/bin/python ]] || "$python" -m venv .venv
-  echo "setup: pip install .[test] into .venv"
-  .venv/bin/python -m pip install -q --disable-pip-version-check ".[test]"
+  [[ -x $venv/bin/python ]] || "$python" -m venv "$venv"
+  echo "setup: pip install .[test] into $venv"
+  SIMLOOP_MUJOCO=$mujoco "$venv/bin/python" "${pip[@]}" ".[test]"
 fi

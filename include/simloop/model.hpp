@@ -64,6 +64,10 @@ class Model {
   // one. Throws MujocoError if MuJoCo refuses the bytes.
   [[nodiscard]] std::string to_bytes() const;
   [[nodiscard]] static Model from_bytes(std::string_view bytes, std::string_view source = "<saved model>");
+  // A copy (mj_copyModel) of a model someone else owns, such as the one
+  // behind a Python mujoco.MjModel: the caller guarantees `m` points to a
+  // valid mjModel of the very libmujoco simloop runs.
+  [[nodiscard]] static Model copy_of(const mjModel* m, std::string_view source);
   // <mujoco model="...">'s name ("" if the scene has none).
   [[nodiscard]] std::string name() const;
 
@@ -111,9 +115,12 @@ class Data {
     void operator()(mjData* d) const noexcept { mj_deleteData(d); }
   };
   std::unique_ptr<mjData, Deleter> data_;
-  // mjModel's leading block of int sizes, nq through nbuffer.
-  static constexpr std::size_t kSizeFields = (offsetof(mjModel, nbuffer) - offsetof(mjModel, nq)) / sizeof(int) + 1;
-  std::array<int, kSizeFields> sizes_{};
+  // mjModel's leading block of sizes, nq through nbuffer (int in MuJoCo
+  // 2.2, mjtSize from 3.5: the type is the model's own).
+  using SizeField = decltype(mjModel::nq);
+  static constexpr std::size_t kSizeFields =
+      (offsetof(mjModel, nbuffer) - offsetof(mjModel, nq)) / sizeof(SizeField) + 1;
+  std::array<SizeField, kSizeFields> sizes_{};
 };
 
 // "MuJoCo 2.2.2": the version of the library we are linked against.

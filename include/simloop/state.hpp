@@ -1,14 +1,18 @@
 // A simulation's full state as one flat array of doubles, for saving,
-// restoring, copying and starting batches from.
+// restoring, copying and starting batches from: everything mj_step reads
+// that is not the model, so that set_state(get_state(d)) and stepping gives
+// the bits the original would have given. Its layout depends on the MuJoCo
+// simloop is built on (state_layout names the parts):
 //
-// MuJoCo 2.2 has no mj_getState; this is the same idea as later MuJoCo's
-// mjSTATE_INTEGRATION: everything mj_step reads that is not the model, so
-// that set_state(get_state(d)) and stepping gives the bits the original
-// would have given. In order (sizes from the model):
-//
-//   time (1), qpos (nq), qvel (nv), act (na), qacc_warmstart (nv),
-//   ctrl (nu), qfrc_applied (nv), xfrc_applied (6 nbody),
-//   mocap_pos (3 nmocap), mocap_quat (4 nmocap), userdata (nuserdata)
+// - MuJoCo 3.3 and later (the PyPI build): exactly mj_getState(m, d, state,
+//   mjSTATE_INTEGRATION), so mujoco.mj_setState takes it as it is, then,
+//   from 3.4, the kinematic trees' sleep counters (d->tree_asleep, ntree
+//   values; mj_getState leaves them out, and without them a restore wakes
+//   every sleeping body).
+// - MuJoCo 2.2 (Debian's) has no mj_getState; the same idea, in order:
+//     time (1), qpos (nq), qvel (nv), act (na), qacc_warmstart (nv),
+//     ctrl (nu), qfrc_applied (nv), xfrc_applied (6 nbody),
+//     mocap_pos (3 nmocap), mocap_quat (4 nmocap), userdata (nuserdata)
 //
 // The warmstart is part of it because MuJoCo's constraint solver starts from
 // it: leave it out and a restored run differs in the last bits.
@@ -33,7 +37,7 @@ namespace simloop {
 void get_state(const mjModel* m, const mjData* d, double* state) noexcept;
 [[nodiscard]] std::vector<double> get_state(const mjModel* m, const mjData* d);
 
-// Writes state[0 .. state_size(m)) into d and runs forward_keeping_state,
+// Writes state[0 .. state_size(m)) into d, derives what MuJoCo derives from it,
 // so that what MuJoCo derives from the state (poses, contacts, sensors) is
 // current. The caller checks the size; values are taken as they are (a state
 // is data MuJoCo itself produced, or the caller's responsibility). Inside

@@ -11,6 +11,16 @@ numpy views of the trajectory, and writes the rerun recording.
 
 from typing import TYPE_CHECKING
 
+try:
+    from . import _core  # noqa: F401  (loads libmujoco; the line below explains a failure)
+except ImportError as _error:
+    from ._mujoco_check import load_failure_message
+
+    _message = load_failure_message(_error)
+    if _message is None:
+        raise
+    raise ImportError(_message) from None
+
 from ._api import Sim, draw_shove, load_model, run, run_batch, sweep
 from .scenario import Observation, Scenario, ScenarioResult, run_scenario, run_scenario_batch
 from ._core import (

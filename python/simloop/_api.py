@@ -29,7 +29,7 @@ if TYPE_CHECKING:  # (importing numpy would cost every `import simloop` ~50 ms)
     from numpy.typing import NDArray
 
 from . import _core
-from ._core import Model, RunResult, SweepResult
+from ._core import MUJOCO_VERSION, Model, RunResult, SweepResult
 
 if TYPE_CHECKING:
     from .tables import BatchTable
@@ -135,7 +135,8 @@ def _pusher_scene() -> Model:
 
 
 def load_model(model: ModelLike = None) -> Model:
-    """The model to run: None for the chapter's scene, a Model, or an MJCF path.
+    """The model to run: None for the chapter's scene, a Model, an MJCF path,
+    or a mujoco.MjModel (copied; on simloop built on the same PyPI mujoco).
 
     A file that is missing raises OSError; one MuJoCo cannot parse raises
     simloop.MujocoError with MuJoCo's message; one without a body "box" on a
@@ -147,7 +148,12 @@ def load_model(model: ModelLike = None) -> Model:
         return model
     if isinstance(model, (str, bytes, os.PathLike)):
         return Model.from_file(_check_path("model", model, "an MJCF file"))
-    raise TypeError(f"model must be None, a simloop.Model or a path to an MJCF file, got {_describe(model)}")
+    from ._mujoco_check import is_mujoco_model, mujoco_model_address
+
+    if is_mujoco_model(model):
+        return Model._copy_of_address(mujoco_model_address(model, MUJOCO_VERSION), "mujoco.MjModel")
+    raise TypeError("model must be None, a simloop.Model, a mujoco.MjModel or a path to an MJCF file, "
+                    f"got {_describe(model)}")
 
 
 RNGS = ("mt19937_64", "numpy")

@@ -26,7 +26,7 @@ from typing import (TYPE_CHECKING, Any, Callable, Dict, Iterable, List, Literal,
 
 from . import _core
 from ._api import (Progress, _check_bool, _check_no_control_every, _sequence, _check_int, _check_progress, _check_timestep, _describe,
-                   _show, _U64_MAX, RNGS)
+                   _show, _U64_MAX, RNGS, load_model)
 
 if TYPE_CHECKING:  # numpy and the tables load when used: `import simloop` stays quick
     import numpy as np
@@ -226,7 +226,11 @@ def _scenario_and_scene(scenario: Union[Scenario, str, "os.PathLike[str]"],
         raise TypeError(f"scenario must be a simloop.Scenario or a scenario file's path, got {_describe(scenario)}")
     scene = scenario.model() if model is None else model
     if not isinstance(scene, _core.Model):
-        raise TypeError(f"model must be a simloop.Model, got {_describe(scene)}")
+        from ._mujoco_check import is_mujoco_model
+
+        if not is_mujoco_model(scene):
+            raise TypeError(f"model must be a simloop.Model or a mujoco.MjModel, got {_describe(scene)}")
+        scene = load_model(scene)
     return scenario, scene
 
 

@@ -5,6 +5,7 @@
 #include <limits>
 #include <string>
 
+#include "expected.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/model.hpp"
 #include "simloop/sim.hpp"
@@ -111,14 +112,33 @@ TEST(Model, InvalidXmlRaisesMujocosOwnMessageAndWritesNoLog) {
         [] { (void)simloop::Model::from_xml_string("<mujoco><worldbody><body></mujoco>", "broken.xml"); });
     EXPECT_EQ(msg.rfind("broken.xml: XML parse error", 0), 0u) << msg;
     EXPECT_NE(msg.find("XML_ERROR_MISMATCHED_ELEMENT"), std::string::npos) << msg;
-    // Schema errors go through MuJoCo's parser too: the chapter's
-    // ctrlrange without autolimits is one on 2.2.
-    const std::string no_autolimits = scene_with("<compiler autolimits=\"true\"/>", "");
+    // Schema errors go through MuJoCo's parser too: an attribute no
+    // MuJoCo knows.
+    const std::string unknown = scene_with("<light pos=\"0 0 3\"", "<light shine=\"1\" pos=\"0 0 3\"");
     const std::string msg2 =
-        message_of<simloop::MujocoError>([&] { (void)simloop::Model::from_xml_string(no_autolimits); });
-    EXPECT_NE(msg2.find("ctrlrange"), std::string::npos) << msg2;
+        message_of<simloop::MujocoError>([&] { (void)simloop::Model::from_xml_string(unknown); });
+    EXPECT_NE(msg2.find("shine"), std::string::npos) << msg2;
   });
   EXPECT_FALSE(fs::exists(dir.path() / "MUJOCO_LOG.TXT"));
+}
+
+TEST(Model, ASceneForNewerMujocoSaysHowToGetIt) {
+  // implicitfast came in MuJoCo 2.3.3: 2.2 refuses the word, and the message
+  // says which MuJoCo this is and how to build on the other.
+  SIMLOOP_EXPECTED(bool, refused, "errors.implicitfast_refused");
+  const std::string xml = scene_with("<compiler autolimits=\"true\"/>",
+                                     "<compiler autolimits=\"true\"/><option integrator=\"implicitfast\"/>");
+  if (!refused) {
+    EXPECT_NE(simloop::Model::from_xml_string(xml, "new.xml").get(), nullptr);
+    return;
+  }
+  const std::string msg = message_of<simloop::MujocoError>([&] { (void)simloop::Model::from_xml_string(xml, "new.xml"); });
+  EXPECT_NE(msg.find("implicitfast"), std::string::npos) << msg;
+  EXPECT_NE(msg.find(std::string("this simloop runs MuJoCo ") + mj_versionString() + "; for a scene written for newer "
+                     "MuJoCo, build it on the mujoco package: SIMLOOP_MUJOCO=pypi scripts/run.sh)"),
+            std::string::npos)
+      << msg;
+  EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
 }
 
 TEST(Model, FromFile) {
@@ -138,11 +158,14 @@ TEST(Model, MujocoErrorsBecomeExceptionsAndWriteNoLog) {
   test::in_directory(dir.path(), [] {
     // While compiling: a stack far too small for the forward pass that
     // compilation runs.
+    // (2.2 sizes it with nstack, 3.x with memory; the words differ too.)
+    SIMLOOP_EXPECTED(std::string, small_stack_size, "errors.small_stack_size");
+    SIMLOOP_EXPECTED(std::string, small_stack_message, "errors.small_stack_message");
     const std::string small_stack =
-        scene_with("<compiler autolimits=\"true\"/>", "<compiler autolimits=\"true\"/><size nstack=\"100\"/>");
+        scene_with("<compiler autolimits=\"true\"/>", "<compiler autolimits=\"true\"/>" + small_stack_size);
     const std::string msg =
         message_of<simloop::MujocoError>([&] { (void)simloop::Model::from_xml_string(small_stack, "tiny.xml"); });
-    EXPECT_EQ(msg, "tiny.xml: Error: engine error: Stack overflow") << msg;
+    EXPECT_EQ(msg.rfind("tiny.xml: " + small_stack_message, 0), 0u) << msg;
 
     // While stepping: mj_step raises mju_error for an integrator it does not
     // know. (Model is read-only by design; the test reaches past that.)
@@ -161,7 +184,15 @@ TEST(Model, MujocoErrorsBecomeExceptionsAndWriteNoLog) {
 }
 
 TEST(Model, ReportsTheLinkedMujocoVersion) {
-  EXPECT_EQ(simloop::mujoco_version(), "MuJoCo 2.2.2");
+  // As MuJoCo spells it, whatever the version's number encoding (222 for
+  // 2.2.2, 3017000 for 3.17.0).
+  EXPECT_EQ(simloop::mujoco_version(), std::string("MuJoCo ") + mj_versionString());
+  EXPECT_EQ(mj_version() >= 3000000 ? std::to_string(mj_version() / 1000000) + "." +
+                                          std::to_string(mj_version() / 1000 % 1000) + "." +
+                                          std::to_string(mj_version() % 1000)
+                                    : std::to_string(mj_version() / 100) + "." + std::to_string(mj_version() / 10 % 10) +
+                                          "." + std::to_string(mj_version() % 10),
+            mj_versionString());
 }
 
 }  // namespace

@@ -201,14 +201,8 @@ TEST(SceneGeometry, MeshesAreTheirBoundingBoxesAndMaterialsGiveColour) {
       <geom name="hidden" type="sphere" size="1" group="3"/>
       <geom name="clear" type="sphere" size="1" rgba="1 0 0 0"/>
     </worldbody></mujoco>)";
-  mjVFS vfs;
-  mj_defaultVFS(&vfs);
-  ASSERT_EQ(mj_makeEmptyFileVFS(&vfs, "m.xml", static_cast<int>(std::strlen(xml))), 0);
-  std::memcpy(vfs.filedata[vfs.nfile - 1], xml, std::strlen(xml));
-  char error[512] = "";
-  mjModel* m = mj_loadXML("m.xml", &vfs, error, sizeof error);
-  mj_deleteVFS(&vfs);
-  ASSERT_NE(m, nullptr) << error;
+  const simloop::Model model = simloop::Model::from_xml_string(xml, "wedge scene");
+  const mjModel* m = model.get();
   const std::vector<simloop::GeomShape> shapes = simloop::scene_geometry(m);
   ASSERT_EQ(shapes.size(), 1u);
   EXPECT_EQ(shapes[0].kind, simloop::GeomShape::Kind::kMesh);
@@ -229,7 +223,6 @@ TEST(SceneGeometry, MeshesAreTheirBoundingBoxesAndMaterialsGiveColour) {
   }
   EXPECT_GE(touching, 6);
   EXPECT_EQ(shapes[0].rgba, (std::array<float, 4>{0.0f, 0.0f, 1.0f, 1.0f}));
-  mj_deleteModel(m);
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 #include <cstring>
 #include <limits>
 
+#include "expected.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/number_format.hpp"
 #include "simloop/output.hpp"
@@ -169,11 +170,14 @@ TEST(Run, BreakItTheCoarseTimestepHopsAndDrifts) {
   EXPECT_LT(fine_peak_z, 0.056);
   EXPECT_GT(coarse_peak_z, 0.085);
   EXPECT_LT(coarse_peak_z, 0.10);
-  // The drift: a quarter metre sideways at 0.05, a few centimetres at 0.002.
   EXPECT_LT(fine_max_y, 0.07);
-  EXPECT_LT(coarse_final_y, -0.2);
-  EXPECT_GT(coarse_final_y, -0.3);
-  EXPECT_GT(std::fabs(coarse_final_y), 3 * fine_max_y);
+  // The drift: a quarter metre sideways at 0.05 on MuJoCo 2.2; none on 4.0,
+  // whose solver keeps the symmetric push symmetric (the hop remains).
+  SIMLOOP_EXPECTED(double, final_y_min, "break_it.final_y_min");
+  SIMLOOP_EXPECTED(double, final_y_max, "break_it.final_y_max");
+  EXPECT_GE(coarse_final_y, final_y_min);
+  EXPECT_LE(coarse_final_y, final_y_max);
+  if (final_y_max < 0) EXPECT_GT(std::fabs(coarse_final_y), 3 * fine_max_y);
   // Neither run raised a MuJoCo warning: the blow-up is silent.
   EXPECT_TRUE(fine.warnings.empty());
   EXPECT_TRUE(coarse.warnings.empty());

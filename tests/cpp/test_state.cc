@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "expected.hpp"
 #include "simloop/model.hpp"
 #include "simloop/state.hpp"
 
@@ -27,14 +28,26 @@ TEST(State, LayoutCoversEveryPartInOrder) {
   const Model model = pusht();
   const mjModel* m = model.get();
   const auto layout = simloop::state_layout(m);
-  ASSERT_EQ(layout.size(), 11u);
-  EXPECT_EQ(layout[0].first, "time");
-  EXPECT_EQ(layout[1], (std::pair<std::string, std::size_t>{"qpos", static_cast<std::size_t>(m->nq)}));
-  EXPECT_EQ(layout[4].first, "qacc_warmstart");
-  std::size_t total = 0;
-  for (const auto& part : layout) total += part.second;
+  // The parts every MuJoCo's state has, in this order (3.x's mj_getState
+  // adds history, eq_active, plugin and plastic parts, and calls the
+  // warmstart "warmstart").
+  const std::vector<std::pair<std::string, std::size_t>> common = {
+      {"time", 1}, {"qpos", m->nq}, {"qvel", m->nv}, {"act", m->na}, {"warmstart", m->nv}, {"ctrl", m->nu},
+      {"qfrc_applied", m->nv}, {"xfrc_applied", 6 * m->nbody}, {"mocap_pos", 3 * m->nmocap},
+      {"mocap_quat", 4 * m->nmocap}, {"userdata", m->nuserdata}};
+  std::size_t next = 0, total = 0;
+  for (const auto& part : layout) {
+    total += part.second;
+    const std::string name = part.first == "qacc_warmstart" ? "warmstart" : part.first;
+    if (next < common.size() && name == common[next].first) {
+      EXPECT_EQ(part.second, common[next].second) << name;
+      ++next;
+    }
+  }
+  EXPECT_EQ(next, common.size()) << "missing or out of order: " << common[std::min(next, common.size() - 1)].first;
   EXPECT_EQ(total, simloop::state_size(m));
-  EXPECT_EQ(total, 1 + 3u * m->nv + m->nq + m->na + m->nu + 6u * m->nbody + 7u * m->nmocap + m->nuserdata);
+  SIMLOOP_EXPECTED(int64_t, parts, "state.parts");
+  EXPECT_EQ(layout.size(), static_cast<std::size_t>(parts));
 }
 
 TEST(State, RestoredRunGoesOnBitForBit) {
@@ -56,11 +69,14 @@ TEST(State, RestoredRunGoesOnBitForBit) {
   EXPECT_EQ(restored.get()->time, original.get()->time);
 
   // The warmstart matters: restore without it and the bits differ, which is
-  // why it is part of the state.
+  // why it is part of the state (on 2.2 for this scene; 4.0's solver lands
+  // on the same bits from a cold start here).
+  SIMLOOP_EXPECTED(bool, warmstart_matters, "state.warmstart_changes_pusht_bits");
+  if (!warmstart_matters) return;
   std::vector<double> cold = saved;
   std::size_t at = 0;
   for (const auto& [name, size] : simloop::state_layout(m)) {
-    if (name == "qacc_warmstart") std::fill_n(cold.begin() + static_cast<std::ptrdiff_t>(at), size, 0.0);
+    if (name.find("warmstart") != std::string::npos) std::fill_n(cold.begin() + static_cast<std::ptrdiff_t>(at), size, 0.0);
     at += size;
   }
   Data without(model);

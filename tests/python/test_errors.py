@@ -26,7 +26,8 @@ BAD_RUN_ARGUMENTS = [
     ({"perturb": "yes"}, TypeError, "perturb must be a bool, got 'yes' (str)"),
     ({"smoke": 1}, TypeError, "smoke must be a bool, got 1 (int)"),
     ({"record_every": 0}, ValueError, "record_every must be at least 1, got 0"),
-    ({"model": 3}, TypeError, "model must be None, a simloop.Model or a path to an MJCF file, got 3 (int)"),
+    ({"model": 3}, TypeError,
+     "model must be None, a simloop.Model, a mujoco.MjModel or a path to an MJCF file, got 3 (int)"),
     ({"steps": 4_000_000_000_000}, ValueError, "raise record_every"),
     ({"rng": "pcg64"}, ValueError, "rng must be 'mt19937_64' or 'numpy', got 'pcg64'"),
     ({"rng": None}, TypeError, "rng must be a str, got None (NoneType)"),
@@ -71,7 +72,7 @@ def test_sim_refuses_bad_arguments():
         (lambda: sim.apply_force([0.0, "1", 0.0]), TypeError, "force[1] must be a number, got '1' (str)"),
         (lambda: sim.apply_force(5.0), TypeError, "force must be a sequence, got 5.0 (float)"),
         (lambda: setattr(sim, "timestep", -1), ValueError, "timestep must be a positive, finite number"),
-        (lambda: simloop.Sim(model=[]), TypeError, "model must be None, a simloop.Model or a path"),
+        (lambda: simloop.Sim(model=[]), TypeError, "model must be None, a simloop.Model, a mujoco.MjModel or a path"),
     ]
     for call, error, message in cases:
         with pytest.raises(error) as caught:
@@ -155,5 +156,5 @@ def test_command_help_and_version(tmp_path):
                  "--record-every", "--model"):
         assert flag in helped.stdout
     version = run_command(["--version"], tmp_path)
-    assert version.stdout == f"simloop {simloop.__version__} (MuJoCo 2.2.2)\n"
+    assert version.stdout == f"simloop {simloop.__version__} ({simloop.MUJOCO_VERSION})\n"
     assert not Path(tmp_path / "outputs").exists()

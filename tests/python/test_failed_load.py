@@ -4,6 +4,7 @@ the scene it was compiling when its compiler runs out of memory, and leaves
 its own error handler behind; the compile now runs in a child process)."""
 
 from conftest import run_python
+from expected import expected, stepping_error_scene
 
 CHILD = """
     import resource
@@ -14,17 +15,13 @@ CHILD = """
             return next(int(line.split()[1]) for line in status if line.startswith("VmRSS:")) / 1024
 
     xml = simloop._core.PUSHER_SCENE_XML.replace('<compiler autolimits="true"/>',
-                                                 '<compiler autolimits="true"/><size nkey="5000000"/>')
+                                                 '<compiler autolimits="true"/>' + {too_big!r})
     path = "{tmp}/many_keys.xml"
     with open(path, "w") as f:
         f.write(xml)
-    falls = "{tmp}/falls.xml"  # a stack too small once the boxes land: a MuJoCo error while stepping
+    falls = "{tmp}/falls.xml"  # a MuJoCo error while stepping
     with open(falls, "w") as f:
-        f.write('<mujoco><option timestep="0.004"/><size nstack="600"/><worldbody>'
-                '<geom type="plane" size="2 2 0.1"/>'
-                '<body name="b1" pos="0 0 0.5"><freejoint/><geom type="box" size="0.05 0.05 0.05"/></body>'
-                '<body name="b2" pos="0.3 0 0.5"><freejoint/><geom type="box" size="0.05 0.05 0.05"/></body>'
-                '</worldbody></mujoco>')
+        f.write({falls!r})
     simloop.run(steps=10)
     before = rss_mib()
     resource.setrlimit(resource.RLIMIT_AS, (1000000 * 1024, resource.RLIM_INFINITY))  # ulimit -v 1000000
@@ -44,13 +41,17 @@ CHILD = """
 
 
 def test_a_compile_that_runs_out_of_memory_leaves_the_process_as_it_was(tmp_path):
-    proc = run_python(CHILD.format(tmp=tmp_path), timeout=300)
+    falls, stepping_error = stepping_error_scene()
+    says = expected("errors.out_of_memory_says")
+    proc = run_python(CHILD.format(tmp=tmp_path, too_big=expected("errors.out_of_memory_scene"), falls=falls),
+                      timeout=300)
     assert proc.returncode == 0, f"exit {proc.returncode}: {proc.stderr[-2000:]}"
+    assert proc.stderr == "", proc.stderr  # what the compiling child said is in the error, not on stderr
     lines = proc.stdout.splitlines()
     assert len(lines) == 5, proc.stdout
     for line in lines[:3]:
-        assert line.startswith("MujocoError ") and "out of memory" in line, line
+        assert line.startswith("MujocoError ") and any(said in line for said in says), line
     words = lines[3].split()
     assert words[:3] == ["next", "run", "11"], lines[3]
     assert int(words[-1]) < 50, f"{lines[3]}: MiB the failed compiles kept"
-    assert lines[4].startswith("stepping error ") and "Stack overflow" in lines[4], lines[4]
+    assert lines[4].startswith("stepping error ") and stepping_error in lines[4], lines[4]

@@ -12,18 +12,7 @@ import pytest
 
 import simloop
 from conftest import sim_loop_exe
-
-
-FALLING_BOXES = """<mujoco model="fall">
-  <option timestep="0.004"/>
-  <size nstack="600"/>
-  <worldbody>
-    <geom name="floor" type="plane" size="2 2 0.1"/>
-    <body name="b1" pos="0 0 0.5"><freejoint/><geom type="box" size="0.05 0.05 0.05"/></body>
-    <body name="b2" pos="0.3 0 0.5"><freejoint/><geom type="box" size="0.05 0.05 0.05"/></body>
-  </worldbody>
-</mujoco>
-"""
+from expected import stepping_error_scene
 
 
 def command(which: str):
@@ -65,12 +54,13 @@ def test_the_lock_is_released_on_every_exit_path(tmp_path):
     out = tmp_path / "out"
     # A failed run (a MuJoCo error while stepping), a stopped one, a killed one:
     # each time the next run gets the folder.
-    broken = tmp_path / "falls.xml"  # a stack too small once the boxes land: "Stack overflow" while stepping
-    broken.write_text(FALLING_BOXES)
+    scene, says = stepping_error_scene()
+    broken = tmp_path / "falls.xml"
+    broken.write_text(scene)
     for which in ("sim_loop", "python"):
         failed = subprocess.run(command(which) + ["--model", str(broken), "--body", "b1", "--out", str(out)],
                                 capture_output=True, text=True, timeout=120)
-        assert failed.returncode == 1 and "Stack overflow" in failed.stderr, failed.stderr
+        assert failed.returncode == 1 and says in failed.stderr, failed.stderr
         proc = subprocess.Popen(command(which) + ["--steps", "100000000", "--record-every", "100000",
                                                   "--out", str(out)], stdout=subprocess.DEVNULL,
                                 stderr=subprocess.DEVNULL)

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 import simloop
+from expected import expected
 
 
 def test_break_it_the_coarse_timestep_hops_and_drifts():
@@ -15,7 +16,8 @@ def test_break_it_the_coarse_timestep_hops_and_drifts():
     assert fine.column("box_z").max() < 0.056
     assert 0.085 < coarse.column("box_z").max() < 0.10
     assert np.abs(fine.column("box_y")).max() < 0.07
-    assert -0.30 < coarse.column("box_y")[-1] < -0.20
+    # The drift is MuJoCo 2.2's (-0.254 m); 4.0 keeps the symmetric push symmetric.
+    assert expected("break_it.final_y_min") <= coarse.column("box_y")[-1] <= expected("break_it.final_y_max")
     # Nothing pushed sideways: every shove written was zero (NaN: the final
     # row has no inputs), and MuJoCo raised no warning. The energy came from
     # the integrator.

@@ -41,7 +41,8 @@ def test_the_chapters_model_pickles_and_runs_the_chapters_bits():
 
 
 def test_damaged_pickles_are_refused_with_a_message():
-    with pytest.raises(simloop.MujocoError, match="<saved model>: loading the saved model: "):
+    # (MuJoCo 2.2 raises an error on bytes that are not a model; 4.0 returns no model.)
+    with pytest.raises(simloop.MujocoError, match="<saved model>: (loading the saved model: |not a model MuJoCo)"):
         simloop.Model.__new__(simloop.Model).__setstate__(b"not a model")
     result = simloop.run(steps=20)
     version, fields = result.__getstate__()

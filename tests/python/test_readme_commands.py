@@ -9,8 +9,11 @@ from pathlib import Path
 
 from conftest import ROOT, sim_loop_exe
 
+from simloop import _build
+
 SYSTEM_PATH = "/usr/bin:/bin"  # as in a new shell: .venv/bin is not on it
-VENV_PYTHON = ROOT / ".venv" / "bin" / "python"
+# The venv scripts/test.sh makes for the build under test (sim_loop's --plot default).
+VENV_PYTHON = ROOT / (".venv-pypi" if _build.MUJOCO_BUILD == "pypi" else ".venv") / "bin" / "python"
 
 
 def test_sim_loop_plot_finds_the_projects_venv(tmp_path):

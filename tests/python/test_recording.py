@@ -84,8 +84,9 @@ def test_static_boxes_and_the_floor(recorded):
     # It covers the chapter's 4 m x 4 m floor and everywhere the box went.
     for column, axis in (("box_x", 0), ("box_y", 1)):
         values = result.column(column)
-        assert centre[axis] - half[axis] <= min(values.min(), -2.0)
-        assert centre[axis] + half[axis] >= max(values.max(), 2.0)
+        # (rerun stores float32: a few 1e-7 either way)
+        assert centre[axis] - half[axis] <= min(values.min(), -2.0) + 1e-6
+        assert centre[axis] + half[axis] >= max(values.max(), 2.0) - 1e-6
 
 
 def test_box_pose_matches_the_trajectory(recorded):

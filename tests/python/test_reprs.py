@@ -8,8 +8,10 @@ PUSHT = ROOT / "tests" / "scenes" / "pusht.toml"
 
 
 def test_the_chapters_run():
+    from expected import expected
+
     assert repr(simloop.run()) == ("RunResult(seed=0, steps=2000, timestep=0.002, rows=2001, "
-                                   "lateral_drift=0.045015, warnings=0)")
+                                   f"lateral_drift={expected('chapter.seed0_lateral_drift')}, warnings=0)")
     r = simloop.run(seed=7, steps=500, timestep=0.004, record_every=10)
     assert repr(r) == (f"RunResult(seed=7, steps=500, timestep=0.004, rows=51, "
                        f"lateral_drift={r.metrics['lateral_drift']!r}, warnings=0)")

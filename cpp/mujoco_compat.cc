@@ -1,0 +1,300 @@
+#include "mujoco_compat.hpp"
+
+#include <link.h>
+
+#include <algorithm>
+#include <array>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <iterator>
+#include <mutex>
+#include <system_error>
+
+#include "mujoco_guard.hpp"
+#include "simloop/errors.hpp"
+
+namespace simloop::detail::compat {
+namespace {
+
+constexpr const char* kWarningNames[] = {
+#include "simloop/mujoco_warning_names.inc"
+};
+static_assert(std::size(kWarningNames) == mjNWARNING, "the warning names read from the headers are MuJoCo's");
+
+}  // namespace
+
+std::string version_string() { return mj_versionString(); }
+
+mjModel* load_xml(const char* filename, const mjVFS* vfs, char* error, int error_size) {
+#if mjVERSION_HEADER >= 300
+  mjSpec* spec = mj_parseXML(filename, vfs, error, error_size);
+  if (spec == nullptr) return nullptr;
+  mjModel* m = nullptr;
+  // Sizes MuJoCo 3's compiler fills element by element (2^31 user numbers a
+  // body allocated for minutes, then crashed): refused before compiling.
+  const std::pair<const char*, int> user_sizes[] = {
+      {"nuserdata", spec->nuserdata},     {"nuser_body", spec->nuser_body}, {"nuser_jnt", spec->nuser_jnt},
+      {"nuser_geom", spec->nuser_geom},   {"nuser_site", spec->nuser_site}, {"nuser_cam", spec->nuser_cam},
+      {"nuser_tendon", spec->nuser_tendon}, {"nuser_actuator", spec->nuser_actuator},
+      {"nuser_sensor", spec->nuser_sensor}};
+  const auto too_big = std::find_if(std::begin(user_sizes), std::end(user_sizes),
+                                    [](const auto& size) { return size.second > kMaxUserNumbers; });
+  if (spec->nkey > kMaxKeyframes) {
+    std::snprintf(error, static_cast<std::size_t>(error_size),
+                  "<size nkey=\"%d\"> asks for %d keyframes; simloop loads at most %d", spec->nkey, spec->nkey,
+                  kMaxKeyframes);
+  } else if (too_big != std::end(user_sizes)) {
+    std::snprintf(error, static_cast<std::size_t>(error_size), "<size %s=\"%d\"> is more than simloop loads (%d)",
+                  too_big->first, too_big->second, kMaxUserNumbers);
+  } else {
+    m = mj_compile(spec, vfs);
+    // A failed compile's error, or a compiled model's warning (as mj_loadXML).
+    if (m == nullptr || mjs_isWarning(spec)) {
+      std::snprintf(error, static_cast<std::size_t>(error_size), "%s", mjs_getError(spec));
+    }
+  }
+  mj_deleteSpec(spec);
+  return m;
+#else
+  mjModel* m = mj_loadXML(filename, vfs, error, error_size);
+  // Today's scenes use words 2.2 does not know (implicitfast, <size memory>,
+  // actuatorfrcrange, ...): say which MuJoCo this is and how to get the other.
+  if (m == nullptr && (std::strstr(error, "Schema violation") != nullptr || std::strstr(error, "invalid keyword") != nullptr)) {
+    const std::size_t used = std::strlen(error);
+    std::snprintf(error + used, static_cast<std::size_t>(error_size) - used,
+                  " (this simloop runs MuJoCo %s; for a scene written for newer MuJoCo, build it on the mujoco "
+                  "package: SIMLOOP_MUJOCO=pypi scripts/run.sh)",
+                  mj_versionString());
+  }
+  return m;
+#endif
+}
+
+const char* warning_name(int warning) noexcept {
+  return warning >= 0 && warning < mjNWARNING ? kWarningNames[warning] : "mjWARN_UNKNOWN";
+}
+
+#if mjVERSION_HEADER >= 300
+// ---------------------------------------------------------------- MuJoCo 3.3 .. 4.x
+
+namespace {
+// Adds `contents` to vfs as the file `name`; MuJoCo's status, 0 when done.
+int add_file(mjVFS* vfs, const char* name, std::string_view contents) {
+  return mj_addBufferVFS(vfs, name, contents.data(), static_cast<int>(contents.size()));
+}
+}  // namespace
+
+std::string warning_text(int warning, int info) {
+  // Thread-local in MuJoCo since 2.3.1: safe while batches step in threads.
+  return mju_warningText(warning, static_cast<std::size_t>(std::max(info, 0)));
+}
+
+namespace {
+
+constexpr int kStateSignature = mjSTATE_INTEGRATION;
+constexpr const char* kStateNames[] = {
+#include "simloop/mujoco_state_names.inc"
+};
+static_assert(std::size(kStateNames) == mjNSTATE, "the state names read from the headers are MuJoCo's");
+
+// MuJoCo 3.4 put bodies to sleep: d->tree_asleep counts each kinematic tree
+// towards sleep and is not part of mj_getState, so a state without it wakes
+// every sleeping tree on restore. It goes after MuJoCo's own state, as doubles.
+#if mjVERSION_HEADER >= 340
+std::size_t sleep_size(const mjModel* m) noexcept { return count(m->ntree); }
+}  // namespace
+// Recomputes d's derived sleep arrays (tree_awake, body_awake, ...) from
+// tree_asleep. Exported by libmujoco since 3.4 but not declared in its
+// headers; without it the next step sees trees asleep by tree_asleep yet
+// awake by tree_awake, and wakes them ("perturbation").
+extern "C" void mj_updateSleep(const mjModel* m, mjData* d);
+namespace {
+#else
+std::size_t sleep_size(const mjModel*) noexcept { return 0; }
+#endif
+
+std::size_t mujoco_state_size(const mjModel* m) noexcept {
+  return static_cast<std::size_t>(mj_stateSize(m, kStateSignature));
+}
+
+}  // namespace
+
+std::vector<std::pair<std::string, std::size_t>> state_layout(const mjModel* m) {
+  std::vector<std::pair<std::string, std::size_t>> layout;
+  for (int i = 0; i < mjNSTATE; ++i) {
+    const int element = 1 << i;
+    if ((kStateSignature & element) == 0) continue;
+    std::string name = kStateNames[i] + std::strlen("mjSTATE_");
+    std::transform(name.begin(), name.end(), name.begin(), [](char c) { return c >= 'A' && c <= 'Z' ? char(c + 32) : c; });
+    layout.emplace_back(std::move(name), static_cast<std::size_t>(mj_stateSize(m, element)));
+  }
+  if (sleep_size(m) > 0) layout.emplace_back("tree_asleep", sleep_size(m));
+  return layout;
+}
+
+std::size_t state_size(const mjModel* m) noexcept { return mujoco_state_size(m) + sleep_size(m); }
+
+void get_state(const mjModel* m, const mjData* d, double* state) noexcept {
+  mj_getState(m, d, state, kStateSignature);
+#if mjVERSION_HEADER >= 340
+  std::copy_n(d->tree_asleep, sleep_size(m), state + mujoco_state_size(m));
+#endif
+}
+
+void put_state(const mjModel* m, mjData* d, const double* state) noexcept {
+  mj_setState(m, d, state, kStateSignature);
+#if mjVERSION_HEADER >= 340
+  const double* asleep = state + mujoco_state_size(m);
+  for (std::size_t i = 0; i < sleep_size(m); ++i) d->tree_asleep[i] = static_cast<int>(asleep[i]);
+  mj_updateSleep(m, d);
+#endif
+}
+
+void put_state_awake(const mjModel* m, mjData* d, const double* state) noexcept {
+  mj_setState(m, d, state, kStateSignature);
+#if mjVERSION_HEADER >= 340
+  std::fill_n(d->tree_asleep, sleep_size(m), -(1 + mjMINAWAKE));  // MuJoCo's "fully awake"
+  mj_updateSleep(m, d);
+#endif
+}
+
+namespace {
+// The folder of the libmujoco this process runs: the one whose file name
+// starts with libmujoco.so among the loaded objects.
+int find_libmujoco(dl_phdr_info* info, std::size_t, void* out) {
+  const char* path = info->dlpi_name;
+  if (path == nullptr || *path == '\0') return 0;
+  const std::filesystem::path file(path);
+  if (file.filename().string().rfind("libmujoco.so", 0) != 0) return 0;
+  *static_cast<std::filesystem::path*>(out) = file.parent_path();
+  return 1;
+}
+}  // namespace
+
+void load_plugins_once() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    std::filesystem::path folder;
+    dl_iterate_phdr(find_libmujoco, &folder);
+    if (folder.empty()) return;
+    const std::string plugins = (folder / "plugin").string();
+    std::error_code error;
+    if (!std::filesystem::is_directory(plugins, error)) return;
+    // A plugin library that fails to load leaves its plugins unknown; the
+    // scene that names one then fails to load with MuJoCo's own message.
+    const char* dir = plugins.c_str();
+    (void)call_catching_mujoco_error([](void* p) { mj_loadAllPluginLibraries(static_cast<const char*>(p), nullptr); },
+                                     const_cast<char*>(dir));
+  });
+}
+
+#else
+// ---------------------------------------------------------------- MuJoCo 2.2
+
+namespace {
+// 2.2's mjVFS is fixed arrays (2 MB): a file is made empty, then filled in place.
+int add_file(mjVFS* vfs, const char* name, std::string_view contents) {
+  const int status = mj_makeEmptyFileVFS(vfs, name, static_cast<int>(contents.size()));
+  if (status == 0) std::memcpy(vfs->filedata[vfs->nfile - 1], contents.data(), contents.size());
+  return status;
+}
+}  // namespace
+
+// 2.2's texts (mju_warningText), rebuilt because that function writes one
+// shared static buffer and batches step in threads.
+std::string warning_text(int warning, int info) {
+  static constexpr const char* kFormats[mjNWARNING] = {
+      "Inertia matrix is too close to singular at DOF %d. Check model.",
+      "Pre-allocated contact buffer is full. Increase nconmax above %d.",
+      "Pre-allocated constraint buffer is full. Increase njmax above %d.",
+      "Pre-allocated visual geom buffer is full. Increase maxgeom above %d.",
+      "Nan, Inf or huge value in QPOS at DOF %d. The simulation is unstable.",
+      "Nan, Inf or huge value in QVEL at DOF %d. The simulation is unstable.",
+      "Nan, Inf or huge value in QACC at DOF %d. The simulation is unstable.",
+      "Nan, Inf or huge value in CTRL at ACTUATOR %d. The simulation is unstable."};
+  if (warning < 0 || warning >= mjNWARNING) return "Unknown warning type " + std::to_string(warning) + ".";
+  char text[160];
+  std::snprintf(text, sizeof text, kFormats[warning], info);
+  return text;
+}
+
+namespace {
+
+// MuJoCo 2.2 has no mj_getState; this is the same idea as later MuJoCo's
+// mjSTATE_INTEGRATION, in this order. These two lists serve get, put and
+// the layout, so they cannot disagree.
+constexpr std::size_t kParts = 11;
+constexpr std::array<const char*, kParts> kNames = {
+    "time", "qpos", "qvel", "act", "qacc_warmstart", "ctrl", "qfrc_applied", "xfrc_applied",
+    "mocap_pos", "mocap_quat", "userdata"};
+
+std::array<std::size_t, kParts> sizes(const mjModel* m) noexcept {
+  return {1, count(m->nq), count(m->nv), count(m->na), count(m->nv), count(m->nu), count(m->nv),
+          6 * count(m->nbody), 3 * count(m->nmocap), 4 * count(m->nmocap), count(m->nuserdata)};
+}
+
+template <typename D>
+auto places(D* d) noexcept {
+  return std::array<decltype(&d->time), kParts>{&d->time, d->qpos, d->qvel, d->act, d->qacc_warmstart,
+                                                 d->ctrl, d->qfrc_applied, d->xfrc_applied, d->mocap_pos,
+                                                 d->mocap_quat, d->userdata};
+}
+
+}  // namespace
+
+std::vector<std::pair<std::string, std::size_t>> state_layout(const mjModel* m) {
+  const auto size = sizes(m);
+  std::vector<std::pair<std::string, std::size_t>> layout;
+  for (std::size_t i = 0; i < kParts; ++i) layout.emplace_back(kNames[i], size[i]);
+  return layout;
+}
+
+std::size_t state_size(const mjModel* m) noexcept {
+  std::size_t total = 0;
+  for (const std::size_t size : sizes(m)) total += size;
+  return total;
+}
+
+void get_state(const mjModel* m, const mjData* d, double* state) noexcept {
+  const auto size = sizes(m);
+  const auto source = places(d);
+  for (std::size_t i = 0; i < kParts; ++i) state = std::copy_n(source[i], size[i], state);
+}
+
+void put_state(const mjModel* m, mjData* d, const double* state) noexcept {
+  const auto size = sizes(m);
+  const auto target = places(d);
+  for (std::size_t i = 0; i < kParts; ++i) {
+    std::copy_n(state, size[i], target[i]);
+    state += size[i];
+  }
+}
+
+void put_state_awake(const mjModel* m, mjData* d, const double* state) noexcept { put_state(m, d, state); }
+
+void load_plugins_once() {}
+
+#endif
+
+// ---------------------------------------------------------------- both
+
+OneFileVfs::OneFileVfs(const char* name, std::string_view contents, std::string_view source, const char* what)
+    : vfs_(new mjVFS) {
+  mj_defaultVFS(vfs_.get());
+  int status = 0;
+  mjVFS* vfs = vfs_.get();
+  try {
+    // The caller checked that contents' size fits MuJoCo's int.
+    mujoco_call([&] { status = add_file(vfs, name, contents); });
+  } catch (const MujocoError& e) {
+    throw MujocoError(std::string(source) + ": holding the " + what + " in memory: " + e.what());
+  }
+  if (status != 0) {
+    throw Error(std::string(source) + ": could not hold the " + what + " in MuJoCo's virtual file system");
+  }
+}
+
+OneFileVfs::~OneFileVfs() { mj_deleteVFS(vfs_.get()); }
+
+}  // namespace simloop::detail::compat
