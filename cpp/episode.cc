@@ -6,13 +6,12 @@
 #include <optional>
 #include <string>
 
-#include "divergence.hpp"
+#include "loop.hpp"
 #include "mujoco_guard.hpp"
 #include "run_detail.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/shove.hpp"
 #include "simloop/state.hpp"
-#include "warning_counter.hpp"
 
 namespace simloop {
 
@@ -20,14 +19,12 @@ namespace {
 
 // One episode: its own Data, the schedule drawn at its reset, where it is.
 struct Episode {
-  explicit Episode(const Model& model) : data(model), divergence(model.get()) {}
+  explicit Episode(const Model& model) : data(model), health(model.get()) {}
   Data data;
   Schedule schedule;
   std::optional<ScheduledInputs> inputs;  // empty until the first reset
   std::int64_t step = 0;
-  detail::WarningCounter warnings;
-  detail::DivergenceCheck divergence;
-  bool reset_by_mujoco = false;  // MuJoCo found a bad state and reset it
+  detail::StepHealth health;
 };
 
 }  // namespace
@@ -54,7 +51,7 @@ struct Episodes::Impl {
     recorder->after_step(observation, m, d);
   }
 
-  [[nodiscard]] bool terminated(const Episode& e) const noexcept { return e.reset_by_mujoco || e.divergence.diverged(); }
+  [[nodiscard]] bool terminated(const Episode& e) const noexcept { return e.health.broken(); }
 };
 
 Episodes::Episodes(const Model& scene, const Scenario& scenario, const ScenarioConfig& config, std::size_t count)
@@ -98,14 +95,12 @@ void Episodes::reset(std::size_t i, std::uint64_t seed, double* observation) {
   e.schedule = build_schedule(s.resolved, s.scenario, s.model.timestep(), *draws);
   e.inputs.emplace(e.schedule, false);  // ctrl is the actions'
   e.step = 0;
-  e.warnings = detail::WarningCounter();
-  e.divergence = detail::DivergenceCheck(s.model.get());
-  e.reset_by_mujoco = false;
   const mjModel* m = s.model.get();
+  e.health = detail::StepHealth(m);
   mjData* d = e.data.get();
-  detail::mujoco_call([&] {
+  detail::guarded_steps(m, 0, 0, [&] {
     mj_resetData(m, d);
-    mj_forward(m, d);  // as run_schedule starts
+    mj_forward(m, d);  // as run_loop starts
   });
   s.observe(e, observation);
 }
@@ -148,14 +143,11 @@ void Episodes::step(const double* actions, std::int64_t every, const std::uint8_
     while (e.step < end && !s.terminated(e)) {
       const std::int64_t chunk_start = e.step;
       const std::int64_t chunk_end = std::min(end, e.step + RunControl::kChunkSteps);
-      detail::mujoco_call([&] {
+      detail::guarded_steps(m, chunk_start, chunk_end - 1, [&] {
         for (; e.step < chunk_end; ++e.step) {
           e.inputs->write(e.step, d);
           mj_step(m, d);
-          e.reset_by_mujoco = e.reset_by_mujoco || d->warning[mjWARN_BADQPOS].number > 0 ||
-                              d->warning[mjWARN_BADQVEL].number > 0 || d->warning[mjWARN_BADQACC].number > 0;
-          e.warnings.after_step(d, e.step);
-          e.divergence.after_step(d, e.step);
+          e.health.after_step(d, e.step);
           if (s.terminated(e)) {
             ++e.step;
             break;
@@ -182,10 +174,7 @@ double Episodes::time(std::size_t i) const {
 
 std::vector<Warning> Episodes::warnings(std::size_t i) const {
   check_index(i, impl_->episodes.size());
-  const Episode& e = impl_->episodes[i];
-  std::vector<Warning> out = e.warnings.warnings();
-  if (e.divergence.diverged()) out.push_back(e.divergence.warning());
-  return out;
+  return impl_->episodes[i].health.warnings();
 }
 
 }  // namespace simloop

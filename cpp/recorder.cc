@@ -8,6 +8,7 @@
 #include <set>
 
 #include "mujoco_guard.hpp"
+#include "loop.hpp"
 #include "run_detail.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/state.hpp"
@@ -249,86 +250,18 @@ ScenarioRunResult detail::run_schedule_counted_elsewhere(const mjModel* m, mjDat
   check_inputs(m, inputs, schedule.steps);
   const Recorder recorder(m, scenario, schedule);
   if (sink == nullptr) detail::check_kept_rows(schedule.steps, record_every, recorder.width());
-  Policy* const policy = inputs.policy;
-  // The caller's controls, or a policy, replace the schedule's ctrl changes.
-  ScheduledInputs scheduled(schedule, policy == nullptr && inputs.controls == nullptr);
-  const double* own_controls = inputs.controls;
-  const int nu = detail::compat::as_int(m->nu);
-  const std::int64_t steps = schedule.steps;
-  const int width = recorder.width();
-
   ScenarioRunResult result;
+  detail::KeepRows keep(result.trajectory);
+  detail::LoopResult loop =
+      detail::run_loop(m, d, schedule, recorder, record_every, sink ? *sink : keep, control, inputs);
   result.columns = recorder.columns();
   result.schedule = schedule;
-  result.timestep = m->opt.timestep;
-  result.rows = Trajectory::rows_for(steps, record_every);
-  detail::KeepRows keep(result.trajectory);
-  RowSink& rows = sink ? *sink : keep;
-  rows.describe(result.columns);
-  rows.start(width, result.rows);
-  detail::RowBlock block(width, std::min(result.rows, RunControl::kChunkSteps / record_every + 2));
-  detail::WarningCounter warnings;
-  detail::DivergenceCheck divergence(m);
-  // Decision steps: 0, K, 2K, ... with a policy; none (the run's end) without.
-  std::int64_t next_decision = policy ? 0 : steps;
-  std::vector<double> observation(policy ? static_cast<std::size_t>(width) : 0);
-
-  detail::mujoco_call([&] {
-    mj_resetData(m, d);
-    if (inputs.initial_state) {
-      set_state(m, d, inputs.initial_state);  // forward, keeping the state as given
-    } else {
-      mj_forward(m, d);
-    }
-  });
-  std::int64_t until_record = 0;
-  for (std::int64_t step = 0; step < steps;) {
-    if (step == next_decision) {
-      // Outside MuJoCo's guard: the policy may throw (a Python exception).
-      detail::mujoco_call([&] {
-        scheduled.write(step, d);
-        forward_keeping_state(m, d);
-      });
-      recorder.before_step(observation.data(), step, m, d, true);
-      recorder.after_step(observation.data(), m, d);
-      policy->decide(step, observation.data(), width, d->ctrl, detail::compat::as_int(m->nu));
-      next_decision = steps - step > policy->every() ? step + policy->every() : steps;
-    }
-    const std::int64_t chunk_start = step;
-    const std::int64_t chunk_end = std::min({steps, step + RunControl::kChunkSteps, next_decision});
-    detail::mujoco_call([&] {
-      for (; step < chunk_end; ++step) {
-        // The rhythm: write intent, write interference, step. The schedule
-        // says what changes at this step; everything else persists.
-        scheduled.write(step, d);
-        if (own_controls) std::copy_n(own_controls + step * nu, nu, d->ctrl);
-        double* row = nullptr;
-        if (until_record-- == 0) {
-          row = block.next();
-          recorder.before_step(row, step, m, d, true);
-          until_record = record_every - 1;
-        }
-        mj_step(m, d);
-        warnings.after_step(d, step);
-        divergence.after_step(d, step);
-        if (row) recorder.after_step(row, m, d);
-      }
-    });
-    block.flush_to(rows);
-    if (control) control->advance(chunk_end - chunk_start);
-  }
-  double* last = block.next();
-  recorder.before_step(last, steps, m, d, false);
-  // Before mj_forward, which would overwrite the warmstart the next step needs.
-  result.final_state = get_state(m, d);
-  detail::mujoco_call([&] { mj_forward(m, d); });
-  recorder.after_step(last, m, d);
-  result.final_row.assign(last, last + width);
-  block.flush_to(rows);
-
-  result.warnings = warnings.warnings();
-  if (divergence.diverged()) result.warnings.push_back(divergence.warning());
-  result.sim_time = d->time;
+  result.timestep = loop.timestep;
+  result.rows = loop.rows;
+  result.final_row = std::move(loop.final_row);
+  result.final_state = std::move(loop.final_state);
+  result.warnings = std::move(loop.warnings);
+  result.sim_time = loop.sim_time;
   return result;
 }
 

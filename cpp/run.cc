@@ -10,11 +10,10 @@
 #include <limits>
 #include <sstream>
 
-#include "divergence.hpp"
 #include "energy_audit.hpp"
-#include "mujoco_guard.hpp"
+#include "loop.hpp"
 #include "run_detail.hpp"
-#include "warning_counter.hpp"
+#include "simloop/recorder.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/number_format.hpp"
 
@@ -50,24 +49,93 @@ std::uint64_t cgroup_memory_max() noexcept {
   return numeric && limit > 0 ? limit : std::numeric_limits<std::uint64_t>::max();
 }
 
-// Writes one trajectory row: the state now, and the inputs just written
-// (or NaN for the final row, which has no step after it).
-void record_row(double* values, std::int64_t step, const mjData* d, const SceneLayout& at, bool with_inputs) {
-  const auto put = [values](int column, double value) { values[column] = value; };
-  const double* box_q = d->qpos + at.box_qposadr;
-  const double* box_v = d->qvel + at.box_dofadr;
-  const double* shove = d->xfrc_applied + 6 * at.box_body;
-  constexpr double kNone = std::numeric_limits<double>::quiet_NaN();
-  put(Trajectory::kStep, static_cast<double>(step));
-  put(Trajectory::kTime, d->time);
-  put(Trajectory::kCtrl, with_inputs ? d->ctrl[0] : kNone);
-  for (int i = 0; i < 3; ++i) put(Trajectory::kShoveX + i, with_inputs ? shove[i] : kNone);
-  for (int i = 0; i < 7; ++i) put(Trajectory::kBoxX + i, box_q[i]);
-  for (int i = 0; i < 6; ++i) put(Trajectory::kBoxVx + i, box_v[i]);
-  put(Trajectory::kPusherX, d->qpos[at.pusher_qposadr]);
-  put(Trajectory::kPusherVx, d->qvel[at.pusher_dofadr]);
-  put(Trajectory::kNcon, d->ncon);
+// The chapter's row: the state entering the step and the inputs just written
+// (NaN in the final row, which has no step after it), all read before the
+// step as the chapter reads them (ncon: the contacts the last step found).
+class ChapterRecorder final : public RowRecorder {
+ public:
+  ChapterRecorder(const SceneLayout& at, int columns) : at_(at), columns_(chapter_columns(columns)) {}
+  [[nodiscard]] const std::vector<Column>& columns() const noexcept override { return columns_; }
+  void before_step(double* row, std::int64_t step, const mjModel* /*m*/, const mjData* d,
+                   bool inputs) const noexcept override {
+    const auto put = [row](int column, double value) { row[column] = value; };
+    const double* box_q = d->qpos + at_.box_qposadr;
+    const double* box_v = d->qvel + at_.box_dofadr;
+    const double* shove = d->xfrc_applied + 6 * at_.box_body;
+    constexpr double kNone = std::numeric_limits<double>::quiet_NaN();
+    put(Trajectory::kStep, static_cast<double>(step));
+    put(Trajectory::kTime, d->time);
+    put(Trajectory::kCtrl, inputs ? d->ctrl[0] : kNone);
+    for (int i = 0; i < 3; ++i) put(Trajectory::kShoveX + i, inputs ? shove[i] : kNone);
+    for (int i = 0; i < 7; ++i) put(Trajectory::kBoxX + i, box_q[i]);
+    for (int i = 0; i < 6; ++i) put(Trajectory::kBoxVx + i, box_v[i]);
+    put(Trajectory::kPusherX, d->qpos[at_.pusher_qposadr]);
+    put(Trajectory::kPusherVx, d->qvel[at_.pusher_dofadr]);
+    put(Trajectory::kNcon, d->ncon);
+  }
+  void after_step(double* /*row*/, const mjModel* /*m*/, const mjData* /*d*/) const noexcept override {}
+
+ private:
+  SceneLayout at_;
+  std::vector<Column> columns_;
+};
+
+// The chapter's inputs as a schedule: full throttle on actuator 0 from step
+// 0, and the shove on the box for its window (if the run is perturbed).
+Schedule chapter_schedule(const SceneLayout& at, const Shove& shove, std::int64_t steps, bool perturb) {
+  Schedule schedule;
+  schedule.steps = steps;
+  schedule.control_changes.push_back({0, 0, 1.0});
+  if (perturb) {
+    Schedule::Force force;
+    force.body = at.box_body;
+    force.wrench = {0.0, shove.force_y(), 0.0, 0.0, 0.0, 0.0};
+    force.start = std::min(shove.start_step, steps);
+    force.asked_end = shove.start_step + shove.num_steps;
+    force.end = std::min(force.asked_end, steps);
+    schedule.forces.push_back(force);
+  }
+  return schedule;
 }
+
+// What the chapter watches besides the rows: where the box was when the
+// shove began (its drift is measured from there), and with the energy
+// audit, the energy of each row's state and the work done up to it.
+class ChapterWatch final : public detail::StepObserver {
+ public:
+  ChapterWatch(const mjModel* m, const SceneLayout& at, std::int64_t shove_start, bool audit)
+      : box_body_(at.box_body), shove_start_(shove_start), audit_(audit), energy_(detail::compat::as_int(m->nv)) {}
+
+  void before_step(std::int64_t step, const mjModel* /*m*/, const mjData* d) noexcept override {
+    // A copy, as the chapter takes: xpos is overwritten by the next step.
+    if (step == shove_start_) std::copy_n(d->xpos + 3 * box_body_, 3, box_pos_at_shove_);
+    if (audit_) energy_.before_step(d);
+  }
+  void after_step(std::int64_t /*step*/, const mjModel* m, mjData* d, double* row) noexcept override {
+    if (!audit_) return;
+    // The row's state is the one this step started from: its energy is known
+    // now, and the work before this step's is what the row holds.
+    const double entering = energy_.observe(d);
+    if (row) energy_.fill_row(row, entering);
+    energy_.add_step_work(m, d, box_body_);
+  }
+  void at_end(const mjModel* /*m*/, const mjData* d, double* row) noexcept override {
+    if (!audit_) return;
+    final_energy_ = d->energy[0] + d->energy[1];  // from the loop's final mj_forward
+    energy_.fill_row(row, final_energy_);
+  }
+
+  [[nodiscard]] double box_y_at_shove() const noexcept { return box_pos_at_shove_[1]; }
+  [[nodiscard]] EnergyTotals energy() const noexcept { return audit_ ? energy_.totals(final_energy_) : EnergyTotals{}; }
+
+ private:
+  int box_body_;
+  std::int64_t shove_start_;
+  bool audit_;
+  detail::EnergyAudit energy_;
+  double box_pos_at_shove_[3] = {};
+  double final_energy_ = 0.0;
+};
 
 }  // namespace
 
@@ -200,12 +268,6 @@ RunResult run(const Model& model, const RunConfig& config) {
   return detail::run_counted_elsewhere(model, config, workspace, nullptr, nullptr);
 }
 
-namespace {
-
-
-
-}  // namespace
-
 RunResult run(const Model& model, const RunConfig& config, Data& workspace, RowSink* sink,
               RunControl* control) {
   validate(config);
@@ -225,107 +287,28 @@ RunResult detail::run_counted_elsewhere(const Model& model_in, const RunConfig& 
   mjData* d = workspace.get();
   const SceneLayout& at = model.layout();
   const std::int64_t steps = config.num_steps();
-  const std::int64_t every = config.record_every;
 
   RunResult result;
   result.config = config;
-  result.timestep = m->opt.timestep;
   result.shove = draw_shove(config.seed, steps, config.rng);
-  result.rows = Trajectory::rows_for(steps, every);
-  const Shove& shove = result.shove;
-  const bool audit = config.audit_energy;
-  const int columns = audit ? Trajectory::kNumColumns : Trajectory::kNumBaseColumns;
+  const ChapterRecorder recorder(at, config.audit_energy ? Trajectory::kNumColumns : Trajectory::kNumBaseColumns);
+  ChapterWatch watch(m, at, result.shove.start_step, config.audit_energy);
   detail::KeepRows keep(result.trajectory);
-  RowSink& rows = sink ? *sink : keep;
-  rows.start(columns, result.rows);
-  detail::RowBlock block(columns, std::min(result.rows, RunControl::kChunkSteps / every + 2));
-  detail::WarningCounter warnings;
-  detail::DivergenceCheck divergence(m);
-  detail::EnergyAudit energy(detail::compat::as_int(m->nv));
-  double box_pos_at_push[3] = {};
-
-  double* box_force = d->xfrc_applied + 6 * at.box_body;
-  // mj_forward fills in the derived state (poses, contacts) without
-  // advancing time, so row 0 is the true rest pose at t = 0.
-  const auto stepping_error = [&](const MujocoError& e, std::int64_t from, std::int64_t to) {
-    std::ostringstream msg;
-    msg << "running the model at timestep " << python_float_repr(m->opt.timestep) << " s, in steps " << from
-        << " to " << to << ": " << e.what();
-    return MujocoError(msg.str());
-  };
-  try {
-    detail::mujoco_call([&] {
-      mj_resetData(m, d);
-      mj_forward(m, d);
-    });
-  } catch (const MujocoError& e) {
-    throw stepping_error(e, 0, 0);
-  }
-  std::int64_t until_record = 0;  // counts down to the next recorded step
-  // The loop runs in chunks: each inside one guard (a MuJoCo error jumps back
-  // out of it, and nothing inside owns anything that would need destroying),
-  // then the chunk's rows go to the sink and the control may stop the run.
-  for (std::int64_t step = 0; step < steps;) {
-    const std::int64_t chunk_start = step;
-    const std::int64_t chunk_end = std::min(steps, step + RunControl::kChunkSteps);
-    try {
-      detail::mujoco_call([&] {
-        for (; step < chunk_end; ++step) {
-          const bool in_shove = config.perturb && shove.acts_at(step);
-          if (step == shove.start_step) {
-            // A copy, as the chapter takes: xpos is overwritten by the next step.
-            for (int i = 0; i < 3; ++i) box_pos_at_push[i] = d->xpos[3 * at.box_body + i];
-          }
-          // The rhythm: write intent, write interference, step.
-          d->ctrl[0] = 1.0;  // full throttle on the slide motor
-          box_force[0] = 0.0;
-          box_force[1] = in_shove ? shove.force_y() : 0.0;  // write 0 explicitly: xfrc_applied persists
-          box_force[2] = 0.0;
-          const bool recorded = until_record-- == 0;
-          if (recorded) {
-            record_row(block.next(), step, d, at, true);
-            until_record = every - 1;
-          }
-          if (audit) energy.before_step(d);
-          mj_step(m, d);
-          warnings.after_step(d, step);
-          divergence.after_step(d, step);
-          if (audit) {
-            // The row's state is the one this step started from: its energy is
-            // known now, and the work before this step's is what the row holds.
-            const double entering = energy.observe(d);
-            if (recorded) energy.fill_row(block.last(), entering);
-            energy.add_step_work(m, d, at.box_body);
-          }
-        }
-      });
-    } catch (const MujocoError& e) {
-      throw stepping_error(e, chunk_start, chunk_end - 1);
-    }
-    block.flush_to(rows);
-    if (control) control->advance(chunk_end - chunk_start);
-  }
-  record_row(block.next(), steps, d, at, false);
-  if (audit) {
-    // MuJoCo computes energy during a step; the final state has had none,
-    // so a forward pass (no time advances) computes its energy.
-    try {
-      detail::mujoco_call([&] { mj_forward(m, d); });
-    } catch (const MujocoError& e) {
-      throw stepping_error(e, steps, steps);
-    }
-    const double final_energy = d->energy[0] + d->energy[1];
-    energy.fill_row(block.last(), final_energy);
-    result.energy = energy.totals(final_energy);
-  }
-  block.flush_to(rows);
+  const detail::LoopResult loop =
+      detail::run_loop(m, d, chapter_schedule(at, result.shove, steps, config.perturb), recorder,
+                       config.record_every, sink ? *sink : keep, control, RunInputs{}, {&watch});
+  result.timestep = loop.timestep;
+  result.rows = loop.rows;
+  result.warnings = loop.warnings;
+  result.sim_time = loop.sim_time;
+  result.energy = watch.energy();
 
   // Inspect, as the chapter does: the box's free joint owns qpos[adr..adr+3)
   // (position) and qvel[adr..adr+3) (linear velocity).
   const double* box_q = d->qpos + at.box_qposadr;
   const double* box_v = d->qvel + at.box_dofadr;
   const double speed = std::sqrt(box_v[0] * box_v[0] + box_v[1] * box_v[1] + box_v[2] * box_v[2]);
-  const double drift = std::fabs(box_q[1] - box_pos_at_push[1]);
+  const double drift = std::fabs(box_q[1] - watch.box_y_at_shove());
   Metrics& metrics = result.metrics;
   metrics.steps = steps;
   metrics.seed = config.seed;
@@ -341,10 +324,6 @@ RunResult detail::run_counted_elsewhere(const Model& model_in, const RunConfig& 
   exact.box_final_speed = speed;
   exact.pusher_final_x = d->qpos[at.pusher_qposadr];
   exact.lateral_drift = drift;
-
-  result.warnings = warnings.warnings();
-  if (divergence.diverged()) result.warnings.push_back(divergence.warning());
-  result.sim_time = d->time;
   return result;
 }
 

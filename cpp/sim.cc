@@ -10,11 +10,14 @@
 #include "simloop/number_format.hpp"
 #include "simloop/scenario.hpp"
 #include "simloop/state.hpp"
-#include "warning_counter.hpp"
+#include "loop.hpp"
 
 namespace simloop {
 
-struct Sim::Counter : detail::WarningCounter {};
+// MuJoCo's warnings and the divergence check, as every loop watches them.
+struct Sim::Counter : detail::StepHealth {
+  using StepHealth::StepHealth;
+};
 
 namespace {
 
@@ -97,7 +100,7 @@ void Sim::reset() {
     mj_forward(m, d);
   });
   steps_ = 0;
-  counter_ = std::make_shared<Counter>();
+  counter_ = std::make_shared<Counter>(m);
 }
 
 void Sim::reset_to_keyframe(int key) {
@@ -109,7 +112,7 @@ void Sim::reset_to_keyframe(int key) {
     mj_forward(m, d);
   });
   steps_ = 0;
-  counter_ = std::make_shared<Counter>();
+  counter_ = std::make_shared<Counter>(m);
 }
 
 int Sim::id(mjtObj type, const std::string& name) const {
@@ -233,13 +236,16 @@ void Sim::step(std::int64_t n, RunControl* control) {
   const mjModel* m = model_.get();
   mjData* d = data_.get();
   if (control) control->add_total(n);
+  Counter& health = *counter_;
   for (std::int64_t done = 0; done < n;) {
     const std::int64_t chunk = std::min(n - done, RunControl::kChunkSteps);
-    for (std::int64_t i = 0; i < chunk; ++i) {
-      detail::mujoco_call([&] { mj_step(m, d); });
-      counter_->after_step(d, steps_);
-      ++steps_;
-    }
+    detail::guarded_steps(m, steps_, steps_ + chunk - 1, [&] {
+      for (std::int64_t i = 0; i < chunk; ++i) {
+        mj_step(m, d);
+        health.after_step(d, steps_);
+        ++steps_;
+      }
+    });
     done += chunk;
     if (control) control->advance(chunk);
   }

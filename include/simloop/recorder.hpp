@@ -23,6 +23,22 @@ struct CtrlRange {
 };
 [[nodiscard]] CtrlRange ctrl_range(const mjModel* m);
 
+// What a run's rows hold: their columns, and how to fill one. The loop calls
+// before_step when it records a row, after_step once that step is taken.
+class RowRecorder {
+ public:
+  virtual ~RowRecorder() = default;
+  [[nodiscard]] virtual const std::vector<Column>& columns() const noexcept = 0;
+  [[nodiscard]] int width() const noexcept { return static_cast<int>(columns().size()); }
+  // Before mj_step: step, time, the inputs just written (NaN in the final
+  // row, which has no step after it) and the state entering the step.
+  virtual void before_step(double* row, std::int64_t step, const mjModel* m, const mjData* d,
+                           bool inputs) const noexcept = 0;
+  // After mj_step (the final row: after mj_forward): what MuJoCo derived
+  // from the row's state.
+  virtual void after_step(double* row, const mjModel* m, const mjData* d) const noexcept = 0;
+};
+
 // The columns of a resolved scenario, laid out once, and how to fill a row.
 //
 // A row holds the state entering its step and the inputs written for that
@@ -42,17 +58,14 @@ struct CtrlRange {
 // (m and m/s for a slide, rad and rad/s for a hinge; `_pos0..` for the
 // several numbers of ball and free joints); per recorded actuator `_force`
 // (N or N m); per recorded sensor its value(s); `ncon` (contacts).
-class Recorder {
+class Recorder final : public RowRecorder {
  public:
   Recorder(const mjModel* m, const ResolvedScenario& scenario, const Schedule& schedule);
 
-  [[nodiscard]] const std::vector<Column>& columns() const noexcept { return columns_; }
-  [[nodiscard]] int width() const noexcept { return static_cast<int>(columns_.size()); }
-
-  // Before mj_step: step, time, inputs (NaN in the final row) and the state.
-  void before_step(double* row, std::int64_t step, const mjModel* m, const mjData* d, bool inputs) const noexcept;
-  // After mj_step (or mj_forward): what MuJoCo derived from the row's state.
-  void after_step(double* row, const mjModel* m, const mjData* d) const noexcept;
+  [[nodiscard]] const std::vector<Column>& columns() const noexcept override { return columns_; }
+  void before_step(double* row, std::int64_t step, const mjModel* m, const mjData* d,
+                   bool inputs) const noexcept override;
+  void after_step(double* row, const mjModel* m, const mjData* d) const noexcept override;
 
  private:
   struct Source {

@@ -53,7 +53,7 @@ import json
 import os
 import uuid
 from pathlib import Path
-from typing import Any, Mapping, Optional, Union
+from typing import Any, Mapping, Optional, Sequence, Union
 
 from . import _core
 from ._api import ModelLike, _pusher_scene, load_model
@@ -368,7 +368,12 @@ class ChapterRecording:
             self.file.close()
             raise
 
-    # run_to_files's drawing: rows(block) per block, finish(result) at the end.
+    # run_to_files's drawing: columns(names) once, rows(block) per block,
+    # finish(result) at the end.
+    def columns(self, names: Sequence[str]) -> None:
+        if list(names) != self._names:  # the run and the recording disagree on what a row holds
+            raise ValueError(f"the chapter's recording draws the columns {self._names}, the run records {list(names)}")
+
     def rows(self, block: Any) -> None:
         self._pending.append(block)
         self._pending_rows += len(block)

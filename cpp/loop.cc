@@ -1,0 +1,108 @@
+#include "loop.hpp"
+
+#include <algorithm>
+#include <sstream>
+
+#include "mujoco_compat.hpp"
+#include "run_detail.hpp"
+#include "simloop/errors.hpp"
+#include "simloop/number_format.hpp"
+#include "simloop/state.hpp"
+
+namespace simloop::detail {
+
+MujocoError stepping_error(const mjModel* m, std::int64_t from, std::int64_t to, const MujocoError& e) {
+  std::ostringstream msg;
+  msg << "running the model at timestep " << python_float_repr(m->opt.timestep) << " s, in steps " << from << " to "
+      << to << ": " << e.what();
+  return MujocoError(msg.str());
+}
+
+LoopResult run_loop(const mjModel* m, mjData* d, const Schedule& schedule, const RowRecorder& recorder,
+                    std::int64_t record_every, RowSink& rows, RunControl* control, const RunInputs& inputs,
+                    const std::vector<StepObserver*>& observers) {
+  Policy* const policy = inputs.policy;
+  // The caller's controls, or a policy, replace the schedule's ctrl changes.
+  ScheduledInputs scheduled(schedule, policy == nullptr && inputs.controls == nullptr);
+  const double* own_controls = inputs.controls;
+  const int nu = compat::as_int(m->nu);
+  const std::int64_t steps = schedule.steps;
+  const int width = recorder.width();
+
+  LoopResult result;
+  result.timestep = m->opt.timestep;
+  result.rows = Trajectory::rows_for(steps, record_every);
+  rows.describe(recorder.columns());
+  rows.start(width, result.rows);
+  RowBlock block(width, std::min(result.rows, RunControl::kChunkSteps / record_every + 2));
+  StepHealth health(m);
+  // Decision steps: 0, K, 2K, ... with a policy; none (the run's end) without.
+  std::int64_t next_decision = policy ? 0 : steps;
+  std::vector<double> observation(policy ? static_cast<std::size_t>(width) : 0);
+  const auto guarded = [m](std::int64_t from, std::int64_t to, auto&& body) { guarded_steps(m, from, to, body); };
+
+  // mj_forward fills in the derived state (poses, contacts) without
+  // advancing time, so row 0 is the true state at t = 0.
+  guarded(0, 0, [&] {
+    mj_resetData(m, d);
+    if (inputs.initial_state) {
+      set_state(m, d, inputs.initial_state);  // forward, keeping the state as given
+    } else {
+      mj_forward(m, d);
+    }
+  });
+  std::int64_t until_record = 0;  // counts down to the next recorded step
+  for (std::int64_t step = 0; step < steps;) {
+    if (step == next_decision) {
+      // Outside MuJoCo's guard: the policy may throw (a Python exception).
+      guarded(step, step, [&] {
+        scheduled.write(step, d);
+        forward_keeping_state(m, d);
+      });
+      recorder.before_step(observation.data(), step, m, d, true);
+      recorder.after_step(observation.data(), m, d);
+      policy->decide(step, observation.data(), width, d->ctrl, nu);
+      next_decision = steps - step > policy->every() ? step + policy->every() : steps;
+    }
+    const std::int64_t chunk_start = step;
+    const std::int64_t chunk_end = std::min({steps, step + RunControl::kChunkSteps, next_decision});
+    guarded(chunk_start, chunk_end - 1, [&] {
+      for (; step < chunk_end; ++step) {
+        // The rhythm: write intent, write interference, step. The schedule
+        // says what changes at this step; everything else persists.
+        scheduled.write(step, d);
+        if (own_controls) std::copy_n(own_controls + step * nu, nu, d->ctrl);
+        double* row = nullptr;
+        if (until_record-- == 0) {
+          row = block.next();
+          recorder.before_step(row, step, m, d, true);
+          until_record = record_every - 1;
+        }
+        for (StepObserver* o : observers) o->before_step(step, m, d);
+        mj_step(m, d);
+        health.after_step(d, step);
+        if (row) recorder.after_step(row, m, d);
+        for (StepObserver* o : observers) o->after_step(step, m, d, row);
+      }
+    });
+    block.flush_to(rows);
+    if (control) control->advance(chunk_end - chunk_start);
+  }
+  double* last = block.next();
+  recorder.before_step(last, steps, m, d, false);
+  // Before mj_forward, which would overwrite the warmstart the next step needs.
+  result.final_state = get_state(m, d);
+  // MuJoCo derives a state's quantities (and its energy) during a step; the
+  // final state has had none, so a forward pass (no time advances) does it.
+  guarded(steps, steps, [&] { mj_forward(m, d); });
+  recorder.after_step(last, m, d);
+  for (StepObserver* o : observers) o->at_end(m, d, last);
+  result.final_row.assign(last, last + width);
+  block.flush_to(rows);
+
+  result.warnings = health.warnings();
+  result.sim_time = d->time;
+  return result;
+}
+
+}  // namespace simloop::detail

@@ -1,0 +1,108 @@
+// The one loop every run steps in: the chapter's, a scenario's, a batch's,
+// a policy's (internal to the library).
+//
+// It only reads what was decided before it started: the schedule (which
+// ctrl and which forces change at which step, drawn from the seed up front),
+// or the caller's own controls, or a policy's decisions. Per step:
+//
+//   write intent (ctrl), write interference (xfrc_applied), note the row,
+//   mj_step, note what MuJoCo derived, watch for warnings and divergence.
+//
+// What a row holds is the recorder's business, what else is watched (the
+// energy audit, the chapter's drift) the observers'. The steps run in
+// chunks of RunControl::kChunkSteps inside one MuJoCo error guard each;
+// between chunks the rows go to the sink and the control may stop the run.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <mujoco/mujoco.h>
+
+#include "divergence.hpp"
+#include "mujoco_guard.hpp"
+#include "warning_counter.hpp"
+#include "simloop/control.hpp"
+#include "simloop/errors.hpp"
+#include "simloop/recorder.hpp"
+#include "simloop/run.hpp"
+#include "simloop/scenario.hpp"
+
+namespace simloop::detail {
+
+// What every stepping loop (run_loop, Sim, Episodes) watches after each
+// mj_step: MuJoCo's warnings, counted, and simloop's divergence check.
+class StepHealth {
+ public:
+  explicit StepHealth(const mjModel* m) : divergence_(m) {}
+  void after_step(mjData* d, std::int64_t step) noexcept {
+    // Before the counter empties them: after these MuJoCo reset the state.
+    reset_by_mujoco_ = reset_by_mujoco_ || d->warning[mjWARN_BADQPOS].number > 0 ||
+                       d->warning[mjWARN_BADQVEL].number > 0 || d->warning[mjWARN_BADQACC].number > 0;
+    warnings_.after_step(d, step);
+    divergence_.after_step(d, step);
+  }
+  // MuJoCo reset a bad state, or a free body fell through the floor.
+  [[nodiscard]] bool broken() const noexcept { return reset_by_mujoco_ || divergence_.diverged(); }
+  // MuJoCo's warnings, then the divergence's if any.
+  [[nodiscard]] std::vector<Warning> warnings() const {
+    std::vector<Warning> out = warnings_.warnings();
+    if (divergence_.diverged()) out.push_back(divergence_.warning());
+    return out;
+  }
+
+ private:
+  WarningCounter warnings_;
+  DivergenceCheck divergence_;
+  bool reset_by_mujoco_ = false;
+};
+
+// A MuJoCo error `e` while running steps `from` to `to`, saying so and the
+// timestep, on one line.
+[[nodiscard]] MujocoError stepping_error(const mjModel* m, std::int64_t from, std::int64_t to, const MujocoError& e);
+
+// Runs `steps` (MuJoCo calls for steps `from` to `to`) inside one MuJoCo
+// error guard; a MuJoCo error throws stepping_error.
+template <class Steps>
+void guarded_steps(const mjModel* m, std::int64_t from, std::int64_t to, Steps&& steps) {
+  try {
+    mujoco_call(steps);
+  } catch (const MujocoError& e) {
+    throw stepping_error(m, from, to, e);
+  }
+}
+
+// Watches a run step by step without changing it. `row` is the row being
+// recorded at this step, or null.
+class StepObserver {
+ public:
+  virtual ~StepObserver() = default;
+  virtual void before_step(std::int64_t /*step*/, const mjModel* /*m*/, const mjData* /*d*/) noexcept {}
+  virtual void after_step(std::int64_t /*step*/, const mjModel* /*m*/, mjData* /*d*/,
+                          double* /*row*/) noexcept {}
+  // After the last step and the final mj_forward; `row` is the final row.
+  virtual void at_end(const mjModel* /*m*/, const mjData* /*d*/, double* /*row*/) noexcept {}
+};
+
+// What the loop leaves besides the rows it gave the sink.
+struct LoopResult {
+  std::int64_t rows = 0;            // rows recorded, kept or streamed
+  std::vector<double> final_row;    // the last row
+  std::vector<double> final_state;  // the full state at the end (state.hpp's layout)
+  std::vector<Warning> warnings;    // MuJoCo's, then simloop's divergence
+  double timestep = 0.0;
+  double sim_time = 0.0;
+};
+
+// Runs `schedule` on m and d (reset first, or set to inputs.initial_state),
+// recording every `record_every`-th row with `recorder` into `rows`. The
+// caller has checked the arguments (check_schedule_run, check_inputs). A
+// MuJoCo error while stepping throws MujocoError saying the timestep and
+// the steps it happened in; the control's stop throws Interrupted.
+[[nodiscard]] LoopResult run_loop(const mjModel* m, mjData* d, const Schedule& schedule,
+                                  const RowRecorder& recorder, std::int64_t record_every, RowSink& rows,
+                                  RunControl* control, const RunInputs& inputs,
+                                  const std::vector<StepObserver*>& observers = {});
+
+}  // namespace simloop::detail
