@@ -55,7 +55,7 @@ struct Episodes::Impl {
 };
 
 Episodes::Episodes(const Model& scene, const Scenario& scenario, const ScenarioConfig& config, std::size_t count)
-    : impl_(std::make_unique<Impl>(Impl{scene.for_run(detail::run_timestep(scene, scenario, config), false),
+    : impl_(std::make_unique<Impl>(Impl{scene.for_run(run_timestep(scene, scenario, config), false),
                                         detail::configured_scenario(scenario, config), config, {}, std::nullopt, 0, {}})) {
   Impl& s = *impl_;
   s.resolved = resolve(s.scenario, s.model.get());

@@ -152,11 +152,7 @@ Model Model::from_file(const std::string& path) {
 }
 
 Model Model::with_timestep(double timestep) const {
-  if (!(std::isfinite(timestep) && timestep > 0.0)) {
-    std::ostringstream msg;
-    msg << "timestep must be a positive, finite number of seconds, got " << timestep;
-    throw InvalidArgument(msg.str());
-  }
+  check_positive_seconds("timestep", timestep);
   mjModel* copy = nullptr;
   const mjModel* src = model_.get();
   try {

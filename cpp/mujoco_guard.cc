@@ -94,6 +94,23 @@ bool call_catching_mujoco_error(void (*fn)(void*), void* context) noexcept {
 
 const char* last_mujoco_error() noexcept { return t_error_message; }
 
+
+MujocoError error_from_exception(const std::exception_ptr& error) {
+  try {
+    std::rethrow_exception(error);
+  } catch (const std::bad_alloc&) {
+    return MujocoError("MuJoCo ran out of memory");
+  } catch (const std::exception& e) {
+    return MujocoError("MuJoCo failed: " + one_line(e.what()));
+  } catch (...) {
+    return MujocoError("MuJoCo failed with an unknown C++ exception");
+  }
+}
+
+}  // namespace simloop::detail
+
+namespace simloop {
+
 std::string one_line(std::string_view text) {
   std::string line;
   bool pending_separator = false;
@@ -112,16 +129,4 @@ std::string one_line(std::string_view text) {
   return line;
 }
 
-MujocoError error_from_exception(const std::exception_ptr& error) {
-  try {
-    std::rethrow_exception(error);
-  } catch (const std::bad_alloc&) {
-    return MujocoError("MuJoCo ran out of memory");
-  } catch (const std::exception& e) {
-    return MujocoError("MuJoCo failed: " + one_line(e.what()));
-  } catch (...) {
-    return MujocoError("MuJoCo failed with an unknown C++ exception");
-  }
-}
-
-}  // namespace simloop::detail
+}  // namespace simloop

@@ -57,9 +57,7 @@ class CaptureWarnings {
 // them, for after such an exception.
 void reset_mujoco_thread_handlers() noexcept;
 
-// `text` on one line: each run of line breaks becomes "; " (MuJoCo's XML
-// errors span lines), and surrounding blanks are dropped.
-[[nodiscard]] std::string one_line(std::string_view text);
+using simloop::one_line;  // include/simloop/errors.hpp
 
 // The MujocoError for a C++ exception that came out of MuJoCo (its XML
 // parser and compiler are C++ inside libmujoco: std::bad_alloc, for one).

@@ -1,5 +1,7 @@
 #include "simloop/number_format.hpp"
 
+#include "simloop/errors.hpp"
+
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -74,6 +76,12 @@ std::string shortest_repr(double x) {
   std::string out;
   append_shortest(out, x);
   return out;
+}
+
+void check_positive_seconds(std::string_view name, double value) {
+  if (std::isfinite(value) && value > 0.0) return;
+  throw InvalidArgument(std::string(name) + " must be a positive, finite number of seconds, got " +
+                        python_float_repr(value));
 }
 
 }  // namespace simloop

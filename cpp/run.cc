@@ -153,9 +153,8 @@ std::vector<Column> chapter_columns(int count) {
 
 void validate(const RunConfig& config) {
   std::ostringstream msg;
-  if (!(std::isfinite(config.timestep) && config.timestep > 0.0)) {
-    msg << "timestep must be a positive, finite number of seconds, got " << python_float_repr(config.timestep);
-  } else if (config.num_steps() < 1) {
+  check_positive_seconds("timestep", config.timestep);
+  if (config.num_steps() < 1) {
     msg << "steps must be at least 1, got " << config.num_steps();
   } else if (config.num_steps() > kMaxSteps) {
     msg << "steps must be at most " << kMaxSteps << ", got " << config.num_steps();

@@ -71,8 +71,6 @@ void check_schedule_run(std::int64_t steps, std::int64_t record_every);
 // A scenario as one run of `config` sees it: its length replaced by
 // config.steps, its disturbances dropped unless config.perturb.
 [[nodiscard]] Scenario configured_scenario(const Scenario& scenario, const ScenarioConfig& config);
-// The timestep such a run steps at: config's, else the scenario's, else the scene's own.
-[[nodiscard]] double run_timestep(const Model& scene, const Scenario& scenario, const ScenarioConfig& config);
 
 // run() without announcing its steps to the control: a batch announces all
 // of its runs' steps up front, so progress has its true total from the start.

@@ -567,9 +567,7 @@ ResolvedScenario resolve(const Scenario& scenario, const mjModel* m) {
 }
 
 Schedule build_schedule(const ResolvedScenario& scenario, const Scenario& spec, double timestep, Draws& draws) {
-  if (!(std::isfinite(timestep) && timestep > 0)) {
-    throw InvalidArgument("timestep must be a positive, finite number of seconds, got " + python_float_repr(timestep));
-  }
+  check_positive_seconds("timestep", timestep);
   Schedule s;
   s.steps = spec.length.to_steps(timestep, 0);
   if (s.steps < 1) {

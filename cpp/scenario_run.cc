@@ -53,7 +53,6 @@ ScenarioRunResult labelled(ScenarioRunResult result, const mjModel* m, const Sce
   return result;
 }
 
-using detail::run_timestep;
 
 }  // namespace
 
@@ -64,7 +63,7 @@ Scenario detail::configured_scenario(const Scenario& scenario, const ScenarioCon
   return effective;
 }
 
-double detail::run_timestep(const Model& scene, const Scenario& scenario, const ScenarioConfig& config) {
+double run_timestep(const Model& scene, const Scenario& scenario, const ScenarioConfig& config) {
   return config.timestep.value_or(scenario.timestep.value_or(scene.timestep()));
 }
 

@@ -42,13 +42,8 @@ std::vector<double> default_sweep_timesteps() {
 }
 
 std::int64_t sweep_steps(double duration, double timestep) {
-  if (!(std::isfinite(duration) && duration > 0.0)) {
-    throw InvalidArgument("duration must be a positive, finite number of seconds, got " + python_float_repr(duration));
-  }
-  if (!(std::isfinite(timestep) && timestep > 0.0)) {
-    throw InvalidArgument("timestep must be a positive, finite number of seconds, got " +
-                          python_float_repr(timestep));
-  }
+  check_positive_seconds("duration", duration);
+  check_positive_seconds("timestep", timestep);
   const double ratio = duration / timestep;  // may be inf
   // 2^62 is exact in a double; below it llround cannot overflow.
   const std::int64_t steps =
@@ -103,9 +98,7 @@ class SweepReducer final : public RowSink {
 
 SweepResult sweep(const Model& model, std::vector<double> timesteps, double duration, int threads,
                   RunControl* control) {
-  if (!(std::isfinite(duration) && duration > 0.0)) {
-    throw InvalidArgument("duration must be a positive, finite number of seconds, got " + python_float_repr(duration));
-  }
+  check_positive_seconds("duration", duration);
   if (timesteps.empty()) throw InvalidArgument("timesteps must not be empty");
   std::vector<RunConfig> configs;
   for (double dt : timesteps) {
@@ -299,9 +292,7 @@ class PeakSpeed final : public RowSink {
 
 ScenarioSweepResult sweep_scenario(const Model& scene, const Scenario& scenario, std::vector<double> timesteps,
                                    double duration, const ScenarioConfig& config, int threads, RunControl* control) {
-  if (!(std::isfinite(duration) && duration > 0.0)) {
-    throw InvalidArgument("duration must be a positive, finite number of seconds, got " + python_float_repr(duration));
-  }
+  check_positive_seconds("duration", duration);
   if (timesteps.empty()) throw InvalidArgument("timesteps must not be empty");
   std::vector<ScenarioConfig> configs;
   for (double dt : timesteps) {

@@ -5,8 +5,19 @@
 
 #include <stdexcept>
 #include <string>
+#include <string_view>
 
 namespace simloop {
+
+// `text` on one line: each run of line breaks becomes "; " (MuJoCo's XML
+// errors span lines), and trailing blanks are dropped. Every message simloop
+// throws is one line; the commands print theirs through this too.
+[[nodiscard]] std::string one_line(std::string_view text);
+
+// A duration in seconds (a timestep, a sweep's duration) that a run can use:
+// throws InvalidArgument "<name> must be a positive, finite number of
+// seconds, got <value>" otherwise. Every such check in the library is this one.
+void check_positive_seconds(std::string_view name, double value);
 
 // Base of everything simloop throws.
 class Error : public std::runtime_error {

@@ -61,6 +61,10 @@ struct ScenarioConfig {
 // run_scenario() would. The commands call it before touching --out.
 void check_scenario(const Model& scene, const Scenario& scenario, const ScenarioConfig& config);
 
+// The timestep a run of `scenario` on `scene` with `config` steps at:
+// config's, else the scenario's, else the scene's own.
+[[nodiscard]] double run_timestep(const Model& scene, const Scenario& scenario, const ScenarioConfig& config);
+
 //
 // inputs: empty, or one RunInputs per config (run i follows inputs[i]; runs
 // may share the same arrays, and the same policy, whose decide() is then

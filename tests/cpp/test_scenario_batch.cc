@@ -76,7 +76,7 @@ TEST(ScenarioBatch, RefusesBadConfigsBeforeRunningAny) {
     (void)simloop::run_scenario_batch(scene, scenario, cs, 2);
     FAIL() << "accepted";
   } catch (const simloop::InvalidArgument& e) {
-    EXPECT_STREQ(e.what(), "run 3: timestep must be a positive, finite number of seconds, got -1");
+    EXPECT_STREQ(e.what(), "run 3: timestep must be a positive, finite number of seconds, got -1.0");
   }
   cs = configs({0, 1}, {0.002});
   cs[1].record_every = 0;

@@ -86,7 +86,7 @@ void complete_scenario_sweep(Options& opts, const Model& scene, const Scenario& 
 [[nodiscard]] ScenarioConfig scenario_config(const Options& opts);
 
 // What the command was doing, with which inputs, for its error lines
-// (cpp/cli_doing.cc): "running 2000 steps of --model x.xml (--steps 2000,
+// (command/cli_doing.cc): "running 2000 steps of --model x.xml (--steps 2000,
 // --timestep 0.002, --record-every 1)" or "sweeping ...". With the scene and
 // scenario of a scenario run, the timestep and steps it ran with: the
 // flags', else the scenario's, else the scene's own.

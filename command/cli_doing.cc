@@ -2,7 +2,6 @@
 #include <string>
 
 #include "cli_options.hpp"
-#include "run_detail.hpp"
 #include "simloop/number_format.hpp"
 
 namespace simloop::cli {
@@ -24,7 +23,7 @@ std::string doing(const Options& opts, const Model* scene, const Scenario* scena
   std::string steps_flag = run.smoke ? std::string("--smoke") : "--steps " + steps;
   if (scene != nullptr && scenario != nullptr) {
     const ScenarioConfig config = scenario_config(opts);
-    const double dt = detail::run_timestep(*scene, *scenario, config);
+    const double dt = run_timestep(*scene, *scenario, config);
     const std::string whose = scenario->timestep ? "the scenario's" : "the scene's own";
     if (!opts.timestep_given) timestep = "timestep " + python_float_repr(dt) + " s: " + whose;
     if (!opts.steps_given) {

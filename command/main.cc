@@ -23,7 +23,6 @@
 #include <system_error>
 
 #include "cli_options.hpp"
-#include "mujoco_guard.hpp"
 #include "simloop/control.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/number_format.hpp"
@@ -199,7 +198,7 @@ int finish_stdout(int code) {
 // One line on stderr, whatever the message held (MuJoCo's XML errors span lines).
 int fail(int code, const std::string& message) {
   g_progress.finish();
-  std::fprintf(stderr, "sim_loop: %s\n", simloop::detail::one_line(message).c_str());
+  std::fprintf(stderr, "sim_loop: %s\n", simloop::one_line(message).c_str());
   return code;
 }
 
