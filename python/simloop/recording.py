@@ -23,7 +23,8 @@ same run always gets the same id and two different runs open as two
 recordings instead of merging into one. rerun does not let us make the bytes
 repeat: it stamps every chunk and row with a time-based id and gives the
 embedded blueprint a random store id, so two identical runs give two files
-with the same data (`rerun rrd compare a.rrd b.rrd` says so) but different
+with the same data (`rerun rrd compare --unordered a.rrd b.rrd` says so: rerun may
+batch the same rows into chunks differently) but different
 bytes.
 
 Two choices differ from the chapter's listing, on purpose:

@@ -224,15 +224,15 @@ def test_make_vec_uses_the_vector_class():
     venv.close()
 
 
-def test_the_readmes_random_policy_runs():
+def test_the_docs_random_policy_runs():
     from pathlib import Path
 
-    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text(encoding="utf-8")
+    readme = (Path(__file__).resolve().parents[2] / "docs" / "training.md").read_text(encoding="utf-8")
     after = readme.split("A random policy:\n\n```python\n", 1)[1]
     code = after.split("```", 1)[0]
     assert "gymnasium.make(\"simloop/" in code and "env.step(env.action_space.sample())" in code
     namespace = {}
-    exec(compile(code, "README.md", "exec"), namespace)
+    exec(compile(code, "docs/training.md", "exec"), namespace)
     assert namespace["total"] == 0.0  # no reward function: 0.0 every step
 
 

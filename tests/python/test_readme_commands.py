@@ -1,4 +1,4 @@
-"""The README's commands work as printed after scripts/test.sh, with nothing
+"""The commands README.md and docs/ print work as printed after scripts/test.sh, with nothing
 set by hand: no SIMLOOP_PYTHON, the venv's bin off PATH, the system python3."""
 
 import os

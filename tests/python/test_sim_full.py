@@ -253,14 +253,14 @@ def test_reprs_say_what_they_are():
     assert repr(sim.joint("knee_left")) == "<simloop.Sim joint 2 'knee_left' type=hinge>"
 
 
-def test_the_readmes_sim_example_runs(monkeypatch):
+def test_the_docs_sim_example_runs(monkeypatch):
     root = Path(__file__).resolve().parents[2]
-    text = (root / "README.md").read_text()
-    section = text.split("### Your own loop: simloop.Sim", 1)[1]
+    text = (root / "docs" / "python.md").read_text()
+    section = text.split("## Your own loop: simloop.Sim", 1)[1]
     code = section.split("```python\n", 1)[1].split("```", 1)[0]
     monkeypatch.chdir(root)
     scope: dict = {}
-    exec(compile(code, "README.md", "exec"), scope)  # noqa: S102 (our own README)
+    exec(compile(code, "docs/python.md", "exec"), scope)  # noqa: S102 (our own docs)
     assert scope["sim"].time == 0.0 and scope["restored"].steps_taken == 350  # set_state leaves the count
     assert np.array_equal(scope["twin"].get_state(), scope["saved"])
 

@@ -118,11 +118,11 @@ def test_wrong_inputs_and_a_missing_extra_say_what_to_do(monkeypatch):
         simloop.run_batch(seeds=[0], steps=10, metrics_only=True).to_pandas()
 
 
-def test_the_readmes_batches_example_runs(capsys, monkeypatch):
-    text = (ROOT / "README.md").read_text()
+def test_the_docs_batches_example_runs(capsys, monkeypatch):
+    text = (ROOT / "docs" / "scaling.md").read_text()
     section = text.split("## Batches, tables\n", 1)[1]
     code = section.split("```python\n", 1)[1].split("```", 1)[0]
     monkeypatch.chdir(ROOT)
-    exec(compile(code, "README.md: Batches, tables", "exec"), {})
+    exec(compile(code, "docs/scaling.md: Batches, tables", "exec"), {})
     last = capsys.readouterr().out.splitlines()[-1]
     assert last.startswith("ScenarioResult(name='pusht', seed=0, steps=1000,") and last.endswith(") 25")
