@@ -261,8 +261,11 @@ def layout() -> List[Tuple[str, List[str]]]:
 
 def tracked_files(folder: str) -> List[str]:
     """The files directly in folder that git tracks (or, outside a clone, that exist)."""
-    proc = subprocess.run(["git", "ls-files", "--", folder], cwd=ROOT, capture_output=True, text=True)
-    if proc.returncode == 0 and proc.stdout:
+    try:
+        proc = subprocess.run(["git", "ls-files", "--", folder], cwd=ROOT, capture_output=True, text=True)
+    except FileNotFoundError:  # no git on this machine (a source tree copied or cloned elsewhere)
+        proc = None
+    if proc is not None and proc.returncode == 0 and proc.stdout:
         names = [p[len(folder):] for p in proc.stdout.splitlines()]
     else:
         names = [p.name for p in (ROOT / folder).iterdir() if p.is_file()]
