@@ -39,11 +39,10 @@ LoopResult run_loop(const mjModel* m, mjData* d, const Schedule& schedule, const
   // Decision steps: 0, K, 2K, ... with a policy; none (the run's end) without.
   std::int64_t next_decision = policy ? 0 : steps;
   std::vector<double> observation(policy ? static_cast<std::size_t>(width) : 0);
-  const auto guarded = [m](std::int64_t from, std::int64_t to, auto&& body) { guarded_steps(m, from, to, body); };
 
   // mj_forward fills in the derived state (poses, contacts) without
   // advancing time, so row 0 is the true state at t = 0.
-  guarded(0, 0, [&] {
+  guarded_steps(m, 0, 0, [&] {
     mj_resetData(m, d);
     if (inputs.initial_state) {
       set_state(m, d, inputs.initial_state);  // forward, keeping the state as given
@@ -55,7 +54,7 @@ LoopResult run_loop(const mjModel* m, mjData* d, const Schedule& schedule, const
   for (std::int64_t step = 0; step < steps;) {
     if (step == next_decision) {
       // Outside MuJoCo's guard: the policy may throw (a Python exception).
-      guarded(step, step, [&] {
+      guarded_steps(m, step, step, [&] {
         scheduled.write(step, d);
         forward_keeping_state(m, d);
       });
@@ -66,7 +65,7 @@ LoopResult run_loop(const mjModel* m, mjData* d, const Schedule& schedule, const
     }
     const std::int64_t chunk_start = step;
     const std::int64_t chunk_end = std::min({steps, step + RunControl::kChunkSteps, next_decision});
-    guarded(chunk_start, chunk_end - 1, [&] {
+    guarded_steps(m, chunk_start, chunk_end - 1, [&] {
       for (; step < chunk_end; ++step) {
         // The rhythm: write intent, write interference, step. The schedule
         // says what changes at this step; everything else persists.
@@ -94,7 +93,7 @@ LoopResult run_loop(const mjModel* m, mjData* d, const Schedule& schedule, const
   result.final_state = get_state(m, d);
   // MuJoCo derives a state's quantities (and its energy) during a step; the
   // final state has had none, so a forward pass (no time advances) does it.
-  guarded(steps, steps, [&] { mj_forward(m, d); });
+  guarded_steps(m, steps, steps, [&] { mj_forward(m, d); });
   recorder.after_step(last, m, d);
   for (StepObserver* o : observers) o->at_end(m, d, last);
   result.final_row.assign(last, last + width);

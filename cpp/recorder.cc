@@ -7,13 +7,10 @@
 #include <map>
 #include <set>
 
-#include "mujoco_guard.hpp"
 #include "loop.hpp"
 #include "run_detail.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/state.hpp"
-#include "divergence.hpp"
-#include "warning_counter.hpp"
 
 namespace simloop {
 namespace {

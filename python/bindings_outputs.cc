@@ -66,6 +66,30 @@ std::vector<simloop::PendingFile*> pending(const std::vector<simloop::PipedFile*
   return files;
 }
 
+// A run written into an output folder (run_to_files, run_scenario_to_files):
+// `run(to_python, extra, control)` steps it, streaming its rows to the
+// folder's writer and, with a `drawing`, to Python, and commits the files
+// with `also`'s. Interruptible, with failures named by `what`; an exception
+// raised in the drawing reaches Python as itself.
+template <class Run>
+auto run_into_folder(const std::string& what, py::object drawing, const std::vector<simloop::PipedFile*>& also,
+                     py::object progress, Run&& run) {
+  std::optional<RowsToPython> to_python;
+  if (!drawing.is_none()) to_python.emplace(std::move(drawing));
+  const std::vector<simloop::PendingFile*> extra = pending(also);
+  Interruptible work(std::move(progress));
+  try {
+    auto done = work.run([&](simloop::RunControl* control) {
+      return naming_failures(what, [&] { return run(to_python ? &*to_python : nullptr, extra, control); });
+    });
+    work.finish();
+    return done;
+  } catch (const RowsToPython::Failed&) {
+    to_python->raise_if_failed();
+    throw;
+  }
+}
+
 // An OutputLock that Python can release when it chooses (a with block).
 struct PyOutputLock {
   std::optional<simloop::OutputLock> lock;
@@ -150,28 +174,18 @@ void bind_outputs(py::module_& m) {
       "run_to_files",
       [](const simloop::Model& model, const simloop::RunConfig& config, const std::filesystem::path& out,
          py::object drawing, const std::vector<simloop::PipedFile*>& also, py::object progress) {
-        std::optional<RowsToPython> to_python;
-        if (!drawing.is_none()) to_python.emplace(drawing);
-        const std::vector<simloop::PendingFile*> extra = pending(also);
-        Interruptible work(std::move(progress));
-        try {
-          auto done = work.run([&](simloop::RunControl* control) {
-            return naming_failures("run(steps=" + std::to_string(config.num_steps()) + ")", [&] {
+        return run_into_folder(
+            "run(steps=" + std::to_string(config.num_steps()) + ")", std::move(drawing), also, std::move(progress),
+            [&](RowsToPython* to_python, const std::vector<simloop::PendingFile*>& extra,
+                simloop::RunControl* control) {
               simloop::OutputWriter writer(out);
               simloop::Data workspace(model);
-              Tee rows(writer.trajectory(), to_python ? &*to_python : nullptr);
+              Tee rows(writer.trajectory(), to_python);
               simloop::RunResult result = simloop::run(model, config, workspace, &rows, control);
               if (to_python) to_python->finish(result);
               const simloop::OutputFiles files = writer.commit(result.metrics, control, extra);
               return std::make_tuple(std::move(result), files.metrics, files.trajectory);
             });
-          });
-          work.finish();
-          return done;
-        } catch (const RowsToPython::Failed&) {
-          to_python->raise_if_failed();
-          throw;
-        }
       },
       "model"_a, "config"_a, "out"_a, "drawing"_a = py::none(), "also"_a = std::vector<simloop::PipedFile*>{},
       "progress"_a = py::none(),
@@ -183,13 +197,10 @@ void bind_outputs(py::module_& m) {
       [](const simloop::Model& scene, const simloop::Scenario& scenario, const simloop::ScenarioConfig& config,
          const std::filesystem::path& out, py::object drawing, const std::vector<simloop::PipedFile*>& also,
          py::object progress) {
-        std::optional<RowsToPython> to_python;
-        if (!drawing.is_none()) to_python.emplace(drawing);
-        const std::vector<simloop::PendingFile*> extra = pending(also);
-        Interruptible work(std::move(progress));
-        try {
-          auto done = work.run([&](simloop::RunControl* control) {
-            return naming_failures("run_scenario(" + scenario.name + ")", [&] {
+        return run_into_folder(
+            "run_scenario(" + scenario.name + ")", std::move(drawing), also, std::move(progress),
+            [&](RowsToPython* to_python, const std::vector<simloop::PendingFile*>& extra,
+                simloop::RunControl* control) {
               simloop::OutputWriter writer(out);
               simloop::ScenarioRunResult result =
                   to_python ? simloop::run_scenario_drawn(scene, scenario, config, writer.trajectory(), *to_python,
@@ -200,13 +211,6 @@ void bind_outputs(py::module_& m) {
                   writer.commit(simloop::scenario_metrics_json(result), control, extra);
               return std::make_tuple(std::move(result), files.metrics, files.trajectory);
             });
-          });
-          work.finish();
-          return done;
-        } catch (const RowsToPython::Failed&) {
-          to_python->raise_if_failed();
-          throw;
-        }
       },
       "scene"_a, "scenario"_a, "config"_a, "out"_a, "drawing"_a = py::none(),
       "also"_a = std::vector<simloop::PipedFile*>{}, "progress"_a = py::none(),
