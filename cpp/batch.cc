@@ -33,6 +33,12 @@ std::thread start_thread(const std::function<void()>& work) {
 
 void detail::limit_thread_starts_for_testing(int threads) noexcept { g_thread_starts_left.store(threads); }
 
+void detail::check_threads(int threads) {
+  if (threads < 0) {
+    throw InvalidArgument("threads must be at least 1, or 0 for one per core, got " + std::to_string(threads));
+  }
+}
+
 int batch_workers(int threads, std::size_t jobs) noexcept {
   const int wanted = threads > 0 ? threads : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
   return static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(wanted), std::max<std::size_t>(jobs, 1)));
@@ -127,16 +133,8 @@ std::vector<RunResult> run_batch(const Model& model, const std::vector<RunConfig
 
 std::vector<RunResult> run_batch(const Model& model, const std::vector<RunConfig>& configs,
                                  const std::vector<RowSink*>& sinks, int threads, RunControl* control) {
-  if (threads < 0) {
-    throw InvalidArgument("threads must be at least 1, or 0 for one per core, got " + std::to_string(threads));
-  }
-  for (std::size_t i = 0; i < configs.size(); ++i) {
-    try {
-      validate(configs[i]);
-    } catch (const InvalidArgument& e) {
-      throw InvalidArgument("run " + std::to_string(i) + ": " + e.what());
-    }
-  }
+  detail::check_threads(threads);
+  for (std::size_t i = 0; i < configs.size(); ++i) detail::check_run(i, [&] { validate(configs[i]); });
   if (sinks.empty()) {
     check_kept_trajectories(configs);
   } else if (sinks.size() != configs.size() || std::find(sinks.begin(), sinks.end(), nullptr) != sinks.end()) {

@@ -6,8 +6,10 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <string>
 #include <vector>
 
+#include "simloop/errors.hpp"
 #include "simloop/recorder.hpp"
 #include "simloop/run.hpp"
 #include "simloop/scenario_run.hpp"
@@ -76,6 +78,18 @@ void check_schedule_run(std::int64_t steps, std::int64_t record_every);
 // of its runs' steps up front, so progress has its true total from the start.
 [[nodiscard]] RunResult run_counted_elsewhere(const Model& model, const RunConfig& config, Data& workspace,
                                               RowSink* sink, RunControl* control);
+
+// A batch's checks before any run starts: threads is at least 0 (0: one
+// per core), and run i's own checks, their InvalidArgument prefixed "run i: ".
+void check_threads(int threads);
+template <class Check>
+void check_run(std::size_t i, Check&& check) {
+  try {
+    check();
+  } catch (const InvalidArgument& e) {
+    throw InvalidArgument("run " + std::to_string(i) + ": " + e.what());
+  }
+}
 
 // The batches' worker pool: job(i, data, control) for every i in [0, jobs),
 // taken in order from one atomic index by batch_workers(threads, jobs)

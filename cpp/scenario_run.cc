@@ -105,9 +105,7 @@ std::vector<ScenarioRunResult> run_scenario_batch(const Model& scene, const Scen
     throw InvalidArgument("sinks must hold one per config (" + std::to_string(configs.size()) + "), got " +
                           std::to_string(sinks.size()));
   }
-  if (threads < 0) {
-    throw InvalidArgument("threads must be at least 1, or 0 for one per core, got " + std::to_string(threads));
-  }
+  detail::check_threads(threads);
   if (!inputs.empty() && inputs.size() != configs.size()) {
     throw InvalidArgument("inputs: one RunInputs per config, got " + std::to_string(inputs.size()) + " for " +
                           std::to_string(configs.size()) + " configs");
@@ -123,7 +121,7 @@ std::vector<ScenarioRunResult> run_scenario_batch(const Model& scene, const Scen
   std::vector<std::array<std::int64_t, 3>> kept;
   for (std::size_t i = 0; i < configs.size(); ++i) {
     const ScenarioConfig& config = configs[i];
-    try {
+    detail::check_run(i, [&] {
       const double timestep = run_timestep(scene, scenario, config);
       auto it = std::find_if(models.begin(), models.end(), [&](const auto& m) { return m.first == timestep; });
       if (it == models.end()) it = models.emplace(models.end(), timestep, scene.for_run(timestep, false));
@@ -133,9 +131,7 @@ std::vector<ScenarioRunResult> run_scenario_batch(const Model& scene, const Scen
       check_inputs(it->second.get(), inputs_of(i), runs.back().schedule.steps);
       const Recorder columns(it->second.get(), runs.back().resolved, runs.back().schedule);
       if (sinks[i] == nullptr) kept.push_back({runs.back().schedule.steps, config.record_every, columns.width()});
-    } catch (const InvalidArgument& e) {
-      throw InvalidArgument("run " + std::to_string(i) + ": " + e.what());
-    }
+    });
   }
   if (!kept.empty()) detail::check_kept_rows(kept);
 

@@ -61,6 +61,38 @@ std::int64_t sweep_steps(double duration, double timestep) {
 
 namespace {
 
+// What every sweep shares, whatever its kind of run and its criterion: the
+// grid of points, and where the edge lies.
+struct GridPoint {
+  double timestep;
+  std::int64_t steps;  // sweep_steps(duration, timestep)
+};
+
+// The timesteps with their steps over `duration` (sweep_steps refuses a point
+// that cannot be run faithfully), ascending, duplicates dropped. Ascending
+// timesteps put the longest runs first, which keeps a batch's workers evenly
+// loaded to the end.
+std::vector<GridPoint> sweep_grid(const std::vector<double>& timesteps, double duration) {
+  check_positive_seconds("duration", duration);
+  if (timesteps.empty()) throw InvalidArgument("timesteps must not be empty");
+  std::vector<GridPoint> grid;
+  for (const double dt : timesteps) grid.push_back({dt, sweep_steps(duration, dt)});
+  const auto earlier = [](const GridPoint& a, const GridPoint& b) { return a.timestep < b.timestep; };
+  const auto same = [](const GridPoint& a, const GridPoint& b) { return a.timestep == b.timestep; };
+  std::sort(grid.begin(), grid.end(), earlier);
+  grid.erase(std::unique(grid.begin(), grid.end(), same), grid.end());
+  return grid;
+}
+
+// The edge: the last of the points (ascending timesteps) before the first
+// that fails the criterion; -1 if even the first fails.
+template <class Point, class Passes>
+int sweep_edge(const std::vector<Point>& points, Passes passes) {
+  int edge = -1;
+  for (std::size_t i = 0; i < points.size() && passes(points[i]); ++i) edge = static_cast<int>(i);
+  return edge;
+}
+
 // Reduces a run's rows to a sweep point's figures as they come, so a sweep
 // keeps no trajectories, however many timesteps it has.
 class SweepReducer final : public RowSink {
@@ -98,24 +130,15 @@ class SweepReducer final : public RowSink {
 
 SweepResult sweep(const Model& model, std::vector<double> timesteps, double duration, int threads,
                   RunControl* control) {
-  check_positive_seconds("duration", duration);
-  if (timesteps.empty()) throw InvalidArgument("timesteps must not be empty");
   std::vector<RunConfig> configs;
-  for (double dt : timesteps) {
+  for (const GridPoint& point : sweep_grid(timesteps, duration)) {
     RunConfig c;
-    c.timestep = dt;
-    c.steps = sweep_steps(duration, dt);  // refuses a point that cannot be run faithfully
+    c.timestep = point.timestep;
+    c.steps = point.steps;
     c.perturb = false;
     c.audit_energy = true;
     configs.push_back(c);
   }
-  std::sort(configs.begin(), configs.end(),
-            [](const RunConfig& a, const RunConfig& b) { return a.timestep < b.timestep; });
-  configs.erase(std::unique(configs.begin(), configs.end(),
-                            [](const RunConfig& a, const RunConfig& b) { return a.timestep == b.timestep; }),
-                configs.end());
-  // Ascending timesteps put the longest runs first, which keeps the workers
-  // evenly loaded to the end.
   std::vector<SweepReducer> reducers(configs.size());
   std::vector<RowSink*> sinks;
   for (SweepReducer& r : reducers) sinks.push_back(&r);
@@ -141,8 +164,7 @@ void judge_sweep(SweepResult& result) {
   for (SweepPoint& p : result.points) {
     p.stable = p.peak_box_z <= kBoxRestZ + kStableHop && p.final_box_z >= kBoxRestZ - kStableSink && p.warnings == 0;
   }
-  result.edge_index = -1;
-  for (size_t i = 0; i < result.points.size() && result.points[i].stable; ++i) result.edge_index = static_cast<int>(i);
+  result.edge_index = sweep_edge(result.points, [](const SweepPoint& p) { return p.stable; });
 }
 
 std::string sweep_csv(const SweepResult& result) {
@@ -292,24 +314,14 @@ class PeakSpeed final : public RowSink {
 
 ScenarioSweepResult sweep_scenario(const Model& scene, const Scenario& scenario, std::vector<double> timesteps,
                                    double duration, const ScenarioConfig& config, int threads, RunControl* control) {
-  check_positive_seconds("duration", duration);
-  if (timesteps.empty()) throw InvalidArgument("timesteps must not be empty");
   std::vector<ScenarioConfig> configs;
-  for (double dt : timesteps) {
+  for (const GridPoint& point : sweep_grid(timesteps, duration)) {
     ScenarioConfig c = config;
-    c.timestep = dt;
-    c.steps = sweep_steps(duration, dt);  // refuses a point that cannot be run faithfully
-    c.record_every = 1;                   // every step's speed is read
+    c.timestep = point.timestep;
+    c.steps = point.steps;
+    c.record_every = 1;  // every step's speed is read
     configs.push_back(c);
   }
-  const auto timestep_of = [](const ScenarioConfig& c) { return *c.timestep; };
-  std::sort(configs.begin(), configs.end(),
-            [&](const ScenarioConfig& a, const ScenarioConfig& b) { return timestep_of(a) < timestep_of(b); });
-  configs.erase(std::unique(configs.begin(), configs.end(),
-                            [&](const ScenarioConfig& a, const ScenarioConfig& b) {
-                              return timestep_of(a) == timestep_of(b);
-                            }),
-                configs.end());
   std::vector<PeakSpeed> reducers(configs.size());
   std::vector<RowSink*> sinks;
   for (PeakSpeed& r : reducers) sinks.push_back(&r);
@@ -349,9 +361,7 @@ ScenarioSweepResult sweep_scenario(const Model& scene, const Scenario& scenario,
     }
     p.blew_up = p.mujoco_warnings > 0 || p.diverged > 0 || !(p.max_offset <= result.tolerance);
   }
-  for (size_t i = 0; i < result.points.size() && !result.points[i].blew_up; ++i) {
-    result.edge_index = static_cast<int>(i);
-  }
+  result.edge_index = sweep_edge(result.points, [](const ScenarioSweepPoint& p) { return !p.blew_up; });
   return result;
 }
 

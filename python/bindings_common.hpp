@@ -5,9 +5,11 @@
 
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
+#include <pybind11/stl/filesystem.h>
 
 #include <algorithm>
 #include <cstdint>
+#include <filesystem>
 #include <new>
 #include <optional>
 #include <stdexcept>
@@ -16,7 +18,10 @@
 #include <utility>
 #include <vector>
 
+#include <mujoco/mujoco.h>
+
 #include "simloop/control.hpp"
+#include "simloop/output.hpp"
 #include "simloop/run.hpp"
 
 namespace simloop_py {
@@ -168,5 +173,88 @@ class RowsToPython final : public simloop::RowSink {
   std::optional<py::error_already_set> error_;
 };
 
+
+// Text from the C++ side that may hold a path's raw bytes (not UTF-8): as a
+// str the way Python decodes file names (os.fsdecode, surrogateescape).
+inline py::str fs_str(const std::string& text) {
+  PyObject* decoded = PyUnicode_DecodeFSDefaultAndSize(text.data(), static_cast<py::ssize_t>(text.size()));
+  if (!decoded) throw py::error_already_set();
+  return py::reinterpret_steal<py::str>(decoded);
+}
+
+// Sets a Python error whose message is `what` on one line (MuJoCo's own
+// messages can span several), decoded as fs_str does.
+void set_error_fs(PyObject* type, const char* what);
+
+inline py::array vec(const double* values, size_t n) { return py::array_t<double>(static_cast<py::ssize_t>(n), values); }
+inline py::array vector_array(const std::vector<double>& values) { return vec(values.data(), values.size()); }
+inline std::string py_bool(bool b) { return b ? "True" : "False"; }
+inline std::string py_str_repr(const std::string& text) { return py::repr(py::str(text)).cast<std::string>(); }
+
+// A run's trajectory as a (rows, columns) read-only view of its own buffer,
+// and one column of it as a strided view. No copy.
+inline py::array trajectory_view(const py::object& owner, const simloop::Trajectory& t) {
+  const auto item = static_cast<py::ssize_t>(sizeof(double));
+  py::array view(py::dtype::of<double>(), {static_cast<py::ssize_t>(t.rows()), static_cast<py::ssize_t>(t.columns())},
+                 {item * t.columns(), item}, t.data(), owner);
+  py::detail::array_proxy(view.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
+  return view;
+}
+inline py::array column_view(const py::object& owner, const simloop::Trajectory& t, int column) {
+  const auto item = static_cast<py::ssize_t>(sizeof(double));
+  py::array view(py::dtype::of<double>(), {static_cast<py::ssize_t>(t.rows())}, {item * t.columns()},
+                 t.data() + column, owner);
+  py::detail::array_proxy(view.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
+  return view;
+}
+
+// A kind of MuJoCo object by its word ("body", "joint", "actuator", "sensor",
+// "keyframe"); ValueError for any other.
+mjtObj object_type(const std::string& kind);
+
+// A long call: Ctrl-C stops it within a chunk of steps (Interruptible);
+// progress(steps_done, steps_total), if given, is called from this thread at
+// most every 20 ms, and once at the end; `what` names the call in a
+// resource failure's message.
+template <class Work>
+auto long_call(py::object progress, const std::string& what, Work&& work) {
+  Interruptible call(std::move(progress));
+  auto result = call.run([&](simloop::RunControl* control) { return naming_failures(what, [&] { return work(control); }); });
+  call.finish();
+  return result;
+}
+
+// What every kind of sweep result offers beside its own figures: its edge,
+// sweep.csv, the table for people, and writing sweep.csv.
+template <class Result, std::string (*Csv)(const Result&), std::string (*Summary)(const Result&)>
+void bind_sweep_outputs(py::class_<Result>& result, const char* edge_doc) {
+  result
+      .def_property_readonly(
+          "edge",
+          [](const Result& r) -> py::object {
+            if (r.edge_index < 0) return py::none();
+            return py::float_(r.points[static_cast<size_t>(r.edge_index)].timestep);
+          },
+          edge_doc)
+      .def("csv", Csv)
+      .def("summary", Summary)
+      .def(
+          "write",
+          [](const Result& r, const std::filesystem::path& out) {
+            simloop::prepare_output_dir(out);
+            simloop::write_file_atomically(out / "sweep.csv", Csv(r));
+            return out / "sweep.csv";
+          },
+          py::arg("out"), "Writes sweep.csv into out (atomically); returns its path.");
+}
+
+// The topics' bindings, in the order bindings.cc registers them (a type is
+// registered before any signature names it).
+void bind_model(py::module_& m);
+void bind_chapter(py::module_& m);
+void bind_scenario(py::module_& m);
+void bind_sim(py::module_& m);
+void bind_command(py::module_& m);
+void bind_outputs(py::module_& m);
 
 }  // namespace simloop_py

@@ -1,7 +1,7 @@
 // simloop._core, continued: the commands' outputs. A run written to its
 // folder as it steps (run_to_files, run_scenario_to_files), the folder's
 // lock (OutputLock), the recording's file (PipedFile), and the signals the
-// commands stop on. Glue only, as in bindings.cc.
+// commands stop on.
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
@@ -25,14 +25,10 @@
 #include "simloop/scenario_run.hpp"
 #include "simloop/signals.hpp"
 
-namespace py = pybind11;
-using namespace pybind11::literals;
-
+namespace simloop_py {
 namespace {
 
-using simloop_py::Interruptible;
-using simloop_py::naming_failures;
-using simloop_py::RowsToPython;
+using namespace pybind11::literals;
 
 // The chapter's rows to trajectory.csv and, with a drawing, to Python too.
 class Tee final : public simloop::RowSink {
@@ -218,3 +214,5 @@ void bind_outputs(py::module_& m) {
       "`also`, all or none; drawing.columns(names) and drawing.rows(array) get the rows and every moving body's "
       "pose, drawing.finish(result) the result before the files are put in place.");
 }
+
+}  // namespace simloop_py

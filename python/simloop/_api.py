@@ -343,8 +343,8 @@ def run_batch(seeds: Iterable[int] = (0,), timesteps: Iterable[float] = (0.002,)
         return run_batch_on(executor, configs, model, threads, chunk_size, _check_progress(progress))
     if metrics_only:
         from .tables import table
-        return table(_core.run_batch_metrics_only(load_model(model), configs, workers,
-                                                  progress=_check_progress(progress)))
+        return table(_core.run_batch(load_model(model), configs, workers, keep_rows=False,
+                                     progress=_check_progress(progress)))
     return _core.run_batch(load_model(model), configs, workers, progress=_check_progress(progress))
 
 

@@ -206,12 +206,9 @@ class RunResult(metaclass=_Pybind11Type):
     def __setstate__(self, state: Any, /) -> None: ...
 
 def run(model: Model, config: RunConfig, progress: _Progress = None) -> RunResult: ...
+# keep_rows False: without the trajectories (rows 0), for metrics only.
 def run_batch(
-    model: Model, configs: Sequence[RunConfig], threads: int, progress: _Progress = None
-) -> list[RunResult]: ...
-# As run_batch, without the trajectories (rows 0).
-def run_batch_metrics_only(
-    model: Model, configs: Sequence[RunConfig], threads: int, progress: _Progress = None
+    model: Model, configs: Sequence[RunConfig], threads: int, keep_rows: bool = True, progress: _Progress = None
 ) -> list[RunResult]: ...
 def batch_workers(threads: int, jobs: int) -> int: ...
 
@@ -300,53 +297,32 @@ class ScenarioResult(metaclass=_Pybind11Type):
     def __getstate__(self) -> Any: ...
     def __setstate__(self, state: Any, /) -> None: ...
 
+# The scenario's controls; or the caller's (controls: steps x nu, initial_state:
+# state_size; per run, or one for all); or a policy's decisions (decide, every
+# control_every steps). keep_rows False: metrics only.
 def run_scenario(
-    scene: Model, scenario: Scenario, config: ScenarioConfig, progress: _Progress = None
+    scene: Model,
+    scenario: Scenario,
+    config: ScenarioConfig,
+    controls: Optional[_ArrayLike] = None,
+    initial_state: Optional[_ArrayLike] = None,
+    decide: Optional[_Decide] = None,
+    control_every: int = 1,
+    progress: _Progress = None,
 ) -> ScenarioResult: ...
 def run_scenario_batch(
     scene: Model,
     scenario: Scenario,
     configs: Sequence[ScenarioConfig],
     threads: int,
+    controls: Optional[_ArrayLike] = None,
+    initial_state: Optional[_ArrayLike] = None,
+    decide: Optional[_Decide] = None,
+    control_every: int = 1,
+    keep_rows: bool = True,
     progress: _Progress = None,
 ) -> list[ScenarioResult]: ...
 def check_scenario(scene: Model, scenario: Scenario, config: ScenarioConfig) -> None: ...
-# A run's own inputs: controls (steps x nu) and/or an initial state (state_size).
-def run_scenario_with_inputs(
-    scene: Model,
-    scenario: Scenario,
-    config: ScenarioConfig,
-    controls: Optional[_ArrayLike],
-    initial_state: Optional[_ArrayLike],
-    progress: _Progress = None,
-) -> ScenarioResult: ...
-def run_scenario_batch_with_inputs(
-    scene: Model,
-    scenario: Scenario,
-    configs: Sequence[ScenarioConfig],
-    threads: int,
-    controls: Optional[_ArrayLike],
-    initial_state: Optional[_ArrayLike],
-    keep_rows: bool,
-    progress: _Progress = None,
-) -> list[ScenarioResult]: ...
-def run_scenario_policy(
-    scene: Model,
-    scenario: Scenario,
-    config: ScenarioConfig,
-    decide: _Decide,
-    control_every: int,
-    progress: _Progress = None,
-) -> ScenarioResult: ...
-def run_scenario_batch_policy(
-    scene: Model,
-    scenario: Scenario,
-    configs: Sequence[ScenarioConfig],
-    threads: int,
-    decide: _Decide,
-    control_every: int,
-    progress: _Progress = None,
-) -> list[ScenarioResult]: ...
 # (result, metrics.json's path, trajectory.csv's path); drawing is a callback for the figures.
 def run_scenario_to_files(
     scene: Model,

@@ -131,14 +131,13 @@ def run_chunk(job: Dict[str, Any], runs: Sequence[Run]) -> BatchTable:
             # cast: the chapter's runs always have a timestep (run_batch_on); RunConfig checks it anyway.
             configs = [_core.RunConfig(runs[i][1], job["steps"], cast(float, runs[i][2]), job["perturb"], job["smoke"],
                                        1, job["audit_energy"], job["rng"]) for i in members]
-            out = _core.run_batch_metrics_only(model, configs, job["threads"])
+            out = _core.run_batch(model, configs, job["threads"], keep_rows=False)
         else:
             scenario, scene = _scenario(job["scenario"])
             model = _with_params(scene, params)
             scenario_configs = [_core.ScenarioConfig(runs[i][1], job["rng"], runs[i][2], job["steps"], job["perturb"],
                                                      1) for i in members]
-            out = _core.run_scenario_batch_with_inputs(model, scenario, scenario_configs, job["threads"], None, None,
-                                                       False)
+            out = _core.run_scenario_batch(model, scenario, scenario_configs, job["threads"], keep_rows=False)
         for i, result in zip(members, out):
             results[i] = result
     return metrics_table(runs, results)

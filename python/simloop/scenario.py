@@ -411,13 +411,11 @@ def run_scenario(scenario: Union[Scenario, str, "os.PathLike[str]"], *, seed: in
             raise ValueError("policy with controls or initial_state is not supported: the policy decides ctrl, "
                              "and its runs start from the scene's reset pose")
         decide, every = _decider(policy, control_every, scene, scenario, config)
-        return _core.run_scenario_policy(scene, scenario._core, config, decide, every,
-                                         progress=_check_progress(progress))
+        return _core.run_scenario(scene, scenario._core, config, decide=decide, control_every=every,
+                                  progress=_check_progress(progress))
     _check_no_control_every(control_every)
-    if own is None and start is None:
-        return _core.run_scenario(scene, scenario._core, config, progress=_check_progress(progress))
-    return _core.run_scenario_with_inputs(scene, scenario._core, config, own, start,
-                                          progress=_check_progress(progress))
+    return _core.run_scenario(scene, scenario._core, config, controls=own, initial_state=start,
+                              progress=_check_progress(progress))
 
 
 # Typed for the checker: full results unless metrics_only or an executor (then a BatchTable).
@@ -526,8 +524,8 @@ def run_scenario_batch(scenario: Union[Scenario, str, "os.PathLike[str]"], seeds
         if not configs:
             return []
         decide, decide_every = _decider(policy, control_every, scene, scenario, configs[0])
-        return _core.run_scenario_batch_policy(scene, scenario._core, configs, workers, decide, decide_every,
-                                               progress=_check_progress(progress))
+        return _core.run_scenario_batch(scene, scenario._core, configs, workers, decide=decide,
+                                        control_every=decide_every, progress=_check_progress(progress))
     _check_no_control_every(control_every)
     own = _inputs_array("controls", controls, (2, 3), "shaped (runs, steps, nu) or (steps, nu)")
     start = _inputs_array("initial_state", initial_state, (1, 2), "shaped (runs, state_size) or (state_size,)")
@@ -535,10 +533,8 @@ def run_scenario_batch(scenario: Union[Scenario, str, "os.PathLike[str]"], seeds
         if array is not None and array.ndim == ndim and array.shape[0] != len(configs):
             raise ValueError(f"{name} holds {array.shape[0]} runs' inputs for {len(configs)} runs "
                              f"({len(seed_list)} seeds x {len(timestep_list)} timesteps)")
-    if own is None and start is None and not metrics_only:
-        return _core.run_scenario_batch(scene, scenario._core, configs, workers, progress=_check_progress(progress))
-    results = _core.run_scenario_batch_with_inputs(scene, scenario._core, configs, workers, own, start,
-                                                   not metrics_only, progress=_check_progress(progress))
+    results = _core.run_scenario_batch(scene, scenario._core, configs, workers, controls=own, initial_state=start,
+                                       keep_rows=not metrics_only, progress=_check_progress(progress))
     if metrics_only:
         from .tables import table
 

@@ -1,0 +1,363 @@
+// simloop._core's chapter: its run's config, shove, result and batch, and
+// Break It's sweep of the baseline over timesteps.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
+
+#include <algorithm>
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "bindings_common.hpp"
+#include "bindings_pickle.hpp"
+#include "warning_counter.hpp"
+#include "simloop/batch.hpp"
+#include "simloop/model.hpp"
+#include "simloop/number_format.hpp"
+#include "simloop/output.hpp"
+#include "simloop/run.hpp"
+#include "simloop/shove.hpp"
+#include "simloop/sweep.hpp"
+
+namespace simloop_py {
+namespace {
+
+using namespace pybind11::literals;
+using simloop::RunResult;
+
+py::dict metrics_dict(const simloop::Metrics& m) {
+  py::dict d;
+  d["box_final_pos"] = py::list(py::cast(std::vector<double>(m.box_final_pos.begin(), m.box_final_pos.end())));
+  d["box_final_speed"] = m.box_final_speed;
+  d["lateral_drift"] = m.lateral_drift;
+  d["perturb"] = m.perturb;
+  d["pusher_final_x"] = m.pusher_final_x;
+  d["seed"] = m.seed;
+  d["shove_moved_box"] = m.shove_moved_box;
+  d["steps"] = m.steps;
+  return d;
+}
+
+int column_index(const Trajectory& t, const std::string& name) {
+  for (int c = 0; c < t.columns(); ++c) {
+    if (Trajectory::kColumnNames[c] == name) return c;
+  }
+  throw py::key_error("no trajectory column named '" + name + "'; see result.column_names");
+}
+
+py::tuple column_names(int first, int end) {
+  py::tuple names(static_cast<size_t>(end - first));
+  for (int c = first; c < end; ++c) {
+    names[static_cast<size_t>(c - first)] = py::str(std::string(Trajectory::kColumnNames[c]));
+  }
+  return names;
+}
+
+simloop::ShoveRng shove_rng(const std::string& name) {
+  const std::optional<simloop::ShoveRng> rng = simloop::parse_rng(name);
+  if (!rng) throw py::value_error("rng must be 'mt19937_64' or 'numpy', got '" + name + "'");
+  return *rng;
+}
+std::string run_call(const char* name, const simloop::RunConfig& c) {
+  return std::string(name) + "(steps=" + std::to_string(c.num_steps()) +
+         ", record_every=" + std::to_string(c.record_every) + ")";
+}
+
+template <class Io, class Result>
+void run_result_fields(Io& io, Result& r) {
+  io.field(r.config.seed);
+  io.field(r.config.steps);
+  io.field(r.config.timestep);
+  io.field(r.config.perturb);
+  io.field(r.config.smoke);
+  io.field(r.config.record_every);
+  io.field(r.config.audit_energy);
+  io.field(r.config.rng);
+  io.field(r.metrics);
+  io.field(r.unrounded_metrics);
+  io.field(r.shove);
+  io.field(r.trajectory);
+  io.field(r.rows);
+  io.field(r.warnings);
+  io.field(r.energy);
+  io.field(r.timestep);
+  io.field(r.sim_time);
+}
+
+
+}  // namespace
+
+void bind_chapter(py::module_& m) {
+  m.attr("PUSHER_SCENE_XML") = std::string(simloop::pusher_scene_xml());
+  m.attr("COLUMN_NAMES") = column_names(0, Trajectory::kNumBaseColumns);
+  m.attr("ENERGY_COLUMN_NAMES") = column_names(Trajectory::kNumBaseColumns, Trajectory::kNumColumns);
+  m.attr("SMOKE_STEPS") = simloop::kSmokeSteps;
+  m.attr("SHOVE_STEPS") = simloop::kShoveSteps;
+  m.attr("MAX_STEPS") = simloop::kMaxSteps;
+  m.attr("MAX_RECORD_EVERY") = simloop::kMaxRecordEvery;
+  m.attr("WARNING_NAMES") = py::tuple(py::cast(simloop::detail::all_warning_names()));
+
+  py::class_<simloop::RunConfig>(m, "RunConfig")
+      .def(py::init([](std::uint64_t seed, std::int64_t steps, double timestep, bool perturb, bool smoke,
+                       std::int64_t record_every, bool audit_energy, const std::string& rng) {
+             return simloop::RunConfig{seed, steps, timestep, perturb, smoke, record_every, audit_energy,
+                                       shove_rng(rng)};
+           }),
+           "seed"_a, "steps"_a, "timestep"_a, "perturb"_a, "smoke"_a, "record_every"_a, "audit_energy"_a = false,
+           "rng"_a = "mt19937_64")
+      .def_property_readonly("rng", [](const simloop::RunConfig& c) { return std::string(simloop::rng_name(c.rng)); })
+      .def_readonly("audit_energy", &simloop::RunConfig::audit_energy)
+      .def_readonly("seed", &simloop::RunConfig::seed)
+      .def_readonly("steps", &simloop::RunConfig::steps)
+      .def_readonly("timestep", &simloop::RunConfig::timestep)
+      .def_readonly("perturb", &simloop::RunConfig::perturb)
+      .def_readonly("smoke", &simloop::RunConfig::smoke)
+      .def_readonly("record_every", &simloop::RunConfig::record_every)
+      .def("__repr__", [](const simloop::RunConfig& c) {
+        return "RunConfig(seed=" + std::to_string(c.seed) + ", steps=" + std::to_string(c.steps) +
+               ", timestep=" + simloop::python_float_repr(c.timestep) + ", perturb=" + py_bool(c.perturb) +
+               ", smoke=" + py_bool(c.smoke) + ", record_every=" + std::to_string(c.record_every) +
+               ", audit_energy=" + py_bool(c.audit_energy) + ", rng='" + std::string(simloop::rng_name(c.rng)) + "')";
+      });
+
+  py::class_<simloop::Shove>(m, "Shove", "The sideways shove drawn for a run (applied only if perturb).")
+      .def_readonly("newtons", &simloop::Shove::newtons)
+      .def_readonly("sign", &simloop::Shove::sign)
+      .def_readonly("start_step", &simloop::Shove::start_step)
+      .def_readonly("steps", &simloop::Shove::num_steps)
+      .def_property_readonly("force_y", &simloop::Shove::force_y)
+      .def_property_readonly("rng", [](const simloop::Shove& s) { return std::string(simloop::rng_name(s.rng)); },
+                             "The generator that drew it: 'mt19937_64' or 'numpy'.")
+      .def("__repr__", [](const simloop::Shove& s) {
+        return "Shove(newtons=" + simloop::python_float_repr(s.newtons) + ", sign=" +
+               simloop::python_float_repr(s.sign) + ", start_step=" + std::to_string(s.start_step) +
+               ", steps=" + std::to_string(s.num_steps) + ", rng='" + std::string(simloop::rng_name(s.rng)) + "')";
+      });
+  m.def(
+      "draw_shove",
+      [](std::uint64_t seed, std::int64_t steps, const std::string& rng) {
+        return simloop::draw_shove(seed, steps, shove_rng(rng));
+      },
+      "seed"_a, "steps"_a = 2000, "rng"_a = "mt19937_64", "The shove a run of `steps` steps draws from `seed`.");
+
+  py::class_<simloop::Warning>(m, "MujocoWarning", "A warning MuJoCo raised while stepping.")
+      .def_readonly("name", &simloop::Warning::name)
+      .def_readonly("count", &simloop::Warning::count)
+      .def_readonly("first_step", &simloop::Warning::first_step)
+      .def_readonly("message", &simloop::Warning::message)
+      .def("__repr__", [](const simloop::Warning& w) {
+        return "MujocoWarning(" + w.name + ", count=" + std::to_string(w.count) +
+               ", first_step=" + std::to_string(w.first_step) + ")";
+      });
+
+  py::class_<RunResult>(m, "RunResult", "What one run did: metrics, trajectory, shove, warnings.")
+      .def_property_readonly("metrics", [](const RunResult& r) { return metrics_dict(r.metrics); },
+                             "The dict metrics.json holds (floats rounded to 6 decimals).")
+      .def_property_readonly("trajectory", [](const py::object& self) { return trajectory_view(self, self.cast<const RunResult&>().trajectory); },
+                             "(rows, columns) read-only float64 view; columns as in COLUMN_NAMES.")
+      .def(
+          "column",
+          [](const py::object& self, const std::string& name) {
+            const Trajectory& t = self.cast<const RunResult&>().trajectory;
+            return column_view(self, t, column_index(t, name));
+          },
+          "name"_a, "One trajectory column as a read-only (strided) view (no copy).")
+      .def_property_readonly(
+          "columns",
+          [](const py::object& self) {
+            py::dict columns;
+            for (int c = 0; c < self.cast<const RunResult&>().trajectory.columns(); ++c) {
+              columns[py::str(std::string(Trajectory::kColumnNames[c]))] =
+                  column_view(self, self.cast<const RunResult&>().trajectory, c);
+            }
+            return columns;
+          },
+          "Every trajectory column by name, as read-only views (no copy).")
+      .def_property_readonly(
+          "column_names",
+          [](const RunResult& r) { return column_names(0, r.trajectory.columns()); },
+          "This result's trajectory columns (COLUMN_NAMES, then ENERGY_COLUMN_NAMES with the audit).")
+      .def_property_readonly(
+          "energy",
+          [](const RunResult& r) -> py::object {
+            if (!r.config.audit_energy) return py::none();
+            const simloop::EnergyTotals& e = r.energy;
+            py::dict d;
+            d["energy_start"] = e.energy_start;
+            d["energy_end"] = e.energy_end;
+            d["work_actuator"] = e.work_actuator;
+            d["work_shove"] = e.work_shove;
+            d["work_passive"] = e.work_passive;
+            d["work_constraint"] = e.work_constraint;
+            d["work_constraint_positive"] = e.work_constraint_positive;
+            d["unexplained"] = e.unexplained;
+            return std::move(d);
+          },
+          "The energy audit's totals, J (None unless audit_energy).")
+      .def_property_readonly("rows", [](const RunResult& r) { return std::max(r.trajectory.rows(), r.rows); },
+                             "Trajectory rows the run recorded, kept or streamed (without building a numpy view).")
+      .def_property_readonly("shove", [](const RunResult& r) { return r.shove; })
+      .def_property_readonly("warnings", [](const RunResult& r) { return r.warnings; })
+      .def_property_readonly("config", [](const RunResult& r) { return r.config; })
+      .def_property_readonly("timestep", [](const RunResult& r) { return r.timestep; })
+      .def_property_readonly("sim_time", [](const RunResult& r) { return r.sim_time; })
+      .def("metrics_json", [](const RunResult& r) { return simloop::metrics_json(r.metrics); })
+      .def("trajectory_csv", [](const RunResult& r) {
+        std::string text;
+        {
+          py::gil_scoped_release release;
+          text = naming_failures("RunResult.trajectory_csv", [&] { return simloop::trajectory_csv(r.trajectory); });
+        }
+        return text;
+      })
+      .def("summary", [](const RunResult& r) { return simloop::summary_text(r); })
+      .def(
+          "write",
+          [](const RunResult& r, const std::filesystem::path& out) {
+            py::gil_scoped_release release;
+            const simloop::OutputFiles files =
+                naming_failures("RunResult.write(" + out.string() + ")", [&] { return simloop::write_outputs(r, out); });
+            return std::make_pair(files.metrics, files.trajectory);
+          },
+          "out"_a)
+      .def_property_readonly("unrounded_metrics", [](const RunResult& r) { return metrics_dict(r.unrounded_metrics); },
+                             "metrics as computed, not rounded (metrics.json rounds to 6 decimals).")
+      .def("__repr__", [](const RunResult& r) {
+        return "RunResult(seed=" + std::to_string(r.config.seed) + ", steps=" + std::to_string(r.metrics.steps) +
+               ", timestep=" + simloop::python_float_repr(r.timestep) + ", rows=" +
+               std::to_string(r.trajectory.rows()) + ", lateral_drift=" +
+               simloop::python_float_repr(r.metrics.lateral_drift) + ", warnings=" + std::to_string(r.warnings.size()) +
+               ")";
+      })
+      .def(pickling<RunResult, &run_result_fields<FieldWriter, const RunResult>,
+                    &run_result_fields<FieldReader, RunResult>>("RunResult"));
+  m.def(
+      "run",
+      [](const simloop::Model& model, const simloop::RunConfig& config, py::object progress) {
+        return long_call(std::move(progress), run_call("run", config), [&](simloop::RunControl* control) {
+          simloop::Data workspace(model);
+          return simloop::run(model, config, workspace, nullptr, control);
+        });
+      },
+      "model"_a, "config"_a, "progress"_a = py::none());
+  m.def(
+      "run_batch",
+      [](const simloop::Model& model, const std::vector<simloop::RunConfig>& configs, int threads, bool keep_rows,
+         py::object progress) {
+        const std::string runs = " x " + std::to_string(configs.size()) + " runs";
+        const std::string what = !keep_rows        ? "run_batch(metrics_only=True)" + runs
+                                 : configs.empty() ? std::string("run_batch")
+                                                   : run_call("run_batch", configs.front()) + runs;
+        simloop::DiscardRows discard;  // stateless: shared by every run
+        const std::vector<simloop::RowSink*> sinks(keep_rows ? 0 : configs.size(), &discard);
+        return long_call(std::move(progress), what, [&](simloop::RunControl* control) {
+          return keep_rows ? simloop::run_batch(model, configs, threads, control)
+                           : simloop::run_batch(model, configs, sinks, threads, control);
+        });
+      },
+      "model"_a, "configs"_a, "threads"_a, "keep_rows"_a = true, "progress"_a = py::none());
+  m.def("batch_workers", &simloop::batch_workers, "threads"_a, "jobs"_a);
+
+  py::class_<simloop::SweepPoint>(m, "SweepPoint", "One timestep of a sweep.")
+      .def_readonly("timestep", &simloop::SweepPoint::timestep)
+      .def_readonly("steps", &simloop::SweepPoint::steps)
+      .def_readonly("peak_box_z", &simloop::SweepPoint::peak_box_z)
+      .def_readonly("max_abs_box_y", &simloop::SweepPoint::max_abs_box_y)
+      .def_readonly("final_box_x", &simloop::SweepPoint::final_box_x)
+      .def_readonly("final_box_y", &simloop::SweepPoint::final_box_y)
+      .def_readonly("final_box_z", &simloop::SweepPoint::final_box_z)
+      .def_readonly("final_pusher_x", &simloop::SweepPoint::final_pusher_x)
+      .def_readonly("warnings", &simloop::SweepPoint::warnings)
+      .def_property_readonly("work_constraint_positive",
+                             [](const simloop::SweepPoint& p) { return p.energy.work_constraint_positive; })
+      .def_property_readonly("energy_unexplained", [](const simloop::SweepPoint& p) { return p.energy.unexplained; })
+      .def_property_readonly("energy_change",
+                             [](const simloop::SweepPoint& p) { return p.energy.energy_end - p.energy.energy_start; })
+      .def_readonly("stable", &simloop::SweepPoint::stable)
+      .def("__repr__", [](const simloop::SweepPoint& p) {
+        return "SweepPoint(timestep=" + simloop::python_float_repr(p.timestep) + ", steps=" + std::to_string(p.steps) +
+               ", stable=" + py_bool(p.stable) + ", peak_box_z=" + simloop::python_float_repr(simloop::round6(p.peak_box_z)) +
+               ", warnings=" + std::to_string(p.warnings) + ")";
+      });
+  py::class_<simloop::SweepResult> sweep_result(m, "SweepResult", "A timestep sweep of the baseline run.");
+  bind_sweep_outputs<simloop::SweepResult, &simloop::sweep_csv, &simloop::sweep_summary>(
+      sweep_result, "The largest stable timestep (None if even the finest is unstable).");
+  sweep_result
+      .def_readonly("duration", &simloop::SweepResult::duration)
+      .def_readonly("points", &simloop::SweepResult::points)
+      .def("__repr__", [](const simloop::SweepResult& r) {
+        const std::string edge =
+            r.edge_index < 0 ? "None"
+                             : simloop::python_float_repr(r.points[static_cast<std::size_t>(r.edge_index)].timestep);
+        std::string range;
+        if (!r.points.empty()) {
+          range = ", timesteps=" + simloop::python_float_repr(r.points.front().timestep) + ".." +
+                  simloop::python_float_repr(r.points.back().timestep);
+        }
+        return "SweepResult(points=" + std::to_string(r.points.size()) + range + ", duration=" +
+               simloop::python_float_repr(r.duration) + ", edge=" + edge + ")";
+      });
+  m.def(
+      "sweep",
+      [](const simloop::Model& model, const std::vector<double>& timesteps, double duration, int threads,
+         py::object progress) {
+        const std::string what = "sweep(" + std::to_string(timesteps.size()) + " timesteps, duration=" +
+                                 simloop::python_float_repr(duration) + ")";
+        return long_call(std::move(progress), what, [&](simloop::RunControl* control) {
+          return simloop::sweep(model, timesteps, duration, threads, control);
+        });
+      },
+      "model"_a, "timesteps"_a, "duration"_a, "threads"_a, "progress"_a = py::none());
+  m.def("log_spaced", &simloop::log_spaced, "start"_a, "stop"_a, "count"_a);
+  m.def("default_sweep_timesteps", &simloop::default_sweep_timesteps,
+        "The default sweep's 25 round timesteps (1, 2, 3, 4, 5, 6, 8 per decade, 0.0005 s to 1 s).");
+  m.attr("STABLE_HOP") = simloop::kStableHop;
+  m.attr("STABLE_SINK") = simloop::kStableSink;
+  m.attr("BOX_REST_Z") = simloop::kBoxRestZ;
+
+  // A sweep run in chunks on a cluster's workers comes back as plain data
+  // and is put together as one SweepResult (python/simloop/distributed.py).
+  m.def(
+      "sweep_point_fields",
+      [](const simloop::SweepPoint& p) {
+        const simloop::EnergyTotals& e = p.energy;
+        return py::make_tuple(p.timestep, p.steps, p.peak_box_z, p.max_abs_box_y, p.final_box_x, p.final_box_y,
+                              p.final_box_z, p.final_pusher_x, p.warnings,
+                              py::make_tuple(e.energy_start, e.energy_end, e.work_actuator, e.work_shove,
+                                             e.work_passive, e.work_constraint, e.work_constraint_positive,
+                                             e.unexplained));
+      },
+      "point"_a);
+  m.def(
+      "sweep_result_from_fields",
+      [](double duration, const std::vector<py::tuple>& points) {
+        simloop::SweepResult result;
+        result.duration = duration;
+        for (const py::tuple& f : points) {
+          simloop::SweepPoint p;
+          p.timestep = f[0].cast<double>();
+          p.steps = f[1].cast<std::int64_t>();
+          p.peak_box_z = f[2].cast<double>();
+          p.max_abs_box_y = f[3].cast<double>();
+          p.final_box_x = f[4].cast<double>();
+          p.final_box_y = f[5].cast<double>();
+          p.final_box_z = f[6].cast<double>();
+          p.final_pusher_x = f[7].cast<double>();
+          p.warnings = f[8].cast<int>();
+          const auto e = f[9].cast<std::array<double, 8>>();
+          p.energy = {e[0], e[1], e[2], e[3], e[4], e[5], e[6], e[7]};
+          result.points.push_back(p);
+        }
+        simloop::judge_sweep(result);
+        return result;
+      },
+      "duration"_a, "points"_a);
+  m.def("sweep_steps", &simloop::sweep_steps, "duration"_a, "timestep"_a);
+}
+
+}  // namespace simloop_py

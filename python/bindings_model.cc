@@ -1,0 +1,179 @@
+// simloop._core's Model: a compiled scene, its names and fixed facts,
+// copies with other parameters, pickling, and what the recording draws.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
+
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <tuple>
+#include <vector>
+
+#include "bindings_common.hpp"
+#include "simloop/model.hpp"
+#include "simloop/number_format.hpp"
+#include "simloop/scenario_run.hpp"
+#include "simloop/scene_geometry.hpp"
+#include "simloop/scene_params.hpp"
+#include "simloop/sim.hpp"
+
+namespace simloop_py {
+namespace {
+
+using namespace pybind11::literals;
+
+py::list model_names(const simloop::Model& model, const std::string& kind) {
+  const mjtObj type = object_type(kind);
+  const mjModel* raw = model.get();
+  const int count = type == mjOBJ_BODY       ? raw->nbody
+                    : type == mjOBJ_JOINT    ? raw->njnt
+                    : type == mjOBJ_ACTUATOR ? raw->nu
+                    : type == mjOBJ_SENSOR   ? raw->nsensor
+                                             : raw->nkey;
+  py::list names;
+  for (int i = 0; i < count; ++i) {
+    const char* name = mj_id2name(raw, type, i);
+    names.append(py::str(name ? name : ""));
+  }
+  return names;
+}
+
+}  // namespace
+
+mjtObj object_type(const std::string& kind) {
+  if (kind == "body") return mjOBJ_BODY;
+  if (kind == "joint") return mjOBJ_JOINT;
+  if (kind == "actuator") return mjOBJ_ACTUATOR;
+  if (kind == "sensor") return mjOBJ_SENSOR;
+  if (kind == "keyframe") return mjOBJ_KEY;
+  throw py::value_error("kind must be 'body', 'joint', 'actuator', 'sensor' or 'keyframe', got '" + kind + "'");
+}
+
+void bind_model(py::module_& m) {
+  py::class_<simloop::Model>(m, "Model", "A compiled MuJoCo world: read-only, shared by every run on it.")
+      .def_static("pusher_scene", &simloop::Model::pusher_scene, "The chapter's scene.")
+      .def_static(
+          "from_xml_string",
+          [](std::string_view xml, std::string_view source) {
+            return naming_failures("Model.from_xml_string", [&] { return simloop::Model::from_xml_string(xml, source); });
+          },
+          "xml"_a, "source"_a = "<string>",
+          "Compiles MJCF text; it needs a body 'box' on a free joint and an actuator 0 on a slide or "
+          "hinge joint.")
+      .def_static(
+          "from_file",
+          [](const std::filesystem::path& path) {
+            return naming_failures("Model.from_file(" + path.string() + ")",
+                                   [&] { return simloop::Model::from_file(path.string()); });
+          },
+          "path"_a, "Compiles an MJCF file.")
+      .def_static(
+          "_copy_of_address",
+          [](std::uintptr_t address, std::string_view source) {
+            // simloop.load_model checked that the address is a mujoco.MjModel's
+            // of this very libmujoco (simloop/_mujoco_check.py).
+            return simloop::Model::copy_of(reinterpret_cast<const mjModel*>(address), source);
+          },
+          "address"_a, "source"_a, "A copy of the mjModel at `address` (a mujoco.MjModel's _address).")
+      .def("with_timestep", &simloop::Model::with_timestep, "timestep"_a, "A copy with opt.timestep set.")
+      .def_property_readonly("timestep", &simloop::Model::timestep)
+      .def_property_readonly("nq", [](const simloop::Model& model) { return model.get()->nq; })
+      .def_property_readonly("nv", [](const simloop::Model& model) { return model.get()->nv; })
+      .def_property_readonly("nu", [](const simloop::Model& model) { return model.get()->nu; })
+      .def("__repr__", [](const simloop::Model& model) {
+        const mjModel* raw = model.get();
+        const std::string name = model.name();
+        return "<simloop.Model " + (name.empty() ? std::string("(unnamed)") : "'" + name + "'") +
+               " nq=" + std::to_string(raw->nq) + " nv=" + std::to_string(raw->nv) + " nu=" + std::to_string(raw->nu) +
+               " nbody=" + std::to_string(raw->nbody) + " timestep=" + simloop::python_float_repr(model.timestep()) +
+               ">";
+      })
+      .def_property_readonly("name", &simloop::Model::name, "<mujoco model=...>'s name ('' if none).")
+      .def_property_readonly("has_chapter_layout", &simloop::Model::has_chapter_layout,
+                             "True if the scene has the chapter's box and pusher (the chapter's loop runs on it).")
+      .def_property_readonly("nbody", [](const simloop::Model& model) { return model.get()->nbody; })
+      .def_property_readonly("njnt", [](const simloop::Model& model) { return model.get()->njnt; })
+      .def_property_readonly("na", [](const simloop::Model& model) { return model.get()->na; })
+      .def_property_readonly("nsensor", [](const simloop::Model& model) { return model.get()->nsensor; })
+      .def_property_readonly("nsensordata", [](const simloop::Model& model) { return model.get()->nsensordata; })
+      .def_property_readonly("nkey", [](const simloop::Model& model) { return model.get()->nkey; })
+      .def(
+          "names",
+          &model_names,
+          "kind"_a, "Every object's name of a kind, by index ('' for an unnamed one).")
+      .def(
+          "object_info",
+          [](const simloop::Model& model, const std::string& kind, int id) {
+            // The model's fixed facts the named views need, as plain values.
+            const mjModel* raw = model.get();
+            const mjtObj type = object_type(kind);
+            if (id < 0 || static_cast<size_t>(id) >= py::len(model_names(model, kind))) throw py::value_error(kind + " id out of range");
+            if (type == mjOBJ_BODY) return py::dict("mass"_a = raw->body_mass[id]);
+            if (type == mjOBJ_JOINT) {
+              static constexpr const char* kTypes[] = {"free", "ball", "slide", "hinge"};
+              const int t = raw->jnt_type[id];
+              const int nq = t == mjJNT_FREE ? 7 : t == mjJNT_BALL ? 4 : 1;
+              const int nv = t == mjJNT_FREE ? 6 : t == mjJNT_BALL ? 3 : 1;
+              return py::dict("type"_a = kTypes[t], "qposadr"_a = raw->jnt_qposadr[id], "nq"_a = nq,
+                              "dofadr"_a = raw->jnt_dofadr[id], "nv"_a = nv, "body"_a = raw->jnt_bodyid[id]);
+            }
+            if (type == mjOBJ_ACTUATOR) {
+              return py::dict("ctrlrange"_a = py::make_tuple(raw->actuator_ctrlrange[2 * id],
+                                                             raw->actuator_ctrlrange[2 * id + 1]),
+                              "ctrllimited"_a = raw->actuator_ctrllimited[id] != 0);
+            }
+            if (type == mjOBJ_SENSOR) {
+              return py::dict("adr"_a = raw->sensor_adr[id], "dim"_a = raw->sensor_dim[id]);
+            }
+            return py::dict();
+          },
+          "kind"_a, "id"_a)
+      .def(py::pickle([](const simloop::Model& model) { return py::bytes(model.to_bytes()); },
+                      [](const py::bytes& bytes) { return simloop::Model::from_bytes(std::string(bytes)); }));
+  m.def(
+      "scene_geometry",
+      [](const simloop::Model& model) {
+        static constexpr const char* kKinds[] = {"plane", "sphere", "capsule", "ellipsoid", "cylinder", "box", "mesh", "other"};
+        py::list out;
+        for (const simloop::GeomShape& g : simloop::scene_geometry(model.get())) {
+          out.append(py::dict("name"_a = g.name, "body"_a = g.body, "body_id"_a = g.body_id,
+                              "kind"_a = kKinds[static_cast<int>(g.kind)], "half_size"_a = vec(g.half_size.data(), 3),
+                              "mesh_center"_a = vec(g.mesh_center.data(), 3), "pos"_a = vec(g.pos.data(), 3),
+                              "quat"_a = vec(g.quat.data(), 4),
+                              "rgba"_a = py::make_tuple(g.rgba[0], g.rgba[1], g.rgba[2], g.rgba[3])));
+        }
+        return out;
+      },
+      "model"_a, "Every visible geom: its shape, its pose on its body, its colour.");
+  m.def("pusher_track", [](const simloop::Model& model) {
+    const simloop::PusherTrack t = simloop::pusher_track(model);
+    return py::make_tuple(vec(t.rest_position.data(), 3), vec(t.axis.data(), 3), t.q0);
+  });
+  m.def(
+      "with_scene_params",
+      [](const simloop::Model& model, const std::vector<std::tuple<std::string, std::string, double>>& params) {
+        std::vector<simloop::SceneParam> converted;
+        for (const auto& [kind, name, value] : params) {
+          simloop::SceneParam p;
+          if (kind == "friction") {
+            p.kind = simloop::SceneParam::Kind::kFriction;
+          } else if (kind == "mass") {
+            p.kind = simloop::SceneParam::Kind::kMass;
+          } else if (kind == "damping") {
+            p.kind = simloop::SceneParam::Kind::kDamping;
+          } else {
+            throw py::value_error("scene parameter kind must be 'friction', 'mass' or 'damping', got '" + kind + "'");
+          }
+          p.name = name;
+          p.value = value;
+          converted.push_back(p);
+        }
+        return simloop::with_scene_params(model, converted);
+      },
+      "model"_a, "params"_a, "A copy of model with (kind, name, value) scene parameters applied.");
+  m.def("moving_bodies", &simloop::moving_bodies, "scene"_a);
+}
+
+}  // namespace simloop_py

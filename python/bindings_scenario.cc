@@ -1,0 +1,340 @@
+// simloop._core's scenarios: a scenario, one run's config and result, runs
+// and batches of them (the scenario's controls, the caller's arrays, or a
+// policy's decisions), and a scenario swept over timesteps.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "bindings_common.hpp"
+#include "bindings_pickle.hpp"
+#include "simloop/model.hpp"
+#include "simloop/number_format.hpp"
+#include "simloop/output.hpp"
+#include "simloop/recorder.hpp"
+#include "simloop/scenario.hpp"
+#include "simloop/scenario_run.hpp"
+#include "simloop/sweep.hpp"
+
+namespace simloop_py {
+namespace {
+
+using namespace pybind11::literals;
+using simloop::ScenarioRunResult;
+
+// One RunInputs per run from Python's arrays (already checked and made
+// C-contiguous float64 by simloop.scenario): controls (B, T, nu) gives run i
+// its own slice, (T, nu) the same array to every run; initial_state (B, n)
+// or (n,) likewise. The arrays are read in place: the caller keeps them
+// alive (they are this call's arguments) for the whole call.
+using DoubleArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
+
+std::vector<simloop::RunInputs> run_inputs(std::size_t runs, const std::optional<DoubleArray>& controls,
+                                           const std::optional<DoubleArray>& initial_state) {
+  std::vector<simloop::RunInputs> out(runs);
+  if (controls) {
+    const py::ssize_t nd = controls->ndim();
+    if (nd != 2 && nd != 3) throw py::value_error("controls must be (steps, nu) or (runs, steps, nu)");
+    if (nd == 3 && static_cast<std::size_t>(controls->shape(0)) != runs) {
+      throw py::value_error("controls: " + std::to_string(controls->shape(0)) + " runs' controls for " +
+                            std::to_string(runs) + " runs");
+    }
+    const std::int64_t steps = controls->shape(nd - 2), width = controls->shape(nd - 1);
+    for (std::size_t i = 0; i < runs; ++i) {
+      out[i].controls = controls->data() + (nd == 3 ? i * static_cast<std::size_t>(steps * width) : 0);
+      out[i].control_steps = steps;
+      out[i].control_width = width;
+    }
+  }
+  if (initial_state) {
+    const py::ssize_t nd = initial_state->ndim();
+    if (nd != 1 && nd != 2) throw py::value_error("initial_state must be (state_size,) or (runs, state_size)");
+    if (nd == 2 && static_cast<std::size_t>(initial_state->shape(0)) != runs) {
+      throw py::value_error("initial_state: " + std::to_string(initial_state->shape(0)) + " states for " +
+                            std::to_string(runs) + " runs");
+    }
+    const auto size = static_cast<std::size_t>(initial_state->shape(nd - 1));
+    for (std::size_t i = 0; i < runs; ++i) {
+      out[i].initial_state = initial_state->data() + (nd == 2 ? i * size : 0);
+      out[i].state_size = size;
+    }
+  }
+  return out;
+}
+
+// A Python callable as the loop's Policy: decide(step, row) -> ctrl, where
+// row is the recorder's row (a fresh float64 array) and ctrl an array of nu
+// float64 (simloop/scenario.py's wrapper checks what the user's policy
+// returned and adds the decision step to its exceptions). Called from
+// whichever thread steps the run: it takes the GIL for the call only.
+class PyPolicy final : public simloop::Policy {
+ public:
+  PyPolicy(py::object decide, std::int64_t every) : Policy(every), decide_(std::move(decide)) {}
+  ~PyPolicy() override {
+    py::gil_scoped_acquire gil;
+    decide_ = py::object();
+  }
+  PyPolicy(const PyPolicy&) = delete;
+  PyPolicy& operator=(const PyPolicy&) = delete;
+
+  void decide(std::int64_t step, const double* observation, int width, double* ctrl, int nu) override {
+    py::gil_scoped_acquire gil;
+    const py::array_t<double> row(width, observation);
+    const py::array_t<double, py::array::c_style | py::array::forcecast> out(decide_(step, row));
+    if (out.size() != nu) {
+      throw simloop::InvalidArgument("policy at decision step " + std::to_string(step) + ": " +
+                                     std::to_string(out.size()) + " ctrl values for " + std::to_string(nu) + " actuators");
+    }
+    std::copy(out.data(), out.data() + nu, ctrl);
+  }
+
+ private:
+  py::object decide_;
+};
+
+
+template <class Io, class Result>
+void scenario_result_fields(Io& io, Result& r) {
+  io.field(r.name);
+  io.field(r.seed);
+  io.field(r.rng);
+  io.field(r.perturb);
+  io.field(r.disturbed_bodies);
+  io.field(r.columns);
+  io.field(r.final_row);
+  io.field(r.final_state);
+  io.field(r.trajectory);
+  io.field(r.rows);
+  io.field(r.schedule.steps);
+  io.field(r.schedule.control_changes);
+  io.field(r.schedule.forces);
+  io.field(r.warnings);
+  io.field(r.timestep);
+  io.field(r.sim_time);
+}
+
+
+}  // namespace
+
+void bind_scenario(py::module_& m) {
+  // One parser: the C++ one reads the TOML for both faces.
+  py::class_<simloop::Scenario>(m, "Scenario", "A scenario: scene, timestep, length, controls, disturbances, recording.")
+      .def_static("chapter", &simloop::Scenario::chapter, "The chapter's run as a scenario.")
+      .def_static(
+          "from_file", [](const std::string& path) { return simloop::Scenario::from_toml_file(path); }, "path"_a)
+      .def_static(
+          "from_toml",
+          [](const std::string& text, const std::string& source, const std::string& base) {
+            return simloop::Scenario::from_toml_string(text, source, base);
+          },
+          "text"_a, "source"_a = "<string>", "base"_a = "")
+      .def_readonly("name", &simloop::Scenario::name)
+      .def_property_readonly("scene", [](const simloop::Scenario& s) { return fs_str(s.scene.native()); })
+      .def_readonly("timestep", &simloop::Scenario::timestep)
+      .def_property_readonly("body_names", [](const simloop::Scenario& s) { return s.record.bodies; })
+      .def("__repr__", [](const simloop::Scenario& s) {
+        std::string length;
+        switch (s.length.unit) {
+          case simloop::When::Unit::kSteps: length = "steps=" + std::to_string(s.length.count); break;
+          case simloop::When::Unit::kSeconds: length = "duration=" + simloop::python_float_repr(s.length.value); break;
+          default: length = "length=" + simloop::python_float_repr(s.length.value); break;
+        }
+        std::string controls;
+        for (const simloop::ControlSpec& c : s.controls) controls += (controls.empty() ? "" : ", ") + py_str_repr(c.actuator);
+        std::string recorded;
+        for (const std::string& b : s.record.bodies) recorded += (recorded.empty() ? "" : ", ") + py_str_repr(b);
+        return "Scenario(name=" + py_str_repr(s.name) + ", scene=" +
+               (s.scene.empty() ? std::string("None") : py::repr(fs_str(s.scene.native())).cast<std::string>()) +
+               ", timestep=" + (s.timestep ? simloop::python_float_repr(*s.timestep) : std::string("None")) + ", " +
+               length + ", controls=[" + controls + "], disturbances=" + std::to_string(s.disturbances.size()) +
+               ", bodies=[" + recorded + "])";
+      });
+
+  m.def("load_scene", &simloop::load_scene, "scenario"_a);
+  m.def(
+      "check_scenario_names",
+      [](const simloop::Scenario& s, const simloop::Model& model) { (void)simloop::resolve(s, model.get()); },
+      "scenario"_a, "model"_a);
+
+  py::class_<simloop::ScenarioConfig>(m, "ScenarioConfig")
+      .def(py::init([](std::uint64_t seed, const std::string& rng, std::optional<double> timestep,
+                       std::optional<std::int64_t> steps, bool perturb, std::int64_t record_every) {
+             const std::optional<simloop::ShoveRng> generator = simloop::parse_rng(rng);
+             if (!generator) throw py::value_error("rng must be 'mt19937_64' or 'numpy', got '" + rng + "'");
+             return simloop::ScenarioConfig{seed, *generator, timestep, steps, perturb, record_every};
+           }),
+           "seed"_a, "rng"_a, "timestep"_a, "steps"_a, "perturb"_a, "record_every"_a)
+      .def("__repr__", [](const simloop::ScenarioConfig& c) {
+        return "ScenarioConfig(seed=" + std::to_string(c.seed) + ", rng='" + std::string(simloop::rng_name(c.rng)) +
+               "', timestep=" + (c.timestep ? simloop::python_float_repr(*c.timestep) : std::string("None")) +
+               ", steps=" + (c.steps ? std::to_string(*c.steps) : std::string("None")) + ", perturb=" +
+               py_bool(c.perturb) + ", record_every=" + std::to_string(c.record_every) + ")";
+      });
+
+  py::class_<simloop::ScenarioRunResult>(m, "ScenarioResult", "What one run of a scenario did.")
+      .def_readonly("name", &simloop::ScenarioRunResult::name)
+      .def_readonly("seed", &simloop::ScenarioRunResult::seed)
+      .def_readonly("rows", &simloop::ScenarioRunResult::rows)
+      .def_readonly("timestep", &simloop::ScenarioRunResult::timestep)
+      .def_readonly("sim_time", &simloop::ScenarioRunResult::sim_time)
+      .def_readonly("warnings", &simloop::ScenarioRunResult::warnings)
+      .def_property_readonly("steps", [](const simloop::ScenarioRunResult& r) { return r.schedule.steps; })
+      .def_property_readonly("column_names",
+                             [](const simloop::ScenarioRunResult& r) {
+                               py::tuple names(r.columns.size());
+                               for (size_t i = 0; i < r.columns.size(); ++i) names[i] = py::str(r.columns[i].name);
+                               return names;
+                             })
+      .def_property_readonly("column_units",
+                             [](const simloop::ScenarioRunResult& r) {
+                               py::dict units;
+                               for (const simloop::Column& c : r.columns) units[py::str(c.name)] = c.unit;
+                               return units;
+                             })
+      .def_property_readonly(
+          "trajectory",
+          [](const py::object& self) {
+            return trajectory_view(self, self.cast<const simloop::ScenarioRunResult&>().trajectory);
+          },
+          "(rows, columns) read-only float64 view; columns as in column_names.")
+      .def(
+          "column",
+          [](const py::object& self, const std::string& name) {
+            const auto& r = self.cast<const simloop::ScenarioRunResult&>();
+            for (size_t c = 0; c < r.columns.size(); ++c) {
+              if (r.columns[c].name == name) return column_view(self, r.trajectory, static_cast<int>(c));
+            }
+            throw py::key_error("no trajectory column named '" + name + "'; see result.column_names");
+          },
+          "name"_a)
+      .def_property_readonly("disturbances",
+                             [](const simloop::ScenarioRunResult& r) {
+                               py::list out;
+                               for (size_t i = 0; i < r.schedule.forces.size(); ++i) {
+                                 const simloop::Schedule::Force& f = r.schedule.forces[i];
+                                 out.append(py::dict("body"_a = r.disturbed_bodies[i],
+                                                     "force"_a = vec(f.wrench.data(), 3),
+                                                     "torque"_a = vec(f.wrench.data() + 3, 3),
+                                                     "start_step"_a = f.start, "end_step"_a = f.end,
+                                                     "asked_end_step"_a = f.asked_end));
+                               }
+                               return out;
+                             })
+      .def_property_readonly("bodies", [](const simloop::ScenarioRunResult& r) { return simloop::recorded_bodies(r); },
+                             "The recorded bodies: {name: the column of its _x}.")
+      .def("metrics_json", &simloop::scenario_metrics_json)
+      .def("summary", &simloop::scenario_summary)
+      .def(
+          "write",
+          [](const simloop::ScenarioRunResult& r, const std::filesystem::path& out) {
+            py::gil_scoped_release release;
+            const simloop::OutputFiles files = simloop::write_scenario_outputs(r, out);
+            return std::make_pair(files.metrics, files.trajectory);
+          },
+          "out"_a)
+      .def_readonly("rng", &simloop::ScenarioRunResult::rng)
+      .def_readonly("perturb", &simloop::ScenarioRunResult::perturb)
+      .def_property_readonly("final_row", [](const simloop::ScenarioRunResult& r) { return vector_array(r.final_row); },
+                             "The last row (columns as column_names), kept or not: a copy.")
+      .def_property_readonly(
+          "final_state", [](const simloop::ScenarioRunResult& r) { return vector_array(r.final_state); },
+          "The full state at the end (the flat layout of state.hpp): an initial_state that continues this run.")
+      .def("__repr__", [](const simloop::ScenarioRunResult& r) {
+        return "ScenarioResult(name=" + py_str_repr(r.name) + ", seed=" + std::to_string(r.seed) + ", steps=" +
+               std::to_string(r.schedule.steps) + ", timestep=" + simloop::python_float_repr(r.timestep) +
+               ", rows=" + std::to_string(r.trajectory.rows()) + ", columns=" + std::to_string(r.columns.size()) +
+               ", disturbances=" + std::to_string(r.schedule.forces.size()) +
+               ", warnings=" + std::to_string(r.warnings.size()) + ")";
+      })
+      .def(pickling<ScenarioRunResult, &scenario_result_fields<FieldWriter, const ScenarioRunResult>,
+                    &scenario_result_fields<FieldReader, ScenarioRunResult>>("ScenarioResult"));
+
+  // A run, or a batch, follows the scenario's controls; or the caller's
+  // (controls, initial_state: arrays simloop.scenario has checked and made
+  // C-contiguous float64); or a policy's decisions (decide(step, row) -> ctrl,
+  // every control_every steps). keep_rows false: metrics only.
+  m.def(
+      "run_scenario",
+      [](const simloop::Model& scene, const simloop::Scenario& scenario, const simloop::ScenarioConfig& config,
+         std::optional<DoubleArray> controls, std::optional<DoubleArray> initial_state, py::object decide,
+         std::int64_t control_every, py::object progress) {
+        simloop::RunInputs inputs = run_inputs(1, controls, initial_state).front();
+        std::optional<PyPolicy> policy;
+        if (!decide.is_none()) inputs.policy = &policy.emplace(std::move(decide), control_every);
+        const std::string what = "run_scenario(" + scenario.name + (policy ? ", policy=...)" : ")");
+        return long_call(std::move(progress), what, [&](simloop::RunControl* control) {
+          return simloop::run_scenario(scene, scenario, config, nullptr, nullptr, control, inputs);
+        });
+      },
+      "scene"_a, "scenario"_a, "config"_a, "controls"_a = py::none(), "initial_state"_a = py::none(),
+      "decide"_a = py::none(), "control_every"_a = 1, "progress"_a = py::none());
+  m.def(
+      "run_scenario_batch",
+      [](const simloop::Model& scene, const simloop::Scenario& scenario,
+         const std::vector<simloop::ScenarioConfig>& configs, int threads, std::optional<DoubleArray> controls,
+         std::optional<DoubleArray> initial_state, py::object decide, std::int64_t control_every, bool keep_rows,
+         py::object progress) {
+        std::vector<simloop::RunInputs> inputs;
+        if (controls || initial_state) inputs = run_inputs(configs.size(), controls, initial_state);
+        std::optional<PyPolicy> policy;
+        if (!decide.is_none()) {
+          inputs.assign(configs.size(), simloop::RunInputs::deciding(policy.emplace(std::move(decide), control_every)));
+        }
+        const std::string what = "run_scenario_batch(" + scenario.name + (policy ? ", policy=...)" : ")") + " x " +
+                                 std::to_string(configs.size()) + " runs";
+        return long_call(std::move(progress), what, [&](simloop::RunControl* control) {
+          return simloop::run_scenario_batch(scene, scenario, configs, threads, control, inputs, keep_rows);
+        });
+      },
+      "scene"_a, "scenario"_a, "configs"_a, "threads"_a, "controls"_a = py::none(), "initial_state"_a = py::none(),
+      "decide"_a = py::none(), "control_every"_a = 1, "keep_rows"_a = true, "progress"_a = py::none());
+  m.def("check_scenario", &simloop::check_scenario, "scene"_a, "scenario"_a, "config"_a,
+        "Everything run_scenario checks before its first step, without running.");
+
+  py::class_<simloop::ScenarioSweepPoint>(m, "ScenarioSweepPoint", "One timestep of a scenario sweep.")
+      .def_readonly("timestep", &simloop::ScenarioSweepPoint::timestep)
+      .def_readonly("steps", &simloop::ScenarioSweepPoint::steps)
+      .def_readonly("mujoco_warnings", &simloop::ScenarioSweepPoint::mujoco_warnings)
+      .def_readonly("diverged", &simloop::ScenarioSweepPoint::diverged)
+      .def_readonly("peak_speed", &simloop::ScenarioSweepPoint::peak_speed)
+      .def_readonly("final_positions", &simloop::ScenarioSweepPoint::final_positions)
+      .def_readonly("offsets", &simloop::ScenarioSweepPoint::offsets)
+      .def_readonly("max_offset", &simloop::ScenarioSweepPoint::max_offset)
+      .def_readonly("blew_up", &simloop::ScenarioSweepPoint::blew_up)
+      .def("__repr__", [](const simloop::ScenarioSweepPoint& p) {
+        return "ScenarioSweepPoint(timestep=" + simloop::python_float_repr(p.timestep) +
+               ", blew_up=" + (p.blew_up ? "True" : "False") + ")";
+      });
+  py::class_<simloop::ScenarioSweepResult> sweep_result(m, "ScenarioSweepResult", "A timestep sweep of a scenario.");
+  bind_sweep_outputs<simloop::ScenarioSweepResult, &simloop::scenario_sweep_csv, &simloop::scenario_sweep_summary>(
+      sweep_result, "The largest timestep before any blew up (None if even the finest did).");
+  sweep_result
+      .def_readonly("name", &simloop::ScenarioSweepResult::name)
+      .def_readonly("duration", &simloop::ScenarioSweepResult::duration)
+      .def_readonly("bodies", &simloop::ScenarioSweepResult::bodies)
+      .def_readonly("scene_size", &simloop::ScenarioSweepResult::scene_size)
+      .def_readonly("tolerance", &simloop::ScenarioSweepResult::tolerance)
+      .def_readonly("points", &simloop::ScenarioSweepResult::points);
+  m.def(
+      "sweep_scenario",
+      [](const simloop::Model& scene, const simloop::Scenario& scenario, const std::vector<double>& timesteps,
+         double duration, const simloop::ScenarioConfig& config, int threads, py::object progress) {
+        const std::string what = "sweep(scenario=" + scenario.name + ", " + std::to_string(timesteps.size()) +
+                                 " timesteps, duration=" + simloop::python_float_repr(duration) + ")";
+        return long_call(std::move(progress), what, [&](simloop::RunControl* control) {
+          return simloop::sweep_scenario(scene, scenario, timesteps, duration, config, threads, control);
+        });
+      },
+      "scene"_a, "scenario"_a, "timesteps"_a, "duration"_a, "config"_a, "threads"_a, "progress"_a = py::none());
+  m.def("scenario_duration", &simloop::scenario_duration, "scene"_a, "scenario"_a);
+  m.def("default_scenario_sweep_timesteps", &simloop::default_scenario_sweep_timesteps, "duration"_a);
+  m.attr("SCENARIO_SWEEP_TOLERANCE") = simloop::kScenarioSweepTolerance;
+}
+
+}  // namespace simloop_py

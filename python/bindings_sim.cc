@@ -1,0 +1,372 @@
+// simloop._core's Sim (one run stepped from outside, safe from any thread,
+// with views into its state) and Episodes (N runs stepped a decision at a
+// time, under gym.py).
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+#include <utility>
+#include <vector>
+
+#include "bindings_common.hpp"
+#include "simloop/episode.hpp"
+#include "simloop/model.hpp"
+#include "simloop/number_format.hpp"
+#include "simloop/recorder.hpp"
+#include "simloop/sim.hpp"
+
+namespace simloop_py {
+namespace {
+
+using namespace pybind11::literals;
+
+// A Sim that any Python thread may call. Every call holds the Sim's lock for
+// its whole length, GIL released or not, so no call sees another half done
+// (a step while set_timestep swaps the model, say). The lock is waited for
+// without the GIL, so a thread waiting for it never blocks the thread that
+// holds it from getting the GIL back; and in slices, between which the waiter
+// runs Python's signal handlers, so Ctrl-C reaches a thread waiting for a Sim
+// that another thread is stepping for a long time.
+struct PySim {
+  explicit PySim(const simloop::Model& model) : sim(model) {}
+  explicit PySim(const simloop::Sim& other) : sim(other) {}
+  simloop::Sim sim;
+  std::timed_mutex mutex;
+  // The thread holding `mutex`, if any. Only the holder writes it, and a
+  // thread only asks whether it is itself the holder, so relaxed order does.
+  std::atomic<std::thread::id> holder{};
+};
+
+class SimLock {
+ public:
+  explicit SimLock(PySim& s) : s_(s) {
+    // A signal handler or a progress callback, run from inside this Sim's own
+    // step, calling it again: refuse rather than deadlock.
+    if (s.holder.load(std::memory_order_relaxed) == std::this_thread::get_id()) {
+      throw py::value_error("this Sim is in the middle of a call on this thread (a signal handler or "
+                            "progress callback called it); call it after that call returns");
+    }
+    while (!s.mutex.try_lock()) {
+      bool locked = false;
+      {
+        py::gil_scoped_release release;
+        locked = s.mutex.try_lock_for(simloop::RunControl::kPollInterval);
+      }
+      if (locked) break;
+      if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+    }
+    s.holder.store(std::this_thread::get_id(), std::memory_order_relaxed);
+  }
+  ~SimLock() {
+    s_.holder.store(std::thread::id(), std::memory_order_relaxed);
+    s_.mutex.unlock();
+  }
+  SimLock(const SimLock&) = delete;
+  SimLock& operator=(const SimLock&) = delete;
+
+ private:
+  PySim& s_;
+};
+
+// A Sim method as a Python method that holds the Sim's lock.
+template <class R, class... Args>
+auto locked(R (simloop::Sim::*fn)(Args...)) {
+  return [fn](PySim& s, Args... args) -> R {
+    SimLock lock(s);
+    return (s.sim.*fn)(std::forward<Args>(args)...);
+  };
+}
+template <class R, class... Args>
+auto locked(R (simloop::Sim::*fn)(Args...) noexcept) {
+  return [fn](PySim& s, Args... args) -> R {
+    SimLock lock(s);
+    return (s.sim.*fn)(std::forward<Args>(args)...);
+  };
+}
+template <class R>
+auto locked(R (simloop::Sim::*fn)() const) {
+  return [fn](PySim& s) -> R {
+    SimLock lock(s);
+    return (s.sim.*fn)();
+  };
+}
+template <class R>
+auto locked(R (simloop::Sim::*fn)() const noexcept) {
+  return [fn](PySim& s) -> R {
+    SimLock lock(s);
+    return (s.sim.*fn)();
+  };
+}
+
+// A numpy view of `count` (x `width`) doubles at `values`, owned by `owner`
+// (the Sim or Model Python object), which the view keeps alive through its
+// base. Safe because a Sim's mjData and a Model's mjModel never move.
+py::array owned_view(const py::object& owner, double* values, py::ssize_t count, py::ssize_t width, bool writable) {
+  static double empty = 0.0;  // a size-0 view still needs a pointer to own nothing
+  double* at = count > 0 ? values : &empty;
+  const auto item = static_cast<py::ssize_t>(sizeof(double));
+  py::array view = width > 0 ? py::array(py::dtype::of<double>(), {count, width}, {item * width, item}, at, owner)
+                             : py::array(py::dtype::of<double>(), {count}, {item}, at, owner);
+  if (!writable) py::detail::array_proxy(view.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
+  return view;
+}
+
+
+// Observations live in one (count, width) buffer the Python side reads
+// after each call (copied out: a returned array never changes later).
+struct PyEpisodes {
+  PyEpisodes(const simloop::Model& scene, const simloop::Scenario& scenario, const simloop::ScenarioConfig& config,
+             std::size_t count)
+      : episodes(scene, scenario, config, count),
+        observations(static_cast<std::size_t>(episodes.width()) * count, 0.0) {}
+  simloop::Episodes episodes;
+  std::vector<double> observations;
+  std::mutex mutex;  // one call at a time (the GIL is released while stepping)
+};
+
+}  // namespace
+
+void bind_sim(py::module_& m) {
+  py::class_<simloop::Contact>(m, "Contact")
+      .def_readonly("geom1", &simloop::Contact::geom1)
+      .def_readonly("geom2", &simloop::Contact::geom2)
+      .def_readonly("dist", &simloop::Contact::dist)
+      .def_property_readonly("pos", [](const simloop::Contact& c) { return vec(c.pos.data(), 3); })
+      .def("__repr__", [](const simloop::Contact& c) {
+        return "Contact(" + c.geom1 + ", " + c.geom2 + ", dist=" + simloop::python_float_repr(c.dist) + ")";
+      });
+
+  // Every call holds the Sim's lock (PySim, SimLock): safe from any thread.
+  // The arrays (array()) are views into the Sim's mjData and take no lock:
+  // see simloop.Sim's docstring for what that means across threads.
+  py::class_<PySim>(m, "Sim")
+      .def(py::init([](const simloop::Model& model) {
+             return naming_failures("Sim", [&] { return std::make_unique<PySim>(model); });
+           }),
+           "model"_a)
+      .def("copy", [](PySim& s) {
+        SimLock lock(s);
+        return naming_failures("Sim.copy", [&] { return std::make_unique<PySim>(s.sim); });
+      }, "An independent copy: its own data, the same (shared, read-only) model.")
+      .def("reset", locked(&simloop::Sim::reset))
+      .def("reset_to_keyframe", locked(&simloop::Sim::reset_to_keyframe), "key"_a)
+      .def("set_timestep", locked(&simloop::Sim::set_timestep), "timestep"_a)
+      .def_property_readonly("timestep", locked(&simloop::Sim::timestep))
+      .def("set_ctrl", [](PySim& s, double value) {
+        SimLock lock(s);
+        s.sim.set_ctrl(value);
+      }, "value"_a)
+      .def("set_ctrl_vector", [](PySim& s, const py::array_t<double, py::array::c_style | py::array::forcecast>& values) {
+        SimLock lock(s);
+        s.sim.set_ctrl(values.data(), static_cast<size_t>(values.size()));
+      }, "values"_a)
+      .def_property_readonly("ctrl", locked(&simloop::Sim::ctrl))
+      .def("apply_force", locked(&simloop::Sim::apply_force), "force"_a)
+      .def("clear_force", locked(&simloop::Sim::clear_force))
+      .def("apply_wrench", [](PySim& s, int body, std::optional<std::array<double, 3>> force,
+                              std::optional<std::array<double, 3>> torque) {
+        SimLock lock(s);
+        s.sim.apply_wrench(body, force ? &*force : nullptr, torque ? &*torque : nullptr);
+      }, "body"_a, "force"_a, "torque"_a)
+      .def("clear_forces", locked(&simloop::Sim::clear_forces))
+      .def_property_readonly("applied_force", [](PySim& s) {
+        SimLock lock(s);
+        return vec(s.sim.applied_force().data(), 3);
+      })
+      .def("forward", locked(&simloop::Sim::forward))
+      .def("get_state", [](PySim& s) {
+        SimLock lock(s);
+        const std::vector<double> state = s.sim.state();
+        return vec(state.data(), state.size());
+      })
+      .def("set_state", [](PySim& s, const py::array_t<double, py::array::c_style>& state) {
+        SimLock lock(s);
+        s.sim.set_state(state.data(), static_cast<size_t>(state.size()));
+      }, "state"_a)
+      .def_property_readonly("state_layout", [](PySim& s) {
+        SimLock lock(s);
+        return s.sim.state_layout();
+      })
+      .def("id", [](PySim& s, const std::string& kind, const std::string& name) {
+        SimLock lock(s);  // set_timestep may be swapping the model on another thread
+        return s.sim.id(object_type(kind), name);
+      }, "kind"_a, "name"_a)
+      .def("checked_index", [](PySim& s, const std::string& kind, long long index) {
+        SimLock lock(s);
+        return s.sim.checked_index(object_type(kind), index);
+      }, "kind"_a, "index"_a)
+      .def("body_velocity", [](PySim& s, int body) {
+        SimLock lock(s);
+        return vec(s.sim.body_velocity(body).data(), 6);
+      }, "body"_a)
+      .def_property_readonly("model", [](PySim& s) {
+        SimLock lock(s);
+        return s.sim.model();
+      }, "This Sim's own model (with its timestep).")
+      .def(
+          "array",
+          [](const py::object& self, const std::string& name) {
+            PySim& s = self.cast<PySim&>();
+            SimLock lock(s);  // for the model's sizes; the view itself outlives the lock, as documented
+            const mjModel* mm = s.sim.model().get();
+            mjData* d = s.sim.data();
+            // Inputs and state: writable. What MuJoCo derives: read-only.
+            if (name == "qpos") return owned_view(self, d->qpos, mm->nq, 0, true);
+            if (name == "qvel") return owned_view(self, d->qvel, mm->nv, 0, true);
+            if (name == "ctrl") return owned_view(self, d->ctrl, mm->nu, 0, true);
+            if (name == "act") return owned_view(self, d->act, mm->na, 0, true);
+            if (name == "qfrc_applied") return owned_view(self, d->qfrc_applied, mm->nv, 0, true);
+            if (name == "xfrc_applied") return owned_view(self, d->xfrc_applied, mm->nbody, 6, true);
+            if (name == "sensordata") return owned_view(self, d->sensordata, mm->nsensordata, 0, false);
+            if (name == "actuator_force") return owned_view(self, d->actuator_force, mm->nu, 0, false);
+            if (name == "xpos") return owned_view(self, d->xpos, mm->nbody, 3, false);
+            if (name == "xquat") return owned_view(self, d->xquat, mm->nbody, 4, false);
+            throw py::value_error("no Sim array named '" + name + "'");
+          },
+          "name"_a, "A numpy view into this Sim's mjData (keeps the Sim alive).")
+      .def(
+          "step",
+          [](PySim& s, std::int64_t n) {
+            SimLock lock(s);
+            if (n <= simloop::RunControl::kChunkSteps) {
+              // One chunk: nothing to interrupt, so no RunControl to pay for
+              // (Python checks for Ctrl-C between the calls of a tight loop).
+              py::gil_scoped_release release;
+              s.sim.step(n);
+              return;
+            }
+            Interruptible work{py::none()};
+            work.run([&](simloop::RunControl* control) { s.sim.step(n, control); });
+          },
+          "n"_a)
+      .def(
+          "step_with_progress",
+          [](PySim& s, std::int64_t n, py::object progress) {
+            SimLock lock(s);
+            Interruptible work(std::move(progress));
+            work.run([&](simloop::RunControl* control) { s.sim.step(n, control); });
+            work.finish();
+          },
+          "n"_a, "progress"_a)
+      .def_property_readonly("time", locked(&simloop::Sim::time))
+      .def_property_readonly("steps_taken", locked(&simloop::Sim::steps_taken))
+      .def_property_readonly("box_position", [](PySim& s) {
+        SimLock lock(s);
+        return vec(s.sim.box_position().data(), 3);
+      })
+      .def_property_readonly("box_quaternion", [](PySim& s) {
+        SimLock lock(s);
+        return vec(s.sim.box_quaternion().data(), 4);
+      })
+      .def_property_readonly("box_velocity", [](PySim& s) {
+        SimLock lock(s);
+        return vec(s.sim.box_velocity().data(), 3);
+      })
+      .def_property_readonly("pusher_x", locked(&simloop::Sim::pusher_x))
+      .def_property_readonly("pusher_velocity", locked(&simloop::Sim::pusher_velocity))
+      .def_property_readonly("contacts", locked(&simloop::Sim::contacts))
+      .def_property_readonly("warnings", locked(&simloop::Sim::warnings))
+      // Pickled as its model (MuJoCo's binary, with this Sim's timestep), its
+      // full state and its step count; MuJoCo's warnings are not carried.
+      .def(py::pickle(
+          [](PySim& s) {
+            SimLock lock(s);
+            const std::vector<double> state = s.sim.state();
+            return py::make_tuple(s.sim.model(), vec(state.data(), state.size()), s.sim.steps_taken());
+          },
+          [](const py::tuple& t) {
+            if (t.size() != 3) throw py::value_error("cannot unpickle a Sim: expected (model, state, steps_taken)");
+            auto s = std::make_unique<PySim>(t[0].cast<simloop::Model>());
+            const auto state = t[1].cast<py::array_t<double, py::array::c_style | py::array::forcecast>>();
+            s->sim.set_state(state.data(), static_cast<size_t>(state.size()));
+            s->sim.set_steps_taken(t[2].cast<std::int64_t>());
+            return s;
+          }));
+
+  py::class_<PyEpisodes>(m, "Episodes", "N episodes of a scenario, stepped a decision at a time (gym.py).")
+      .def(py::init([](const simloop::Model& scene, const simloop::Scenario& scenario,
+                       const simloop::ScenarioConfig& config, std::size_t count) {
+             return naming_failures("Episodes", [&] { return std::make_unique<PyEpisodes>(scene, scenario, config, count); });
+           }),
+           "scene"_a, "scenario"_a, "config"_a, "count"_a)
+      .def_property_readonly("count", [](PyEpisodes& e) { return e.episodes.count(); })
+      .def_property_readonly("nu", [](PyEpisodes& e) { return e.episodes.nu(); })
+      .def_property_readonly("steps", [](PyEpisodes& e) { return e.episodes.steps(); })
+      .def_property_readonly("timestep", [](PyEpisodes& e) { return e.episodes.model().timestep(); })
+      .def_property_readonly("column_names",
+                             [](PyEpisodes& e) {
+                               py::tuple names(e.episodes.columns().size());
+                               for (size_t i = 0; i < e.episodes.columns().size(); ++i) {
+                                 names[i] = py::str(e.episodes.columns()[i].name);
+                               }
+                               return names;
+                             })
+      .def_property_readonly("ctrl_range",
+                             [](PyEpisodes& e) {
+                               const simloop::CtrlRange r = simloop::ctrl_range(e.episodes.model().get());
+                               return py::make_tuple(vec(r.low.data(), r.low.size()), vec(r.high.data(), r.high.size()));
+                             })
+      .def(
+          "reset",
+          [](PyEpisodes& e, std::size_t i, std::uint64_t seed) {
+            std::lock_guard<std::mutex> lock(e.mutex);
+            const auto width = static_cast<std::size_t>(e.episodes.width());
+            if (i >= e.episodes.count()) {
+              throw py::index_error("episode " + std::to_string(i) + " does not exist: there are " +
+                                    std::to_string(e.episodes.count()));
+            }
+            e.episodes.reset(i, seed, e.observations.data() + i * width);
+            return vec(e.observations.data() + i * width, width);
+          },
+          "i"_a, "seed"_a)
+      .def(
+          "step",
+          [](PyEpisodes& e, const py::array_t<double, py::array::c_style | py::array::forcecast>& actions,
+             std::int64_t every, const std::optional<py::array_t<std::uint8_t, py::array::c_style | py::array::forcecast>>& active,
+             int threads) {
+            std::lock_guard<std::mutex> lock(e.mutex);
+            const std::size_t n = e.episodes.count();
+            const auto width = static_cast<py::ssize_t>(e.episodes.width());
+            if (static_cast<std::size_t>(actions.size()) != n * static_cast<std::size_t>(e.episodes.nu())) {
+              throw py::value_error("actions must hold " + std::to_string(n) + " x " + std::to_string(e.episodes.nu()) +
+                                    " values, got " + std::to_string(actions.size()));
+            }
+            if (active && static_cast<std::size_t>(active->size()) != n) {
+              throw py::value_error("active must hold " + std::to_string(n) + " flags");
+            }
+            std::vector<std::uint8_t> terminated(n, 0), truncated(n, 0);
+            const std::uint8_t* mask = active ? active->data() : nullptr;
+            const auto work_steps = every > 0 ? static_cast<double>(every) * static_cast<double>(n) : 0.0;
+            const auto stepping = [&](simloop::RunControl* control) {
+              e.episodes.step(actions.data(), every, mask, e.observations.data(), terminated.data(), truncated.data(),
+                              threads, control);
+            };
+            if (work_steps <= static_cast<double>(simloop::RunControl::kChunkSteps)) {
+              py::gil_scoped_release release;  // nothing long to interrupt
+              stepping(nullptr);
+            } else {
+              Interruptible work{py::none()};
+              work.run(stepping);
+            }
+            py::array_t<double> observations({static_cast<py::ssize_t>(n), width});
+            std::copy(e.observations.begin(), e.observations.end(), observations.mutable_data());
+            py::array_t<bool> term(static_cast<py::ssize_t>(n)), trunc(static_cast<py::ssize_t>(n));
+            std::copy(terminated.begin(), terminated.end(), term.mutable_data());
+            std::copy(truncated.begin(), truncated.end(), trunc.mutable_data());
+            return py::make_tuple(observations, term, trunc);
+          },
+          "actions"_a, "every"_a, "active"_a = py::none(), "threads"_a = 1)
+      .def("steps_taken", [](PyEpisodes& e, std::size_t i) { return e.episodes.steps_taken(i); }, "i"_a)
+      .def("time", [](PyEpisodes& e, std::size_t i) { return e.episodes.time(i); }, "i"_a)
+      .def("warnings", [](PyEpisodes& e, std::size_t i) { return e.episodes.warnings(i); }, "i"_a);
+}
+
+}  // namespace simloop_py
