@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <list>
 #include <map>
+#include <optional>
 #include <variant>
 
 #include "json_text.hpp"
@@ -25,10 +26,11 @@ Model load_scene(const Scenario& scenario) {
 namespace {
 
 // A run of a scenario, made ready on its model: names resolved, inputs
-// drawn.
+// drawn, its recorder laid out (the columns).
 struct PreparedRun {
   ResolvedScenario resolved;
   Schedule schedule;
+  std::optional<Recorder> recorder;
 };
 
 PreparedRun prepare(const Model& model, const Scenario& scenario, const ScenarioConfig& config) {
@@ -37,6 +39,7 @@ PreparedRun prepare(const Model& model, const Scenario& scenario, const Scenario
   run.resolved = resolve(effective, model.get());
   const std::unique_ptr<Draws> draws = make_draws(config.seed, config.rng);
   run.schedule = build_schedule(run.resolved, effective, model.timestep(), *draws);
+  run.recorder.emplace(model.get(), run.resolved, run.schedule);
   return run;
 }
 
@@ -69,9 +72,8 @@ double run_timestep(const Model& scene, const Scenario& scenario, const Scenario
 
 void check_scenario(const Model& scene, const Scenario& scenario, const ScenarioConfig& config) {
   const Model model = scene.for_run(run_timestep(scene, scenario, config), false);
-  const PreparedRun run = prepare(model, scenario, config);
+  const PreparedRun run = prepare(model, scenario, config);  // names, schedule, columns
   detail::check_schedule_run(run.schedule.steps, config.record_every);
-  (void)Recorder(model.get(), run.resolved, run.schedule);  // its columns' names
 }
 
 ScenarioRunResult run_scenario(const Model& scene, const Scenario& scenario, const ScenarioConfig& config,
@@ -81,10 +83,9 @@ ScenarioRunResult run_scenario(const Model& scene, const Scenario& scenario, con
   if (workspace == nullptr) workspace = &own.emplace(model);
   if (!workspace->fits(model)) throw InvalidArgument("workspace Data was made for a model of another size");
   const PreparedRun run = prepare(model, scenario, config);
-  return labelled(
-      run_schedule(model.get(), workspace->get(), run.resolved, run.schedule, config.record_every, sink, control,
-                   inputs),
-      model.get(), scenario, config);
+  return labelled(detail::run_schedule_with(model.get(), workspace->get(), *run.recorder, run.schedule,
+                                            config.record_every, sink, control, inputs),
+                  model.get(), scenario, config);
 }
 
 std::vector<ScenarioRunResult> run_scenario_batch(const Model& scene, const Scenario& scenario,
@@ -129,8 +130,8 @@ std::vector<ScenarioRunResult> run_scenario_batch(const Model& scene, const Scen
       runs.push_back(prepare(it->second, scenario, config));
       detail::check_schedule_run(runs.back().schedule.steps, config.record_every);
       check_inputs(it->second.get(), inputs_of(i), runs.back().schedule.steps);
-      const Recorder columns(it->second.get(), runs.back().resolved, runs.back().schedule);
-      if (sinks[i] == nullptr) kept.push_back({runs.back().schedule.steps, config.record_every, columns.width()});
+      const PreparedRun& run = runs.back();
+      if (sinks[i] == nullptr) kept.push_back({run.schedule.steps, config.record_every, run.recorder->width()});
     });
   }
   if (!kept.empty()) detail::check_kept_rows(kept);
@@ -140,7 +141,7 @@ std::vector<ScenarioRunResult> run_scenario_batch(const Model& scene, const Scen
   for (const PreparedRun& r : runs) steps.push_back(r.schedule.steps);
   detail::run_jobs(scene, configs.size(), threads, steps, control, [&](std::size_t i, Data& data, RunControl& ctl) {
     const mjModel* m = model_of[i]->get();
-    results[i] = labelled(detail::run_schedule_counted_elsewhere(m, data.get(), runs[i].resolved, runs[i].schedule,
+    results[i] = labelled(detail::run_schedule_counted_elsewhere(m, data.get(), *runs[i].recorder, runs[i].schedule,
                                                                  configs[i].record_every, sinks[i], &ctl,
                                                                  inputs_of(i)),
                           m, scenario, configs[i]);
@@ -359,11 +360,11 @@ ScenarioRunResult run_scenario_drawn(const Model& scene, const Scenario& scenari
     if (std::find(wide.bodies.begin(), wide.bodies.end(), id) == wide.bodies.end()) wide.bodies.push_back(id);
   }
   const std::vector<std::string> bodies = moving_bodies(model);
-  DrawingSplit split(Recorder(m, run.resolved, run.schedule).columns(), bodies, sink, drawing);
+  DrawingSplit split(run.recorder->columns(), bodies, sink, drawing);
   Data workspace(model);
   ScenarioRunResult result =
       run_schedule(m, workspace.get(), wide, run.schedule, config.record_every, &split, control);
-  result.columns = Recorder(m, run.resolved, run.schedule).columns();
+  result.columns = run.recorder->columns();
   result.final_row = split.narrowed(result.final_row);
   return labelled(std::move(result), m, scenario, config);
 }
