@@ -58,17 +58,17 @@ CtrlRange ctrl_range(const mjModel* m) {
 }
 
 void Recorder::add(Source::Kind kind, int id, int count, const std::vector<std::string>& names,
-                   const std::string& unit, bool integer, bool input) {
+                   const std::string& unit, bool integer, bool input, const std::string& body) {
   Source source{kind, id, count, width()};
-  for (const std::string& n : names) columns_.push_back({n, unit, integer, input});
+  for (const std::string& n : names) columns_.push_back({n, unit, integer, input, body});
   const bool derived = kind == Source::kBodyPose || kind == Source::kBodyVelocity ||
                        kind == Source::kActuatorForce || kind == Source::kSensor || kind == Source::kContacts;
   (derived ? after_ : before_).push_back(source);
 }
 
 Recorder::Recorder(const mjModel* m, const ResolvedScenario& scenario, const Schedule& schedule) {
-  columns_.push_back({"step", "", true, false});
-  columns_.push_back({"time", "s", false, false});
+  columns_.push_back({"step", "", true, false, ""});
+  columns_.push_back({"time", "s", false, false, ""});
   ctrl_range_ = ctrl_range(m);
   // Inputs: the ctrl of every controlled or recorded actuator, the force on
   // every disturbed body.
@@ -86,8 +86,10 @@ Recorder::Recorder(const mjModel* m, const ResolvedScenario& scenario, const Sch
   }
   for (int b : scenario.bodies) {
     const std::string base = name_of(m, mjOBJ_BODY, b, "body");
-    add(Source::kBodyPose, b, 7, suffixed(base, {"_x", "_y", "_z", "_qw", "_qx", "_qy", "_qz"}), "m");
-    add(Source::kBodyVelocity, b, 6, suffixed(base, {"_vx", "_vy", "_vz", "_wx", "_wy", "_wz"}), "m/s, rad/s");
+    add(Source::kBodyPose, b, 7, suffixed(base, {"_x", "_y", "_z", "_qw", "_qx", "_qy", "_qz"}), "m", false, false,
+        base);
+    add(Source::kBodyVelocity, b, 6, suffixed(base, {"_vx", "_vy", "_vz", "_wx", "_wy", "_wz"}), "m/s, rad/s", false,
+        false, base);
   }
   for (int j : scenario.joints) {
     const std::string base = name_of(m, mjOBJ_JOINT, j, "joint");

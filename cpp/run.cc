@@ -146,7 +146,7 @@ std::vector<Column> chapter_columns(int count) {
   std::vector<Column> columns;
   for (int c = 0; c < count && c < Trajectory::kNumColumns; ++c) {
     columns.push_back({std::string(Trajectory::kColumnNames[c]), kUnits[c], Trajectory::is_integer_column(c),
-                       Trajectory::is_input_column(c)});
+                       Trajectory::is_input_column(c), ""});
   }
   return columns;
 }

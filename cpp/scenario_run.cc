@@ -167,13 +167,8 @@ std::map<std::string, std::size_t> recorded_bodies(const ScenarioRunResult& r) {
 
 std::map<std::string, std::size_t> recorded_bodies(const std::vector<Column>& columns) {
   std::map<std::string, std::size_t> out;
-  for (size_t c = 0; c + 12 < columns.size(); ++c) {
-    const std::string& name = columns[c].name;
-    if (name.size() > 2 && name.compare(name.size() - 2, 2, "_x") == 0 &&
-        columns[c + 3].name == name.substr(0, name.size() - 2) + "_qw" &&
-        columns[c + 7].name == name.substr(0, name.size() - 2) + "_vx") {
-      out[name.substr(0, name.size() - 2)] = c;
-    }
+  for (size_t c = 0; c < columns.size(); ++c) {
+    if (!columns[c].body.empty()) out.emplace(columns[c].body, c);  // the first of its columns
   }
   return out;
 }

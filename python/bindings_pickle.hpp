@@ -64,6 +64,7 @@ class FieldWriter {
     io.field(c.unit);
     io.field(c.integer);
     io.field(c.input);
+    io.field(c.body);
   }
 
  private:
@@ -138,7 +139,7 @@ class FieldReader {
 };
 
 // The pickle format's version: bump when a result's fields change.
-constexpr int kPickleVersion = 1;
+constexpr int kPickleVersion = 2;
 
 template <class Result, void (*Fields)(FieldWriter&, const Result&)>
 py::tuple pickle_fields(const Result& r) {

@@ -75,7 +75,7 @@ class Recorder final : public RowRecorder {
     int column = 0;  // its first column
   };
   void add(Source::Kind kind, int id, int count, const std::vector<std::string>& names, const std::string& unit,
-           bool integer = false, bool input = false);
+           bool integer = false, bool input = false, const std::string& body = "");
   std::vector<Column> columns_;
   std::vector<Source> before_, after_;
   CtrlRange ctrl_range_;

@@ -160,6 +160,9 @@ struct Column {
   std::string unit;      // "m", "rad", "m/s", "N"; "" for counts and quaternions
   bool integer = false;  // a whole number (written without a decimal point)
   bool input = false;    // an input written for the step: the final row has none (NaN, an empty cell)
+  // The recorded body whose 13 columns this is one of (x y z, qw qx qy qz,
+  // vx vy vz, wx wy wz, in that order); "" for every other column.
+  std::string body;
 };
 
 // The chapter's first `count` columns (Trajectory::kColumnNames).
