@@ -33,7 +33,8 @@ from typing import Any, Callable, Dict, Iterable, Iterator, List, Optional, Sequ
 import numpy as np
 
 from . import _core
-from .tables import DIVERGENCE_WARNINGS, WARNING_NAMES, BatchTable, table
+from ._checks import _check_int, _check_path, _check_threads
+from .tables import BatchTable, table
 
 # A scene parameter as it travels: ("friction" | "mass" | "damping", name or "", value).
 SceneParam = Tuple[str, str, float]
@@ -73,8 +74,6 @@ def scene_source(model: object) -> Tuple[str, str]:
     if model is None:
         return ("chapter", "")
     if isinstance(model, (str, bytes, os.PathLike)):
-        from ._api import _check_path
-
         return ("path", os.path.abspath(_check_path("model", model, "an MJCF file")))
     raise TypeError("model must be None (the chapter's scene) or an MJCF file's path when work goes to an executor "
                     f"(a compiled simloop.Model does not travel to workers), got {type(model).__name__}")
@@ -283,14 +282,11 @@ def run_table(job: Dict[str, Any], runs: Sequence[Run], executor: object, *, chu
 
 
 def _threads(threads: Optional[int]) -> int:
-    from ._api import _check_int
-
-    return 1 if threads is None else _check_int("threads", threads, 1, 4096)
+    """A worker's threads: None is 1 (a cluster's worker has its own cores to share)."""
+    return 1 if threads is None else _check_threads(threads)
 
 
 def _chunk_size(chunk_size: Optional[int]) -> Optional[int]:
-    from ._api import _check_int
-
     return None if chunk_size is None else _check_int("chunk_size", chunk_size, 1, 2**31 - 1)
 
 
@@ -335,6 +331,8 @@ def sweep_on(executor: object, timesteps: Sequence[float], duration: float, mode
     """simloop.sweep(..., executor=...): the same SweepResult as a local sweep,
     its timesteps run in chunks on the executor's workers."""
     ordered = sorted(set(timesteps))  # as the C++ sweep orders them: ascending, duplicates dropped
+    if not ordered:
+        raise ValueError("timesteps must not be empty")  # as the C++ sweep says it
     for t in ordered:
         _core.sweep_steps(duration, t)  # refuses a point that cannot be run, before any work goes out
     pool = _Pool(executor)
