@@ -70,7 +70,7 @@ std::vector<simloop::RunInputs> run_inputs(std::size_t runs, const std::optional
 
 // A Python callable as the loop's Policy: decide(step, row) -> ctrl, where
 // row is the recorder's row (a fresh float64 array) and ctrl an array of nu
-// float64 (simloop/scenario.py's wrapper checks what the user's policy
+// float64 (simloop/policy.py's wrapper checks what the user's policy
 // returned and adds the decision step to its exceptions). Called from
 // whichever thread steps the run: it takes the GIL for the call only.
 class PyPolicy final : public simloop::Policy {

@@ -21,8 +21,15 @@ except ImportError as _error:
         raise
     raise ImportError(_message) from None
 
-from ._api import Sim, draw_shove, load_model, run, run_batch, sweep
-from .scenario import Observation, Scenario, ScenarioResult, run_scenario, run_scenario_batch
+from . import _compiled_methods
+from ._checks import load_model
+from ._gym_registry import register_when_gymnasium_loads
+from .policy import Observation
+from .runs import draw_shove, run, run_batch
+from .scenario import Scenario, ScenarioResult
+from .scenario_runs import run_scenario, run_scenario_batch
+from .sim import Sim
+from .sweeps import sweep
 from ._core import (
     COLUMN_NAMES,
     ENERGY_COLUMN_NAMES,
@@ -90,53 +97,8 @@ def __getattr__(name: str) -> object:
         return getattr(tables, name)
     raise AttributeError(f"module 'simloop' has no attribute {name!r}")
 
-# Gymnasium: simloop/Chapter-v0, simloop/PushT-v0, simloop/Scenario-v0
-# (simloop/gym.py, loaded by gymnasium.make through the entry points).
-# Registered once gymnasium is imported: importing it here would cost every
-# `import simloop` about 0.15 s, and nothing happens when it is not installed.
-_GYMNASIUM_IDS = {
-    "simloop/Chapter-v0": ("simloop.gym:chapter_env", "simloop.gym:chapter_vector_env"),
-    "simloop/PushT-v0": ("simloop.gym:pusht_env", "simloop.gym:pusht_vector_env"),
-    "simloop/Scenario-v0": ("simloop.gym:ScenarioEnv", "simloop.gym:ScenarioVectorEnv"),
-}
 
-
-def _register_envs(gymnasium) -> None:  # type: ignore[no-untyped-def]
-    for env_id, (entry_point, vector_entry_point) in _GYMNASIUM_IDS.items():
-        if env_id not in gymnasium.registry:
-            gymnasium.register(id=env_id, entry_point=entry_point, vector_entry_point=vector_entry_point)
-
-
-def _register_with_gymnasium() -> None:
-    import sys
-
-    if "gymnasium" in sys.modules:
-        _register_envs(sys.modules["gymnasium"])
-        return
-    import importlib.abc
-    import importlib.util
-
-    if importlib.util.find_spec("gymnasium") is None:
-        return
-
-    class _WhenGymnasiumLoads(importlib.abc.MetaPathFinder):
-        def find_spec(self, name, path, target=None):  # type: ignore[no-untyped-def]
-            if name != "gymnasium":
-                return None
-            sys.meta_path.remove(self)
-            spec = importlib.util.find_spec(name)
-            if spec is None or spec.loader is None:
-                return spec
-            execute = spec.loader.exec_module
-
-            def exec_module(module):  # type: ignore[no-untyped-def]
-                execute(module)
-                _register_envs(module)
-
-            spec.loader.exec_module = exec_module  # type: ignore[method-assign]
-            return spec
-
-    sys.meta_path.insert(0, _WhenGymnasiumLoads())
-
-
-_register_with_gymnasium()
+# The compiled classes' checked methods, before anyone can reach the classes.
+_compiled_methods.install()
+# Gymnasium: simloop/Chapter-v0, simloop/PushT-v0, simloop/Scenario-v0 (simloop/gym.py).
+register_when_gymnasium_loads()

@@ -1,7 +1,8 @@
 # Types of simloop._core, the compiled module (python/bindings.cc), as the
 # package presents it: simloop/__init__.py replaces a few of its methods with
-# checked Python ones (_api._install_checked_methods, ScenarioResult.metrics in
-# scenario.py) before anyone can reach the module, and those are typed here.
+# checked Python ones and adds ScenarioResult.metrics and SweepResult.to_pandas
+# and to_arrow (_compiled_methods.install) before anyone can reach the module,
+# and those are typed here.
 # tests/python/test_types.py fails when this file and the module disagree,
 # naming what is missing or different.
 import os
@@ -59,7 +60,7 @@ _Decide = Callable[..., Any]
 class MujocoError(RuntimeError): ...
 
 class Model(metaclass=_Pybind11Type):
-    # These three are the checked Python functions of _api.py.
+    # These three are the checked Python functions of _compiled_methods.py.
     @staticmethod
     def pusher_scene() -> Model: ...
     @staticmethod
@@ -288,7 +289,7 @@ class ScenarioResult(metaclass=_Pybind11Type):
     def final_row(self) -> _Float64Array: ...
     @property
     def final_state(self) -> _Float64Array: ...
-    # scenario.py's: metrics.json's dict (its keys depend on the scenario).
+    # _compiled_methods.py's: metrics.json's dict (its keys depend on the scenario).
     @property
     def metrics(self) -> dict[str, Any]: ...
     def metrics_json(self) -> str: ...
@@ -524,7 +525,7 @@ class SweepResult(metaclass=_Pybind11Type):
     def csv(self) -> str: ...
     def summary(self) -> str: ...
     def write(self, out: _PathLike) -> Path: ...
-    # tables.py's: a pandas.DataFrame / pyarrow.Table, one row per timestep.
+    # _compiled_methods.py's (simloop.tables): a pandas.DataFrame / pyarrow.Table, one row per timestep.
     def to_pandas(self) -> Any: ...
     def to_arrow(self) -> Any: ...
 

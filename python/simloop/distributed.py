@@ -33,7 +33,8 @@ from typing import Any, Callable, Dict, Iterable, Iterator, List, Optional, Sequ
 import numpy as np
 
 from . import _core
-from .tables import DIVERGENCE_WARNINGS, WARNING_NAMES, BatchTable, table
+from ._checks import _check_int, _check_path, _check_threads
+from .tables import BatchTable, table
 
 # A scene parameter as it travels: ("friction" | "mass" | "damping", name or "", value).
 SceneParam = Tuple[str, str, float]
@@ -73,8 +74,6 @@ def scene_source(model: object) -> Tuple[str, str]:
     if model is None:
         return ("chapter", "")
     if isinstance(model, (str, bytes, os.PathLike)):
-        from ._api import _check_path
-
         return ("path", os.path.abspath(_check_path("model", model, "an MJCF file")))
     raise TypeError("model must be None (the chapter's scene) or an MJCF file's path when work goes to an executor "
                     f"(a compiled simloop.Model does not travel to workers), got {type(model).__name__}")
@@ -282,14 +281,11 @@ def run_table(job: Dict[str, Any], runs: Sequence[Run], executor: object, *, chu
 
 
 def _threads(threads: Optional[int]) -> int:
-    from ._api import _check_int
-
-    return 1 if threads is None else _check_int("threads", threads, 1, 4096)
+    """A worker's threads: None is 1 (a cluster's worker has its own cores to share)."""
+    return 1 if threads is None else _check_threads(threads)
 
 
 def _chunk_size(chunk_size: Optional[int]) -> Optional[int]:
-    from ._api import _check_int
-
     return None if chunk_size is None else _check_int("chunk_size", chunk_size, 1, 2**31 - 1)
 
 
@@ -334,6 +330,8 @@ def sweep_on(executor: object, timesteps: Sequence[float], duration: float, mode
     """simloop.sweep(..., executor=...): the same SweepResult as a local sweep,
     its timesteps run in chunks on the executor's workers."""
     ordered = sorted(set(timesteps))  # as the C++ sweep orders them: ascending, duplicates dropped
+    if not ordered:
+        raise ValueError("timesteps must not be empty")  # as the C++ sweep says it
     for t in ordered:
         _core.sweep_steps(duration, t)  # refuses a point that cannot be run, before any work goes out
     pool = _Pool(executor)
@@ -350,198 +348,3 @@ def sweep_on(executor: object, timesteps: Sequence[float], duration: float, mode
         if progress is not None:
             progress(done, len(ordered))
     return _core.sweep_result_from_fields(duration, [p for k in sorted(points) for p in points[k]])
-
-
-# ---- One Parquet file, streamed, resumable ---------------------------------
-
-class ResumeError(ValueError):
-    """The parts folder cannot be used: it belongs to another batch, or exists without --resume."""
-
-
-class ParquetBatch:
-    """A batch written to one Parquet file, a row per run in the order of `runs`.
-
-    Each finished chunk is first written, atomically (a temporary file
-    renamed), to OUT.parts/chunk-<index>.parquet; chunks are then appended
-    in order, one row group each, to a temporary file beside OUT
-    (.OUT.tmp.<pid>), which is renamed onto OUT once every chunk is in, after
-    which OUT.parts/ is removed. OUT is therefore never half-written. If the
-    batch stops (Ctrl-C, a failure), the temporary file is removed and
-    OUT.parts/ kept with a manifest (manifest.json: the batch it belongs to);
-    resume=True then reads the chunks found there and runs only the others.
-    Each part file is stamped (its schema's metadata) with the batch's digest
-    and its chunk's index; resuming refuses (ResumeError) a part file that is
-    another batch's, cut short, or out of place, rather than join it, and
-    OUT carries no stamp.
-    The finished file has the same bytes either way (the same chunks, read
-    back from the same part files, in the same row groups); the chunk size
-    of a resumed batch is the manifest's.
-    """
-
-    def __init__(self, out: "os.PathLike[str] | str", job: Dict[str, Any], runs: Sequence[Run],
-                 chunk_size: int, description: Dict[str, Any]) -> None:
-        import hashlib
-        import json
-
-        self.out = os.fspath(out)
-        self.parts = self.out + ".parts"
-        self.job, self.runs = job, runs
-        identity = {key: value for key, value in job.items() if key != "threads"}  # threads change no bit
-        hasher = hashlib.sha256(json.dumps(identity, sort_keys=True).encode())
-        for run in runs:  # repr: floats exactly, without building one huge string
-            hasher.update(repr(run).encode())
-        digest = hasher.hexdigest()
-        self.digest = digest  # stamped on every part file
-        self.manifest = {"format": 1, "batch": digest, "runs": len(runs), "chunk_size": chunk_size,
-                         "description": description}
-        self.chunk_size = chunk_size
-        self.done: List[int] = []
-
-    def _part(self, index: int) -> str:
-        return os.path.join(self.parts, f"chunk-{index:09d}.parquet")
-
-    def prepare(self, resume: bool) -> int:
-        """Checks the parts folder against this batch; returns the runs already done. Writes nothing."""
-        import json
-
-        if not os.path.isdir(self.parts):
-            return 0
-        manifest_path = os.path.join(self.parts, "manifest.json")
-        if not resume:
-            raise ResumeError(f"{self.parts}/ holds an interrupted batch: add --resume to finish it, or remove the "
-                              "folder to start again")
-        try:
-            with open(manifest_path, encoding="utf-8") as f:
-                theirs = json.load(f)
-        except (OSError, ValueError) as e:
-            raise ResumeError(f"--resume: {manifest_path}: unreadable ({e}); remove {self.parts}/ to start again")
-        if theirs.get("batch") != self.manifest["batch"]:
-            raise ResumeError(f"--resume: {self.parts}/ was written by another batch (other scenario, seeds, grid or "
-                              f"simloop version); remove it, or resume with that batch's arguments")
-        self.chunk_size = int(theirs["chunk_size"])
-        self.manifest["chunk_size"] = self.chunk_size
-        ranges = chunk_ranges(len(self.runs), self.chunk_size)
-        # Every chunk found must be this batch's, whole: one copied from
-        # another batch's folder, or cut short (a full disk, a copy that
-        # stopped), would be joined into FILE otherwise.
-        for name in sorted(os.listdir(self.parts)):
-            if not (name.startswith("chunk-") and name.endswith(".parquet")):
-                continue
-            path = os.path.join(self.parts, name)
-            index = name[len("chunk-"):-len(".parquet")]
-            if not index.isdigit() or int(index) >= len(ranges) or path != self._part(int(index)):
-                raise ResumeError(f"--resume: {path}: not a chunk of this batch (it has {len(ranges)} chunks); "
-                                  f"remove it, or {self.parts}/ to start again")
-            problem = self._chunk_problem(path, int(index), ranges[int(index)][1] - ranges[int(index)][0])
-            if problem:
-                raise ResumeError(f"--resume: {path}: {problem}; remove it to run that chunk again, or {self.parts}/ "
-                                  "to start again")
-        self.done = [k for k in range(len(ranges)) if os.path.isfile(self._part(k))]
-        return sum(ranges[k][1] - ranges[k][0] for k in self.done)
-
-    def _chunk_problem(self, path: str, index: int, rows: int) -> str:
-        """'' if the part file is chunk `index` of this batch, whole; else what is wrong."""
-        import pyarrow as pa
-        import pyarrow.parquet as pq
-
-        try:
-            meta = pq.read_metadata(path)
-            stamp = meta.schema.to_arrow_schema().metadata or {}
-        except (OSError, pa.ArrowException) as e:
-            return f"truncated or damaged (pyarrow cannot read it: {e})"
-        if stamp.get(_STAMP_BATCH) != self.digest.encode():
-            return "written for another batch (other parameters, or another simloop or MuJoCo version)"
-        if stamp.get(_STAMP_CHUNK) != str(index).encode() or meta.num_rows != rows:
-            return (f"not chunk {index} of this batch (it holds {meta.num_rows} rows, stamped chunk "
-                    f"{stamp.get(_STAMP_CHUNK, b'?').decode(errors='replace')}; chunk {index} has {rows})")
-        return ""
-
-    def run(self, executor: object, progress: Optional[Callable[[int, int], object]] = None) -> int:
-        """Runs what is left and writes OUT; returns the runs computed now."""
-        import json
-        import shutil
-
-        import pyarrow.parquet as pq
-
-        os.makedirs(self.parts, exist_ok=True)
-        manifest_path = os.path.join(self.parts, "manifest.json")
-        if not os.path.isfile(manifest_path):
-            _write_atomically(manifest_path, lambda path: _write_text(path, json.dumps(self.manifest, indent=1)))
-        ranges = chunk_ranges(len(self.runs), self.chunk_size)
-        ready = set(self.done)
-        done_runs = sum(ranges[k][1] - ranges[k][0] for k in ready)
-        computed = 0
-        directory = os.path.dirname(os.path.abspath(self.out))
-        temporary = os.path.join(directory, f".{os.path.basename(self.out)}.tmp.{os.getpid()}")
-        writer: Any = None  # a pyarrow.parquet.ParquetWriter once the first chunk is written
-        written = 0  # chunks appended to the temporary file, in order
-        try:
-            def flush() -> None:
-                nonlocal writer, written
-                while written in ready:
-                    table = _unstamped(pq.read_table(self._part(written)))
-                    if writer is None:
-                        writer = pq.ParquetWriter(temporary, table.schema)
-                    writer.write_table(table)
-                    written += 1
-
-            flush()
-            if progress is not None and done_runs:
-                progress(done_runs, len(self.runs))
-            for index, chunk in iter_chunks(self.job, self.runs, executor, chunk_size=self.chunk_size, skip=ready):
-                # Stamped with the batch and its place in it (checked by --resume,
-                # taken off again in FILE).
-                table = chunk.to_arrow()
-                table = table.replace_schema_metadata({**(table.schema.metadata or {}),
-                                                       _STAMP_BATCH: self.digest.encode(),
-                                                       _STAMP_CHUNK: str(index).encode()})
-                _write_atomically(self._part(index), lambda path: pq.write_table(table, path))
-                ready.add(index)
-                count = ranges[index][1] - ranges[index][0]
-                done_runs += count
-                computed += count
-                flush()
-                if progress is not None:
-                    progress(done_runs, len(self.runs))
-            writer.close()
-            writer = None
-            os.replace(temporary, self.out)
-        except BaseException:
-            if writer is not None:
-                writer.close()
-            if os.path.exists(temporary):
-                os.unlink(temporary)
-            raise
-        shutil.rmtree(self.parts, ignore_errors=True)
-        return computed
-
-    def kept_runs(self) -> int:
-        """Runs whose chunks are in the parts folder now (after a stop)."""
-        ranges = chunk_ranges(len(self.runs), self.chunk_size)
-        return sum(b - a for k, (a, b) in enumerate(ranges) if os.path.isfile(self._part(k)))
-
-
-# The stamp a part file carries in its schema's metadata.
-_STAMP_BATCH, _STAMP_CHUNK = b"simloop_batch", b"simloop_chunk"
-
-
-def _unstamped(table: Any) -> Any:
-    """A part file's table without the stamp (FILE has the bytes it always had)."""
-    kept = {k: v for k, v in (table.schema.metadata or {}).items() if k not in (_STAMP_BATCH, _STAMP_CHUNK)}
-    return table.replace_schema_metadata(kept or None)
-
-
-def _write_text(path: str, text: str) -> None:
-    with open(path, "w", encoding="utf-8") as f:
-        f.write(text)
-
-
-def _write_atomically(path: str, write: Callable[[str], object]) -> None:
-    temporary = f"{path}.tmp.{os.getpid()}"
-    try:
-        write(temporary)
-        os.replace(temporary, path)
-    except BaseException:
-        if os.path.exists(temporary):
-            os.unlink(temporary)
-        raise

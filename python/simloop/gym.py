@@ -52,14 +52,13 @@ from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from . import _core
-from ._api import _check_bool, _check_int, _check_timestep, _describe, _U64_MAX, RNGS
-from .scenario import Scenario, _scenario_and_scene
+from . import _core, _gym_registry
+from ._checks import _check_int, _check_seed, _check_threads, _describe
+from .scenario import Scenario, ScenarioLike, _scenario_and_scene, scenario_config
 
 PUSHT_SCENARIO = os.path.join(os.path.dirname(os.path.abspath(__file__)), "scenes", "pusht.toml")
 
 Reward = Callable[[np.ndarray, np.ndarray, np.ndarray], float]
-ScenarioLike = Union[Scenario, str, "os.PathLike[str]"]
 
 # Episodes that end this way are terminated, not truncated (episode.hpp).
 _TERMINATING = ("simloop_DIVERGED", "mjWARN_BADQPOS", "mjWARN_BADQVEL", "mjWARN_BADQACC")
@@ -72,15 +71,12 @@ class _Setup:
     def __init__(self, scenario: ScenarioLike, count: int, control_every: int, reward: Optional[Reward], rng: str,
                  timestep: Optional[float], steps: Optional[int], perturb: bool, model: Optional[_core.Model]) -> None:
         scenario, scene = _scenario_and_scene(scenario, model)
-        if rng not in RNGS:
-            raise ValueError(f"rng must be 'mt19937_64' or 'numpy', got {rng!r}")
         if reward is not None and not callable(reward):
             raise TypeError(f"reward must be None or a callable reward(obs, action, next_obs) -> float, "
                             f"got {_describe(reward)}")
+        # (checked here, at construction: the C++ episodes check it only as they step)
         self.control_every = _check_int("control_every", control_every, 1, _core.MAX_STEPS)
-        config = _core.ScenarioConfig(0, rng, None if timestep is None else _check_timestep(timestep),
-                                      None if steps is None else _check_int("steps", steps, 1, _core.MAX_STEPS),
-                                      _check_bool("perturb", perturb), 1)
+        config = scenario_config(0, rng, timestep, steps, perturb, 1)
         self.scenario = scenario
         self.reward = reward
         self.episodes = _core.Episodes(scene, scenario._core, config, count)
@@ -119,7 +115,7 @@ class _Setup:
 def _episode_seed(np_random: np.random.Generator, seed: Optional[int]) -> int:
     """The scenario's seed for an episode: reset's, else drawn from np_random."""
     if seed is not None:
-        return _check_int("seed", seed, 0, _U64_MAX)
+        return _check_seed("seed", seed)
     return int(np_random.integers(0, 2**64, dtype=np.uint64))
 
 
@@ -188,7 +184,7 @@ class ScenarioVectorEnv(VectorEnv):
         if render_mode is not None:
             raise ValueError(f"render_mode must be None (simloop environments do not render), got {render_mode!r}")
         self.num_envs = _check_int("num_envs", num_envs, 1, 1 << 20)
-        self._threads = 0 if threads is None else _check_int("threads", threads, 1, 4096)
+        self._threads = _check_threads(threads)
         self._setup = _Setup(scenario, self.num_envs, control_every, reward, rng, timestep, steps, perturb, model)
         self.single_action_space = self._setup.action_space
         self.single_observation_space = self._setup.observation_space
@@ -215,7 +211,7 @@ class ScenarioVectorEnv(VectorEnv):
         if seed is None:
             seeds: List[Optional[int]] = [None] * self.num_envs
         elif isinstance(seed, (int, np.integer)) and not isinstance(seed, bool):
-            seeds = [_check_int("seed", seed, 0, _U64_MAX - self.num_envs + 1) + i for i in range(self.num_envs)]
+            seeds = [_check_int("seed", seed, 0, 2**64 - self.num_envs) + i for i in range(self.num_envs)]
         else:
             # (a bool is not iterable here: list() raises TypeError for it, as before)
             seeds = list(cast(Sequence[Optional[int]], seed))
@@ -270,6 +266,4 @@ def pusht_vector_env(num_envs: int = 1, **kwargs: Any) -> ScenarioVectorEnv:
 def register_envs() -> None:
     """Registers simloop/Chapter-v0, simloop/PushT-v0 and simloop/Scenario-v0
     (once; `import simloop` does it as soon as gymnasium is imported)."""
-    from . import _register_envs
-
-    _register_envs(gymnasium)
+    _gym_registry.register_envs(gymnasium)

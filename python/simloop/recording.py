@@ -57,7 +57,7 @@ from pathlib import Path
 from typing import Any, Mapping, Optional, Sequence, Union
 
 from . import _core
-from ._api import ModelLike, _pusher_scene, load_model
+from ._checks import ModelLike, _pusher_scene, load_model
 
 # rerun accepts this application id as it is (no "/" or ".").
 APPLICATION_ID = "simloop_ch0_1_sim_loop"

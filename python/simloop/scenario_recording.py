@@ -35,6 +35,7 @@ from pathlib import Path
 from typing import Any, List, Mapping, Sequence, Union
 
 from . import _core
+from .recording import RrdFile
 
 APPLICATION_ID = "simloop_scenario"
 PLANE_THICKNESS = 0.01
@@ -83,8 +84,6 @@ class ScenarioRecording:
     def __init__(self, model: _core.Model, path: Union[str, "os.PathLike[str]"], run_key: str) -> None:
         import rerun as rr
         import rerun.blueprint as rrb
-
-        from .recording import RrdFile
 
         self._rr = rr
         self.moving_bodies: List[str] = list(_core.moving_bodies(model))

@@ -256,20 +256,3 @@ def sweep_table(result: Any) -> BatchTable:
             "work_constraint_positive": p.work_constraint_positive,
         })
     return _from_rows(rows)
-
-
-def _install() -> None:
-    def sweep_to_pandas(self: Any) -> Any:
-        return sweep_table(self).to_pandas()
-
-    def sweep_to_arrow(self: Any) -> Any:
-        return sweep_table(self).to_arrow()
-
-    sweep_to_pandas.__doc__ = "A pandas.DataFrame: one row per timestep (see simloop.tables)."
-    sweep_to_arrow.__doc__ = "A pyarrow.Table: one row per timestep (see simloop.tables)."
-    # setattr: the stub declares both as SweepResult's methods (mypy refuses assigning to a method).
-    setattr(_core.SweepResult, "to_pandas", sweep_to_pandas)
-    setattr(_core.SweepResult, "to_arrow", sweep_to_arrow)
-
-
-_install()

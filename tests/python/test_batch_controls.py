@@ -123,9 +123,9 @@ def test_a_non_finite_initial_state_is_refused():
 
 
 def test_batch_inputs_must_have_one_entry_per_run():
-    with pytest.raises(ValueError, match=r"controls holds 2 runs' inputs for 3 runs \(3 seeds x 1 timesteps\)"):
+    with pytest.raises(ValueError, match=r"controls: 2 runs' controls for 3 runs"):
         simloop.run_scenario_batch(PUSHT, seeds=[0, 1, 2], steps=100, controls=np.zeros((2, 100, 2)))
-    with pytest.raises(ValueError, match=r"initial_state holds 4 runs' inputs for 3 runs"):
+    with pytest.raises(ValueError, match=r"initial_state: 4 states for 3 runs"):
         simloop.run_scenario_batch(PUSHT, seeds=[0, 1, 2], steps=100, initial_state=np.zeros((4, 54)))
     # A bad run is named by its index, before any run starts.
     u = np.zeros((3, 100, 2))

@@ -204,7 +204,7 @@ def test_plot_needs_a_python_with_simloop(tmp_path):
 
 @pytest.mark.parametrize("kwargs, error, message", [
     ({"timesteps": []}, ValueError, "timesteps must not be empty"),
-    ({"timesteps": [0.002, -1]}, ValueError, "timesteps[1] must be a positive, finite number of seconds, got -1.0"),
+    ({"timesteps": [0.002, -1]}, ValueError, "timestep must be a positive, finite number of seconds, got -1.0"),
     ({"duration": 0}, ValueError, "duration must be a positive, finite number of seconds, got 0.0"),
     ({"threads": 0}, ValueError, "threads must be an integer from 1 to 4096, got 0"),
 ])

@@ -15,12 +15,12 @@ I64_MAX = 2**63 - 1
 
 
 # The issue's three repros: a segfault, a double free, a segfault at GC.
-@pytest.mark.parametrize("call", [
-    "simloop.run(steps=2, record_every=2**63-1)",
-    "simloop.run(steps=10, record_every=2**63-1)",
-    "simloop.run_batch(seeds=[0], steps=5, record_every=2**63-1)",
+@pytest.mark.parametrize("call, where", [
+    ("simloop.run(steps=2, record_every=2**63-1)", ""),
+    ("simloop.run(steps=10, record_every=2**63-1)", ""),
+    ("simloop.run_batch(seeds=[0], steps=5, record_every=2**63-1)", "run 0: "),
 ])
-def test_record_every_past_the_range_is_refused_not_a_crash(call):
+def test_record_every_past_the_range_is_refused_not_a_crash(call, where):
     proc = run_python(f"""
         import gc
         import simloop
@@ -31,7 +31,7 @@ def test_record_every_past_the_range_is_refused_not_a_crash(call):
         gc.collect()
     """)
     assert proc.returncode == 0, f"exit {proc.returncode}: {proc.stderr[-2000:]}"
-    assert proc.stdout == f"record_every must be at most {2**62 - 1} (2**62-1), got {I64_MAX}\n"
+    assert proc.stdout == f"{where}record_every must be at most {2**62 - 1}, got {I64_MAX}\n"
 
 
 def test_python_takes_the_commands_ranges():
@@ -41,7 +41,7 @@ def test_python_takes_the_commands_ranges():
     assert result.rows == 2 and list(result.column("step")) == [0.0, 10.0]
     assert simloop.run_batch(seeds=[0], steps=5, record_every=simloop.MAX_RECORD_EVERY)[0].rows == 2
     for kwargs in ({"steps": 2**62}, {"record_every": 2**62}, {"steps": I64_MAX}):
-        with pytest.raises(ValueError, match=r"must be at most 4611686018427387903 \(2\*\*62-1\)"):
+        with pytest.raises(ValueError, match=r"must be at most 4611686018427387903, got "):
             simloop.run(**kwargs)
     with pytest.raises(ValueError, match="n must be at most"):
         simloop.Sim().step(2**62)

@@ -49,7 +49,7 @@ def test_numpy_scalars_are_fine():
 @pytest.mark.parametrize("kwargs, error, message", [
     ({"seeds": [0, -1]}, ValueError, "seeds[1] must be an integer from 0 to"),
     ({"seeds": 5}, TypeError, "seeds must be a sequence, got 5 (int)"),
-    ({"timesteps": [0.002, 0.0]}, ValueError, "timesteps[1] must be a positive, finite number of seconds, got 0.0"),
+    ({"timesteps": [0.002, 0.0]}, ValueError, "run 1: timestep must be a positive, finite number of seconds, got 0.0"),
     ({"timesteps": "0.002"}, TypeError, "timesteps must be a sequence, got '0.002' (str)"),
     ({"threads": 0}, ValueError, "threads must be an integer from 1 to 4096, got 0"),
     ({"threads": 1.5}, TypeError, "threads must be an int, got 1.5 (float)"),
@@ -68,7 +68,7 @@ def test_sim_refuses_bad_arguments():
         (lambda: sim.step(1.0), TypeError, "n must be an int, got 1.0 (float)"),
         (lambda: sim.step(1, ctrl=math.nan), ValueError, "ctrl must be finite, got nan"),
         (lambda: sim.apply_force([0.0, 1.0]), ValueError, "force must have 3 components (fx, fy, fz), got 2"),
-        (lambda: sim.apply_force([0.0, math.inf, 0.0]), ValueError, "force[1] must be finite, got inf"),
+        (lambda: sim.apply_force([0.0, math.inf, 0.0]), ValueError, "force must be finite, got inf"),
         (lambda: sim.apply_force([0.0, "1", 0.0]), TypeError, "force[1] must be a number, got '1' (str)"),
         (lambda: sim.apply_force(5.0), TypeError, "force must be a sequence, got 5.0 (float)"),
         (lambda: setattr(sim, "timestep", -1), ValueError, "timestep must be a positive, finite number"),

@@ -49,7 +49,7 @@ def test_progress_counts_every_run_and_bad_arguments_are_refused_first():
                                progress=lambda done, total: calls.append((done, total)))
     assert calls[-1] == (900, 900)
     assert all(total == 900 for _, total in calls)
-    with pytest.raises(ValueError, match=r"^timesteps\[1\] must be a positive, finite number of seconds, got -1.0$"):
+    with pytest.raises(ValueError, match=r"^run 1: timestep must be a positive, finite number of seconds, got -1.0$"):
         simloop.run_scenario_batch(SCENES / "pusht.toml", timesteps=[0.002, -1.0])
     with pytest.raises(ValueError, match=r"^steps 1000000000000 with record_every 1 \(run 0, the largest of 2 runs\)"):
         simloop.run_scenario_batch(SCENES / "pusht.toml", seeds=[0, 1], steps=10**12)

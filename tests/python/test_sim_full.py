@@ -115,7 +115,7 @@ def test_force_and_torque_on_any_body_persist_until_cleared():
     assert np.array_equal(sim.xfrc_applied[1], [0, 0.3, 0, 0, 0, 0.05])  # the torque part was left
     sim.clear_forces()
     assert not sim.xfrc_applied.any()
-    with pytest.raises(ValueError, match=r"torque\[2\] must be finite, got nan"):
+    with pytest.raises(ValueError, match=r"torque must be finite, got nan"):
         sim.apply_force(body="tblock", torque=[0, 0, math.nan])
     with pytest.raises(ValueError, match="torque must have 3 components"):
         sim.apply_force(body="tblock", torque=[0, 0])
@@ -140,7 +140,7 @@ def test_step_takes_a_full_ctrl_vector_with_shape_checks():
     sim = simloop.Sim(PUSHT)
     sim.step(3, ctrl=np.array([0.5, -0.5]))
     assert np.array_equal(sim.ctrl, [0.5, -0.5])
-    with pytest.raises(ValueError, match=r"ctrl must have shape \(2,\) \(one per actuator\), got shape \(3,\)"):
+    with pytest.raises(ValueError, match=r"ctrl must have nu = 2 values \(one per actuator\), got 3"):
         sim.step(1, ctrl=[0.1, 0.2, 0.3])
     with pytest.raises(ValueError, match=r"ctrl\[1\] must be finite, got inf"):
         sim.step(1, ctrl=[0.1, math.inf])
@@ -176,7 +176,7 @@ def test_state_layout_and_bad_states():
     assert names[-1] in ("userdata", "plastic", "tree_asleep")  # 2.2's layout ends with userdata; 3.x's mj_getState's does not
     size = sum(n for _, n in layout)
     assert sim.get_state().shape == (size,) == (sim.state_size,)
-    with pytest.raises(ValueError, match=rf"state must have shape \({size},\) for this model, got shape \({size - 1},\)"):
+    with pytest.raises(ValueError, match=rf"state must have {size} values for this model \(time, qpos, .*\), got {size - 1}$"):
         sim.set_state(np.zeros(size - 1))
     with pytest.raises(ValueError, match="state must have dtype float64, got float32"):
         sim.set_state(np.zeros(size, dtype=np.float32))

@@ -1,0 +1,204 @@
+"""The bottom of the package: arguments turned into what the compiled core
+takes, or a one-line TypeError (or ValueError) naming the argument.
+
+Python checks types here, and that a value fits the C++ type it becomes (an
+int64, a uint64, a path without NUL); the ranges of values (a positive
+timestep, steps from 1, ...) are the C++ library's to check, in its words.
+Every other module of the package may import this one; it imports none of
+them (but _mujoco_check, which imports nothing of simloop's).
+"""
+
+from __future__ import annotations
+
+import functools
+import numbers
+import os
+from typing import TYPE_CHECKING, Any, Callable, Iterable, List, Optional, Sequence, Union
+
+if TYPE_CHECKING:  # (importing numpy would cost every `import simloop` ~50 ms)
+    import numpy as np
+    from numpy.typing import NDArray
+
+from . import _core
+from ._core import MUJOCO_VERSION, Model
+from ._mujoco_check import is_mujoco_model, mujoco_model_address
+
+ModelLike = Union[None, Model, str, "os.PathLike[str]"]
+PathLike = Union[str, bytes, "os.PathLike[str]"]
+Progress = Optional[Callable[[int, int], object]]
+
+# The C++ integer types an argument becomes (pybind11 refuses an int outside
+# them with a several-line TypeError).
+U64_MAX = 2**64 - 1
+I64_MIN, I64_MAX = -2**63, 2**63 - 1
+# The ranges sim_loop's --steps and --record-every accept, 1 to 2**62-1
+# (simloop::kMaxSteps, kMaxRecordEvery): steps + record_every fits in int64.
+MAX_STEPS = _core.MAX_STEPS
+MAX_RECORD_EVERY = _core.MAX_RECORD_EVERY
+# threads: None is one per core; Python's API takes 1 to this many.
+MAX_THREADS = 4096
+
+
+def _show(value: object) -> str:
+    """repr(value) for an error message: one line, at most 80 characters."""
+    try:
+        text = repr(value)
+    except Exception:  # an int past Python's digit limit, or a broken __repr__
+        if isinstance(value, int):
+            return f"an int of {value.bit_length()} bits"
+        return f"a {type(value).__name__}"
+    text = " ".join(line.strip() for line in text.splitlines())  # numpy arrays print on several lines
+    return text if len(text) <= 80 else text[:77] + "..."
+
+
+def _describe(value: object) -> str:
+    return f"{_show(value)} ({type(value).__name__})"
+
+
+def _check_int(name: str, value: object, minimum: int = I64_MIN, maximum: int = I64_MAX) -> int:
+    """An int (numpy's too, not a bool) from minimum to maximum: by default
+    the int64 the core takes, whose own range checks then apply."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise TypeError(f"{name} must be an int, got {_describe(value)}")
+    number = int(value)
+    if not minimum <= number <= maximum:
+        raise ValueError(f"{name} must be an integer from {minimum} to {maximum}, got {_show(number)}")
+    return number
+
+
+def _check_seed(name: str, value: object) -> int:
+    """A seed: any uint64."""
+    return _check_int(name, value, 0, U64_MAX)
+
+
+def _check_threads(threads: object) -> int:
+    """threads for the core: None is 0 (one per core), else 1 to MAX_THREADS."""
+    return 0 if threads is None else _check_int("threads", threads, 1, MAX_THREADS)
+
+
+def _check_bool(name: str, value: object) -> bool:
+    if type(value).__name__ not in ("bool", "bool_"):  # Python's bool or numpy's
+        raise TypeError(f"{name} must be a bool, got {_describe(value)}")
+    return bool(value)
+
+
+def _check_real(name: str, value: object) -> float:
+    """A number as the float the core takes (its range is the core's to check)."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise TypeError(f"{name} must be a number, got {_describe(value)}")
+    try:
+        return float(value)
+    except OverflowError:  # an int beyond any float
+        raise ValueError(f"{name} must be a number a float can hold, got {_show(value)}") from None
+
+
+def _check_str(name: str, value: object) -> str:
+    if not isinstance(value, str):
+        raise TypeError(f"{name} must be a str, got {_describe(value)}")
+    return value
+
+
+def _check_path(name: str, value: object, what: str) -> str:
+    """A path as str (bytes decoded as os.fsdecode does: undecodable bytes
+    become surrogates, which the core encodes back to the same bytes)."""
+    if isinstance(value, (str, bytes, os.PathLike)):
+        try:
+            value = os.fsdecode(value)
+        except TypeError:  # an os.PathLike whose __fspath__ returns neither
+            pass
+    if not isinstance(value, str):
+        raise TypeError(f"{name} must be a path (str, bytes or os.PathLike), got {_describe(value)}")
+    if not value:
+        raise ValueError(f"{name} must name {what}, got ''")
+    if "\0" in value:
+        raise ValueError(f"{name} must not contain a NUL character, got {_show(value)}")
+    return value
+
+
+def _check_text(name: str, value: object) -> bytes:
+    """str or bytes as the bytes the core reads (str as UTF-8)."""
+    if isinstance(value, str):
+        try:
+            return value.encode("utf-8")
+        except UnicodeEncodeError as e:
+            raise ValueError(f"{name} must be text that UTF-8 can encode, got {value[e.start:e.end]!r} "
+                             f"at index {e.start}") from None
+    if isinstance(value, bytes):
+        return value
+    raise TypeError(f"{name} must be a str or bytes, got {_describe(value)}")
+
+
+def _check_progress(progress: object) -> Progress:
+    if progress is not None and not callable(progress):
+        raise TypeError(f"progress must be None or a callable progress(steps_done, steps_total), got {_describe(progress)}")
+    return progress
+
+
+def _sequence(name: str, values: object) -> List[Any]:
+    if isinstance(values, (str, bytes)) or not isinstance(values, Iterable):
+        raise TypeError(f"{name} must be a sequence, got {_describe(values)}")
+    return list(values)
+
+
+def _reals(name: str, values: object) -> List[float]:
+    """A sequence of numbers, each checked as _check_real (name[i])."""
+    return [_check_real("%s[%d]" % (name, i), v) for i, v in enumerate(_sequence(name, values))]
+
+
+def _finite_vector(name: str, value: object, size: int, what: str) -> "Union[Sequence[float], NDArray[np.float64]]":
+    """A vector of `size` finite numbers from a sequence or a numeric numpy array;
+    TypeError or ValueError naming `name`, its shape and the size wanted. For
+    what Python writes itself (a Sim's views), where no C++ check follows."""
+    import numpy as np
+
+    if isinstance(value, np.ndarray) and value.dtype == np.float64 and value.shape == (size,) \
+            and np.isfinite(value).all():
+        return value  # the common case, kept cheap
+    array = _float_array(name, value, size, what)
+    if array.shape != (size,):
+        raise ValueError(f"{name} must have shape ({size},) ({what}), got shape {array.shape}")
+    bad = np.flatnonzero(~np.isfinite(array))
+    if bad.size:
+        raise ValueError(f"{name}[{bad[0]}] must be finite, got {float(array[bad[0]])!r}")
+    values: List[float] = array.tolist()
+    return values
+
+
+def _float_array(name: str, value: object, size: int, what: str) -> "NDArray[np.float64]":
+    """A sequence or numeric numpy array (meant to hold `size` numbers, `what`)
+    as a float64 array of any shape, its elements checked as numbers."""
+    import numpy as np
+
+    if isinstance(value, np.ndarray):
+        if value.dtype.kind not in "biuf":
+            raise TypeError(f"{name} must hold numbers ({what}), got an array of dtype {value.dtype}")
+        return value.astype(np.float64)
+    if isinstance(value, Sequence) and not isinstance(value, (str, bytes)):
+        return np.array([_check_real("%s[%d]" % (name, i), v) for i, v in enumerate(value)], dtype=np.float64)
+    raise TypeError(f"{name} must be a sequence or numpy array of {size} numbers ({what}), got {_describe(value)}")
+
+
+@functools.lru_cache(maxsize=1)
+def _pusher_scene() -> Model:
+    return Model.pusher_scene()
+
+
+def load_model(model: ModelLike = None) -> Model:
+    """The model to run: None for the chapter's scene, a Model, an MJCF path,
+    or a mujoco.MjModel (copied; on simloop built on the same PyPI mujoco).
+
+    A file that is missing raises OSError; one MuJoCo cannot parse raises
+    simloop.MujocoError with MuJoCo's message; one without a body "box" on a
+    free joint or an actuator 0 on a slide or hinge joint raises ValueError.
+    """
+    if model is None:
+        return _pusher_scene()
+    if isinstance(model, Model):
+        return model
+    if isinstance(model, (str, bytes, os.PathLike)):
+        return Model.from_file(_check_path("model", model, "an MJCF file"))
+    if is_mujoco_model(model):
+        return Model._copy_of_address(mujoco_model_address(model, MUJOCO_VERSION), "mujoco.MjModel")
+    raise TypeError("model must be None, a simloop.Model, a mujoco.MjModel or a path to an MJCF file, "
+                    f"got {_describe(model)}")
+

@@ -1,0 +1,73 @@
+"""What python -m simloop's commands share (the run, plot and batch): the
+program's name, exit codes, one-line failures, the terminating signals
+raised as KeyboardInterrupt, and the peak memory they report.
+"""
+
+from __future__ import annotations
+
+import signal
+import sys
+from types import FrameType
+from typing import Any, Dict, NoReturn, Optional
+
+from . import _core
+
+PROGRAM = "sim-loop"
+EXIT_RUN_FAILED = 1
+EXIT_USAGE = 2
+# Ctrl-C, SIGTERM and the other terminating signals stop the work: 128 + the
+# signal's number, as for sim_loop.
+EXIT_SIGINT = 128 + signal.SIGINT
+EXIT_SIGTERM = 128 + signal.SIGTERM
+
+
+class _Terminated(KeyboardInterrupt):
+    """A terminating signal other than Ctrl-C (SIGTERM, SIGHUP, SIGQUIT, ...:
+    _core.TERMINATING_SIGNALS), raised like Ctrl-C's KeyboardInterrupt so
+    that each stops the work the same way (the C++ calls check for signals
+    between chunks, and every temporary file goes with the stack)."""
+
+    def __init__(self, signum: int = signal.SIGTERM) -> None:
+        super().__init__(signum)
+        self.signum = signum
+
+
+def _on_signal(signum: int, frame: Optional[FrameType]) -> NoReturn:
+    raise _Terminated(signum)
+
+
+def _stopped_by(e: KeyboardInterrupt) -> "tuple[str, int]":
+    """The signal's name and the exit code for a stop."""
+    signum = e.signum if isinstance(e, _Terminated) else int(signal.SIGINT)
+    return signal.Signals(signum).name, 128 + signum
+
+
+def _catch_terminating_signals() -> Dict[int, Any]:
+    """Installs _on_signal for every terminating signal whose action is still
+    the default (one the command was started ignoring stays ignored, as
+    nohup wants; SIGINT keeps Python's KeyboardInterrupt; Python ignores
+    SIGPIPE itself). Returns what to restore."""
+    previous = {}
+    for signum in _core.TERMINATING_SIGNALS:
+        if signal.getsignal(signum) == signal.SIG_DFL:
+            previous[signum] = signal.signal(signum, _on_signal)
+    return previous
+
+
+def _fail(code: int, message: str) -> int:
+    line = "; ".join(part.strip() for part in str(message).splitlines() if part.strip())
+    if sys.stderr is not None:  # (print(file=None) would write to stdout)
+        print(f"{PROGRAM}: {line}", file=sys.stderr)
+    return code
+
+
+def _peak_memory_mib() -> float:
+    """VmHWM of this process, MiB (-1 if unknown)."""
+    try:
+        with open("/proc/self/status") as status:
+            for line in status:
+                if line.startswith("VmHWM:"):
+                    return int(line.split()[1]) / 1024.0
+    except OSError:
+        pass
+    return -1.0

@@ -1,0 +1,52 @@
+"""simloop's Gymnasium environments, registered with Gymnasium once it is
+imported: simloop/Chapter-v0, simloop/PushT-v0, simloop/Scenario-v0
+(simloop/gym.py, loaded by gymnasium.make through the entry points).
+Importing gymnasium here would cost every `import simloop` about 0.15 s, and
+nothing happens when it is not installed.
+"""
+
+import sys
+
+_GYMNASIUM_IDS = {
+    "simloop/Chapter-v0": ("simloop.gym:chapter_env", "simloop.gym:chapter_vector_env"),
+    "simloop/PushT-v0": ("simloop.gym:pusht_env", "simloop.gym:pusht_vector_env"),
+    "simloop/Scenario-v0": ("simloop.gym:ScenarioEnv", "simloop.gym:ScenarioVectorEnv"),
+}
+
+
+def register_envs(gymnasium) -> None:  # type: ignore[no-untyped-def]
+    for env_id, (entry_point, vector_entry_point) in _GYMNASIUM_IDS.items():
+        if env_id not in gymnasium.registry:
+            gymnasium.register(id=env_id, entry_point=entry_point, vector_entry_point=vector_entry_point)
+
+
+def register_when_gymnasium_loads() -> None:
+    """Registers the environments now if gymnasium is loaded, else as soon as it is."""
+    if "gymnasium" in sys.modules:
+        register_envs(sys.modules["gymnasium"])
+        return
+    import importlib.abc  # (only when gymnasium is installed and not loaded yet)
+    import importlib.util
+
+    if importlib.util.find_spec("gymnasium") is None:
+        return
+
+    class _WhenGymnasiumLoads(importlib.abc.MetaPathFinder):
+        def find_spec(self, name, path, target=None):  # type: ignore[no-untyped-def]
+            if name != "gymnasium":
+                return None
+            sys.meta_path.remove(self)
+            spec = importlib.util.find_spec(name)
+            if spec is None or spec.loader is None:
+                return spec
+            execute = spec.loader.exec_module
+
+            def exec_module(module):  # type: ignore[no-untyped-def]
+                execute(module)
+                register_envs(module)
+
+            spec.loader.exec_module = exec_module  # type: ignore[method-assign]
+            return spec
+
+    sys.meta_path.insert(0, _WhenGymnasiumLoads())
+
