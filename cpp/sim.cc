@@ -231,8 +231,13 @@ std::array<double, 3> Sim::applied_force() const {
   return {slot[0], slot[1], slot[2]};
 }
 
-void Sim::step(std::int64_t n, RunControl* control) {
+void Sim::check_steps(std::int64_t n) {
   if (n < 1) throw InvalidArgument("n must be at least 1, got " + std::to_string(n));
+  if (n > kMaxSteps) throw InvalidArgument("n must be at most " + std::to_string(kMaxSteps) + ", got " + std::to_string(n));
+}
+
+void Sim::step(std::int64_t n, RunControl* control) {
+  check_steps(n);
   const mjModel* m = model_.get();
   mjData* d = data_.get();
   if (control) control->add_total(n);

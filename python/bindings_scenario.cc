@@ -29,7 +29,7 @@ using namespace pybind11::literals;
 using simloop::ScenarioRunResult;
 
 // One RunInputs per run from Python's arrays (already checked and made
-// C-contiguous float64 by simloop.scenario): controls (B, T, nu) gives run i
+// C-contiguous float64 by simloop.scenario_runs): controls (B, T, nu) gives run i
 // its own slice, (T, nu) the same array to every run; initial_state (B, n)
 // or (n,) likewise. The arrays are read in place: the caller keeps them
 // alive (they are this call's arguments) for the whole call.

@@ -247,6 +247,7 @@ void bind_sim(py::module_& m) {
             work.run([&](simloop::RunControl* control) { s.sim.step(n, control); });
           },
           "n"_a)
+      .def_static("check_steps", &simloop::Sim::check_steps, "n"_a, "What step() checks, checked alone.")
       .def(
           "step_with_progress",
           [](PySim& s, std::int64_t n, py::object progress) {

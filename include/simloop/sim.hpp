@@ -80,10 +80,13 @@ class Sim {
   // Zeros every body's xfrc_applied.
   void clear_forces() noexcept;
 
-  // Advances n steps (n >= 1) with the current ctrl and forces. With a
+  // Advances n steps (check_steps) with the current ctrl and forces. With a
   // `control`, a long step can be stopped between chunks (Interrupted; the
   // steps already taken stay taken).
   void step(std::int64_t n = 1, RunControl* control = nullptr);
+  // Throws InvalidArgument unless n is from 1 to kMaxSteps: what step()
+  // takes, checkable before a caller changes anything else (a ctrl to write).
+  static void check_steps(std::int64_t n);
 
   // Brings what MuJoCo derives from the state (xpos, xquat, cvel, sensors,
   // contacts) up to the current qpos/qvel without changing the next step's

@@ -13,7 +13,7 @@ if TYPE_CHECKING:  # (importing numpy would cost every `import simloop` ~50 ms)
     from numpy.typing import NDArray
 
 from . import _core
-from ._checks import (MAX_STEPS, ModelLike, Progress, _check_int, _check_progress, _check_real, _check_text,
+from ._checks import (ModelLike, Progress, _check_int, _check_progress, _check_real, _check_text,
                       _describe, _finite_vector, _float_array, _sequence, _show, load_model)
 from ._core import Model
 from ._views import ActuatorView, BodyView, JointView, SensorView
@@ -208,9 +208,8 @@ class Sim:
         numbers (every actuator). Ctrl-C stops a long step promptly
         (KeyboardInterrupt; the steps taken stay taken). progress: as for run().
         """
-        count = _check_int("n", n)  # from 1: the C++ Sim's check
-        if count > MAX_STEPS:  # a cap the C++ Sim does not have
-            raise ValueError(f"n must be at most {MAX_STEPS}, got {count}")
+        count = _check_int("n", n)
+        self._sim.check_steps(count)  # before ctrl is written: a refused call changes nothing
         if ctrl is not None:
             self.ctrl = ctrl
         if progress is None:
