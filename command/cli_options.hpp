@@ -1,6 +1,8 @@
 // sim_loop's flags: the chapter's, spelled and defaulted as there, plus
 // --model, --record-every, --help and --version, and the scenario flags
-// (--scenario, --body, --ctrl).
+// (--scenario, --body, --ctrl). Parsed in cli_options.cc; turned into what
+// runs (a scenario, its checks, its config) in cli_scenario.cc; --help in
+// cli_help.cc; what it was doing, for error lines, in cli_doing.cc.
 #pragma once
 
 #include <filesystem>

@@ -1,313 +1,30 @@
 // sim_loop: parses flags, calls the library, reports. All simulation lives in
 // simloop::run; this file only turns its results and errors into text and
-// exit codes.
-#include <fcntl.h>
-#include <poll.h>
-#include <signal.h>
-#include <spawn.h>
-#include <sys/ioctl.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
-#include <algorithm>
+// exit codes (the process's signals, streams and failures: process.cc; --plot:
+// plot.cc).
 #include <cerrno>
 #include <chrono>
-#include <csignal>
-#include <cstdlib>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <new>
 #include <optional>
-#include <cstdio>
 #include <string>
 #include <system_error>
 
 #include "cli_options.hpp"
+#include "sim_loop.hpp"
 #include "simloop/control.hpp"
 #include "simloop/errors.hpp"
-#include "simloop/number_format.hpp"
 #include "simloop/model.hpp"
 #include "simloop/output.hpp"
 #include "simloop/output_lock.hpp"
 #include "simloop/run.hpp"
-#include "simloop/signals.hpp"
 #include "simloop/sweep.hpp"
 #include "simloop/version.hpp"
 
-extern char** environ;
-
+namespace sim_loop {
 namespace {
-
-constexpr int kExitRunFailed = 1;
-constexpr int kExitUsage = 2;
-// A terminating signal (SIGINT, SIGTERM, SIGHUP, SIGQUIT, SIGPIPE, ...:
-// simloop::kTerminatingSignals) stops the work: exit 128 + the signal's
-// number, as a shell reports a process the signal ended (130 for Ctrl-C, 143
-// for SIGTERM, 129 for SIGHUP).
-constexpr int kExitSignalBase = 128;
-
-// A progress bar on stderr while the work runs, when stderr is a terminal
-// (and TERM is not "dumb"): drawn from RunControl's poll (on the main thread,
-// at most every 20 ms), shown once the work has taken kDelay, redrawn at most
-// every kRedraw, and erased (finish()) before anything else is printed, so
-// stdout and the output files are the same with or without it.
-class TerminalProgress {
- public:
-  static bool wanted() {
-    const char* term = std::getenv("TERM");
-    return ::isatty(STDERR_FILENO) == 1 && !(term && std::strcmp(term, "dumb") == 0);
-  }
-
-  // From here on the bar may be drawn (after the banner, before the work).
-  void start() {
-    if (!wanted()) return;
-    winsize size{};
-    columns_ = ::ioctl(STDERR_FILENO, TIOCGWINSZ, &size) == 0 && size.ws_col > 0 ? size.ws_col : 80;
-    started_ = std::chrono::steady_clock::now();
-    active_ = true;
-  }
-
-  void draw(std::int64_t done, std::int64_t total) {
-    if (!active_ || total <= 0) return;
-    const auto now = std::chrono::steady_clock::now();
-    if (now - started_ < kDelay || (drawn_ && now - last_draw_ < kRedraw)) return;
-    last_draw_ = now;
-    const double fraction = std::min(1.0, static_cast<double>(done) / static_cast<double>(total));
-    char counts[96];
-    std::snprintf(counts, sizeof counts, "] %3d%% %lld/%lld steps", static_cast<int>(fraction * 100.0),
-                  static_cast<long long>(done), static_cast<long long>(total));
-    const std::string head = "sim_loop [";
-    const int room = columns_ - 1 - static_cast<int>(head.size() + std::strlen(counts));
-    const int width = std::max(0, std::min(room, 40));
-    const int filled = static_cast<int>(fraction * width);
-    std::string line = "\r" + head + std::string(static_cast<size_t>(filled), '#') +
-                       std::string(static_cast<size_t>(width - filled), '.') + counts + "\033[K";
-    write_all(line);
-    drawn_ = true;
-  }
-
-  // Erases the bar (the line is left empty, the cursor at its start); no
-  // more drawing after this.
-  void finish() {
-    active_ = false;
-    if (drawn_) write_all("\r\033[K");
-    drawn_ = false;
-  }
-
- private:
-  static constexpr std::chrono::milliseconds kDelay{250};
-  static constexpr std::chrono::milliseconds kRedraw{100};
-
-  static void write_all(const std::string& text) {
-    for (size_t at = 0; at < text.size();) {
-      const ssize_t n = ::write(STDERR_FILENO, text.data() + at, text.size() - at);
-      if (n < 0 && errno == EINTR) continue;
-      if (n <= 0) return;  // a terminal that went away: no bar, nothing else to do
-      at += static_cast<size_t>(n);
-    }
-  }
-
-  bool active_ = false;
-  bool drawn_ = false;
-  int columns_ = 80;
-  std::chrono::steady_clock::time_point started_, last_draw_;
-};
-TerminalProgress g_progress;
-
-// The command's one control: a terminating signal requests a stop, the loops
-// throw Interrupted within a chunk of steps, and the outputs' temporary files
-// go with the stack. Made at startup, on the main thread (its owner). Its
-// poll draws the progress bar; without a terminal there is no poll at all,
-// so the loop does not even read the clock for it.
-simloop::RunControl g_control = TerminalProgress::wanted()
-                                    ? simloop::RunControl([](std::int64_t done, std::int64_t total) {
-                                        g_progress.draw(done, total);
-                                      })
-                                    : simloop::RunControl();
-volatile std::sig_atomic_t g_signal = 0;
-// Set while nothing is half-done (no temporary file exists): loading the
-// model, which cannot be stopped between chunks, ends the process at once.
-volatile std::sig_atomic_t g_exit_at_once = 0;
-// Set once this run's outputs are in place (a stop after that keeps them).
-bool g_outputs_written = false;
-
-extern "C" void on_stop_signal(int sig) {
-  if (g_signal == 0) g_signal = sig;
-  if (g_exit_at_once) {
-    // Only async-signal-safe calls: write(2) of fixed pieces, then _exit.
-    const auto put = [](const char* text) {
-      [[maybe_unused]] const ssize_t n = ::write(STDERR_FILENO, text, std::strlen(text));
-    };
-    put("sim_loop: interrupted (");
-    put(simloop::signal_name(sig));
-    put("); nothing was written\n");
-    ::_exit(kExitSignalBase + sig);
-  }
-  g_control.request_stop();
-}
-
-void install_signal_handlers() {
-  struct sigaction action {};
-  action.sa_handler = on_stop_signal;
-  sigemptyset(&action.sa_mask);
-  // While the handler runs, the other terminating signals wait: the first
-  // one names the stop.
-  for (int sig : simloop::kTerminatingSignals) sigaddset(&action.sa_mask, sig);
-  action.sa_flags = SA_RESTART;
-  for (int sig : simloop::kTerminatingSignals) {
-    // A signal we were started ignoring stays ignored (a shell's background
-    // job, nohup), as Python and the shell's own tools leave it.
-    struct sigaction inherited {};
-    if (::sigaction(sig, nullptr, &inherited) == 0 && inherited.sa_handler == SIG_IGN) continue;
-    ::sigaction(sig, &action, nullptr);
-  }
-  // Past a file-size limit (ulimit -f), write() fails with EFBIG, which we
-  // report, instead of the process being killed with its temporary files.
-  ::signal(SIGXFSZ, SIG_IGN);
-}
-
-// A closed stdin, stdout or stderr would make the next file we open take its
-// number, and the report would land in an output file: keep 0, 1 and 2 open
-// (on /dev/null). Returns false if stdout was closed.
-bool keep_standard_streams_open() {
-  bool stdout_open = true;
-  for (int fd = 0; fd <= 2; ++fd) {
-    if (::fcntl(fd, F_GETFD) == -1 && errno == EBADF) {
-      if (fd == STDOUT_FILENO) stdout_open = false;
-      const int null = ::open("/dev/null", O_RDWR);  // takes the lowest free number: fd
-      if (null >= 0 && null != fd) ::close(null);
-    }
-  }
-  return stdout_open;
-}
-
-// The report must reach stdout (a full disk, /dev/full): a run whose report
-// was lost exits 1, with one line on stderr, unless it already failed.
-int finish_stdout(int code) {
-  errno = 0;
-  const bool failed = std::fflush(stdout) != 0 || std::ferror(stdout) != 0;
-  const int err = errno;
-  if (failed && code == 0) {
-    std::fprintf(stderr, "sim_loop: cannot write the report to standard output (%s)\n",
-                 err != 0 ? std::strerror(err) : "write error");
-    return kExitRunFailed;
-  }
-  return code;
-}
-
-// One line on stderr, whatever the message held (MuJoCo's XML errors span lines).
-int fail(int code, const std::string& message) {
-  g_progress.finish();
-  std::fprintf(stderr, "sim_loop: %s\n", simloop::one_line(message).c_str());
-  return code;
-}
-
-// Peak resident memory of this process in MiB (VmHWM), or -1 if unknown.
-// Read from /proc rather than getrusage: ru_maxrss also counts the memory of
-// the process we were forked from, before our exec.
-double peak_memory_mib() {
-  std::FILE* status = std::fopen("/proc/self/status", "r");
-  if (status == nullptr) return -1.0;
-  char line[256];
-  double kib = -1.0;
-  while (std::fgets(line, sizeof line, status) != nullptr) {
-    if (std::sscanf(line, "VmHWM: %lf kB", &kib) == 1) break;
-  }
-  std::fclose(status);
-  return kib < 0 ? -1.0 : kib / 1024.0;
-}
-
-// The line and exit code for a stop on a terminating signal.
-int interrupted() {
-  const int sig = g_signal != 0 ? g_signal : SIGINT;
-  return fail(kExitSignalBase + sig, std::string("interrupted (") + simloop::signal_name(sig) + "); " +
-                                         (g_outputs_written ? "after the outputs were written"
-                                                            : "the earlier outputs were left as they were"));
-}
-
-// Stops early if a signal asked to: the work so far is dropped.
-void check_stop() {
-  if (g_control.stop_requested()) throw simloop::Interrupted("interrupted");
-}
-
-// --plot: the chart is drawn by the Python package (matplotlib), which reads
-// the CSV just written. The interpreter: $SIMLOOP_PYTHON if set, else the one
-// CMake recorded (the project's .venv, which scripts/test.sh makes).
-int plot_with_python(const std::filesystem::path& out, const char* what) {
-  const char* env = std::getenv("SIMLOOP_PYTHON");
-  const std::string python = env && *env ? env : SIMLOOP_DEFAULT_PYTHON;
-  const std::string out_text = out.string();
-  const char* argv[] = {python.c_str(), "-m", "simloop", "plot", what, "--out", out_text.c_str(), nullptr};
-  // Its stderr comes back through a pipe: a failure is reported in our one
-  // line (its last line, a traceback's verdict), not as a traceback and ours.
-  int err_pipe[2];
-  if (::pipe2(err_pipe, O_CLOEXEC) != 0) {
-    return fail(kExitRunFailed, "--plot: cannot start " + python + " (" + std::strerror(errno) + ")");
-  }
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_adddup2(&actions, err_pipe[1], STDERR_FILENO);
-  // Its own process group, so that a stop ends it and anything it started.
-  posix_spawnattr_t attributes;
-  posix_spawnattr_init(&attributes);
-  posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETPGROUP);
-  posix_spawnattr_setpgroup(&attributes, 0);
-  pid_t pid = 0;
-  std::fflush(stdout);
-  const int spawned =
-      posix_spawnp(&pid, python.c_str(), &actions, &attributes, const_cast<char* const*>(argv), environ);
-  posix_spawnattr_destroy(&attributes);
-  posix_spawn_file_actions_destroy(&actions);
-  ::close(err_pipe[1]);
-  if (spawned != 0) {
-    ::close(err_pipe[0]);
-    return fail(kExitRunFailed, "--plot: cannot start " + python + " (scripts/test.sh installs the simloop package "
-                                "into the project's .venv; or set SIMLOOP_PYTHON to a Python that has it)");
-  }
-  // Read its stderr until it exits (not until the pipe's end: something it
-  // started may hold that open); on a stop, end its process group.
-  std::string err_text;
-  int status = 0;
-  bool exited = false, stopped = false;
-  while (!exited) {
-    if (g_control.stop_requested() && !stopped) {
-      ::kill(-pid, SIGTERM);
-      stopped = true;
-    }
-    pollfd p{err_pipe[0], POLLIN, 0};
-    if (::poll(&p, 1, 20) > 0) {
-      char buf[4096];
-      const ssize_t n = ::read(err_pipe[0], buf, sizeof buf);
-      if (n > 0 && err_text.size() < (1u << 16)) err_text.append(buf, static_cast<size_t>(n));
-    }
-    const pid_t done = ::waitpid(pid, &status, WNOHANG);
-    exited = done == pid || (done < 0 && errno != EINTR);
-  }
-  // What it wrote just before exiting, without waiting for the pipe's end.
-  ::fcntl(err_pipe[0], F_SETFL, O_NONBLOCK);
-  for (char buf[4096]; err_text.size() < (1u << 16);) {
-    const ssize_t n = ::read(err_pipe[0], buf, sizeof buf);
-    if (n <= 0) break;
-    err_text.append(buf, static_cast<size_t>(n));
-  }
-  ::close(err_pipe[0]);
-  check_stop();
-  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-    std::string last;  // its last non-empty line
-    const size_t end = err_text.find_last_not_of(" \r\n");
-    if (end != std::string::npos) {
-      const size_t newline = err_text.find_last_of('\n', end);
-      const size_t begin = newline == std::string::npos ? 0 : newline + 1;
-      last = err_text.substr(begin, end - begin + 1);
-    }
-    if (last.rfind("sim-loop: ", 0) == 0) last.erase(0, 10);
-    return fail(kExitRunFailed, "--plot: " + python + " -m simloop plot failed" +
-                                    (last.empty() ? std::string() : ": " + last) +
-                                    " (the outputs above were written; the plot needs the simloop package and "
-                                    "matplotlib; scripts/test.sh installs both into the project's .venv)");
-  }
-  return 0;
-}
 
 // A sweep's outputs: sweep.csv put in place, the summary, the plot if asked.
 int report_sweep(const simloop::cli::Options& opts, const std::string& csv_text, const std::string& summary) {
@@ -528,13 +245,14 @@ int run_main(int argc, char** argv) {
 }
 
 }  // namespace
+}  // namespace sim_loop
 
 int main(int argc, char** argv) {
-  int code = kExitRunFailed;
+  int code = sim_loop::kExitRunFailed;
   try {
-    code = run_main(argc, argv);
+    code = sim_loop::run_main(argc, argv);
   } catch (...) {  // a bug, but never a crash: say so in one line
-    code = fail(kExitRunFailed, "internal error (please report it)");
+    code = sim_loop::fail(sim_loop::kExitRunFailed, "internal error (please report it)");
   }
-  return finish_stdout(code);
+  return sim_loop::finish_stdout(code);
 }

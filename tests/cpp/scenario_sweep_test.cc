@@ -1,5 +1,5 @@
-// A scenario swept over timesteps, and a scenario run drawn (every moving
-// body's pose beside the trajectory's rows).
+// sweep_scenario: a scenario swept over timesteps, each point bitwise the run
+// alone, blowing up on warnings or on distance.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -126,64 +126,6 @@ TEST(ScenarioSweep, RefusesBadInputBeforeAnyRun) {
   EXPECT_EQ(grid.front(), 0.0005);
   EXPECT_EQ(grid.back(), 0.5);
   EXPECT_TRUE(simloop::default_scenario_sweep_timesteps(0.001).empty());
-}
-
-// Collects what a sink is given.
-class Collect final : public simloop::RowSink {
- public:
-  void describe(const std::vector<simloop::Column>& columns) override { names = columns; }
-  void start(int columns, std::int64_t rows) override {
-    width = columns;
-    expected_rows = rows;
-  }
-  void write(const double* rows, std::int64_t count) override { values.insert(values.end(), rows, rows + count * width); }
-  std::vector<simloop::Column> names;
-  int width = 0;
-  std::int64_t expected_rows = 0;
-  std::vector<double> values;
-};
-
-TEST(ScenarioDrawn, TheTrajectoryIsUnchangedAndEveryMovingBodyHasItsPose) {
-  const simloop::Scenario scenario = scene_file("walker.toml");
-  const simloop::Model scene = simloop::load_scene(scenario);
-  const std::vector<std::string> moving = simloop::moving_bodies(scene);
-  // The torso (free) and the legs (hinges), which the scenario does not record.
-  EXPECT_GE(moving.size(), 5u);
-  EXPECT_NE(std::find(moving.begin(), moving.end(), "torso"), moving.end());
-  simloop::ScenarioConfig config;
-  config.record_every = 7;
-  const simloop::ScenarioRunResult kept = simloop::run_scenario(scene, scenario, config);
-  Collect rows, drawing;
-  const simloop::ScenarioRunResult drawn = simloop::run_scenario_drawn(scene, scenario, config, rows, drawing);
-  ASSERT_EQ(rows.width, kept.trajectory.columns());
-  ASSERT_EQ(rows.values.size(), static_cast<size_t>(kept.trajectory.rows() * kept.trajectory.columns()));
-  EXPECT_EQ(std::memcmp(rows.values.data(), kept.trajectory.data(), rows.values.size() * sizeof(double)), 0);
-  ASSERT_EQ(drawn.columns.size(), kept.columns.size());
-  for (size_t c = 0; c < kept.columns.size(); ++c) EXPECT_EQ(drawn.columns[c].name, kept.columns[c].name);
-  EXPECT_EQ(std::memcmp(drawn.final_row.data(), kept.final_row.data(), kept.final_row.size() * sizeof(double)), 0);
-  EXPECT_EQ(simloop::scenario_metrics_json(drawn), simloop::scenario_metrics_json(kept));
-  // The drawing: the same values, then x y z qw qx qy qz per moving body.
-  const int width = kept.trajectory.columns();
-  ASSERT_EQ(drawing.width, width + 7 * static_cast<int>(moving.size()));
-  ASSERT_EQ(drawing.names.size(), static_cast<size_t>(drawing.width));
-  EXPECT_EQ(drawing.names[static_cast<size_t>(width)].name, moving[0] + "_x");
-  const std::size_t torso = simloop::recorded_bodies(kept).at("torso");
-  const std::size_t torso_pose =
-      static_cast<size_t>(width) + 7 * static_cast<size_t>(std::find(moving.begin(), moving.end(), "torso") - moving.begin());
-  const mjModel* m = scene.get();
-  for (std::int64_t r = 0; r < kept.trajectory.rows(); ++r) {
-    const double* row = drawing.values.data() + r * drawing.width;
-    EXPECT_EQ(std::memcmp(row, kept.trajectory.row(r), static_cast<size_t>(width) * sizeof(double)), 0);
-    EXPECT_EQ(std::memcmp(row + torso_pose, kept.trajectory.row(r) + torso, 7 * sizeof(double)), 0);
-    for (size_t b = 0; b < moving.size(); ++b) {  // unit quaternions, finite positions
-      const double* q = row + width + 7 * b + 3;
-      EXPECT_NEAR(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3], 1.0, 1e-9);
-    }
-  }
-  // A leg moves relative to the torso over the run (its hinge turns).
-  const int leg = mj_name2id(m, mjOBJ_BODY, moving.back().c_str());
-  ASSERT_GE(leg, 0);
-  EXPECT_NE(m->body_jntnum[leg], 0);
 }
 
 }  // namespace

@@ -1,20 +1,30 @@
-// Sim on any scene: names, inputs, forces, state, keyframes, copies, and a
-// model saved as bytes and loaded back.
+// Sim: the chapter's loop written with it, step by step, on the chapter's
+// scene; and Sim on any scene: names, inputs, forces, state, keyframes,
+// copies, and a model saved as bytes and loaded back.
 #include <gtest/gtest.h>
 
 #include <array>
+#include <cmath>
 #include <cstring>
 #include <string>
 #include <vector>
 
 #include "simloop/errors.hpp"
 #include "simloop/model.hpp"
+#include "simloop/run.hpp"
 #include "simloop/sim.hpp"
 
 namespace {
 
 using simloop::Model;
 using simloop::Sim;
+using simloop::Trajectory;
+
+// The chapter's scene, loaded once.
+const simloop::Model& scene() {
+  static const simloop::Model model = simloop::Model::pusher_scene();
+  return model;
+}
 
 Model scene(const std::string& file) { return Model::from_file(std::string(SIMLOOP_TEST_SCENES) + "/" + file); }
 
@@ -38,6 +48,71 @@ void drive(Sim& sim, int n) {
   for (std::size_t i = 0; i < ctrl.size(); ++i) ctrl[i] = 0.6 - 0.25 * static_cast<double>(i);
   sim.set_ctrl(ctrl.data(), ctrl.size());
   sim.step(n);
+}
+
+// Sim's rhythm, written out as the chapter's loop, is the chapter's loop.
+TEST(Sim, TheChaptersLoopWrittenWithSimMatchesRun) {
+  simloop::RunConfig config;
+  config.steps = 600;
+  const auto reference = simloop::run(scene(), config);
+  simloop::Sim sim(scene());
+  const simloop::Shove& shove = reference.shove;
+  for (std::int64_t step = 0; step < config.steps; ++step) {
+    sim.set_ctrl(1.0);
+    if (step == shove.start_step) sim.apply_force({0.0, shove.force_y(), 0.0});
+    if (step == shove.start_step + shove.num_steps) sim.clear_force();
+    sim.step();
+  }
+  const std::int64_t last = reference.trajectory.rows() - 1;
+  const auto pos = sim.box_position();
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(pos[i], reference.trajectory.at(last, Trajectory::kBoxX + i));
+  EXPECT_EQ(sim.pusher_x(), reference.trajectory.at(last, Trajectory::kPusherX));
+  EXPECT_EQ(sim.time(), reference.sim_time);
+  EXPECT_EQ(sim.steps_taken(), 600);
+}
+
+TEST(Sim, AnAppliedForcePersistsUntilCleared) {
+  simloop::Sim sim(scene());
+  sim.apply_force({0.0, 9.0, 0.0});
+  sim.step(10);
+  EXPECT_EQ(sim.applied_force()[1], 9.0);  // MuJoCo did not clear it
+  const double vy_after_10 = sim.box_velocity()[1];
+  sim.step(10);
+  EXPECT_GT(sim.box_velocity()[1], vy_after_10);  // still pushing: still accelerating
+  sim.clear_force();
+  EXPECT_EQ(sim.applied_force()[1], 0.0);
+  sim.step(200);
+  EXPECT_NEAR(sim.box_velocity()[1], 0.0, 1e-3);  // friction stops it once the force is gone
+}
+
+TEST(Sim, ReadsContactsAndResets) {
+  simloop::Sim sim(scene());
+  const auto contacts = sim.contacts();
+  ASSERT_FALSE(contacts.empty());
+  for (const auto& c : contacts) {
+    EXPECT_EQ(c.geom1, "floor");
+    EXPECT_TRUE(c.geom2 == "box_geom" || c.geom2 == "pusher_geom") << c.geom2;
+  }
+  sim.set_ctrl(1.0);
+  sim.set_timestep(0.01);
+  sim.step(5);
+  EXPECT_NEAR(sim.time(), 0.05, 1e-12);
+  sim.reset();
+  EXPECT_EQ(sim.time(), 0.0);
+  EXPECT_EQ(sim.ctrl(), 0.0);
+  EXPECT_EQ(sim.box_position()[0], 0.4);
+  EXPECT_EQ(sim.timestep(), 0.01);  // the timestep is the model's, kept across reset
+  EXPECT_THROW(sim.step(0), simloop::InvalidArgument);
+  EXPECT_THROW(sim.set_ctrl(NAN), simloop::InvalidArgument);
+  EXPECT_THROW(sim.apply_force({0.0, INFINITY, 0.0}), simloop::InvalidArgument);
+  EXPECT_THROW(sim.set_timestep(0.0), simloop::InvalidArgument);
+}
+
+TEST(PusherTrack, SlidesAlongXFromItsRestPose) {
+  const simloop::PusherTrack track = simloop::pusher_track(scene());
+  EXPECT_EQ(track.rest_position, (std::array<double, 3>{0.0, 0.0, 0.05}));
+  EXPECT_EQ(track.axis, (std::array<double, 3>{1.0, 0.0, 0.0}));
+  EXPECT_EQ(track.q0, 0.0);
 }
 
 TEST(SimAny, RunsASceneWithoutTheChaptersLayoutAndSaysWhatTheChaptersReadsNeed) {

@@ -1,0 +1,388 @@
+// Scenario files (TOML): Scenario::from_toml_file and from_toml_string, with
+// errors that name the file, the key and what is wrong.
+#include "simloop/scenario.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+#include <toml++/toml.h>
+
+#include "simloop/errors.hpp"
+#include "simloop/number_format.hpp"
+
+namespace simloop {
+namespace {
+
+// --- TOML reading: every error names the source, the key and what is wrong.
+
+class TableReader {
+ public:
+  TableReader(const toml::table& table, std::string source, std::string where = "")
+      : table_(table), source_(std::move(source)), where_(std::move(where)) {}
+
+  // "file.toml: control[0].key": where a value came from, for messages.
+  [[nodiscard]] std::string where_text(std::string_view key) const {
+    return source_ + ": " + (where_.empty() ? std::string(key) : where_ + "." + std::string(key));
+  }
+
+  // "file.toml: key: what", "file.toml: control[0].key: what".
+  [[noreturn]] void fail(std::string_view key, const std::string& what) const {
+    const std::string at = where_.empty() ? std::string(key) : key.empty() ? where_ : where_ + "." + std::string(key);
+    throw InvalidArgument(source_ + ": " + (at.empty() ? "" : at + ": ") + what);
+  }
+
+  // Refuses keys this table does not know, naming the ones it does.
+  void allow_only(std::initializer_list<std::string_view> keys) const {
+    for (const auto& [key, value] : table_) {
+      if (std::find(keys.begin(), keys.end(), key.str()) != keys.end()) continue;
+      std::vector<std::string> known(keys.begin(), keys.end());
+      std::string hint = did_you_mean(key.str(), known);
+      std::string list;
+      for (const std::string& k : known) list += (list.empty() ? "" : ", ") + k;
+      fail(key.str(), "unknown key" + (hint.empty() ? "" : " (did you mean '" + hint + "'?)") + "; known keys: " + list);
+    }
+  }
+
+  [[nodiscard]] bool has(std::string_view key) const { return table_.contains(key); }
+  [[nodiscard]] bool is_integer(std::string_view key) const {
+    const toml::node* node = table_.get(key);
+    return node != nullptr && node->is_integer();
+  }
+
+  [[nodiscard]] std::optional<double> number(std::string_view key) const {
+    const toml::node* node = table_.get(key);
+    if (node == nullptr) return std::nullopt;
+    return as_number(*node, key);
+  }
+
+  [[nodiscard]] double as_number(const toml::node& node, std::string_view key) const {
+    double value = 0.0;
+    if (const auto* i = node.as_integer()) {
+      value = static_cast<double>(i->get());
+    } else if (const auto* f = node.as_floating_point()) {
+      value = f->get();
+    } else {
+      fail(key, "expected a number, got " + type_name(node));
+    }
+    if (!std::isfinite(value)) fail(key, "expected a finite number, got " + python_float_repr(value));
+    return value;
+  }
+
+  [[nodiscard]] std::optional<std::int64_t> integer(std::string_view key, std::int64_t minimum) const {
+    const toml::node* node = table_.get(key);
+    if (node == nullptr) return std::nullopt;
+    const auto* i = node->as_integer();
+    if (i == nullptr) fail(key, "expected a whole number, got " + type_name(*node));
+    if (i->get() < minimum) fail(key, "must be at least " + std::to_string(minimum) + ", got " + std::to_string(i->get()));
+    return i->get();
+  }
+
+  [[nodiscard]] std::optional<std::string> string(std::string_view key) const {
+    const toml::node* node = table_.get(key);
+    if (node == nullptr) return std::nullopt;
+    const auto* s = node->as_string();
+    if (s == nullptr) fail(key, "expected a string, got " + type_name(*node));
+    return s->get();
+  }
+
+  [[nodiscard]] std::optional<bool> boolean(std::string_view key) const {
+    const toml::node* node = table_.get(key);
+    if (node == nullptr) return std::nullopt;
+    const auto* b = node->as_boolean();
+    if (b == nullptr) fail(key, "expected true or false, got " + type_name(*node));
+    return b->get();
+  }
+
+  [[nodiscard]] std::optional<std::vector<double>> numbers(std::string_view key, std::size_t count) const {
+    const toml::node* node = table_.get(key);
+    if (node == nullptr) return std::nullopt;
+    const auto* array = node->as_array();
+    if (array == nullptr || array->size() != count) {
+      fail(key, "expected an array of " + std::to_string(count) + " numbers, got " + type_name(*node));
+    }
+    std::vector<double> out;
+    for (const toml::node& item : *array) out.push_back(as_number(item, key));
+    return out;
+  }
+
+  [[nodiscard]] std::vector<std::string> strings(std::string_view key) const {
+    const toml::node* node = table_.get(key);
+    if (node == nullptr) return {};
+    const auto* array = node->as_array();
+    if (array == nullptr) fail(key, "expected an array of names, got " + type_name(*node));
+    std::vector<std::string> out;
+    for (const toml::node& item : *array) {
+      if (const auto* s = item.as_string()) {
+        out.push_back(s->get());
+      } else {
+        fail(key, "expected an array of names, found " + type_name(item));
+      }
+    }
+    return out;
+  }
+
+  // [[t, value], ...] pairs, `t` in the unit the key implies.
+  [[nodiscard]] std::vector<std::pair<double, double>> pairs(std::string_view key) const {
+    const toml::node* node = table_.get(key);
+    const auto* array = node ? node->as_array() : nullptr;
+    if (array == nullptr || array->empty()) fail(key, "expected an array of [time, value] pairs");
+    std::vector<std::pair<double, double>> out;
+    for (const toml::node& item : *array) {
+      const auto* pair = item.as_array();
+      if (pair == nullptr || pair->size() != 2) fail(key, "expected [time, value] pairs, found " + type_name(item));
+      out.emplace_back(as_number(*pair->get(0), key), as_number(*pair->get(1), key));
+      if (out.size() > 1 && out.back().first <= out[out.size() - 2].first) {
+        fail(key, "times must increase, got " + python_float_repr(out[out.size() - 2].first) + " then " +
+                      python_float_repr(out.back().first));
+      }
+    }
+    return out;
+  }
+
+
+ private:
+  static std::string type_name(const toml::node& node) {
+    switch (node.type()) {
+      case toml::node_type::string: return "a string";
+      case toml::node_type::integer: return "an integer";
+      case toml::node_type::floating_point: return "a number";
+      case toml::node_type::boolean: return "a boolean";
+      case toml::node_type::array: return "an array of " + std::to_string(node.as_array()->size());
+      case toml::node_type::table: return "a table";
+      default: return "a date or time";
+    }
+  }
+  const toml::table& table_;
+  std::string source_;  // the file
+  std::string where_;   // the table in it: "" (the top), "control[0]", "record"
+};
+
+// A point in the run from one of `seconds_key` (s), `steps_key` (steps) or
+// `fraction_key` (of the run's length); at most one may be given.
+std::optional<When> read_when(const TableReader& t, std::string_view seconds_key, std::string_view steps_key,
+                              std::string_view fraction_key = {}) {
+  int given = 0;
+  std::optional<When> when;
+  if (const auto s = t.number(seconds_key)) {
+    if (*s < 0) t.fail(seconds_key, "must not be negative, got " + python_float_repr(*s));
+    when = When::seconds(*s);
+    ++given;
+  }
+  if (const auto n = t.integer(steps_key, 0)) {
+    when = When::steps(*n);
+    ++given;
+  }
+  if (!fraction_key.empty()) {
+    if (const auto f = t.number(fraction_key)) {
+      if (*f < 0 || *f > 1) t.fail(fraction_key, "must be between 0 and 1, got " + python_float_repr(*f));
+      when = When::fraction(*f);
+      ++given;
+    }
+  }
+  if (given > 1) {
+    t.fail("", "give only one of " + std::string(seconds_key) + ", " + std::string(steps_key) +
+                   (fraction_key.empty() ? "" : ", " + std::string(fraction_key)));
+  }
+  return when;
+}
+
+// One value per step from a CSV file: a header row, then a row per step
+// (step 0 first). The column is `column`, or the only one. Only the steps
+// where the value changes become schedule entries; after the last row the
+// last value holds.
+std::vector<std::pair<When, double>> read_csv_schedule(const std::filesystem::path& file, const std::string& column,
+                                                       const std::string& where) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw IoError(where + ": " + file.string() + ": cannot open (" + std::strerror(errno) + ")");
+  const auto cells = [](const std::string& line) {
+    std::vector<std::string> out(1);
+    for (char c : line) {
+      if (c == ',') {
+        out.emplace_back();
+      } else if (c != '\r') {
+        out.back() += c;
+      }
+    }
+    return out;
+  };
+  std::string line;
+  if (!std::getline(in, line)) throw InvalidArgument(where + ": " + file.string() + ": empty (it needs a header row)");
+  const std::vector<std::string> header = cells(line);
+  std::size_t index = 0;
+  if (!column.empty()) {
+    const auto it = std::find(header.begin(), header.end(), column);
+    if (it == header.end()) {
+      std::string names;
+      for (const std::string& h : header) names += (names.empty() ? "" : ", ") + h;
+      throw InvalidArgument(where + ": " + file.string() + " has no column '" + column + "'; its columns: " + names);
+    }
+    index = static_cast<std::size_t>(it - header.begin());
+  } else if (header.size() != 1) {
+    throw InvalidArgument(where + ": " + file.string() + " has " + std::to_string(header.size()) +
+                          " columns: name the one to use (column = \"...\")");
+  }
+  std::vector<std::pair<When, double>> schedule;
+  std::int64_t step = 0;
+  for (std::int64_t line_number = 2; std::getline(in, line); ++line_number, ++step) {
+    const std::vector<std::string> row = cells(line);
+    const std::string cell = index < row.size() ? row[index] : std::string();
+    char* end = nullptr;
+    const double value = std::strtod(cell.c_str(), &end);
+    if (cell.empty() || end != cell.c_str() + cell.size() || !std::isfinite(value) || std::isspace(static_cast<unsigned char>(cell[0]))) {
+      throw InvalidArgument(where + ": " + file.string() + ":" + std::to_string(line_number) +
+                            ": expected a finite number, got '" + cell + "'");
+    }
+    if (schedule.empty() || value != schedule.back().second) schedule.emplace_back(When::steps(step), value);
+  }
+  if (schedule.empty()) throw InvalidArgument(where + ": " + file.string() + ": no rows after the header");
+  return schedule;
+}
+
+ControlSpec read_control(const TableReader& t, const std::filesystem::path& base) {
+  t.allow_only({"actuator", "value", "schedule", "schedule_steps", "csv", "column"});
+  ControlSpec c;
+  if (!t.has("actuator")) t.fail("actuator", "missing: name the actuator (or give its index)");
+  if (t.is_integer("actuator")) {
+    c.actuator = std::to_string(*t.integer("actuator", 0));
+  } else {
+    c.actuator = *t.string("actuator");
+  }
+  const int forms = t.has("value") + t.has("schedule") + t.has("schedule_steps") + t.has("csv");
+  if (forms != 1) {
+    t.fail("", "give exactly one of value, schedule ([seconds, value] pairs), schedule_steps, csv (a value per step)");
+  }
+  if (t.has("column") && !t.has("csv")) t.fail("column", "only with csv");
+  if (const auto file = t.string("csv")) {
+    const std::filesystem::path p(*file);
+    c.schedule = read_csv_schedule(p.is_absolute() || base.empty() ? p : base / p, t.string("column").value_or(""),
+                                   t.where_text("csv"));
+  }
+  if (const auto v = t.number("value")) c.schedule.emplace_back(When::steps(0), *v);
+  if (t.has("schedule")) {
+    for (const auto& [s, v] : t.pairs("schedule")) {
+      if (s < 0) t.fail("schedule", "times must not be negative, got " + python_float_repr(s));
+      c.schedule.emplace_back(When::seconds(s), v);
+    }
+  }
+  if (t.has("schedule_steps")) {
+    for (const auto& [s, v] : t.pairs("schedule_steps")) {
+      if (s < 0 || s != std::floor(s)) t.fail("schedule_steps", "steps must be whole and not negative, got " + python_float_repr(s));
+      // Past any run (2^62 steps) it never acts; the clamp keeps the cast defined.
+      c.schedule.emplace_back(When::steps(static_cast<std::int64_t>(std::min(s, 0x1p62))), v);
+    }
+  }
+  return c;
+}
+
+DisturbanceSpec read_disturbance(const TableReader& t) {
+  t.allow_only({"body", "force", "torque", "newtons", "direction", "random_sign", "start", "start_step",
+                "start_fraction", "duration", "steps"});
+  DisturbanceSpec d;
+  // A body by name, or by index (a scene may leave its bodies unnamed).
+  const auto body = t.is_integer("body") ? std::optional<std::string>(std::to_string(*t.integer("body", 0)))
+                                         : t.string("body");
+  if (!body) t.fail("body", "missing: name the body to push (or give its index)");
+  d.body = *body;
+  if (const auto f = t.numbers("force", 3)) std::copy(f->begin(), f->end(), d.force.begin());
+  if (const auto q = t.numbers("torque", 3)) std::copy(q->begin(), q->end(), d.torque.begin());
+  if (const auto n = t.numbers("newtons", 2)) {
+    if ((*n)[0] < 0 || (*n)[1] < (*n)[0]) {
+      t.fail("newtons", "expected [low, high] with 0 <= low <= high, got [" + python_float_repr((*n)[0]) + ", " +
+                            python_float_repr((*n)[1]) + "]");
+    }
+    if (t.has("force")) t.fail("", "give force (fixed) or newtons with direction (drawn), not both");
+    const auto dir = t.numbers("direction", 3);
+    if (!dir) t.fail("direction", "missing: newtons draws a strength; direction says which way (a vector)");
+    const double norm = std::sqrt((*dir)[0] * (*dir)[0] + (*dir)[1] * (*dir)[1] + (*dir)[2] * (*dir)[2]);
+    if (norm == 0.0) t.fail("direction", "must not be zero");
+    for (int i = 0; i < 3; ++i) d.force[static_cast<size_t>(i)] = (*dir)[static_cast<size_t>(i)] / norm;
+    d.newtons = std::array<double, 2>{(*n)[0], (*n)[1]};
+  } else if (t.has("direction")) {
+    t.fail("direction", "only with newtons (a drawn strength)");
+  }
+  d.random_sign = t.boolean("random_sign").value_or(false);
+  if (d.random_sign && !d.newtons) t.fail("random_sign", "only with newtons (a drawn strength)");
+  if (const auto start = read_when(t, "start", "start_step", "start_fraction")) d.start = *start;
+  if (const auto duration = read_when(t, "duration", "steps")) d.duration = *duration;
+  return d;
+}
+
+}  // namespace
+
+Scenario Scenario::from_toml_file(const std::filesystem::path& path) {
+  std::error_code error;
+  if (std::filesystem::is_directory(path, error)) {
+    throw IoError(path.string() + ": is a directory, not a scenario file");
+  }
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw IoError(path.string() + ": cannot open (" + std::strerror(errno) + ")");
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) throw IoError(path.string() + ": cannot read (" + std::strerror(errno) + ")");
+  Scenario s = from_toml_string(text.str(), path.string(), path.parent_path());
+  if (s.name.empty()) s.name = path.stem().string();
+  return s;
+}
+
+Scenario Scenario::from_toml_string(std::string_view text, std::string_view source,
+                                    const std::filesystem::path& base) {
+  toml::table root;
+  try {
+    root = toml::parse(text, source);
+  } catch (const toml::parse_error& e) {
+    const auto& at = e.source().begin;
+    throw InvalidArgument(std::string(source) + ":" + std::to_string(at.line) + ":" + std::to_string(at.column) +
+                          ": " + std::string(e.description()));
+  }
+  const TableReader top(root, std::string(source));
+  top.allow_only({"name", "scene", "timestep", "steps", "duration", "control", "disturbance", "record"});
+  Scenario s;
+  s.name = top.string("name").value_or("");
+  if (const auto scene = top.string("scene")) {
+    if (scene->empty()) top.fail("scene", "must name an MJCF file (leave it out for the chapter's scene)");
+    const std::filesystem::path p(*scene);
+    s.scene = p.is_absolute() || base.empty() ? p : base / p;
+  } else {
+    s.timestep = Scenario::chapter().timestep;  // the chapter's scene runs at the chapter's timestep
+  }
+  if (const auto dt = top.number("timestep")) {
+    if (*dt <= 0) top.fail("timestep", "must be a positive number of seconds, got " + python_float_repr(*dt));
+    s.timestep = *dt;
+  }
+  if (const auto length = read_when(top, "duration", "steps")) {
+    if (length->value <= 0) top.fail(length->unit == When::Unit::kSteps ? "steps" : "duration", "must be positive");
+    s.length = *length;
+  }
+  const auto each_table = [&](std::string_view key, auto&& read) {
+    const toml::node* node = root.get(key);
+    if (node == nullptr) return;
+    const auto* array = node->as_array();
+    if (array == nullptr || !array->is_array_of_tables()) {
+      top.fail(key, "expected [[" + std::string(key) + "]] tables");
+    }
+    for (std::size_t i = 0; i < array->size(); ++i) {
+      read(TableReader(*array->get(i)->as_table(), std::string(source), std::string(key) + "[" + std::to_string(i) + "]"));
+    }
+  };
+  each_table("control", [&](const TableReader& t) { s.controls.push_back(read_control(t, base)); });
+  each_table("disturbance", [&](const TableReader& t) { s.disturbances.push_back(read_disturbance(t)); });
+  if (const toml::node* node = root.get("record")) {
+    const auto* table = node->as_table();
+    if (table == nullptr) top.fail("record", "expected a [record] table");
+    const TableReader r(*table, std::string(source), "record");
+    r.allow_only({"bodies", "joints", "actuators", "sensors", "contacts"});
+    s.record.bodies = r.strings("bodies");
+    s.record.joints = r.strings("joints");
+    s.record.actuators = r.strings("actuators");
+    s.record.sensors = r.strings("sensors");
+    s.record.contacts = r.boolean("contacts").value_or(true);
+  }
+  return s;
+}
+
+}  // namespace simloop
