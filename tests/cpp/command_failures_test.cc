@@ -236,7 +236,7 @@ TEST(Command, OutOfMemorySaysWhatWasBeingDone) {
   std::string xml(simloop::pusher_scene_xml());
   xml.insert(xml.find('>') + 1, "<size nstack=\"60000000\"/>");
   test::write_text(dir.path() / "big.xml", xml);
-  for (const std::vector<std::string> args : {std::vector<std::string>{"--model", "big.xml", "--out", "s"},
+  for (const std::vector<std::string>& args : {std::vector<std::string>{"--model", "big.xml", "--out", "s"},
                                               std::vector<std::string>{"sweep", "--model", "big.xml", "--out", "s"}}) {
     const Outcome o = sim_loop(dir.path(), args, "ulimit -v 300000 &&");
     EXPECT_EQ(o.exit_code, 2);

@@ -85,7 +85,9 @@ TEST(Sweep, TheDefaultTimestepsAreRound) {
     std::snprintf(text, sizeof text, "%.0e", dts[i]);
     EXPECT_EQ(std::strtod(text, nullptr), dts[i]) << text;
     EXPECT_NE(std::string("1234568").find(text[0]), std::string::npos) << text;
-    if (i > 0) EXPECT_GT(dts[i], dts[i - 1]);
+    if (i > 0) {
+      EXPECT_GT(dts[i], dts[i - 1]);
+    }
   }
   // The chapter's default and Break It's timestep are on the grid.
   EXPECT_NE(std::find(dts.begin(), dts.end(), 0.002), dts.end());

@@ -81,6 +81,24 @@ def test_sim_refuses_bad_arguments():
     assert sim.time == 0.0 and sim.steps_taken == 0  # nothing happened
 
 
+def test_a_refused_step_with_a_ctrl_writes_no_ctrl():
+    sim = simloop.Sim()
+    for n, message in ((0, "n must be at least 1, got 0"), (2**62, "n must be at most 4611686018427387903")):
+        with pytest.raises(ValueError, match=message):
+            sim.step(n, ctrl=0.5)
+        assert sim.ctrl == 0.0 and sim.steps_taken == 0
+
+
+def test_a_scenarios_steps_are_worded_as_the_chapters():
+    for steps, message in ((0, "steps must be at least 1, got 0"),
+                           (2**62, "steps must be at most 4611686018427387903, got 4611686018427387904")):
+        with pytest.raises(ValueError) as scenario_error:
+            simloop.run_scenario(simloop.Scenario.chapter(), steps=steps)
+        with pytest.raises(ValueError) as chapter_error:
+            simloop.run(steps=steps)
+        assert message in str(scenario_error.value) and message in str(chapter_error.value)
+
+
 def test_mujoco_errors_raise_with_mujocos_message(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     with pytest.raises(simloop.MujocoError, match="XML parse error"):
