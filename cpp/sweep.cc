@@ -219,6 +219,13 @@ std::string aligned_table(const std::vector<std::string>& header, const std::vec
   return out;
 }
 
+// The line under a sweep's table: where its edge is, or why it has none.
+template <class Result>
+std::string edge_line(const Result& result, const std::string& label, const std::string& none) {
+  if (result.edge_index < 0) return label + ": none (" + none + ")\n";
+  return label + ": " + python_float_repr(result.points[static_cast<std::size_t>(result.edge_index)].timestep) + " s\n";
+}
+
 std::string fixed(double value, int decimals) {
   char text[64];
   std::snprintf(text, sizeof text, "%.*f", decimals, value);
@@ -245,13 +252,7 @@ std::string sweep_summary(const SweepResult& result) {
                         (static_cast<int>(i) == result.edge_index ? "  <- edge" : "")});
   }
   out += aligned_table(header, rows);
-  if (result.edge_index >= 0) {
-    std::snprintf(line, sizeof line, "largest stable timestep: %s s\n",
-                  python_float_repr(result.points[static_cast<size_t>(result.edge_index)].timestep).c_str());
-  } else {
-    std::snprintf(line, sizeof line, "largest stable timestep: none (even the finest is unstable)\n");
-  }
-  out += line;
+  out += edge_line(result, "largest stable timestep", "even the finest is unstable");
   std::snprintf(line, sizeof line,
                 "  stable: the box rises at most %g mm above rest (%.2f m) and ends at most %g mm below it, and "
                 "MuJoCo raised no warning\n",
@@ -411,13 +412,7 @@ std::string scenario_sweep_summary(const ScenarioSweepResult& result) {
     rows.push_back(std::move(row));
   }
   out += aligned_table(header, rows);
-  if (result.edge_index >= 0) {
-    std::snprintf(line, sizeof line, "largest timestep before any blew up: %s s\n",
-                  python_float_repr(result.points[static_cast<size_t>(result.edge_index)].timestep).c_str());
-  } else {
-    std::snprintf(line, sizeof line, "largest timestep before any blew up: none (even the finest did)\n");
-  }
-  out += line;
+  out += edge_line(result, "largest timestep before any blew up", "even the finest did");
   std::snprintf(line, sizeof line,
                 "  blew up: MuJoCo or simloop_DIVERGED warned, or a recorded body ended more than %s m (%g%% of the "
                 "scene's size, %s m) from where the finest timestep left it\n",
