@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -35,22 +36,28 @@ void append_csv_header(std::string& out, const std::vector<Column>& columns) {
   out += '\n';
 }
 
-// `count` rows of trajectory.csv, each columns.size() adjacent values.
+// `count` rows of trajectory.csv, each columns.size() adjacent values. A row
+// is written in a buffer of its own, then appended whole.
 void append_csv_rows(std::string& out, const double* rows, std::int64_t count, const std::vector<Column>& columns) {
   const size_t width = columns.size();
+  // A cell: a comma and at most kMaxShortestChars (an integer column's
+  // int64 fits too); the last one's write_shortest wants kShortestRoom.
+  std::vector<char> line(width * (kMaxShortestChars + 1) + kShortestRoom + 1);
   for (std::int64_t r = 0; r < count; ++r) {
     const double* row = rows + static_cast<size_t>(r) * width;
+    char* end = line.data();
     for (size_t c = 0; c < width; ++c) {
-      if (c > 0) out += ',';
+      if (c > 0) *end++ = ',';
       const double v = row[c];
       if (columns[c].input && std::isnan(v)) continue;  // final row: no inputs
       if (columns[c].integer) {
-        out += std::to_string(static_cast<std::int64_t>(v));
+        end = std::to_chars(end, end + kMaxShortestChars, static_cast<std::int64_t>(v)).ptr;
       } else {
-        append_shortest(out, v);
+        end = write_shortest(end, v);
       }
     }
-    out += '\n';
+    *end++ = '\n';
+    out.append(line.data(), end);
   }
 }
 
