@@ -184,6 +184,7 @@ Data::Data(const Model& model) {
   }
   data_.reset(d);
   std::memcpy(sizes_.data(), &m->nq, sizeof sizes_);
+  made_for_ = model.model_;
 }
 
 bool Data::fits(const Model& model) const noexcept {
