@@ -61,6 +61,9 @@ void append_csv_rows(std::string& out, const double* rows, std::int64_t count, c
   }
 }
 
+// TrajectoryCsvSink formats rows in slices of at most about this many bytes.
+constexpr size_t kSliceBytes = size_t{1} << 14;
+
 // Blocks the signals that would end the process (or, in the commands, stop
 // it) for as long as it lives, in the calling thread.
 class BlockTerminatingSignals {
@@ -322,16 +325,19 @@ void TrajectoryCsvSink::start(int columns, std::int64_t /*rows*/) {
                           std::to_string(columns_.size()) + " names");
   }
   buffer_.clear();
-  buffer_.reserve(kFlushBytes + 4096);
+  buffer_.reserve(kFlushBytes + kSliceBytes);
   append_csv_header(buffer_, columns_);
 }
 
 void TrajectoryCsvSink::write(const double* rows, std::int64_t count) {
-  // A row is at most a few hundred bytes: format in slices that keep the
-  // buffer near kFlushBytes, however many rows come at once.
-  constexpr std::int64_t kRowsPerSlice = 256;
+  // Formatted in slices of at most about kSliceBytes (a cell is a comma and
+  // at most kMaxShortestChars), written out once the buffer holds
+  // kFlushBytes: the buffer stays within its reserve however many rows come
+  // at once. A small buffer, reused: its pages are touched once.
+  const auto row_bytes = static_cast<std::int64_t>(columns_.size() * (kMaxShortestChars + 1) + 1);
+  const std::int64_t rows_per_slice = std::max<std::int64_t>(1, static_cast<std::int64_t>(kSliceBytes) / row_bytes);
   while (count > 0) {
-    const std::int64_t n = std::min(count, kRowsPerSlice);
+    const std::int64_t n = std::min(count, rows_per_slice);
     append_csv_rows(buffer_, rows, n, columns_);
     rows += static_cast<size_t>(n) * columns_.size();
     count -= n;
