@@ -77,7 +77,7 @@ namespace {
 // shorter (fixed on a tie); it spends about 400 instructions a number, most
 // of the cost of a trajectory.csv. For 2^-130 <= |x| < 2^53 the same digits
 // come here from Schubfach (R. Giulietti, "The Schubfach way to render
-// doubles", 2020) in about a third of that: in that range every power of ten
+// doubles", 2020) in about half of that: in that range every power of ten
 // the method needs, 10^0 to 10^55, is an integer below 2^128, so its table
 // is computed below rather than copied. Other numbers (and nan, inf) go to
 // std::to_chars itself; tests/cpp/test_number_format.cc compares the two.
