@@ -133,7 +133,7 @@ Model Model::from_xml_string(std::string_view xml, std::string_view source) {
 }
 
 Model Model::pusher_scene() {
-  detail::install_mujoco_handlers();
+  detail::install_mujoco_handlers(/*plugins=*/false);
   const detail::compat::OneFileVfs vfs("model.xml", kPusherSceneXml, "pusher scene", "XML");
   std::vector<std::string> warnings;
   return adopt(load_xml("model.xml", vfs.get(), "pusher scene", warnings, false), "pusher scene", std::move(warnings));
