@@ -160,7 +160,7 @@ std::string last_line(int fd) {
 
 mjModel* load_xml_here(const char* filename, const mjVFS* vfs, std::string_view source,
                        std::vector<std::string>& warnings) {
-  install_mujoco_handlers();
+  install_mujoco_handlers(/*plugins=*/false);
   const std::lock_guard<std::mutex> lock(load_mutex());
   return load_unlocked(filename, vfs, source, warnings);
 }

@@ -35,7 +35,9 @@ mjModel* load_xml_in_child(const char* filename, const mjVFS* vfs, std::string_v
 
 // The same in this process (what load_xml_in_child runs in its child, and
 // the fallback): after a C++ exception out of MuJoCo it resets the thread's
-// MuJoCo handlers, but the memory the compiler had is lost.
+// MuJoCo handlers, but the memory the compiler had is lost. It installs the
+// handlers but loads no plugin library: a caller loading a scene from
+// outside has called install_mujoco_handlers() (the chapter's scene needs none).
 mjModel* load_xml_here(const char* filename, const mjVFS* vfs, std::string_view source,
                        std::vector<std::string>& warnings);
 

@@ -20,7 +20,7 @@ MujocoError stepping_error(const mjModel* m, std::int64_t from, std::int64_t to,
 
 LoopResult run_loop(const mjModel* m, mjData* d, const Schedule& schedule, const RowRecorder& recorder,
                     std::int64_t record_every, RowSink& rows, RunControl* control, const RunInputs& inputs,
-                    const std::vector<StepObserver*>& observers) {
+                    const std::vector<StepObserver*>& observers, bool d_is_reset) {
   Policy* const policy = inputs.policy;
   // The caller's controls, or a policy, replace the schedule's ctrl changes.
   ScheduledInputs scheduled(schedule, policy == nullptr && inputs.controls == nullptr);
@@ -43,7 +43,7 @@ LoopResult run_loop(const mjModel* m, mjData* d, const Schedule& schedule, const
   // mj_forward fills in the derived state (poses, contacts) without
   // advancing time, so row 0 is the true state at t = 0.
   guarded_steps(m, 0, 0, [&] {
-    mj_resetData(m, d);
+    if (!d_is_reset) mj_resetData(m, d);
     if (inputs.initial_state) {
       set_state(m, d, inputs.initial_state);  // forward, keeping the state as given
     } else {

@@ -100,9 +100,11 @@ struct LoopResult {
 // caller has checked the arguments (check_schedule_run, check_inputs). A
 // MuJoCo error while stepping throws MujocoError saying the timestep and
 // the steps it happened in; the control's stop throws Interrupted.
+// `d_is_reset`: d is already as mj_resetData leaves it for m (a fresh Data,
+// Data::fresh_for), which the loop then does not do again.
 [[nodiscard]] LoopResult run_loop(const mjModel* m, mjData* d, const Schedule& schedule,
                                   const RowRecorder& recorder, std::int64_t record_every, RowSink& rows,
                                   RunControl* control, const RunInputs& inputs,
-                                  const std::vector<StepObserver*>& observers = {});
+                                  const std::vector<StepObserver*>& observers = {}, bool d_is_reset = false);
 
 }  // namespace simloop::detail

@@ -133,7 +133,7 @@ Model Model::from_xml_string(std::string_view xml, std::string_view source) {
 }
 
 Model Model::pusher_scene() {
-  detail::install_mujoco_handlers();
+  detail::install_mujoco_handlers(/*plugins=*/false);
   const detail::compat::OneFileVfs vfs("model.xml", kPusherSceneXml, "pusher scene", "XML");
   std::vector<std::string> warnings;
   return adopt(load_xml("model.xml", vfs.get(), "pusher scene", warnings, false), "pusher scene", std::move(warnings));
@@ -184,6 +184,7 @@ Data::Data(const Model& model) {
   }
   data_.reset(d);
   std::memcpy(sizes_.data(), &m->nq, sizeof sizes_);
+  made_for_ = model.model_;
 }
 
 bool Data::fits(const Model& model) const noexcept {

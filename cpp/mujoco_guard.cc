@@ -71,11 +71,11 @@ void set_handlers_once() {
 }
 }  // namespace
 
-void install_mujoco_handlers() {
+void install_mujoco_handlers(bool plugins) {
   set_handlers_once();
   // Plugins load under the handlers (and call_catching_mujoco_error): a
   // failing plugin library must not reach MuJoCo's default error handler.
-  compat::load_plugins_once();
+  if (plugins) compat::load_plugins_once();
 }
 
 bool call_catching_mujoco_error(void (*fn)(void*), void* context) noexcept {

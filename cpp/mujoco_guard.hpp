@@ -23,8 +23,10 @@ namespace simloop::detail {
 
 // Installs the handlers and, on MuJoCo 3, loads the plugin libraries that
 // ship beside libmujoco (idempotent, thread-safe). Every entry point that
-// creates a model calls it, so users never have to.
-void install_mujoco_handlers();
+// creates a model calls it, so users never have to. The chapter's own
+// scene names no plugin and needs only the handlers (plugins = false):
+// loading a dozen plugin libraries costs sim_loop 1 MiB of peak memory.
+void install_mujoco_handlers(bool plugins = true);
 
 // Runs fn(context). Returns false if MuJoCo raised an error inside it; the
 // message is then in last_mujoco_error(). fn must not hold C++ objects with

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -35,24 +36,33 @@ void append_csv_header(std::string& out, const std::vector<Column>& columns) {
   out += '\n';
 }
 
-// `count` rows of trajectory.csv, each columns.size() adjacent values.
+// `count` rows of trajectory.csv, each columns.size() adjacent values. A row
+// is written in a buffer of its own, then appended whole.
 void append_csv_rows(std::string& out, const double* rows, std::int64_t count, const std::vector<Column>& columns) {
   const size_t width = columns.size();
+  // A cell: a comma and at most kMaxShortestChars (an integer column's
+  // int64 fits too); the last one's write_shortest wants kShortestRoom.
+  std::vector<char> line(width * (kMaxShortestChars + 1) + kShortestRoom + 1);
   for (std::int64_t r = 0; r < count; ++r) {
     const double* row = rows + static_cast<size_t>(r) * width;
+    char* end = line.data();
     for (size_t c = 0; c < width; ++c) {
-      if (c > 0) out += ',';
+      if (c > 0) *end++ = ',';
       const double v = row[c];
       if (columns[c].input && std::isnan(v)) continue;  // final row: no inputs
       if (columns[c].integer) {
-        out += std::to_string(static_cast<std::int64_t>(v));
+        end = std::to_chars(end, end + kMaxShortestChars, static_cast<std::int64_t>(v)).ptr;
       } else {
-        append_shortest(out, v);
+        end = write_shortest(end, v);
       }
     }
-    out += '\n';
+    *end++ = '\n';
+    out.append(line.data(), end);
   }
 }
+
+// TrajectoryCsvSink formats rows in slices of at most about this many bytes.
+constexpr size_t kSliceBytes = size_t{1} << 14;
 
 // Blocks the signals that would end the process (or, in the commands, stop
 // it) for as long as it lives, in the calling thread.
@@ -315,16 +325,19 @@ void TrajectoryCsvSink::start(int columns, std::int64_t /*rows*/) {
                           std::to_string(columns_.size()) + " names");
   }
   buffer_.clear();
-  buffer_.reserve(kFlushBytes + 4096);
+  buffer_.reserve(kFlushBytes + kSliceBytes);
   append_csv_header(buffer_, columns_);
 }
 
 void TrajectoryCsvSink::write(const double* rows, std::int64_t count) {
-  // A row is at most a few hundred bytes: format in slices that keep the
-  // buffer near kFlushBytes, however many rows come at once.
-  constexpr std::int64_t kRowsPerSlice = 256;
+  // Formatted in slices of at most about kSliceBytes (a cell is a comma and
+  // at most kMaxShortestChars), written out once the buffer holds
+  // kFlushBytes: the buffer stays within its reserve however many rows come
+  // at once. A small buffer, reused: its pages are touched once.
+  const auto row_bytes = static_cast<std::int64_t>(columns_.size() * (kMaxShortestChars + 1) + 1);
+  const std::int64_t rows_per_slice = std::max<std::int64_t>(1, static_cast<std::int64_t>(kSliceBytes) / row_bytes);
   while (count > 0) {
-    const std::int64_t n = std::min(count, kRowsPerSlice);
+    const std::int64_t n = std::min(count, rows_per_slice);
     append_csv_rows(buffer_, rows, n, columns_);
     rows += static_cast<size_t>(n) * columns_.size();
     count -= n;

@@ -283,6 +283,7 @@ RunResult detail::run_counted_elsewhere(const Model& model_in, const RunConfig& 
     throw InvalidArgument("workspace Data was made for a model of another size");
   }
   const mjModel* m = model.get();
+  const bool d_is_reset = workspace.fresh_for(model);  // before get(), which ends that
   mjData* d = workspace.get();
   const SceneLayout& at = model.layout();
   const std::int64_t steps = config.num_steps();
@@ -295,7 +296,7 @@ RunResult detail::run_counted_elsewhere(const Model& model_in, const RunConfig& 
   detail::KeepRows keep(result.trajectory);
   const detail::LoopResult loop =
       detail::run_loop(m, d, chapter_schedule(at, result.shove, steps, config.perturb), recorder,
-                       config.record_every, sink ? *sink : keep, control, RunInputs{}, {&watch});
+                       config.record_every, sink ? *sink : keep, control, RunInputs{}, {&watch}, d_is_reset);
   result.timestep = loop.timestep;
   result.rows = loop.rows;
   result.warnings = loop.warnings;

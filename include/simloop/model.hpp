@@ -96,6 +96,7 @@ class Model {
   std::shared_ptr<const mjModel> model_;
   SceneLayout layout_;
   std::shared_ptr<const std::vector<std::string>> load_warnings_;
+  friend class Data;  // which mjModel a Data was made for
 };
 
 // One simulation's state, sized for a model. A Data may be reused for any
@@ -104,11 +105,19 @@ class Model {
 class Data {
  public:
   explicit Data(const Model& model);
-  [[nodiscard]] mjData* get() noexcept { return data_.get(); }
+  [[nodiscard]] mjData* get() noexcept {
+    fresh_ = false;  // whoever has the mjData may change it
+    return data_.get();
+  }
   [[nodiscard]] const mjData* get() const noexcept { return data_.get(); }
   // True if this data was made for a model of the same sizes as `model`
   // (every size field of mjModel, nq through nbuffer, is equal).
   [[nodiscard]] bool fits(const Model& model) const noexcept;
+  // True while this data is as mj_makeData left it for `model`'s own mjModel
+  // (reset to it) and nobody has had its mjData since: a run need not reset it.
+  [[nodiscard]] bool fresh_for(const Model& model) const noexcept {
+    return fresh_ && !made_for_.owner_before(model.model_) && !model.model_.owner_before(made_for_);
+  }
 
  private:
   struct Deleter {
@@ -121,6 +130,8 @@ class Data {
   static constexpr std::size_t kSizeFields =
       (offsetof(mjModel, nbuffer) - offsetof(mjModel, nq)) / sizeof(SizeField) + 1;
   std::array<SizeField, kSizeFields> sizes_{};
+  std::weak_ptr<const mjModel> made_for_;
+  bool fresh_ = true;
 };
 
 // "MuJoCo 2.2.2": the version of the library we are linked against.

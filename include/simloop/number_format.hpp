@@ -1,6 +1,7 @@
 // Number formatting that other tools read back exactly.
 #pragma once
 
+#include <cstddef>
 #include <string>
 
 namespace simloop {
@@ -19,5 +20,15 @@ namespace simloop {
 
 // Appends shortest_repr(x) to out without a temporary string.
 void append_shortest(std::string& out, double x);
+
+// The longest text shortest_repr writes ("-2.2250738585072014e-308").
+inline constexpr std::size_t kMaxShortestChars = 24;
+// The room write_shortest needs at `out`: it works in place, in copies of
+// fixed sizes, and may write bytes past its text's end (never past this).
+inline constexpr std::size_t kShortestRoom = 48;
+
+// Writes shortest_repr(x) at out, which has room for kShortestRoom bytes,
+// and returns the end of its text: the bytes std::to_chars(double) writes.
+char* write_shortest(char* out, double x) noexcept;
 
 }  // namespace simloop

@@ -104,7 +104,7 @@ void write_file_atomically(const std::filesystem::path& path, std::string_view c
 // (a full disk) throws IoError from write() or finish(), which stops a run.
 class TrajectoryCsvSink final : public RowSink {
  public:
-  static constexpr size_t kFlushBytes = size_t{1} << 20;
+  static constexpr size_t kFlushBytes = size_t{1} << 16;
   // `columns`: the header and how to write each cell; empty for the
   // chapter's columns (as many as the run records).
   explicit TrajectoryCsvSink(PendingFile& file, std::vector<Column> columns = {})

@@ -56,6 +56,24 @@ TEST(Run, AReusedWorkspaceGivesTheSameRunAsAFreshOne) {
   EXPECT_TRUE(same_bits(reused.trajectory, fresh.trajectory));
 }
 
+TEST(Run, OnlyAnUntouchedWorkspaceSkipsTheResetItAlreadyHad) {
+  // mj_makeData resets the data it makes; a run on it does not do it again.
+  simloop::Data fresh(scene());
+  EXPECT_TRUE(fresh.fresh_for(scene()));
+  EXPECT_FALSE(fresh.fresh_for(scene().with_timestep(0.002)));  // the same numbers, another mjModel
+  simloop::Data reset_again(scene());
+  mj_resetData(scene().get(), reset_again.get());
+  EXPECT_FALSE(reset_again.fresh_for(scene()));  // whoever has the mjData may change it
+  simloop::Data touched(scene());
+  touched.get()->qpos[0] = 9.0;
+  const auto skipped = simloop::run(scene(), config_with(500), fresh);
+  EXPECT_FALSE(fresh.fresh_for(scene()));  // the run had it
+  const auto reset = simloop::run(scene(), config_with(500), reset_again);
+  const auto after_touch = simloop::run(scene(), config_with(500), touched);
+  EXPECT_TRUE(same_bits(skipped.trajectory, reset.trajectory));
+  EXPECT_TRUE(same_bits(after_touch.trajectory, reset.trajectory));
+}
+
 TEST(Run, TrajectoryStartsAtRestAndEndsAtTheMetrics) {
   const auto r = simloop::run(scene(), config_with(2000));
   const Trajectory& t = r.trajectory;
