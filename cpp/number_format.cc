@@ -281,6 +281,14 @@ std::string shortest_repr(double x) {
   return out;
 }
 
+void check_count(std::string_view name, std::int64_t value, std::int64_t most) {
+  if (value < 1) throw InvalidArgument(std::string(name) + " must be at least 1, got " + std::to_string(value));
+  if (value > most) {
+    throw InvalidArgument(std::string(name) + " must be at most " + std::to_string(most) + ", got " +
+                          std::to_string(value));
+  }
+}
+
 void check_positive_seconds(std::string_view name, double value) {
   if (std::isfinite(value) && value > 0.0) return;
   throw InvalidArgument(std::string(name) + " must be a positive, finite number of seconds, got " +

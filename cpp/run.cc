@@ -153,19 +153,8 @@ std::vector<Column> chapter_columns(int count) {
 
 void validate(const RunConfig& config) {
   check_positive_seconds("timestep", config.timestep);
-  std::ostringstream msg;
-  if (config.num_steps() < 1) {
-    msg << "steps must be at least 1, got " << config.num_steps();
-  } else if (config.num_steps() > kMaxSteps) {
-    msg << "steps must be at most " << kMaxSteps << ", got " << config.num_steps();
-  } else if (config.record_every < 1) {
-    msg << "record_every must be at least 1, got " << config.record_every;
-  } else if (config.record_every > kMaxRecordEvery) {
-    msg << "record_every must be at most " << kMaxRecordEvery << ", got " << config.record_every;
-  } else {
-    return;
-  }
-  throw InvalidArgument(msg.str());
+  check_count("steps", config.num_steps(), kMaxSteps);
+  check_count("record_every", config.record_every, kMaxRecordEvery);
 }
 
 std::uint64_t trajectory_memory_budget() noexcept {

@@ -47,13 +47,8 @@ Scenario Scenario::chapter() {
 
 Schedule build_schedule(const ResolvedScenario& scenario, const Scenario& spec, double timestep, Draws& draws) {
   check_positive_seconds("timestep", timestep);
-  if (spec.length.unit == When::Unit::kSteps) {  // a count of steps, worded as the chapter's run words it
-    const std::int64_t count = spec.length.count;
-    if (count < 1) throw InvalidArgument("steps must be at least 1, got " + std::to_string(count));
-    if (count > kMaxSteps) {
-      throw InvalidArgument("steps must be at most " + std::to_string(kMaxSteps) + ", got " + std::to_string(count));
-    }
-  }
+  // A count of steps, worded as the chapter's run words it.
+  if (spec.length.unit == When::Unit::kSteps) check_count("steps", spec.length.count, kMaxSteps);
   Schedule s;
   s.steps = spec.length.to_steps(timestep, 0);
   if (s.steps < 1) {

@@ -231,10 +231,7 @@ std::array<double, 3> Sim::applied_force() const {
   return {slot[0], slot[1], slot[2]};
 }
 
-void Sim::check_steps(std::int64_t n) {
-  if (n < 1) throw InvalidArgument("n must be at least 1, got " + std::to_string(n));
-  if (n > kMaxSteps) throw InvalidArgument("n must be at most " + std::to_string(kMaxSteps) + ", got " + std::to_string(n));
-}
+void Sim::check_steps(std::int64_t n) { check_count("n", n, kMaxSteps); }
 
 void Sim::step(std::int64_t n, RunControl* control) {
   check_steps(n);

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <stdexcept>
+#include <cstdint>
 #include <string>
 #include <string_view>
 
@@ -18,6 +19,11 @@ namespace simloop {
 // throws InvalidArgument "<name> must be a positive, finite number of
 // seconds, got <value>" otherwise. Every such check in the library is this one.
 void check_positive_seconds(std::string_view name, double value);
+
+// A count from 1 to `most` (steps, record_every, a Sim's n): throws
+// InvalidArgument "<name> must be at least 1, got <value>" or "<name> must be
+// at most <most>, got <value>" otherwise.
+void check_count(std::string_view name, std::int64_t value, std::int64_t most);
 
 // Base of everything simloop throws.
 class Error : public std::runtime_error {
