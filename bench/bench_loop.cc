@@ -180,13 +180,13 @@ int main(int argc, char** argv) {
   simloop::Data pusht_data(pusht_scene);
   simloop::ScenarioConfig pusht_config;
   pusht_config.steps = steps;
-  const simloop::ScenarioRunResult pusht_check = simloop::run_scenario(pusht_scene, pusht, pusht_config, &pusht_data);
+  const simloop::RunRecord pusht_check = simloop::run_scenario(pusht_scene, pusht, pusht_config, &pusht_data);
   std::vector<double> pusht_qpos(pusht_data.get()->qpos, pusht_data.get()->qpos + pusht_scene.get()->nq);
   bare_scenario_loop(pusht_scene.get(), pusht_data.get(), pusht_check.schedule);
   const bool pusht_same =
       std::memcmp(pusht_qpos.data(), pusht_data.get()->qpos, sizeof(double) * pusht_qpos.size()) == 0;
   Pairing scenario;
-  simloop::ScenarioRunResult pusht_sink;
+  simloop::RunRecord pusht_sink;
   scenario.rounds(
       rounds, [&] { bare_scenario_loop(pusht_scene.get(), pusht_data.get(), pusht_check.schedule); },
       [&] { pusht_sink = simloop::run_scenario(pusht_scene, pusht, pusht_config, &pusht_data); });

@@ -89,12 +89,12 @@ int run_command(const simloop::cli::Options& opts, const simloop::Model& model) 
 int scenario_command(const simloop::cli::Options& opts, const simloop::Scenario& scenario,
                      const simloop::Model& scene) {
   simloop::OutputWriter writer(opts.out);
-  const simloop::ScenarioRunResult result = simloop::run_scenario(
+  const simloop::RunRecord result = simloop::run_scenario(
       scene, scenario, simloop::cli::scenario_config(opts), nullptr, &writer.trajectory(), &g_control);
-  const simloop::OutputFiles files = writer.commit(simloop::scenario_metrics_json(result), &g_control);
+  const simloop::OutputFiles files = writer.commit(simloop::metrics_json(result), &g_control);
   g_outputs_written = true;
   g_progress.finish();
-  std::fputs(simloop::scenario_summary(result).c_str(), stdout);
+  std::fputs(simloop::summary_text(result).c_str(), stdout);
   std::printf("metrics: %s\n", files.metrics.c_str());
   std::printf("trajectory: %s (%lld rows, %zu columns)\n", files.trajectory.c_str(),
               static_cast<long long>(result.rows), result.columns.size());

@@ -62,13 +62,13 @@ class EnergyAudit {
   // The audit columns of a row whose state has energy `energy`, with the
   // work done so far.
   void fill_row(double* values, double energy) const noexcept {
-    values[Trajectory::kEnergy] = energy;
-    values[Trajectory::kWorkActuator] = totals_.work_actuator;
-    values[Trajectory::kWorkShove] = totals_.work_shove;
-    values[Trajectory::kWorkPassive] = totals_.work_passive;
-    values[Trajectory::kWorkConstraint] = totals_.work_constraint;
-    values[Trajectory::kWorkConstraintPositive] = totals_.work_constraint_positive;
-    values[Trajectory::kEnergyUnexplained] = unexplained(energy);
+    values[ChapterColumns::kEnergy] = energy;
+    values[ChapterColumns::kWorkActuator] = totals_.work_actuator;
+    values[ChapterColumns::kWorkShove] = totals_.work_shove;
+    values[ChapterColumns::kWorkPassive] = totals_.work_passive;
+    values[ChapterColumns::kWorkConstraint] = totals_.work_constraint;
+    values[ChapterColumns::kWorkConstraintPositive] = totals_.work_constraint_positive;
+    values[ChapterColumns::kEnergyUnexplained] = unexplained(energy);
   }
 
   [[nodiscard]] EnergyTotals totals(double energy_end) const noexcept {

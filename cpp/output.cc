@@ -87,24 +87,6 @@ class BlockTerminatingSignals {
 
 }  // namespace
 
-std::string metrics_json(const Metrics& m) {
-  using detail::Json;
-  Json::Object o;
-  Json::Array position;
-  for (double x : m.box_final_pos) position.push_back({x});
-  o["box_final_pos"] = {position};
-  o["box_final_speed"] = {m.box_final_speed};
-  o["lateral_drift"] = {m.lateral_drift};
-  o["perturb"] = {m.perturb};
-  o["pusher_final_x"] = {m.pusher_final_x};
-  o["seed"] = {m.seed};
-  o["shove_moved_box"] = {m.shove_moved_box};
-  o["steps"] = {m.steps};
-  std::string out;
-  Json{o}.dump(out, 0);
-  return out + "\n";
-}
-
 std::string trajectory_csv(const Trajectory& t, const std::vector<Column>& columns) {
   const std::vector<Column> named = columns.empty() ? chapter_columns(t.columns()) : columns;
   if (static_cast<int>(named.size()) != t.columns()) {
@@ -115,69 +97,6 @@ std::string trajectory_csv(const Trajectory& t, const std::vector<Column>& colum
   out.reserve(static_cast<size_t>(t.rows() + 1) * static_cast<size_t>(t.columns()) * 12);
   append_csv_header(out, named);
   append_csv_rows(out, t.data(), t.rows(), named);
-  return out;
-}
-
-std::string warning_line(const Warning& w) {
-  std::string line = w.name.rfind("mj", 0) == 0 ? "MuJoCo" : "simloop";
-  line += " warning " + w.name + ": raised " + std::to_string(w.count) + (w.count == 1 ? " time" : " times") +
-          ", first in step " + std::to_string(w.first_step) + ": " + w.message + "\n";
-  return line;
-}
-
-std::string load_warnings_text(const Model& model) {
-  std::string out;
-  for (const std::string& w : model.load_warnings()) out += "MuJoCo warning while loading the model: " + w + "\n";
-  return out;
-}
-
-std::string summary_text(const RunResult& r) {
-  const Metrics& m = r.metrics;
-  char line[512];
-  std::string out;
-  std::snprintf(line, sizeof line, "stepped %lld steps of %s s -> %.2f s of sim time\n",
-                static_cast<long long>(m.steps), python_float_repr(r.timestep).c_str(), r.sim_time);
-  out += line;
-  std::snprintf(line, sizeof line, "box final position [%.3f, %.3f, %.3f], speed %.3f m/s\n",
-                m.box_final_pos[0], m.box_final_pos[1], m.box_final_pos[2], m.box_final_speed);
-  out += line;
-  if (m.perturb) {
-    // The steps the shove acted: its window, cut short if the run ended in it.
-    const std::int64_t pushed = std::max<std::int64_t>(
-        0, std::min(r.shove.num_steps, m.steps - r.shove.start_step));
-    char window[64];
-    if (pushed < r.shove.num_steps) {
-      std::snprintf(window, sizeof window, "%lld step%s (of %lld: the run ended first)",
-                    static_cast<long long>(pushed), pushed == 1 ? "" : "s",
-                    static_cast<long long>(r.shove.num_steps));
-    } else {
-      std::snprintf(window, sizeof window, "%lld steps", static_cast<long long>(pushed));
-    }
-    const std::string_view rng = rng_description(r.shove.rng);
-    std::snprintf(line, sizeof line,
-                  "shove: %+.1f N in y for %s -> %.3f m of sideways drift (drawn by %.*s from seed %llu)\n",
-                  r.shove.force_y(), window, m.lateral_drift, static_cast<int>(rng.size()), rng.data(),
-                  static_cast<unsigned long long>(m.seed));
-  } else {
-    std::snprintf(line, sizeof line, "no shove (baseline run)\n");
-  }
-  out += line;
-  for (const Warning& w : r.warnings) out += warning_line(w);
-  if (r.config.audit_energy) {
-    const EnergyTotals& e = r.energy;
-    std::snprintf(line, sizeof line,
-                  "energy audit: change %+.4f J = work by motor %+.4f, shove %+.4f, damping %+.4f, "
-                  "contacts %+.4f (positive steps %+.4f) + unexplained %+.4f J\n",
-                  e.energy_end - e.energy_start, e.work_actuator, e.work_shove, e.work_passive, e.work_constraint,
-                  e.work_constraint_positive, e.unexplained);
-    out += line;
-  }
-  const bool mujoco_warned = std::any_of(r.warnings.begin(), r.warnings.end(),
-                                         [](const Warning& w) { return w.name.rfind("mj", 0) == 0; });
-  if (mujoco_warned) {
-    out += "  (after a bad-value warning MuJoCo resets the state and carries on: "
-           "the numbers above are not one continuous simulation)\n";
-  }
   return out;
 }
 
@@ -385,12 +304,25 @@ OutputFiles OutputWriter::commit(std::string_view metrics_text, const RunControl
   return files_;
 }
 
-OutputFiles write_outputs(const RunResult& result, const std::filesystem::path& dir) {
-  const Trajectory& t = result.trajectory;
-  OutputWriter writer(dir);
+namespace {
+OutputFiles write_record(const RunRecord& r, const std::string& metrics_text, const std::filesystem::path& dir) {
+  const Trajectory& t = r.trajectory;
+  if (t.rows() != r.rows) {
+    throw InvalidArgument("this result's rows went to a RowSink when it ran; there are none to write");
+  }
+  OutputWriter writer(dir, r.columns);
   writer.trajectory().start(t.columns(), t.rows());
   writer.trajectory().write(t.data(), t.rows());
-  return writer.commit(result.metrics);
+  return writer.commit(metrics_text);
+}
+}  // namespace
+
+OutputFiles write_outputs(const RunRecord& record, const std::filesystem::path& dir) {
+  return write_record(record, metrics_json(record), dir);
+}
+
+OutputFiles write_outputs(const RunResult& result, const std::filesystem::path& dir) {
+  return write_record(result, metrics_json(result.metrics), dir);
 }
 
 }  // namespace simloop

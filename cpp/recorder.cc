@@ -235,27 +235,27 @@ void check_inputs(const mjModel* m, const RunInputs& inputs, std::int64_t steps)
   }
 }
 
-ScenarioRunResult run_schedule(const mjModel* m, mjData* d, const ResolvedScenario& scenario,
+RunRecord run_schedule(const mjModel* m, mjData* d, const ResolvedScenario& scenario,
                                const Schedule& schedule, std::int64_t record_every, RowSink* sink,
                                RunControl* control, const RunInputs& inputs) {
   return detail::run_schedule_with(m, d, Recorder(m, scenario, schedule), schedule, record_every, sink, control,
                                    inputs);
 }
 
-ScenarioRunResult detail::run_schedule_with(const mjModel* m, mjData* d, const Recorder& recorder,
+RunRecord detail::run_schedule_with(const mjModel* m, mjData* d, const Recorder& recorder,
                                             const Schedule& schedule, std::int64_t record_every, RowSink* sink,
                                             RunControl* control, const RunInputs& inputs) {
   if (control && schedule.steps >= 1 && schedule.steps <= kMaxSteps) control->add_total(schedule.steps);
   return run_schedule_counted_elsewhere(m, d, recorder, schedule, record_every, sink, control, inputs);
 }
 
-ScenarioRunResult detail::run_schedule_counted_elsewhere(const mjModel* m, mjData* d, const Recorder& recorder,
+RunRecord detail::run_schedule_counted_elsewhere(const mjModel* m, mjData* d, const Recorder& recorder,
                                                          const Schedule& schedule, std::int64_t record_every,
                                                          RowSink* sink, RunControl* control, const RunInputs& inputs) {
   detail::check_schedule_run(schedule.steps, record_every);
   check_inputs(m, inputs, schedule.steps);
   if (sink == nullptr) detail::check_kept_rows(schedule.steps, record_every, recorder.width());
-  ScenarioRunResult result;
+  RunRecord result;
   detail::KeepRows keep(result.trajectory);
   detail::LoopResult loop =
       detail::run_loop(m, d, schedule, recorder, record_every, sink ? *sink : keep, control, inputs);

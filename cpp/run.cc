@@ -63,15 +63,15 @@ class ChapterRecorder final : public RowRecorder {
     const double* box_v = d->qvel + at_.box_dofadr;
     const double* shove = d->xfrc_applied + 6 * at_.box_body;
     constexpr double kNone = std::numeric_limits<double>::quiet_NaN();
-    put(Trajectory::kStep, static_cast<double>(step));
-    put(Trajectory::kTime, d->time);
-    put(Trajectory::kCtrl, inputs ? d->ctrl[0] : kNone);
-    for (int i = 0; i < 3; ++i) put(Trajectory::kShoveX + i, inputs ? shove[i] : kNone);
-    for (int i = 0; i < 7; ++i) put(Trajectory::kBoxX + i, box_q[i]);
-    for (int i = 0; i < 6; ++i) put(Trajectory::kBoxVx + i, box_v[i]);
-    put(Trajectory::kPusherX, d->qpos[at_.pusher_qposadr]);
-    put(Trajectory::kPusherVx, d->qvel[at_.pusher_dofadr]);
-    put(Trajectory::kNcon, d->ncon);
+    put(ChapterColumns::kStep, static_cast<double>(step));
+    put(ChapterColumns::kTime, d->time);
+    put(ChapterColumns::kCtrl, inputs ? d->ctrl[0] : kNone);
+    for (int i = 0; i < 3; ++i) put(ChapterColumns::kShoveX + i, inputs ? shove[i] : kNone);
+    for (int i = 0; i < 7; ++i) put(ChapterColumns::kBoxX + i, box_q[i]);
+    for (int i = 0; i < 6; ++i) put(ChapterColumns::kBoxVx + i, box_v[i]);
+    put(ChapterColumns::kPusherX, d->qpos[at_.pusher_qposadr]);
+    put(ChapterColumns::kPusherVx, d->qvel[at_.pusher_dofadr]);
+    put(ChapterColumns::kNcon, d->ncon);
   }
   void after_step(double* /*row*/, const mjModel* /*m*/, const mjData* /*d*/) const noexcept override {}
 
@@ -140,13 +140,13 @@ class ChapterWatch final : public detail::StepObserver {
 }  // namespace
 
 std::vector<Column> chapter_columns(int count) {
-  static constexpr const char* kUnits[Trajectory::kNumColumns] = {
+  static constexpr const char* kUnits[ChapterColumns::kNumColumns] = {
       "", "s", "", "N", "N", "N", "m", "m", "m", "", "", "", "", "m/s", "m/s", "m/s", "rad/s", "rad/s", "rad/s",
       "m", "m/s", "", "J", "J", "J", "J", "J", "J", "J"};
   std::vector<Column> columns;
-  for (int c = 0; c < count && c < Trajectory::kNumColumns; ++c) {
-    columns.push_back({std::string(Trajectory::kColumnNames[c]), kUnits[c], Trajectory::is_integer_column(c),
-                       Trajectory::is_input_column(c), ""});
+  for (int c = 0; c < count && c < ChapterColumns::kNumColumns; ++c) {
+    columns.push_back({std::string(ChapterColumns::kNames[c]), kUnits[c], c == ChapterColumns::kStep || c == ChapterColumns::kNcon,
+                       c >= ChapterColumns::kCtrl && c <= ChapterColumns::kShoveZ, ""});
   }
   return columns;
 }
@@ -177,8 +177,8 @@ std::uint64_t trajectory_memory_budget() noexcept {
 std::uint64_t kept_trajectory_bytes(const RunConfig& config) noexcept {
   const auto rows = static_cast<std::uint64_t>(Trajectory::rows_for(config.num_steps(), config.record_every));
   const std::uint64_t row_bytes =
-      sizeof(double) * static_cast<std::uint64_t>(config.audit_energy ? Trajectory::kNumColumns
-                                                                      : Trajectory::kNumBaseColumns);
+      sizeof(double) * static_cast<std::uint64_t>(config.audit_energy ? ChapterColumns::kNumColumns
+                                                                      : ChapterColumns::kNumBaseColumns);
   constexpr std::uint64_t kMax = std::numeric_limits<std::uint64_t>::max();
   return rows > kMax / row_bytes ? kMax : rows * row_bytes;
 }
@@ -280,15 +280,24 @@ RunResult detail::run_counted_elsewhere(const Model& model_in, const RunConfig& 
   RunResult result;
   result.config = config;
   result.shove = draw_shove(config.seed, steps, config.rng);
-  const ChapterRecorder recorder(at, config.audit_energy ? Trajectory::kNumColumns : Trajectory::kNumBaseColumns);
+  result.schedule = chapter_schedule(at, result.shove, steps, config.perturb);
+  const ChapterRecorder recorder(at, config.audit_energy ? ChapterColumns::kNumColumns : ChapterColumns::kNumBaseColumns);
   ChapterWatch watch(m, at, result.shove.start_step, config.audit_energy);
   detail::KeepRows keep(result.trajectory);
-  const detail::LoopResult loop =
-      detail::run_loop(m, d, chapter_schedule(at, result.shove, steps, config.perturb), recorder,
-                       config.record_every, sink ? *sink : keep, control, RunInputs{}, {&watch}, d_is_reset);
+  detail::LoopResult loop = detail::run_loop(m, d, result.schedule, recorder, config.record_every,
+                                             sink ? *sink : keep, control, RunInputs{}, {&watch}, d_is_reset);
+  // The record any run leaves, as the chapter's scenario would label it.
+  result.name = std::string(kChapterScenarioName);
+  result.seed = config.seed;
+  result.rng = std::string(rng_name(config.rng));
+  result.perturb = config.perturb;
+  if (config.perturb) result.disturbed_bodies = {mj_id2name(m, mjOBJ_BODY, at.box_body)};
+  result.columns = recorder.columns();
+  result.final_row = std::move(loop.final_row);
+  result.final_state = std::move(loop.final_state);
   result.timestep = loop.timestep;
   result.rows = loop.rows;
-  result.warnings = loop.warnings;
+  result.warnings = std::move(loop.warnings);
   result.sim_time = loop.sim_time;
   result.energy = watch.energy();
 

@@ -63,13 +63,13 @@ void check_kept_rows(const std::vector<std::array<std::int64_t, 3>>& runs);
 void check_schedule_run(std::int64_t steps, std::int64_t record_every);
 
 // run_schedule() with its recorder already made (a prepared run's).
-[[nodiscard]] ScenarioRunResult run_schedule_with(const mjModel* m, mjData* d, const Recorder& recorder,
+[[nodiscard]] RunRecord run_schedule_with(const mjModel* m, mjData* d, const Recorder& recorder,
                                                   const Schedule& schedule, std::int64_t record_every, RowSink* sink,
                                                   RunControl* control, const RunInputs& inputs = {});
 
 // The same without announcing its steps to the control (a batch announces
 // all of its runs' steps up front).
-[[nodiscard]] ScenarioRunResult run_schedule_counted_elsewhere(const mjModel* m, mjData* d, const Recorder& recorder,
+[[nodiscard]] RunRecord run_schedule_counted_elsewhere(const mjModel* m, mjData* d, const Recorder& recorder,
                                                                const Schedule& schedule, std::int64_t record_every,
                                                                RowSink* sink, RunControl* control,
                                                                const RunInputs& inputs = {});

@@ -28,7 +28,7 @@ std::int64_t When::to_steps(double timestep, std::int64_t run_steps) const {
 
 Scenario Scenario::chapter() {
   Scenario s;
-  s.name = "ch0.1-sim-loop";
+  s.name = std::string(kChapterScenarioName);
   s.timestep = kChapterTimestep;
   s.length = When::steps(2000);
   s.controls.push_back({"push_motor", {{When::steps(0), 1.0}}});

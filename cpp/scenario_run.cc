@@ -43,7 +43,7 @@ PreparedRun prepare(const Model& model, const Scenario& scenario, const Scenario
   return run;
 }
 
-ScenarioRunResult labelled(ScenarioRunResult result, const mjModel* m, const Scenario& scenario,
+RunRecord labelled(RunRecord result, const mjModel* m, const Scenario& scenario,
                            const ScenarioConfig& config) {
   result.name = scenario.name;
   result.seed = config.seed;
@@ -76,7 +76,7 @@ void check_scenario(const Model& scene, const Scenario& scenario, const Scenario
   detail::check_schedule_run(run.schedule.steps, config.record_every);
 }
 
-ScenarioRunResult run_scenario(const Model& scene, const Scenario& scenario, const ScenarioConfig& config,
+RunRecord run_scenario(const Model& scene, const Scenario& scenario, const ScenarioConfig& config,
                                Data* workspace, RowSink* sink, RunControl* control, const RunInputs& inputs) {
   const Model model = scene.for_run(run_timestep(scene, scenario, config), false);
   std::optional<Data> own;
@@ -88,7 +88,7 @@ ScenarioRunResult run_scenario(const Model& scene, const Scenario& scenario, con
                   model.get(), scenario, config);
 }
 
-std::vector<ScenarioRunResult> run_scenario_batch(const Model& scene, const Scenario& scenario,
+std::vector<RunRecord> run_scenario_batch(const Model& scene, const Scenario& scenario,
                                                   const std::vector<ScenarioConfig>& configs, int threads,
                                                   RunControl* control, const std::vector<RunInputs>& inputs,
                                                   bool keep_rows) {
@@ -98,7 +98,7 @@ std::vector<ScenarioRunResult> run_scenario_batch(const Model& scene, const Scen
                             inputs);
 }
 
-std::vector<ScenarioRunResult> run_scenario_batch(const Model& scene, const Scenario& scenario,
+std::vector<RunRecord> run_scenario_batch(const Model& scene, const Scenario& scenario,
                                                   const std::vector<ScenarioConfig>& configs,
                                                   const std::vector<RowSink*>& sinks, int threads,
                                                   RunControl* control, const std::vector<RunInputs>& inputs) {
@@ -136,7 +136,7 @@ std::vector<ScenarioRunResult> run_scenario_batch(const Model& scene, const Scen
   }
   if (!kept.empty()) detail::check_kept_rows(kept);
 
-  std::vector<ScenarioRunResult> results(configs.size());
+  std::vector<RunRecord> results(configs.size());
   std::vector<std::int64_t> steps;
   for (const PreparedRun& r : runs) steps.push_back(r.schedule.steps);
   detail::run_jobs(scene, configs.size(), threads, steps, control, [&](std::size_t i, Data& data, RunControl& ctl) {
@@ -147,115 +147,6 @@ std::vector<ScenarioRunResult> run_scenario_batch(const Model& scene, const Scen
                           m, scenario, configs[i]);
   });
   return results;
-}
-
-namespace {
-
-
-using detail::Json;
-
-Json rounded(const double* values, int count) {
-  Json::Array a;
-  for (int i = 0; i < count; ++i) a.push_back({round6(values[i])});
-  return {a};
-}
-
-
-}  // namespace
-
-std::map<std::string, std::size_t> recorded_bodies(const ScenarioRunResult& r) { return recorded_bodies(r.columns); }
-
-std::map<std::string, std::size_t> recorded_bodies(const std::vector<Column>& columns) {
-  std::map<std::string, std::size_t> out;
-  for (size_t c = 0; c < columns.size(); ++c) {
-    if (!columns[c].body.empty()) out.emplace(columns[c].body, c);  // the first of its columns
-  }
-  return out;
-}
-
-std::string scenario_metrics_json(const ScenarioRunResult& r) {
-  Json::Object m;
-  m["scenario"] = {r.name};
-  m["seed"] = {r.seed};
-  m["rng"] = {r.rng};
-  m["perturb"] = {r.perturb};
-  m["steps"] = {r.schedule.steps};
-  m["timestep"] = {r.timestep};
-  Json::Object bodies;
-  for (const auto& [name, c] : recorded_bodies(r)) {
-    const double* v = r.final_row.data() + c;
-    const double speed = std::sqrt(v[7] * v[7] + v[8] * v[8] + v[9] * v[9]);
-    bodies[name] = {Json::Object{{"final_pos", rounded(v, 3)}, {"final_speed", {round6(speed)}}}};
-  }
-  m["bodies"] = {bodies};
-  Json::Array disturbances;
-  for (size_t i = 0; i < r.schedule.forces.size(); ++i) {
-    const Schedule::Force& f = r.schedule.forces[i];
-    disturbances.push_back({Json::Object{{"body", {r.disturbed_bodies[i]}},
-                                         {"force", rounded(f.wrench.data(), 3)},
-                                         {"torque", rounded(f.wrench.data() + 3, 3)},
-                                         {"start_step", {f.start}},
-                                         {"steps", {f.end - f.start}},
-                                         {"steps_asked", {f.asked_end - f.start}}}});
-  }
-  m["disturbances"] = {disturbances};
-  Json::Object warnings;
-  for (const Warning& w : r.warnings) warnings[w.name] = {std::int64_t{w.count}};
-  m["warnings"] = {warnings};
-  std::string out;
-  Json{m}.dump(out, 0);
-  return out + "\n";
-}
-
-std::string scenario_summary(const ScenarioRunResult& r) {
-  std::string out;
-  char line[512];
-  std::snprintf(line, sizeof line, "scenario %s: stepped %lld steps of %s s -> %.2f s of sim time\n",
-                r.name.empty() ? "(unnamed)" : r.name.c_str(), static_cast<long long>(r.schedule.steps),
-                python_float_repr(r.timestep).c_str(), r.sim_time);
-  out += line;
-  for (const auto& [name, c] : recorded_bodies(r)) {
-    const double* v = r.final_row.data() + c;
-    std::snprintf(line, sizeof line, "%s final position [%.3f, %.3f, %.3f], speed %.3f m/s\n", name.c_str(), v[0],
-                  v[1], v[2], std::sqrt(v[7] * v[7] + v[8] * v[8] + v[9] * v[9]));
-    out += line;
-  }
-  if (!r.perturb) out += "no disturbances (baseline run)\n";
-  for (size_t i = 0; i < r.schedule.forces.size(); ++i) {
-    const Schedule::Force& f = r.schedule.forces[i];
-    const std::int64_t acted = f.end - f.start, asked = f.asked_end - f.start;
-    char window[96];
-    if (acted < asked) {
-      std::snprintf(window, sizeof window, "%lld step%s from step %lld (of %lld: the run ended first)",
-                    static_cast<long long>(acted), acted == 1 ? "" : "s", static_cast<long long>(f.start),
-                    static_cast<long long>(asked));
-    } else {
-      std::snprintf(window, sizeof window, "%lld steps from step %lld", static_cast<long long>(acted),
-                    static_cast<long long>(f.start));
-    }
-    const double* w = f.wrench.data();
-    std::snprintf(line, sizeof line, "disturbance on %s: force [%+.2f, %+.2f, %+.2f] N, torque [%+.2f, %+.2f, %+.2f] N m, %s\n",
-                  r.disturbed_bodies[i].c_str(), w[0], w[1], w[2], w[3], w[4], w[5], window);
-    out += line;
-  }
-  if (!r.schedule.forces.empty()) {
-    std::snprintf(line, sizeof line, "random draws: %s from seed %llu\n", r.rng.c_str(),
-                  static_cast<unsigned long long>(r.seed));
-    out += line;
-  }
-  for (const Warning& w : r.warnings) out += warning_line(w);
-  return out;
-}
-
-OutputFiles write_scenario_outputs(const ScenarioRunResult& r, const std::filesystem::path& dir) {
-  const Trajectory& t = r.trajectory;
-  if (t.rows() != r.rows) {
-    throw InvalidArgument("this result's rows went to a RowSink when it ran; there are none to write");
-  }
-  OutputWriter writer(dir, r.columns);
-  writer.trajectory().start(t.columns(), t.rows());
-  writer.trajectory().write(t.data(), t.rows());
-  return writer.commit(scenario_metrics_json(r));
 }
 
 // ---------------------------------------------------------------------------
@@ -345,7 +236,7 @@ class DrawingSplit final : public RowSink {
 
 }  // namespace
 
-ScenarioRunResult run_scenario_drawn(const Model& scene, const Scenario& scenario, const ScenarioConfig& config,
+RunRecord run_scenario_drawn(const Model& scene, const Scenario& scenario, const ScenarioConfig& config,
                                      RowSink& sink, RowSink& drawing, RunControl* control) {
   const Model model = scene.for_run(run_timestep(scene, scenario, config), false);
   const PreparedRun run = prepare(model, scenario, config);
@@ -357,7 +248,7 @@ ScenarioRunResult run_scenario_drawn(const Model& scene, const Scenario& scenari
   const std::vector<std::string> bodies = moving_bodies(model);
   DrawingSplit split(run.recorder->columns(), bodies, sink, drawing);
   Data workspace(model);
-  ScenarioRunResult result =
+  RunRecord result =
       run_schedule(m, workspace.get(), wide, run.schedule, config.record_every, &split, control);
   result.columns = run.recorder->columns();
   result.final_row = split.narrowed(result.final_row);

@@ -101,13 +101,13 @@ class SweepReducer final : public RowSink {
   void write(const double* rows, std::int64_t count) override {
     for (std::int64_t i = 0; i < count; ++i) {
       const double* row = rows + i * columns_;
-      peak_box_z_ = std::max(peak_box_z_, row[Trajectory::kBoxZ]);
-      max_abs_box_y_ = std::max(max_abs_box_y_, std::fabs(row[Trajectory::kBoxY]));
+      peak_box_z_ = std::max(peak_box_z_, row[ChapterColumns::kBoxZ]);
+      max_abs_box_y_ = std::max(max_abs_box_y_, std::fabs(row[ChapterColumns::kBoxY]));
     }
     if (count > 0) {
       const double* last = rows + (count - 1) * columns_;
-      final_ = {last[Trajectory::kBoxX], last[Trajectory::kBoxY], last[Trajectory::kBoxZ],
-                last[Trajectory::kPusherX]};
+      final_ = {last[ChapterColumns::kBoxX], last[ChapterColumns::kBoxY], last[ChapterColumns::kBoxZ],
+                last[ChapterColumns::kPusherX]};
     }
   }
   void fill(SweepPoint& p) const {
@@ -326,7 +326,7 @@ ScenarioSweepResult sweep_scenario(const Model& scene, const Scenario& scenario,
   std::vector<PeakSpeed> reducers(configs.size());
   std::vector<RowSink*> sinks;
   for (PeakSpeed& r : reducers) sinks.push_back(&r);
-  const std::vector<ScenarioRunResult> runs = run_scenario_batch(scene, scenario, configs, sinks, threads, control);
+  const std::vector<RunRecord> runs = run_scenario_batch(scene, scenario, configs, sinks, threads, control);
 
   ScenarioSweepResult result;
   result.name = scenario.name;
@@ -338,7 +338,7 @@ ScenarioSweepResult sweep_scenario(const Model& scene, const Scenario& scenario,
   std::sort(bodies.begin(), bodies.end());
   for (const auto& body : bodies) result.bodies.push_back(body.second);
   for (std::size_t i = 0; i < runs.size(); ++i) {
-    const ScenarioRunResult& r = runs[i];
+    const RunRecord& r = runs[i];
     ScenarioSweepPoint p;
     p.timestep = r.timestep;
     p.steps = r.schedule.steps;

@@ -68,6 +68,7 @@ PYBIND11_MODULE(_core, m) {
   });
 
   simloop_py::bind_model(m);
+  simloop_py::bind_record(m);
   simloop_py::bind_chapter(m);
   simloop_py::bind_scenario(m);
   simloop_py::bind_sim(m);

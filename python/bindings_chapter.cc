@@ -28,6 +28,7 @@ namespace simloop_py {
 namespace {
 
 using namespace pybind11::literals;
+using simloop::ChapterColumns;
 using simloop::RunResult;
 
 py::dict metrics_dict(const simloop::Metrics& m) {
@@ -43,17 +44,10 @@ py::dict metrics_dict(const simloop::Metrics& m) {
   return d;
 }
 
-int column_index(const Trajectory& t, const std::string& name) {
-  for (int c = 0; c < t.columns(); ++c) {
-    if (Trajectory::kColumnNames[c] == name) return c;
-  }
-  throw py::key_error("no trajectory column named '" + name + "'; see result.column_names");
-}
-
 py::tuple column_names(int first, int end) {
   py::tuple names(static_cast<size_t>(end - first));
   for (int c = first; c < end; ++c) {
-    names[static_cast<size_t>(c - first)] = py::str(std::string(Trajectory::kColumnNames[c]));
+    names[static_cast<size_t>(c - first)] = py::str(std::string(ChapterColumns::kNames[c]));
   }
   return names;
 }
@@ -69,7 +63,8 @@ std::string run_call(const char* name, const simloop::RunConfig& c) {
 }
 
 template <class Io, class Result>
-void run_result_fields(Io& io, Result& r) {
+void chapter_result_fields(Io& io, Result& r) {
+  record_fields(io, r);
   io.field(r.config.seed);
   io.field(r.config.steps);
   io.field(r.config.timestep);
@@ -81,21 +76,15 @@ void run_result_fields(Io& io, Result& r) {
   io.field(r.metrics);
   io.field(r.unrounded_metrics);
   io.field(r.shove);
-  io.field(r.trajectory);
-  io.field(r.rows);
-  io.field(r.warnings);
   io.field(r.energy);
-  io.field(r.timestep);
-  io.field(r.sim_time);
 }
-
 
 }  // namespace
 
 void bind_chapter(py::module_& m) {
   m.attr("PUSHER_SCENE_XML") = std::string(simloop::pusher_scene_xml());
-  m.attr("COLUMN_NAMES") = column_names(0, Trajectory::kNumBaseColumns);
-  m.attr("ENERGY_COLUMN_NAMES") = column_names(Trajectory::kNumBaseColumns, Trajectory::kNumColumns);
+  m.attr("COLUMN_NAMES") = column_names(0, ChapterColumns::kNumBaseColumns);
+  m.attr("ENERGY_COLUMN_NAMES") = column_names(ChapterColumns::kNumBaseColumns, ChapterColumns::kNumColumns);
   m.attr("SMOKE_STEPS") = simloop::kSmokeSteps;
   m.attr("SHOVE_STEPS") = simloop::kShoveSteps;
   m.attr("MAX_STEPS") = simloop::kMaxSteps;
@@ -145,88 +134,32 @@ void bind_chapter(py::module_& m) {
       },
       "seed"_a, "steps"_a = 2000, "rng"_a = "mt19937_64", "The shove a run of `steps` steps draws from `seed`.");
 
-  py::class_<simloop::Warning>(m, "MujocoWarning", "A warning MuJoCo raised while stepping.")
-      .def_readonly("name", &simloop::Warning::name)
-      .def_readonly("count", &simloop::Warning::count)
-      .def_readonly("first_step", &simloop::Warning::first_step)
-      .def_readonly("message", &simloop::Warning::message)
-      .def("__repr__", [](const simloop::Warning& w) {
-        return "MujocoWarning(" + w.name + ", count=" + std::to_string(w.count) +
-               ", first_step=" + std::to_string(w.first_step) + ")";
-      });
-
-  py::class_<RunResult>(m, "RunResult", "What one run did: metrics, trajectory, shove, warnings.")
+  py::class_<RunResult, simloop::RunRecord>(
+      m, "RunResult", "What the chapter's run did: its record (a ScenarioResult) with the chapter's report on top.")
       .def_property_readonly("metrics", [](const RunResult& r) { return metrics_dict(r.metrics); },
                              "The dict metrics.json holds (floats rounded to 6 decimals).")
-      .def_property_readonly("trajectory", [](const py::object& self) { return trajectory_view(self, self.cast<const RunResult&>().trajectory); },
-                             "(rows, columns) read-only float64 view; columns as in COLUMN_NAMES.")
-      .def(
-          "column",
-          [](const py::object& self, const std::string& name) {
-            const Trajectory& t = self.cast<const RunResult&>().trajectory;
-            return column_view(self, t, column_index(t, name));
-          },
-          "name"_a, "One trajectory column as a read-only (strided) view (no copy).")
-      .def_property_readonly(
-          "columns",
-          [](const py::object& self) {
-            py::dict columns;
-            for (int c = 0; c < self.cast<const RunResult&>().trajectory.columns(); ++c) {
-              columns[py::str(std::string(Trajectory::kColumnNames[c]))] =
-                  column_view(self, self.cast<const RunResult&>().trajectory, c);
-            }
-            return columns;
-          },
-          "Every trajectory column by name, as read-only views (no copy).")
-      .def_property_readonly(
-          "column_names",
-          [](const RunResult& r) { return column_names(0, r.trajectory.columns()); },
-          "This result's trajectory columns (COLUMN_NAMES, then ENERGY_COLUMN_NAMES with the audit).")
+      .def_property_readonly("unrounded_metrics", [](const RunResult& r) { return metrics_dict(r.unrounded_metrics); },
+                             "metrics as computed, not rounded (metrics.json rounds to 6 decimals).")
       .def_property_readonly(
           "energy",
           [](const RunResult& r) -> py::object {
             if (!r.config.audit_energy) return py::none();
             const simloop::EnergyTotals& e = r.energy;
-            py::dict d;
-            d["energy_start"] = e.energy_start;
-            d["energy_end"] = e.energy_end;
-            d["work_actuator"] = e.work_actuator;
-            d["work_shove"] = e.work_shove;
-            d["work_passive"] = e.work_passive;
-            d["work_constraint"] = e.work_constraint;
-            d["work_constraint_positive"] = e.work_constraint_positive;
-            d["unexplained"] = e.unexplained;
-            return std::move(d);
+            return py::dict("energy_start"_a = e.energy_start, "energy_end"_a = e.energy_end,
+                            "work_actuator"_a = e.work_actuator, "work_shove"_a = e.work_shove,
+                            "work_passive"_a = e.work_passive, "work_constraint"_a = e.work_constraint,
+                            "work_constraint_positive"_a = e.work_constraint_positive,
+                            "unexplained"_a = e.unexplained);
           },
           "The energy audit's totals, J (None unless audit_energy).")
-      .def_property_readonly("rows", [](const RunResult& r) { return std::max(r.trajectory.rows(), r.rows); },
-                             "Trajectory rows the run recorded, kept or streamed (without building a numpy view).")
-      .def_property_readonly("shove", [](const RunResult& r) { return r.shove; })
-      .def_property_readonly("warnings", [](const RunResult& r) { return r.warnings; })
-      .def_property_readonly("config", [](const RunResult& r) { return r.config; })
-      .def_property_readonly("timestep", [](const RunResult& r) { return r.timestep; })
-      .def_property_readonly("sim_time", [](const RunResult& r) { return r.sim_time; })
-      .def("metrics_json", [](const RunResult& r) { return simloop::metrics_json(r.metrics); })
-      .def("trajectory_csv", [](const RunResult& r) {
-        std::string text;
-        {
-          py::gil_scoped_release release;
-          text = naming_failures("RunResult.trajectory_csv", [&] { return simloop::trajectory_csv(r.trajectory); });
-        }
-        return text;
-      })
-      .def("summary", [](const RunResult& r) { return simloop::summary_text(r); })
-      .def(
-          "write",
-          [](const RunResult& r, const std::filesystem::path& out) {
-            py::gil_scoped_release release;
-            const simloop::OutputFiles files =
-                naming_failures("RunResult.write(" + out.string() + ")", [&] { return simloop::write_outputs(r, out); });
-            return std::make_pair(files.metrics, files.trajectory);
-          },
-          "out"_a)
-      .def_property_readonly("unrounded_metrics", [](const RunResult& r) { return metrics_dict(r.unrounded_metrics); },
-                             "metrics as computed, not rounded (metrics.json rounds to 6 decimals).")
+      .def_readonly("shove", &RunResult::shove)
+      .def_readonly("config", &RunResult::config)
+      .def("metrics_json", py::overload_cast<const RunResult&>(&simloop::metrics_json), "metrics.json's text.")
+      .def("summary", py::overload_cast<const RunResult&>(&simloop::summary_text),
+           "The lines sim_loop prints about the run.")
+      .def("write", &write_result<RunResult>, "out"_a,
+          "Writes metrics.json and trajectory.csv into out (a directory, made if missing), the bytes sim_loop "
+          "writes; returns their paths.")
       .def("__repr__", [](const RunResult& r) {
         return "RunResult(seed=" + std::to_string(r.config.seed) + ", steps=" + std::to_string(r.metrics.steps) +
                ", timestep=" + simloop::python_float_repr(r.timestep) + ", rows=" +
@@ -234,8 +167,8 @@ void bind_chapter(py::module_& m) {
                simloop::python_float_repr(r.metrics.lateral_drift) + ", warnings=" + std::to_string(r.warnings.size()) +
                ")";
       })
-      .def(pickling<RunResult, &run_result_fields<FieldWriter, const RunResult>,
-                    &run_result_fields<FieldReader, RunResult>>("RunResult"));
+      .def(pickling<RunResult, &chapter_result_fields<FieldWriter, const RunResult>,
+                    &chapter_result_fields<FieldReader, RunResult>>("RunResult"));
   m.def(
       "run",
       [](const simloop::Model& model, const simloop::RunConfig& config, py::object progress) {

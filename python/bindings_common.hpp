@@ -224,6 +224,16 @@ auto long_call(py::object progress, const std::string& what, Work&& work) {
   return result;
 }
 
+// result.write(out): metrics.json and trajectory.csv into out, as
+// simloop::write_outputs writes them for this kind of result.
+template <class Result>
+std::pair<std::filesystem::path, std::filesystem::path> write_result(const Result& r, const std::filesystem::path& out) {
+  py::gil_scoped_release release;
+  const simloop::OutputFiles files =
+      naming_failures("write(" + out.string() + ")", [&] { return simloop::write_outputs(r, out); });
+  return {files.metrics, files.trajectory};
+}
+
 // What every kind of sweep result offers beside its own figures: its edge,
 // sweep.csv, the table for people, and writing sweep.csv.
 template <class Result, std::string (*Csv)(const Result&), std::string (*Summary)(const Result&)>
@@ -251,6 +261,7 @@ void bind_sweep_outputs(py::class_<Result>& result, const char* edge_doc) {
 // The topics' bindings, in the order bindings.cc registers them (a type is
 // registered before any signature names it).
 void bind_model(py::module_& m);
+void bind_record(py::module_& m);
 void bind_chapter(py::module_& m);
 void bind_scenario(py::module_& m);
 void bind_sim(py::module_& m);

@@ -198,13 +198,13 @@ void bind_outputs(py::module_& m) {
             [&](RowsToPython* to_python, const std::vector<simloop::PendingFile*>& extra,
                 simloop::RunControl* control) {
               simloop::OutputWriter writer(out);
-              simloop::ScenarioRunResult result =
+              simloop::RunRecord result =
                   to_python ? simloop::run_scenario_drawn(scene, scenario, config, writer.trajectory(), *to_python,
                                                           control)
                             : simloop::run_scenario(scene, scenario, config, nullptr, &writer.trajectory(), control);
               if (to_python) to_python->finish(result);
               const simloop::OutputFiles files =
-                  writer.commit(simloop::scenario_metrics_json(result), control, extra);
+                  writer.commit(simloop::metrics_json(result), control, extra);
               return std::make_tuple(std::move(result), files.metrics, files.trajectory);
             });
       },

@@ -11,7 +11,7 @@
 #include <utility>
 #include <vector>
 
-#include "simloop/run.hpp"
+#include "simloop/run_record.hpp"
 
 namespace simloop_py {
 
@@ -19,7 +19,7 @@ namespace py = pybind11;
 using simloop::Trajectory;
 
 // A result's fields as bytes: plain values copied as they are. One list of
-// fields per result (run_result_fields, scenario_result_fields) serves both
+// fields per result (record_fields, chapter_result_fields) serves both
 // directions: FieldWriter's field() appends, FieldReader's reads back.
 class FieldWriter {
  public:
@@ -139,7 +139,7 @@ class FieldReader {
 };
 
 // The pickle format's version: bump when a result's fields change.
-constexpr int kPickleVersion = 2;
+constexpr int kPickleVersion = 3;
 
 template <class Result, void (*Fields)(FieldWriter&, const Result&)>
 py::tuple pickle_fields(const Result& r) {
@@ -158,6 +158,28 @@ Result unpickle_fields(const py::tuple& t, const char* what) {
   Fields(in, r);
   in.finish();
   return r;
+}
+
+// The fields of the record every run leaves (a chapter's RunResult adds its
+// report's after them).
+template <class Io, class Record>
+void record_fields(Io& io, Record& r) {
+  io.field(r.name);
+  io.field(r.seed);
+  io.field(r.rng);
+  io.field(r.perturb);
+  io.field(r.disturbed_bodies);
+  io.field(r.columns);
+  io.field(r.final_row);
+  io.field(r.final_state);
+  io.field(r.trajectory);
+  io.field(r.rows);
+  io.field(r.schedule.steps);
+  io.field(r.schedule.control_changes);
+  io.field(r.schedule.forces);
+  io.field(r.warnings);
+  io.field(r.timestep);
+  io.field(r.sim_time);
 }
 
 // py::pickle for a result: Write and Read are its one list of fields.

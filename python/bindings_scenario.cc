@@ -26,7 +26,7 @@ namespace simloop_py {
 namespace {
 
 using namespace pybind11::literals;
-using simloop::ScenarioRunResult;
+using simloop::RunRecord;
 
 // One RunInputs per run from Python's arrays (already checked and made
 // C-contiguous float64 by simloop.scenario_runs): controls (B, T, nu) gives run i
@@ -99,27 +99,6 @@ class PyPolicy final : public simloop::Policy {
 };
 
 
-template <class Io, class Result>
-void scenario_result_fields(Io& io, Result& r) {
-  io.field(r.name);
-  io.field(r.seed);
-  io.field(r.rng);
-  io.field(r.perturb);
-  io.field(r.disturbed_bodies);
-  io.field(r.columns);
-  io.field(r.final_row);
-  io.field(r.final_state);
-  io.field(r.trajectory);
-  io.field(r.rows);
-  io.field(r.schedule.steps);
-  io.field(r.schedule.control_changes);
-  io.field(r.schedule.forces);
-  io.field(r.warnings);
-  io.field(r.timestep);
-  io.field(r.sim_time);
-}
-
-
 }  // namespace
 
 void bind_scenario(py::module_& m) {
@@ -177,83 +156,6 @@ void bind_scenario(py::module_& m) {
                py_bool(c.perturb) + ", record_every=" + std::to_string(c.record_every) + ")";
       });
 
-  py::class_<simloop::ScenarioRunResult>(m, "ScenarioResult", "What one run of a scenario did.")
-      .def_readonly("name", &simloop::ScenarioRunResult::name)
-      .def_readonly("seed", &simloop::ScenarioRunResult::seed)
-      .def_readonly("rows", &simloop::ScenarioRunResult::rows)
-      .def_readonly("timestep", &simloop::ScenarioRunResult::timestep)
-      .def_readonly("sim_time", &simloop::ScenarioRunResult::sim_time)
-      .def_readonly("warnings", &simloop::ScenarioRunResult::warnings)
-      .def_property_readonly("steps", [](const simloop::ScenarioRunResult& r) { return r.schedule.steps; })
-      .def_property_readonly("column_names",
-                             [](const simloop::ScenarioRunResult& r) {
-                               py::tuple names(r.columns.size());
-                               for (size_t i = 0; i < r.columns.size(); ++i) names[i] = py::str(r.columns[i].name);
-                               return names;
-                             })
-      .def_property_readonly("column_units",
-                             [](const simloop::ScenarioRunResult& r) {
-                               py::dict units;
-                               for (const simloop::Column& c : r.columns) units[py::str(c.name)] = c.unit;
-                               return units;
-                             })
-      .def_property_readonly(
-          "trajectory",
-          [](const py::object& self) {
-            return trajectory_view(self, self.cast<const simloop::ScenarioRunResult&>().trajectory);
-          },
-          "(rows, columns) read-only float64 view; columns as in column_names.")
-      .def(
-          "column",
-          [](const py::object& self, const std::string& name) {
-            const auto& r = self.cast<const simloop::ScenarioRunResult&>();
-            for (size_t c = 0; c < r.columns.size(); ++c) {
-              if (r.columns[c].name == name) return column_view(self, r.trajectory, static_cast<int>(c));
-            }
-            throw py::key_error("no trajectory column named '" + name + "'; see result.column_names");
-          },
-          "name"_a)
-      .def_property_readonly("disturbances",
-                             [](const simloop::ScenarioRunResult& r) {
-                               py::list out;
-                               for (size_t i = 0; i < r.schedule.forces.size(); ++i) {
-                                 const simloop::Schedule::Force& f = r.schedule.forces[i];
-                                 out.append(py::dict("body"_a = r.disturbed_bodies[i],
-                                                     "force"_a = vec(f.wrench.data(), 3),
-                                                     "torque"_a = vec(f.wrench.data() + 3, 3),
-                                                     "start_step"_a = f.start, "end_step"_a = f.end,
-                                                     "asked_end_step"_a = f.asked_end));
-                               }
-                               return out;
-                             })
-      .def_property_readonly("bodies", [](const simloop::ScenarioRunResult& r) { return simloop::recorded_bodies(r); },
-                             "The recorded bodies: {name: the column of its _x}.")
-      .def("metrics_json", &simloop::scenario_metrics_json)
-      .def("summary", &simloop::scenario_summary)
-      .def(
-          "write",
-          [](const simloop::ScenarioRunResult& r, const std::filesystem::path& out) {
-            py::gil_scoped_release release;
-            const simloop::OutputFiles files = simloop::write_scenario_outputs(r, out);
-            return std::make_pair(files.metrics, files.trajectory);
-          },
-          "out"_a)
-      .def_readonly("rng", &simloop::ScenarioRunResult::rng)
-      .def_readonly("perturb", &simloop::ScenarioRunResult::perturb)
-      .def_property_readonly("final_row", [](const simloop::ScenarioRunResult& r) { return vector_array(r.final_row); },
-                             "The last row (columns as column_names), kept or not: a copy.")
-      .def_property_readonly(
-          "final_state", [](const simloop::ScenarioRunResult& r) { return vector_array(r.final_state); },
-          "The full state at the end (the flat layout of state.hpp): an initial_state that continues this run.")
-      .def("__repr__", [](const simloop::ScenarioRunResult& r) {
-        return "ScenarioResult(name=" + py_str_repr(r.name) + ", seed=" + std::to_string(r.seed) + ", steps=" +
-               std::to_string(r.schedule.steps) + ", timestep=" + simloop::python_float_repr(r.timestep) +
-               ", rows=" + std::to_string(r.trajectory.rows()) + ", columns=" + std::to_string(r.columns.size()) +
-               ", disturbances=" + std::to_string(r.schedule.forces.size()) +
-               ", warnings=" + std::to_string(r.warnings.size()) + ")";
-      })
-      .def(pickling<ScenarioRunResult, &scenario_result_fields<FieldWriter, const ScenarioRunResult>,
-                    &scenario_result_fields<FieldReader, ScenarioRunResult>>("ScenarioResult"));
 
   // A run, or a batch, follows the scenario's controls; or the caller's
   // (controls, initial_state: arrays simloop.scenario has checked and made

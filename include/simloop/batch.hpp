@@ -33,15 +33,6 @@ namespace simloop {
                                                const std::vector<RowSink*>& sinks, int threads = 0,
                                                RunControl* control = nullptr);
 
-// A RowSink that keeps nothing: for runs whose metrics are all that is
-// wanted (a run computes its metrics, final row and warnings whatever its
-// sink), so a batch's memory does not grow with its runs' lengths. It holds
-// no state, so one can serve every run of a batch at once.
-class DiscardRows final : public RowSink {
- public:
-  void start(int /*columns*/, std::int64_t /*rows*/) override {}
-  void write(const double* /*rows*/, std::int64_t /*count*/) override {}
-};
 
 // The worker count run_batch uses for `threads` and `jobs`.
 [[nodiscard]] int batch_workers(int threads, std::size_t jobs) noexcept;

@@ -19,22 +19,35 @@
 
 namespace simloop {
 
-// The text Python's json.dumps(metrics, indent=2, sort_keys=True) + "\n"
-// writes for the chapter's metrics dict, byte for byte.
+// metrics.json: the text Python's json.dumps(metrics, indent=2,
+// sort_keys=True) + "\n" writes, byte for byte, floats rounded to 6
+// decimals. For the chapter's run (a RunResult, or its Metrics), the
+// chapter's keys. For any other run, what its record holds: scenario, seed,
+// rng, perturb, steps, timestep; bodies: each recorded body's final_pos (m)
+// and final_speed (m/s); disturbances: each one's body, force (N) and
+// torque (N m) as applied, start_step, steps (as they happened) and
+// steps_asked; warnings: MuJoCo's and simloop's, by name, with their counts.
+// (A RunResult passed as a RunRecord gets the latter: the chapter's run
+// described as a scenario's.)
 [[nodiscard]] std::string metrics_json(const Metrics& metrics);
+[[nodiscard]] std::string metrics_json(const RunResult& result);
+[[nodiscard]] std::string metrics_json(const RunRecord& record);
 
 // trajectory.csv: a header of the column names (the chapter's,
-// Trajectory::kColumnNames, unless `columns` are given), then one line per
+// ChapterColumns::kNames, unless `columns` are given), then one line per
 // row. Numbers are the shortest text that reads back as the same double;
 // integer columns (step, ncon) are whole numbers; the final row's input cells
 // are empty.
 [[nodiscard]] std::string trajectory_csv(const Trajectory& trajectory, const std::vector<Column>& columns = {});
 
-// The chapter's closing lines: steps and sim time, where the box ended, the
-// shove and its drift (or "no shove (baseline run)"; for the steps it acted,
-// its window cut short when the run ends inside it), and any MuJoCo
-// warnings. Each line ends in "\n". Nothing in it depends on time or machine.
+// The closing lines the commands print, each ending in "\n", nothing in
+// them depending on time or machine. The chapter's: steps and sim time,
+// where the box ended, the shove and its drift (or "no shove (baseline
+// run)"; for the steps it acted, its window cut short when the run ends
+// inside it), and any MuJoCo warnings. Any other run's: steps and sim time,
+// where each recorded body ended, each disturbance as applied, warnings.
 [[nodiscard]] std::string summary_text(const RunResult& result);
+[[nodiscard]] std::string summary_text(const RunRecord& record);
 
 // One summary line for a warning: "MuJoCo warning mjWARN_BADQACC: raised 3
 // times, first in step 1043: ..." (or "simloop warning ..." for simloop's own).
@@ -150,8 +163,11 @@ class OutputWriter {
   TrajectoryCsvSink csv_;
 };
 
-// Writes metrics.json and trajectory.csv of an in-memory result into `dir`
-// (prepared first) through an OutputWriter: both or neither are replaced.
+// Writes metrics.json (as metrics_json above) and trajectory.csv of an
+// in-memory result into `dir` (prepared first) through an OutputWriter:
+// both or neither are replaced. InvalidArgument if its rows went to a
+// RowSink when it ran (there are none to write).
 OutputFiles write_outputs(const RunResult& result, const std::filesystem::path& dir);
+OutputFiles write_outputs(const RunRecord& record, const std::filesystem::path& dir);
 
 }  // namespace simloop

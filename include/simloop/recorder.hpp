@@ -11,7 +11,8 @@
 #include <mujoco/mujoco.h>
 
 #include "simloop/control.hpp"
-#include "simloop/run.hpp"
+#include "simloop/rows.hpp"
+#include "simloop/run_record.hpp"
 #include "simloop/scenario.hpp"
 
 namespace simloop {
@@ -81,24 +82,6 @@ class Recorder final : public RowRecorder {
   CtrlRange ctrl_range_;
 };
 
-// A scenario run's outcome: the schedule it followed (the drawn forces and
-// the windows as they actually happened), the recorded rows, the warnings.
-struct ScenarioRunResult {
-  std::string name;          // the scenario's
-  std::uint64_t seed = 0;
-  std::string rng;           // the generator's name ("mt19937_64", "numpy")
-  bool perturb = true;
-  std::vector<std::string> disturbed_bodies;  // schedule.forces[i]'s body, by name
-  std::vector<Column> columns;
-  std::vector<double> final_row;  // the last row, whether kept or streamed
-  std::vector<double> final_state;  // the full state at the end (state.hpp's layout)
-  Trajectory trajectory;  // empty when the rows went to a RowSink
-  std::int64_t rows = 0;
-  Schedule schedule;
-  std::vector<Warning> warnings;
-  double timestep = 0.0;
-  double sim_time = 0.0;
-};
 
 // The schedule's inputs as the loop writes them, step by step: at each step,
 // the ctrl changes and the forces that start or stop there (the sum of the
@@ -209,7 +192,7 @@ void check_inputs(const mjModel* m, const RunInputs& inputs, std::int64_t steps)
 // steps then end at decision steps, where the loop leaves MuJoCo's error
 // guard to call it. Without one the steps run exactly as before (one more
 // comparison per chunk of RunControl::kChunkSteps).
-[[nodiscard]] ScenarioRunResult run_schedule(const mjModel* m, mjData* d, const ResolvedScenario& scenario,
+[[nodiscard]] RunRecord run_schedule(const mjModel* m, mjData* d, const ResolvedScenario& scenario,
                                              const Schedule& schedule, std::int64_t record_every,
                                              RowSink* sink = nullptr, RunControl* control = nullptr,
                                              const RunInputs& inputs = {});

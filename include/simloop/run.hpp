@@ -9,18 +9,14 @@
 
 #include "simloop/control.hpp"
 #include "simloop/model.hpp"
+#include "simloop/rows.hpp"
+#include "simloop/run_record.hpp"
 #include "simloop/shove.hpp"
 
 namespace simloop {
 
 // --smoke: a short, fixed run so CI can compare two runs byte for byte.
 inline constexpr std::int64_t kSmokeSteps = 300;
-
-// The ranges both faces (sim_loop's flags, Python's arguments) accept:
-// steps and record_every from 1 to 2^62 - 1, so that no count the loop
-// derives from them (rows, steps + K) can overflow an int64.
-inline constexpr std::int64_t kMaxSteps = (std::int64_t{1} << 62) - 1;
-inline constexpr std::int64_t kMaxRecordEvery = kMaxSteps;
 
 struct RunConfig {
   std::uint64_t seed = 0;          // seeds the shove, and nothing else
@@ -74,24 +70,10 @@ struct Metrics {
   bool shove_moved_box = false; // unrounded lateral_drift > 0.01 m
 };
 
-// A warning MuJoCo raised while stepping (mjData::warning). After some of
-// them, a bad acceleration for one, MuJoCo resets the state and goes on, so
-// a run that raised one did not simulate what its numbers seem to say.
-struct Warning {
-  std::string name;             // "mjWARN_BADQACC"
-  std::int64_t count = 0;       // how many times it was raised in the run
-  std::int64_t first_step = 0;  // the step during which it was first raised
-  std::string message;          // MuJoCo's text for it, with the last info
-};
-
-// The run's recorded states, one row per recorded step, stored row by row
-// (the loop writes one row of 22 adjacent doubles per step; writing 22
-// separate column arrays instead cost the loop about 4% more time). Row k holds the state at the start of its
-// step and the inputs written for that step; the final row (step == steps)
-// has no inputs after it, so its input columns hold NaN.
-class Trajectory {
- public:
-  enum Column : int {
+// The chapter's trajectory columns, in order (chapter_columns() describes
+// them as Columns).
+struct ChapterColumns {
+  enum : int {
     kStep, kTime, kCtrl, kShoveX, kShoveY, kShoveZ,
     kBoxX, kBoxY, kBoxZ, kBoxQw, kBoxQx, kBoxQy, kBoxQz,
     kBoxVx, kBoxVy, kBoxVz, kBoxWx, kBoxWy, kBoxWz,
@@ -107,85 +89,17 @@ class Trajectory {
     kWorkConstraintPositive, kEnergyUnexplained,
     kNumColumns
   };
-  static constexpr std::array<std::string_view, kNumColumns> kColumnNames = {
+  static constexpr std::array<std::string_view, kNumColumns> kNames = {
       "step", "time", "ctrl", "shove_x", "shove_y", "shove_z",
       "box_x", "box_y", "box_z", "box_qw", "box_qx", "box_qy", "box_qz",
       "box_vx", "box_vy", "box_vz", "box_wx", "box_wy", "box_wz",
       "pusher_x", "pusher_vx", "ncon",
       "energy", "work_actuator", "work_shove", "work_passive", "work_constraint",
       "work_constraint_positive", "energy_unexplained"};
-  // Columns whose values are whole numbers (written without a decimal point).
-  [[nodiscard]] static constexpr bool is_integer_column(int column) noexcept {
-    return column == kStep || column == kNcon;
-  }
-  // Columns that hold the inputs written for a step (empty in the final row).
-  [[nodiscard]] static constexpr bool is_input_column(int column) noexcept {
-    return column >= kCtrl && column <= kShoveZ;
-  }
-  // Rows a run of `steps` steps records: every K-th step, then the final
-  // state. Never overflows for steps, record_every in 1 .. kMaxSteps.
-  [[nodiscard]] static std::int64_t rows_for(std::int64_t steps, std::int64_t record_every) noexcept {
-    return steps / record_every + (steps % record_every != 0 ? 1 : 0) + 1;
-  }
-
-  Trajectory() = default;
-  // `columns`: kNumBaseColumns, or kNumColumns with the energy audit.
-  Trajectory(std::int64_t rows, int columns)
-      : rows_(rows), columns_(columns), values_(static_cast<size_t>(rows) * static_cast<size_t>(columns)) {}
-
-  [[nodiscard]] std::int64_t rows() const noexcept { return rows_; }
-  [[nodiscard]] int columns() const noexcept { return columns_; }
-  [[nodiscard]] double at(std::int64_t row, int column) const noexcept {
-    return values_[static_cast<size_t>(row) * static_cast<size_t>(columns_) + static_cast<size_t>(column)];
-  }
-  // Row `row`: columns() adjacent values.
-  [[nodiscard]] const double* row(std::int64_t row) const noexcept {
-    return values_.data() + static_cast<size_t>(row) * static_cast<size_t>(columns_);
-  }
-  [[nodiscard]] double* mutable_row(std::int64_t row) noexcept {
-    return values_.data() + static_cast<size_t>(row) * static_cast<size_t>(columns_);
-  }
-  // All rows() x columns() values, row-major.
-  [[nodiscard]] const double* data() const noexcept { return values_.data(); }
-
- private:
-  std::int64_t rows_ = 0;
-  int columns_ = kNumBaseColumns;
-  std::vector<double> values_;
 };
 
-// One trajectory column, as the CSV writer and the bindings need it.
-struct Column {
-  std::string name;      // "box_x"; for scenarios made from the scene's names
-  std::string unit;      // "m", "rad", "m/s", "N"; "" for counts and quaternions
-  bool integer = false;  // a whole number (written without a decimal point)
-  bool input = false;    // an input written for the step: the final row has none (NaN, an empty cell)
-  // The recorded body whose 13 columns this is one of (x y z, qw qx qy qz,
-  // vx vy vz, wx wy wz, in that order); "" for every other column.
-  std::string body;
-};
-
-// The chapter's first `count` columns (Trajectory::kColumnNames).
+// The chapter's first `count` columns (ChapterColumns::kNames).
 [[nodiscard]] std::vector<Column> chapter_columns(int count);
-
-// Where a run's trajectory rows go as the loop makes them: kept in memory
-// (RunResult::trajectory, the default), streamed to a file by the commands,
-// or reduced on the fly. The loop hands over rows in blocks between its
-// chunks of steps, outside MuJoCo's C frames, so a sink may throw (a full
-// disk): the run stops and the exception reaches the caller.
-class RowSink {
- public:
-  virtual ~RowSink() = default;
-  // Once, before start(), from loops whose columns are not the chapter's (a
-  // scenario's, named from its scene): what each column is.
-  virtual void describe(const std::vector<Column>& /*columns*/) {}
-  // Once, before any row: the width of every row (Trajectory::kNumBaseColumns,
-  // or kNumColumns with the energy audit) and how many rows will come.
-  virtual void start(int columns, std::int64_t rows) = 0;
-  // `count` rows, each `columns` adjacent doubles, in order.
-  virtual void write(const double* rows, std::int64_t count) = 0;
-};
-
 
 // The energy audit's totals over a whole run (RunConfig::audit_energy), J.
 struct EnergyTotals {
@@ -199,17 +113,15 @@ struct EnergyTotals {
   double unexplained = 0.0;      // (energy_end - energy_start) - all the work
 };
 
-struct RunResult {
+// The chapter's run: the record any run leaves (its name the chapter
+// scenario's, its columns ChapterColumns, its schedule the motor's 1.0 and
+// the shove's window), with the chapter's report on top.
+struct RunResult : RunRecord {
   RunConfig config;
   Metrics metrics;
   Metrics unrounded_metrics;  // the same, floats as computed (tables; metrics.json rounds)
   Shove shove;             // the shove drawn for this run (applied only if perturb)
-  Trajectory trajectory;    // empty when the rows went to a RowSink
-  std::int64_t rows = 0;    // trajectory rows the run recorded, kept or not
-  std::vector<Warning> warnings;
   EnergyTotals energy;     // zeros unless config.audit_energy
-  double timestep = 0.0;   // the model's timestep during the run
-  double sim_time = 0.0;   // mjData::time at the end
 };
 
 // Runs the chapter's loop on `model` (a copy of it with config.timestep when

@@ -32,6 +32,10 @@
 
 namespace simloop {
 
+// The chapter's run as a scenario is named so (Scenario::chapter(), and the
+// record of the chapter's own run).
+inline constexpr std::string_view kChapterScenarioName = "ch0.1-sim-loop";
+
 // A point or span of a run, in steps or in simulated seconds (converted with
 // the run's timestep, rounded to the nearest step).
 struct When {

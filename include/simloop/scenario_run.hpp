@@ -12,7 +12,6 @@
 
 #include "simloop/control.hpp"
 #include "simloop/model.hpp"
-#include "simloop/output.hpp"
 #include "simloop/recorder.hpp"
 #include "simloop/scenario.hpp"
 #include "simloop/shove.hpp"
@@ -42,7 +41,7 @@ struct ScenarioConfig {
 // controls, or a policy's decisions (Policy in recorder.hpp), instead of the
 // scenario's controls, and starts from the caller's state; all checked
 // first (InvalidArgument naming them).
-[[nodiscard]] ScenarioRunResult run_scenario(const Model& scene, const Scenario& scenario,
+[[nodiscard]] RunRecord run_scenario(const Model& scene, const Scenario& scenario,
                                              const ScenarioConfig& config, Data* workspace = nullptr,
                                              RowSink* sink = nullptr, RunControl* control = nullptr,
                                              const RunInputs& inputs = {});
@@ -75,7 +74,7 @@ void check_scenario(const Model& scene, const Scenario& scenario, const Scenario
 // keep_rows false: the runs keep no trajectory (each result still has its
 // final_row, final_state, warnings and schedule, which is all the metrics
 // need), so a batch's memory does not grow with its runs' lengths.
-[[nodiscard]] std::vector<ScenarioRunResult> run_scenario_batch(const Model& scene, const Scenario& scenario,
+[[nodiscard]] std::vector<RunRecord> run_scenario_batch(const Model& scene, const Scenario& scenario,
                                                                 const std::vector<ScenarioConfig>& configs,
                                                                 int threads = 0, RunControl* control = nullptr,
                                                                 const std::vector<RunInputs>& inputs = {},
@@ -85,33 +84,11 @@ void check_scenario(const Model& scene, const Scenario& scenario, const Scenario
 // in its result's trajectory; each used by one worker at a time): a sink
 // that reduces rows as they come lets a batch of any length run in little
 // memory (the scenario sweep does; keep_rows false above is DiscardRows).
-[[nodiscard]] std::vector<ScenarioRunResult> run_scenario_batch(const Model& scene, const Scenario& scenario,
+[[nodiscard]] std::vector<RunRecord> run_scenario_batch(const Model& scene, const Scenario& scenario,
                                                                 const std::vector<ScenarioConfig>& configs,
                                                                 const std::vector<RowSink*>& sinks,
                                                                 int threads = 0, RunControl* control = nullptr,
                                                                 const std::vector<RunInputs>& inputs = {});
-
-// The recorded bodies, by name, with the column of each one's "_x" (its 13
-// columns follow: position, orientation, linear and angular velocity).
-[[nodiscard]] std::map<std::string, std::size_t> recorded_bodies(const ScenarioRunResult& result);
-// The same from a run's columns (what a RowSink's describe() is given).
-[[nodiscard]] std::map<std::string, std::size_t> recorded_bodies(const std::vector<Column>& columns);
-
-// metrics.json for a scenario run: byte for byte what Python's
-// json.dumps(metrics, indent=2, sort_keys=True) + "\n" writes, floats
-// rounded to 6 decimals as in the chapter's. Keys: scenario, seed, rng,
-// perturb, steps, timestep; bodies: each recorded body's final_pos (m) and
-// final_speed (m/s); disturbances: each one's body, force (N) and torque
-// (N m) as applied, start_step, steps (as they happened) and steps_asked;
-// warnings: MuJoCo's and simloop's, by name, with their counts.
-[[nodiscard]] std::string scenario_metrics_json(const ScenarioRunResult& result);
-
-// The closing lines for people, as for the chapter's run.
-[[nodiscard]] std::string scenario_summary(const ScenarioRunResult& result);
-
-// Writes an in-memory scenario result's metrics.json and trajectory.csv into
-// `dir`, both or neither (as write_outputs does for the chapter's run).
-OutputFiles write_scenario_outputs(const ScenarioRunResult& result, const std::filesystem::path& dir);
 
 // ---------------------------------------------------------------------------
 // Drawing a run (the rerun recording): every body that moves, not only the
@@ -129,7 +106,7 @@ OutputFiles write_scenario_outputs(const ScenarioRunResult& result, const std::f
 // where the recorded bodies' poses are) going to `drawing`. It is one run:
 // the recorder reads the extra bodies too, and the rows are split. The
 // result is labelled as run_scenario's, with the trajectory's columns.
-[[nodiscard]] ScenarioRunResult run_scenario_drawn(const Model& scene, const Scenario& scenario,
+[[nodiscard]] RunRecord run_scenario_drawn(const Model& scene, const Scenario& scenario,
                                                    const ScenarioConfig& config, RowSink& sink, RowSink& drawing,
                                                    RunControl* control = nullptr);
 

@@ -6,15 +6,14 @@ Python until the bindings do it (python/bindings.cc; then this module goes).
   answer with one line naming the argument (and, being Python, a wrong
   argument count gets Python's own one line too). Only types are checked
   here: the values are the C++ side's to check.
-- Two conveniences of the results: ScenarioResult.metrics (metrics.json's
-  dict) and SweepResult.to_pandas / to_arrow (simloop.tables).
+- A convenience of the sweep's result: SweepResult.to_pandas / to_arrow
+  (simloop.tables).
 
 `import simloop` runs install() once, before anyone can reach the classes.
 """
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable, Dict, List, Tuple, Union
 
@@ -23,7 +22,7 @@ if TYPE_CHECKING:
     from numpy.typing import NDArray
 
 from ._checks import PathLike, _check_path, _check_real, _check_text, _describe, _show
-from ._core import Model, RunResult, ScenarioResult, SweepResult
+from ._core import Model, RunResult, SweepResult
 
 
 def install() -> None:
@@ -71,10 +70,6 @@ def install() -> None:
             return text
         return method
 
-    def scenario_metrics(self: ScenarioResult) -> Dict[str, Any]:
-        metrics: Dict[str, Any] = json.loads(self.metrics_json())
-        return metrics
-
     def sweep_to_pandas(self: SweepResult) -> Any:
         from .tables import sweep_table  # numpy and pandas: loaded when asked for
 
@@ -115,5 +110,3 @@ def install() -> None:
         checked.__qualname__ = f"{cls.__name__}.{name}"
         checked.__doc__ = doc
         setattr(cls, name, checked)
-    setattr(ScenarioResult, "metrics", property(scenario_metrics,
-                                                doc="The dict metrics.json holds (floats rounded to 6 decimals)."))

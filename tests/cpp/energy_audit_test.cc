@@ -14,6 +14,7 @@
 
 namespace {
 
+using simloop::ChapterColumns;
 using simloop::Trajectory;
 
 const simloop::Model& scene() {
@@ -37,10 +38,10 @@ TEST(EnergyAudit, ChangesNoPhysics) {
   audit.audit_energy = true;
   const auto a = simloop::run(scene(), plain);
   const auto b = simloop::run(scene(), audit);
-  ASSERT_EQ(a.trajectory.columns(), Trajectory::kNumBaseColumns);
-  ASSERT_EQ(b.trajectory.columns(), Trajectory::kNumColumns);
+  ASSERT_EQ(a.trajectory.columns(), ChapterColumns::kNumBaseColumns);
+  ASSERT_EQ(b.trajectory.columns(), ChapterColumns::kNumColumns);
   for (std::int64_t r = 0; r < a.trajectory.rows(); ++r) {
-    ASSERT_EQ(std::memcmp(a.trajectory.row(r), b.trajectory.row(r), sizeof(double) * Trajectory::kNumBaseColumns), 0)
+    ASSERT_EQ(std::memcmp(a.trajectory.row(r), b.trajectory.row(r), sizeof(double) * ChapterColumns::kNumBaseColumns), 0)
         << "row " << r;
   }
   EXPECT_EQ(simloop::metrics_json(a.metrics), simloop::metrics_json(b.metrics));
@@ -49,16 +50,16 @@ TEST(EnergyAudit, ChangesNoPhysics) {
 TEST(EnergyAudit, ColumnsAddUpRowByRow) {
   const auto r = audited(0.002, 2000, true);
   const Trajectory& t = r.trajectory;
-  const double e0 = t.at(0, Trajectory::kEnergy);
+  const double e0 = t.at(0, ChapterColumns::kEnergy);
   // At rest: potential m g z of the box (0.5 kg at 0.05 m) and pusher (1 kg at 0.05 m).
   EXPECT_NEAR(e0, 1.5 * 9.81 * 0.05, 1e-9);
   for (std::int64_t row = 0; row < t.rows(); ++row) {
-    const double work = t.at(row, Trajectory::kWorkActuator) + t.at(row, Trajectory::kWorkShove) +
-                        t.at(row, Trajectory::kWorkPassive) + t.at(row, Trajectory::kWorkConstraint);
-    ASSERT_NEAR(t.at(row, Trajectory::kEnergyUnexplained), t.at(row, Trajectory::kEnergy) - e0 - work, 1e-9);
+    const double work = t.at(row, ChapterColumns::kWorkActuator) + t.at(row, ChapterColumns::kWorkShove) +
+                        t.at(row, ChapterColumns::kWorkPassive) + t.at(row, ChapterColumns::kWorkConstraint);
+    ASSERT_NEAR(t.at(row, ChapterColumns::kEnergyUnexplained), t.at(row, ChapterColumns::kEnergy) - e0 - work, 1e-9);
   }
   const simloop::EnergyTotals& e = r.energy;
-  EXPECT_EQ(e.energy_end, t.at(t.rows() - 1, Trajectory::kEnergy));
+  EXPECT_EQ(e.energy_end, t.at(t.rows() - 1, ChapterColumns::kEnergy));
   EXPECT_GT(e.work_actuator, 10.0);   // the motor drives everything
   EXPECT_LT(e.work_passive, -5.0);    // damping takes energy out
   EXPECT_LT(e.work_constraint, 0.0);  // friction takes energy out

@@ -32,7 +32,7 @@ simloop::Scenario constant_pusht(const char* length = "steps = 700") {
 
 bool same_bits(const double* a, const double* b, std::size_t n) { return std::memcmp(a, b, n * sizeof(double)) == 0; }
 
-bool same_run(const simloop::ScenarioRunResult& a, const simloop::ScenarioRunResult& b) {
+bool same_run(const simloop::RunRecord& a, const simloop::RunRecord& b) {
   const simloop::Trajectory& x = a.trajectory;
   const simloop::Trajectory& y = b.trajectory;
   return x.rows() == y.rows() && x.columns() == y.columns() && a.final_row.size() == b.final_row.size() &&
@@ -84,10 +84,10 @@ TEST(Policy, WritingTheScheduledCtrlGivesTheOpenLoopRunsBits) {
   for (std::uint64_t seed : {0u, 3u}) {
     simloop::ScenarioConfig config;
     config.seed = seed;
-    const simloop::ScenarioRunResult open = simloop::run_scenario(scene, scenario, config);
+    const simloop::RunRecord open = simloop::run_scenario(scene, scenario, config);
     for (std::int64_t every : {1, 7, 50, 5000}) {
       Constant policy(every, {0.8, 0.3});
-      const simloop::ScenarioRunResult closed = simloop::run_scenario(scene, scenario, config, nullptr, nullptr, nullptr, simloop::RunInputs::deciding(policy));
+      const simloop::RunRecord closed = simloop::run_scenario(scene, scenario, config, nullptr, nullptr, nullptr, simloop::RunInputs::deciding(policy));
       EXPECT_TRUE(same_run(open, closed)) << "seed " << seed << ", every " << every;
     }
     // And the hook does decide: other values, other bits.
@@ -101,9 +101,9 @@ TEST(Policy, DecidesEveryKStepsOnTheRecordersRowAndItsCtrlWinsOverTheSchedules) 
   const simloop::Model scene = simloop::load_scene(scenario);
   simloop::ScenarioConfig config;
   config.record_every = 1;
-  const simloop::ScenarioRunResult probe = simloop::run_scenario(scene, scenario, config);
+  const simloop::RunRecord probe = simloop::run_scenario(scene, scenario, config);
   Steering policy(50, column(probe.columns, "tblock_x"));
-  const simloop::ScenarioRunResult r = simloop::run_scenario(scene, scenario, config, nullptr, nullptr, nullptr, simloop::RunInputs::deciding(policy));
+  const simloop::RunRecord r = simloop::run_scenario(scene, scenario, config, nullptr, nullptr, nullptr, simloop::RunInputs::deciding(policy));
   EXPECT_EQ(policy.steps, (std::vector<std::int64_t>{0, 50, 100, 150, 200}));
   const int ctrl_x = column(r.columns, "push_x_ctrl");
   for (std::size_t k = 0; k < policy.steps.size(); ++k) {
@@ -178,7 +178,7 @@ TEST(Policy, BatchesEqualSequentialRunsAtAnyThreadCount) {
       ctrl[1] = -std::tanh(o[4]);
     }
   } policy;
-  std::vector<simloop::ScenarioRunResult> alone;
+  std::vector<simloop::RunRecord> alone;
   for (const auto& c : configs) alone.push_back(simloop::run_scenario(scene, scenario, c, nullptr, nullptr, nullptr, simloop::RunInputs::deciding(policy)));
   for (int threads : {1, 2}) {
     const auto batch = simloop::run_scenario_batch(scene, scenario, configs, threads, nullptr,
@@ -195,7 +195,7 @@ TEST(Episodes, FollowTheBitsOfAPolicyRunGivenItsActions) {
   simloop::Episodes episodes(scene, scenario, config, 1);
   ASSERT_EQ(episodes.steps(), 230);
   Steering policy(50, column(episodes.columns(), "tblock_x"));
-  const simloop::ScenarioRunResult r = simloop::run_scenario(scene, scenario, config, nullptr, nullptr, nullptr, simloop::RunInputs::deciding(policy));
+  const simloop::RunRecord r = simloop::run_scenario(scene, scenario, config, nullptr, nullptr, nullptr, simloop::RunInputs::deciding(policy));
   const auto width = static_cast<std::size_t>(episodes.width());
   ASSERT_EQ(width, r.columns.size());
   std::vector<double> observation(width);

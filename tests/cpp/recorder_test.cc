@@ -29,7 +29,7 @@ Loaded load(const char* file) {
 
 struct PushtRun {
   simloop::Scenario scenario;
-  simloop::ScenarioRunResult result;
+  simloop::RunRecord result;
   int column(const std::string& name) const {
     for (size_t i = 0; i < result.columns.size(); ++i) {
       if (result.columns[i].name == name) return static_cast<int>(i);

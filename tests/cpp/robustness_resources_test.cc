@@ -28,6 +28,7 @@
 
 namespace {
 
+using simloop::ChapterColumns;
 using simloop::Trajectory;
 using test::config_with;
 using test::scene;
@@ -214,18 +215,18 @@ TEST(Robustness, ASweepReducesOnTheFlyToWhatTheFullTrajectoriesSay) {
     const Trajectory& t = r.trajectory;
     double peak = -INFINITY, max_y = 0.0;
     for (std::int64_t row = 0; row < t.rows(); ++row) {
-      peak = std::max(peak, t.at(row, Trajectory::kBoxZ));
-      max_y = std::max(max_y, std::fabs(t.at(row, Trajectory::kBoxY)));
+      peak = std::max(peak, t.at(row, ChapterColumns::kBoxZ));
+      max_y = std::max(max_y, std::fabs(t.at(row, ChapterColumns::kBoxY)));
     }
     const std::int64_t last = t.rows() - 1;
     const simloop::SweepPoint& p = s.points[i];
     EXPECT_EQ(p.steps, c.steps);
     EXPECT_EQ(p.peak_box_z, peak);
     EXPECT_EQ(p.max_abs_box_y, max_y);
-    EXPECT_EQ(p.final_box_x, t.at(last, Trajectory::kBoxX));
-    EXPECT_EQ(p.final_box_y, t.at(last, Trajectory::kBoxY));
-    EXPECT_EQ(p.final_box_z, t.at(last, Trajectory::kBoxZ));
-    EXPECT_EQ(p.final_pusher_x, t.at(last, Trajectory::kPusherX));
+    EXPECT_EQ(p.final_box_x, t.at(last, ChapterColumns::kBoxX));
+    EXPECT_EQ(p.final_box_y, t.at(last, ChapterColumns::kBoxY));
+    EXPECT_EQ(p.final_box_z, t.at(last, ChapterColumns::kBoxZ));
+    EXPECT_EQ(p.final_pusher_x, t.at(last, ChapterColumns::kPusherX));
   }
 }
 

@@ -25,6 +25,7 @@
 
 namespace {
 
+using simloop::ChapterColumns;
 using simloop::Trajectory;
 using test::config_with;
 using test::scene;
@@ -81,7 +82,7 @@ TEST(Robustness, TheBudgetIsExactAndBatchesSumTheirRuns) {
   EXPECT_EQ(simloop::kept_trajectory_bytes(c), bytes);
   simloop::RunConfig audited = c;
   audited.audit_energy = true;
-  EXPECT_EQ(simloop::kept_trajectory_bytes(audited), 1001u * Trajectory::kNumColumns * 8);
+  EXPECT_EQ(simloop::kept_trajectory_bytes(audited), 1001u * ChapterColumns::kNumColumns * 8);
   EXPECT_NO_THROW(simloop::check_kept_trajectories({c}, bytes));
   EXPECT_THROW(simloop::check_kept_trajectories({c}, bytes - 1), simloop::InvalidArgument);
   // Two runs each fit alone, not together.

@@ -13,6 +13,7 @@
 
 namespace {
 
+using simloop::ChapterColumns;
 using simloop::Trajectory;
 
 const simloop::Model& scene() {
@@ -79,26 +80,26 @@ TEST(Run, TrajectoryStartsAtRestAndEndsAtTheMetrics) {
   const Trajectory& t = r.trajectory;
   ASSERT_EQ(t.rows(), 2001);
   // Row 0: the rest pose after mj_forward, with the first step's inputs.
-  EXPECT_EQ(t.at(0, Trajectory::kStep), 0);
-  EXPECT_EQ(t.at(0, Trajectory::kTime), 0.0);
-  EXPECT_EQ(t.at(0, Trajectory::kBoxX), 0.4);
-  EXPECT_EQ(t.at(0, Trajectory::kBoxZ), 0.05);
-  EXPECT_EQ(t.at(0, Trajectory::kBoxQw), 1.0);
-  EXPECT_EQ(t.at(0, Trajectory::kCtrl), 1.0);
-  EXPECT_GT(t.at(0, Trajectory::kNcon), 0);  // box and pusher rest on the floor
+  EXPECT_EQ(t.at(0, ChapterColumns::kStep), 0);
+  EXPECT_EQ(t.at(0, ChapterColumns::kTime), 0.0);
+  EXPECT_EQ(t.at(0, ChapterColumns::kBoxX), 0.4);
+  EXPECT_EQ(t.at(0, ChapterColumns::kBoxZ), 0.05);
+  EXPECT_EQ(t.at(0, ChapterColumns::kBoxQw), 1.0);
+  EXPECT_EQ(t.at(0, ChapterColumns::kCtrl), 1.0);
+  EXPECT_GT(t.at(0, ChapterColumns::kNcon), 0);  // box and pusher rest on the floor
   // Final row: step == steps, no inputs, and the state metrics.json reports.
   const std::int64_t last = t.rows() - 1;
-  EXPECT_EQ(t.at(last, Trajectory::kStep), 2000);
-  EXPECT_NEAR(t.at(last, Trajectory::kTime), 4.0, 1e-9);
-  for (int c = Trajectory::kCtrl; c <= Trajectory::kShoveZ; ++c) EXPECT_TRUE(std::isnan(t.at(last, c)));
-  for (int i = 0; i < 3; ++i) EXPECT_EQ(simloop::round6(t.at(last, Trajectory::kBoxX + i)), r.metrics.box_final_pos[i]);
-  EXPECT_EQ(simloop::round6(t.at(last, Trajectory::kPusherX)), r.metrics.pusher_final_x);
-  const double vx = t.at(last, Trajectory::kBoxVx), vy = t.at(last, Trajectory::kBoxVy), vz = t.at(last, Trajectory::kBoxVz);
+  EXPECT_EQ(t.at(last, ChapterColumns::kStep), 2000);
+  EXPECT_NEAR(t.at(last, ChapterColumns::kTime), 4.0, 1e-9);
+  for (int c = ChapterColumns::kCtrl; c <= ChapterColumns::kShoveZ; ++c) EXPECT_TRUE(std::isnan(t.at(last, c)));
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(simloop::round6(t.at(last, ChapterColumns::kBoxX + i)), r.metrics.box_final_pos[i]);
+  EXPECT_EQ(simloop::round6(t.at(last, ChapterColumns::kPusherX)), r.metrics.pusher_final_x);
+  const double vx = t.at(last, ChapterColumns::kBoxVx), vy = t.at(last, ChapterColumns::kBoxVy), vz = t.at(last, ChapterColumns::kBoxVz);
   EXPECT_EQ(simloop::round6(std::sqrt(vx * vx + vy * vy + vz * vz)), r.metrics.box_final_speed);
   // The pusher reaches the box and shoves it along x.
   EXPECT_GT(r.metrics.box_final_pos[0], 1.0);
   EXPECT_GT(r.metrics.pusher_final_x, 1.0);
-  EXPECT_EQ(r.sim_time, t.at(last, Trajectory::kTime));
+  EXPECT_EQ(r.sim_time, t.at(last, ChapterColumns::kTime));
 }
 
 TEST(Run, RecordEveryKeepsEveryKthStepAndTheFinalState) {
@@ -106,12 +107,12 @@ TEST(Run, RecordEveryKeepsEveryKthStepAndTheFinalState) {
   c.record_every = 7;
   const auto r = simloop::run(scene(), c);
   ASSERT_EQ(r.trajectory.rows(), 16);  // steps 0, 7, ..., 98, then 100
-  for (std::int64_t row = 0; row < 15; ++row) EXPECT_EQ(r.trajectory.at(row, Trajectory::kStep), 7.0 * row);
-  EXPECT_EQ(r.trajectory.at(15, Trajectory::kStep), 100);
+  for (std::int64_t row = 0; row < 15; ++row) EXPECT_EQ(r.trajectory.at(row, ChapterColumns::kStep), 7.0 * row);
+  EXPECT_EQ(r.trajectory.at(15, ChapterColumns::kStep), 100);
   // Recording less does not change the physics.
   const auto full = simloop::run(scene(), config_with(100));
   EXPECT_EQ(simloop::metrics_json(r.metrics), simloop::metrics_json(full.metrics));
-  EXPECT_EQ(r.trajectory.at(3, Trajectory::kBoxY), full.trajectory.at(21, Trajectory::kBoxY));
+  EXPECT_EQ(r.trajectory.at(3, ChapterColumns::kBoxY), full.trajectory.at(21, ChapterColumns::kBoxY));
 }
 
 TEST(Run, SmokeIsAFixedThreeHundredSteps) {
@@ -128,9 +129,9 @@ TEST(Run, TheShoveActsExactlyInItsWindowAndIsClearedAfter) {
   const Trajectory& t = r.trajectory;
   for (std::int64_t row = 0; row + 1 < t.rows(); ++row) {
     const bool window = row >= 1000 && row < 1050;
-    EXPECT_EQ(t.at(row, Trajectory::kShoveY), window ? r.shove.force_y() : 0.0) << "step " << row;
-    EXPECT_EQ(t.at(row, Trajectory::kShoveX), 0.0);
-    EXPECT_EQ(t.at(row, Trajectory::kShoveZ), 0.0);
+    EXPECT_EQ(t.at(row, ChapterColumns::kShoveY), window ? r.shove.force_y() : 0.0) << "step " << row;
+    EXPECT_EQ(t.at(row, ChapterColumns::kShoveX), 0.0);
+    EXPECT_EQ(t.at(row, ChapterColumns::kShoveZ), 0.0);
   }
   EXPECT_EQ(r.shove.force_y(), 6.9587601802227645);
 }
@@ -144,14 +145,14 @@ TEST(Run, TheSeedChangesTheShoveAndNothingElse) {
   EXPECT_NE(shoved0.shove.force_y(), shoved1.shove.force_y());
   // Identical up to the shove (row 300 differs only in the shove written
   // for step 300), different after it.
-  for (int c = 0; c < Trajectory::kNumBaseColumns; ++c) {
+  for (int c = 0; c < ChapterColumns::kNumBaseColumns; ++c) {
     for (std::int64_t row = 0; row <= 300; ++row) {
-      if (c == Trajectory::kShoveY && row == 300) continue;
+      if (c == ChapterColumns::kShoveY && row == 300) continue;
       ASSERT_EQ(shoved0.trajectory.at(row, c), base0.trajectory.at(row, c)) << row << " " << c;
       ASSERT_EQ(shoved0.trajectory.at(row, c), shoved1.trajectory.at(row, c)) << row << " " << c;
     }
   }
-  EXPECT_NE(shoved0.trajectory.at(301, Trajectory::kBoxVy), base0.trajectory.at(301, Trajectory::kBoxVy));
+  EXPECT_NE(shoved0.trajectory.at(301, ChapterColumns::kBoxVy), base0.trajectory.at(301, ChapterColumns::kBoxVy));
   EXPECT_NE(shoved0.metrics.box_final_pos[1], shoved1.metrics.box_final_pos[1]);
 }
 
@@ -178,12 +179,12 @@ TEST(Run, TheShoveMovesTheBoxSideways) {
 TEST(Run, BreakItTheCoarseTimestepHopsAndDrifts) {
   const auto fine = simloop::run(scene(), config_with(2000, 0.002, false));
   const auto coarse = simloop::run(scene(), config_with(2000, 0.05, false));
-  const double fine_peak_z = column_max(fine.trajectory, Trajectory::kBoxZ);
-  const double coarse_peak_z = column_max(coarse.trajectory, Trajectory::kBoxZ);
-  const double fine_max_y = column_max(fine.trajectory, Trajectory::kBoxY, true);
-  const double coarse_final_y = coarse.trajectory.at(coarse.trajectory.rows() - 1, Trajectory::kBoxY);
+  const double fine_peak_z = column_max(fine.trajectory, ChapterColumns::kBoxZ);
+  const double coarse_peak_z = column_max(coarse.trajectory, ChapterColumns::kBoxZ);
+  const double fine_max_y = column_max(fine.trajectory, ChapterColumns::kBoxY, true);
+  const double coarse_final_y = coarse.trajectory.at(coarse.trajectory.rows() - 1, ChapterColumns::kBoxY);
   // No lateral force anywhere: the inputs are a flat push along x.
-  EXPECT_EQ(column_max(coarse.trajectory, Trajectory::kShoveY, true), 0.0);
+  EXPECT_EQ(column_max(coarse.trajectory, ChapterColumns::kShoveY, true), 0.0);
   // The hop: at rest z is 0.05 (half the box).
   EXPECT_LT(fine_peak_z, 0.056);
   EXPECT_GT(coarse_peak_z, 0.085);

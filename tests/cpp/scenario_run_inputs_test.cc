@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "simloop/output.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/scenario_run.hpp"
 #include "simloop/state.hpp"
@@ -54,7 +55,7 @@ TEST(BatchControls, OwnControlsGiveTheBitsOfAHandWrittenLoop) {
   const int nu = scene.get()->nu;
   const std::int64_t steps = 300;
   const std::vector<double> u = random_controls(7, steps, nu);
-  const simloop::ScenarioRunResult r =
+  const simloop::RunRecord r =
       simloop::run_scenario(scene, scenario, config(0, steps, false), nullptr, nullptr, nullptr,
                             controls_input(u, steps, nu));
 
@@ -90,7 +91,7 @@ TEST(BatchControls, ABatchOfOwnControlsEqualsRunningEachAloneAtOneAndTwoThreads)
   std::vector<simloop::RunInputs> inputs;
   for (const auto& u : us) inputs.push_back(controls_input(u, steps, nu));
   inputs[4] = inputs[0];  // runs may share one array
-  std::vector<simloop::ScenarioRunResult> alone;
+  std::vector<simloop::RunRecord> alone;
   for (size_t i = 0; i < cs.size(); ++i) {
     alone.push_back(simloop::run_scenario(scene, scenario, cs[i], nullptr, nullptr, nullptr, inputs[i]));
   }
@@ -114,7 +115,7 @@ TEST(BatchControls, ABatchOfOwnControlsEqualsRunningEachAloneAtOneAndTwoThreads)
                   std::memcmp(lean[i].final_row.data(), alone[i].final_row.data(),
                               sizeof(double) * alone[i].final_row.size()) == 0);
       EXPECT_TRUE(same(lean[i].final_state, alone[i].final_state));
-      EXPECT_EQ(simloop::scenario_metrics_json(lean[i]), simloop::scenario_metrics_json(alone[i]));
+      EXPECT_EQ(simloop::metrics_json(lean[i]), simloop::metrics_json(alone[i]));
     }
   }
 }

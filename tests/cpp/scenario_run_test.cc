@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "run_detail.hpp"
+#include "simloop/output.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/scenario_run.hpp"
 
@@ -20,7 +21,7 @@ simloop::Scenario scene_file(const char* name) {
   return simloop::Scenario::from_toml_file(std::string(SIMLOOP_TEST_SCENES) + "/" + name);
 }
 
-bool same_bits(const simloop::ScenarioRunResult& a, const simloop::ScenarioRunResult& b) {
+bool same_bits(const simloop::RunRecord& a, const simloop::RunRecord& b) {
   const simloop::Trajectory& x = a.trajectory;
   const simloop::Trajectory& y = b.trajectory;
   // memcmp, not ==: the final row's input columns hold NaN.
@@ -48,15 +49,15 @@ std::vector<simloop::ScenarioConfig> configs(std::initializer_list<std::uint64_t
 void expect_equal_to_sequential(const char* file, const std::vector<simloop::ScenarioConfig>& cs) {
   const simloop::Scenario scenario = scene_file(file);
   const simloop::Model scene = simloop::load_scene(scenario);
-  std::vector<simloop::ScenarioRunResult> alone;
+  std::vector<simloop::RunRecord> alone;
   for (const auto& c : cs) alone.push_back(simloop::run_scenario(scene, scenario, c));
   for (int threads : {1, 2, 7}) {
     const auto batch = simloop::run_scenario_batch(scene, scenario, cs, threads);
     ASSERT_EQ(batch.size(), cs.size());
     for (size_t i = 0; i < cs.size(); ++i) {
       EXPECT_TRUE(same_bits(batch[i], alone[i])) << file << " run " << i << ", " << threads << " threads";
-      EXPECT_EQ(simloop::scenario_metrics_json(batch[i]), simloop::scenario_metrics_json(alone[i]));
-      EXPECT_EQ(simloop::scenario_summary(batch[i]), simloop::scenario_summary(alone[i]));
+      EXPECT_EQ(simloop::metrics_json(batch[i]), simloop::metrics_json(alone[i]));
+      EXPECT_EQ(simloop::summary_text(batch[i]), simloop::summary_text(alone[i]));
     }
   }
 }
@@ -201,16 +202,16 @@ TEST(ScenarioDrawn, TheTrajectoryIsUnchangedAndEveryMovingBodyHasItsPose) {
   EXPECT_NE(std::find(moving.begin(), moving.end(), "torso"), moving.end());
   simloop::ScenarioConfig config;
   config.record_every = 7;
-  const simloop::ScenarioRunResult kept = simloop::run_scenario(scene, scenario, config);
+  const simloop::RunRecord kept = simloop::run_scenario(scene, scenario, config);
   Collect rows, drawing;
-  const simloop::ScenarioRunResult drawn = simloop::run_scenario_drawn(scene, scenario, config, rows, drawing);
+  const simloop::RunRecord drawn = simloop::run_scenario_drawn(scene, scenario, config, rows, drawing);
   ASSERT_EQ(rows.width, kept.trajectory.columns());
   ASSERT_EQ(rows.values.size(), static_cast<size_t>(kept.trajectory.rows() * kept.trajectory.columns()));
   EXPECT_EQ(std::memcmp(rows.values.data(), kept.trajectory.data(), rows.values.size() * sizeof(double)), 0);
   ASSERT_EQ(drawn.columns.size(), kept.columns.size());
   for (size_t c = 0; c < kept.columns.size(); ++c) EXPECT_EQ(drawn.columns[c].name, kept.columns[c].name);
   EXPECT_EQ(std::memcmp(drawn.final_row.data(), kept.final_row.data(), kept.final_row.size() * sizeof(double)), 0);
-  EXPECT_EQ(simloop::scenario_metrics_json(drawn), simloop::scenario_metrics_json(kept));
+  EXPECT_EQ(simloop::metrics_json(drawn), simloop::metrics_json(kept));
   // The drawing: the same values, then x y z qw qx qy qz per moving body.
   const int width = kept.trajectory.columns();
   ASSERT_EQ(drawing.width, width + 7 * static_cast<int>(moving.size()));

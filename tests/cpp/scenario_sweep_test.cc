@@ -23,7 +23,7 @@ simloop::Scenario scene_file(const char* name) {
 bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
 
 // The run a sweep point stands for, kept in memory.
-simloop::ScenarioRunResult alone(const simloop::Model& scene, const simloop::Scenario& scenario, double dt,
+simloop::RunRecord alone(const simloop::Model& scene, const simloop::Scenario& scenario, double dt,
                                  double duration) {
   simloop::ScenarioConfig c;
   c.timestep = dt;
@@ -47,7 +47,7 @@ TEST(ScenarioSweep, EachPointIsBitwiseTheRunAloneAndTheFinestIsTheReference) {
   std::vector<std::array<double, 3>> reference;
   for (std::size_t i = 0; i < swept.points.size(); ++i) {
     const simloop::ScenarioSweepPoint& p = swept.points[i];
-    const simloop::ScenarioRunResult run = alone(scene, scenario, p.timestep, duration);
+    const simloop::RunRecord run = alone(scene, scenario, p.timestep, duration);
     EXPECT_EQ(p.steps, run.schedule.steps);
     // The largest speed over every row, and the final positions: the same bits.
     double peak = 0.0;

@@ -61,13 +61,13 @@ TEST(SceneParams, TheScenesOwnValuesChangeNoBit) {
 
 TEST(SceneParams, OtherValuesChangeTheRunAndLeaveTheOriginalAlone) {
   const simloop::Model scene = simloop::Model::pusher_scene();
-  const double box_x = run_on(scene).trajectory.at(600, simloop::Trajectory::kBoxX);
+  const double box_x = run_on(scene).trajectory.at(600, simloop::ChapterColumns::kBoxX);
   for (const simloop::SceneParam& p : std::vector<simloop::SceneParam>{
            {Kind::kFriction, "", 0.3}, {Kind::kMass, "box", 2.0}, {Kind::kDamping, "pusher_slide", 20.0}}) {
     const simloop::Model copy = simloop::with_scene_params(scene, {p});
-    EXPECT_NE(run_on(copy).trajectory.at(600, simloop::Trajectory::kBoxX), box_x) << simloop::scene_param_kind_name(p.kind);
+    EXPECT_NE(run_on(copy).trajectory.at(600, simloop::ChapterColumns::kBoxX), box_x) << simloop::scene_param_kind_name(p.kind);
   }
-  EXPECT_EQ(run_on(scene).trajectory.at(600, simloop::Trajectory::kBoxX), box_x);
+  EXPECT_EQ(run_on(scene).trajectory.at(600, simloop::ChapterColumns::kBoxX), box_x);
   EXPECT_EQ(scene.get()->body_mass[1], 0.5);
   EXPECT_EQ(scene.get()->geom_friction[0], 1.0);
 }

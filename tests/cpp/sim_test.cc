@@ -18,6 +18,7 @@ namespace {
 
 using simloop::Model;
 using simloop::Sim;
+using simloop::ChapterColumns;
 using simloop::Trajectory;
 
 // The chapter's scene, loaded once.
@@ -65,8 +66,8 @@ TEST(Sim, TheChaptersLoopWrittenWithSimMatchesRun) {
   }
   const std::int64_t last = reference.trajectory.rows() - 1;
   const auto pos = sim.box_position();
-  for (int i = 0; i < 3; ++i) EXPECT_EQ(pos[i], reference.trajectory.at(last, Trajectory::kBoxX + i));
-  EXPECT_EQ(sim.pusher_x(), reference.trajectory.at(last, Trajectory::kPusherX));
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(pos[i], reference.trajectory.at(last, ChapterColumns::kBoxX + i));
+  EXPECT_EQ(sim.pusher_x(), reference.trajectory.at(last, ChapterColumns::kPusherX));
   EXPECT_EQ(sim.time(), reference.sim_time);
   EXPECT_EQ(sim.steps_taken(), 600);
 }

@@ -75,6 +75,10 @@ def test_results_pickle_field_by_field():
     assert back.metrics_json() == result.metrics_json() and back.summary() == result.summary()
     assert repr(back.shove) == repr(result.shove) and back.config.rng == "numpy"
     assert (back.rows, back.timestep, back.sim_time) == (result.rows, result.timestep, result.sim_time)
+    # and the record under the chapter's report
+    assert (back.name, back.seed, back.rng, back.steps) == (result.name, 5, "numpy", 300)
+    assert repr(back.disturbances) == repr(result.disturbances) and back.column_units == result.column_units
+    assert np.array_equal(back.final_state, result.final_state) and back.final_state.size > 0
 
     scenario = simloop.run_scenario(SCENES / "walker.toml", seed=2, steps=400, record_every=3)
     again = pickle.loads(pickle.dumps(scenario))

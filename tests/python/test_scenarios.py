@@ -221,3 +221,31 @@ def test_the_chapters_scenario_is_the_chapters_run_bit_for_bit(seed, rng, timest
         assert np.array_equal(chapter.column(ours), scenario.column(theirs), equal_nan=True), ours
     assert chapter.metrics["box_final_pos"] == scenario.metrics["bodies"]["box"]["final_pos"]
     assert [w.name for w in chapter.warnings] == [w.name for w in scenario.warnings]
+
+
+def test_the_chapters_result_is_a_run_record_with_its_report_on_top(tmp_path):
+    # One record per run: the chapter's RunResult is a ScenarioResult,
+    # labelled as its scenario, and its final state continues the run.
+    chapter = simloop.run(seed=2, steps=400)
+    assert isinstance(chapter, simloop.ScenarioResult)
+    assert chapter.name == simloop.Scenario.chapter().name
+    assert (chapter.seed, chapter.rng, chapter.perturb, chapter.steps) == (2, "mt19937_64", True, 400)
+    [shove] = chapter.disturbances
+    assert shove["body"] == "box" and shove["start_step"] == chapter.shove.start_step == 200
+    assert shove["force"][1] == chapter.shove.force_y
+    assert chapter.column_units["box_z"] == "m" and chapter.column_units["ncon"] == ""
+    assert np.array_equal(chapter.final_row, chapter.trajectory[-1], equal_nan=True)
+    # its own metrics and files are the chapter's
+    assert set(chapter.metrics) == {"box_final_pos", "box_final_speed", "lateral_drift", "perturb",
+                                    "pusher_final_x", "seed", "shove_moved_box", "steps"}
+    chapter.write(tmp_path)
+    assert (tmp_path / "metrics.json").read_text() == chapter.metrics_json()
+    assert (tmp_path / "trajectory.csv").read_text() == chapter.trajectory_csv()
+    # 400 steps, then 400 more from where it ended, are the 800-step run's
+    # state (the second half unshoved, as the first half's shove is over).
+    whole = simloop.run_scenario(simloop.Scenario.chapter(), seed=2, steps=800, perturb=False)
+    first = simloop.run_scenario(simloop.Scenario.chapter(), seed=2, steps=400, perturb=False)
+    rest = simloop.run_scenario(simloop.Scenario.chapter(), seed=2, steps=400, perturb=False,
+                                initial_state=simloop.run(seed=2, steps=400, perturb=False).final_state)
+    assert np.array_equal(first.final_state, simloop.run(seed=2, steps=400, perturb=False).final_state)
+    assert np.array_equal(rest.final_state, whole.final_state)

@@ -1,0 +1,138 @@
+// simloop._core's run record: what any run leaves (ScenarioResult in Python;
+// the chapter's RunResult is one, with the chapter's report on top), and
+// the warnings it holds.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
+
+#include <string>
+#include <utility>
+
+#include "bindings_common.hpp"
+#include "bindings_pickle.hpp"
+#include "simloop/number_format.hpp"
+#include "simloop/output.hpp"
+#include "simloop/run_record.hpp"
+
+namespace simloop_py {
+
+using namespace pybind11::literals;
+using simloop::RunRecord;
+
+namespace {
+
+int column_index(const RunRecord& r, const std::string& name) {
+  for (size_t c = 0; c < r.columns.size(); ++c) {
+    if (r.columns[c].name == name) return static_cast<int>(c);
+  }
+  throw py::key_error("no trajectory column named '" + name + "'; see result.column_names");
+}
+
+}  // namespace
+
+void bind_record(py::module_& m) {
+  py::class_<simloop::Warning>(m, "MujocoWarning", "A warning MuJoCo raised while stepping.")
+      .def_readonly("name", &simloop::Warning::name)
+      .def_readonly("count", &simloop::Warning::count)
+      .def_readonly("first_step", &simloop::Warning::first_step)
+      .def_readonly("message", &simloop::Warning::message)
+      .def("__repr__", [](const simloop::Warning& w) {
+        return "MujocoWarning(" + w.name + ", count=" + std::to_string(w.count) +
+               ", first_step=" + std::to_string(w.first_step) + ")";
+      });
+
+  py::class_<RunRecord>(m, "ScenarioResult", "What one run did: its schedule, rows, final state and warnings.")
+      .def_readonly("name", &RunRecord::name, "The scenario's name.")
+      .def_readonly("seed", &RunRecord::seed)
+      .def_readonly("rng", &RunRecord::rng)
+      .def_readonly("perturb", &RunRecord::perturb)
+      .def_readonly("rows", &RunRecord::rows, "Trajectory rows the run recorded, kept or streamed.")
+      .def_readonly("timestep", &RunRecord::timestep)
+      .def_readonly("sim_time", &RunRecord::sim_time)
+      .def_readonly("warnings", &RunRecord::warnings)
+      .def_property_readonly("steps", [](const RunRecord& r) { return r.schedule.steps; })
+      .def_property_readonly("column_names",
+                             [](const RunRecord& r) {
+                               py::tuple names(r.columns.size());
+                               for (size_t i = 0; i < r.columns.size(); ++i) names[i] = py::str(r.columns[i].name);
+                               return names;
+                             })
+      .def_property_readonly("column_units",
+                             [](const RunRecord& r) {
+                               py::dict units;
+                               for (const simloop::Column& c : r.columns) units[py::str(c.name)] = c.unit;
+                               return units;
+                             })
+      .def_property_readonly(
+          "trajectory", [](const py::object& self) { return trajectory_view(self, self.cast<const RunRecord&>().trajectory); },
+          "(rows, columns) read-only float64 view; columns as in column_names.")
+      .def(
+          "column",
+          [](const py::object& self, const std::string& name) {
+            const auto& r = self.cast<const RunRecord&>();
+            return column_view(self, r.trajectory, column_index(r, name));
+          },
+          "name"_a, "One trajectory column as a read-only (strided) view (no copy).")
+      .def_property_readonly(
+          "columns",
+          [](const py::object& self) {
+            const auto& r = self.cast<const RunRecord&>();
+            py::dict columns;
+            for (int c = 0; c < r.trajectory.columns(); ++c) {
+              columns[py::str(r.columns[static_cast<size_t>(c)].name)] = column_view(self, r.trajectory, c);
+            }
+            return columns;
+          },
+          "Every trajectory column by name, as read-only views (no copy).")
+      .def_property_readonly("disturbances",
+                             [](const RunRecord& r) {
+                               py::list out;
+                               for (size_t i = 0; i < r.schedule.forces.size(); ++i) {
+                                 const simloop::Schedule::Force& f = r.schedule.forces[i];
+                                 out.append(py::dict("body"_a = r.disturbed_bodies[i],
+                                                     "force"_a = vec(f.wrench.data(), 3),
+                                                     "torque"_a = vec(f.wrench.data() + 3, 3),
+                                                     "start_step"_a = f.start, "end_step"_a = f.end,
+                                                     "asked_end_step"_a = f.asked_end));
+                               }
+                               return out;
+                             })
+      .def_property_readonly("bodies", [](const RunRecord& r) { return simloop::recorded_bodies(r); },
+                             "The recorded bodies: {name: the column of its _x}.")
+      .def_property_readonly("final_row", [](const RunRecord& r) { return vector_array(r.final_row); },
+                             "The last row (columns as column_names), kept or not: a copy.")
+      .def_property_readonly(
+          "final_state", [](const RunRecord& r) { return vector_array(r.final_state); },
+          "The full state at the end (the flat layout of state.hpp): an initial_state that continues this run.")
+      .def_property_readonly(
+          "metrics",
+          [](const RunRecord& r) {
+            return py::module_::import("json").attr("loads")(simloop::metrics_json(r));
+          },
+          "The dict metrics.json holds (floats rounded to 6 decimals).")
+      .def("metrics_json", py::overload_cast<const RunRecord&>(&simloop::metrics_json), "metrics.json's text.")
+      .def("summary", py::overload_cast<const RunRecord&>(&simloop::summary_text),
+           "The lines the command prints about the run.")
+      .def(
+          "trajectory_csv",
+          [](const RunRecord& r) {
+            py::gil_scoped_release release;
+            return naming_failures("trajectory_csv", [&] { return simloop::trajectory_csv(r.trajectory, r.columns); });
+          },
+          "trajectory.csv's text.")
+      .def("write", &write_result<RunRecord>, "out"_a,
+          "Writes metrics.json and trajectory.csv into out (a directory, made if missing), the bytes the command "
+          "writes; returns their paths.")
+      .def("__repr__", [](const RunRecord& r) {
+        return "ScenarioResult(name=" + py_str_repr(r.name) + ", seed=" + std::to_string(r.seed) + ", steps=" +
+               std::to_string(r.schedule.steps) + ", timestep=" + simloop::python_float_repr(r.timestep) +
+               ", rows=" + std::to_string(r.trajectory.rows()) + ", columns=" + std::to_string(r.columns.size()) +
+               ", disturbances=" + std::to_string(r.schedule.forces.size()) +
+               ", warnings=" + std::to_string(r.warnings.size()) + ")";
+      })
+      .def(pickling<RunRecord, &record_fields<FieldWriter, const RunRecord>, &record_fields<FieldReader, RunRecord>>(
+          "ScenarioResult"));
+}
+
+}  // namespace simloop_py
