@@ -135,10 +135,10 @@ def seed_and_timestep(result):
 
 @pytest.mark.parametrize("kind", ["chapter", "scenario"])
 def test_a_batch_is_one_kind_of_table_locally_metrics_only_and_on_an_executor(kind):
-    def batch(**kwargs):
+    def batch(seeds=(5, 6), **kwargs):
         if kind == "chapter":
-            return simloop.run_batch(seeds=[5, 6], timesteps=[0.002, 0.004], steps=200, **kwargs)
-        return simloop.run_scenario_batch(PUSHT, seeds=[5, 6], timesteps=[None, 0.004], steps=200, **kwargs)
+            return simloop.run_batch(seeds=seeds, timesteps=[0.002, 0.004], steps=200, **kwargs)
+        return simloop.run_scenario_batch(PUSHT, seeds=seeds, timesteps=[None, 0.004], steps=200, **kwargs)
 
     kept = batch(threads=2)
     lean = batch(metrics_only=True, threads=2)
@@ -155,6 +155,10 @@ def test_a_batch_is_one_kind_of_table_locally_metrics_only_and_on_an_executor(ki
     assert [seed_and_timestep(r) for r in kept.results] == [
         (kept.row(i)["seed"], kept.row(i)["timestep"]) for i in range(len(kept))]
     assert kept["seed"].tolist() == [5, 5, 6, 6]
+    # No runs: no rows and no columns, in every mode.
+    with ThreadPoolExecutor(1) as pool:
+        empty = [batch(seeds=[]), batch(seeds=[], metrics_only=True), batch(seeds=[], executor=pool)]
+    assert [(len(t), t.column_names, t.has_results) for t in empty] == [(0, [], True), (0, [], False), (0, [], False)]
 
 
 def test_a_table_iterates_over_its_column_names_and_is_indexed_by_name_only():
