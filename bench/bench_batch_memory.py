@@ -41,8 +41,8 @@ CHILD = textwrap.dedent("""
         if mode.endswith("to_pandas"):
             table.to_pandas()
     elif mode == "kept":
-        results = simloop.run_batch(seeds=range(runs), threads=threads)
-        assert len(results) == runs
+        batch = simloop.run_batch(seeds=range(runs), threads=threads)
+        assert len(batch.results) == runs
         wall, cpu = time.perf_counter() - start, time.process_time() - cpu
     else:
         wall = cpu = 0.0

@@ -163,7 +163,7 @@ class Inputs:
 
 def check_same(inputs, datas, threads):
     """Final qpos and qvel of every run, bit for bit; also each side against itself at 1 thread."""
-    results = inputs.simloop(threads, metrics_only=False)
+    results = inputs.simloop(threads, metrics_only=False).results  # each run's ScenarioResult
     states, _ = inputs.rollout(threads, datas, keep=True)
     warned = [r.seed for r in results if r.warnings]
     sq, sv = inputs.qpos_qvel_simloop(results)

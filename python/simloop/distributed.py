@@ -34,7 +34,7 @@ import numpy as np
 
 from . import _core
 from ._checks import _check_int, _check_path, _check_threads
-from .tables import BatchTable, table
+from .tables import BatchTable, _table
 
 # A scene parameter as it travels: ("friction" | "mass" | "damping", name or "", value).
 SceneParam = Tuple[str, str, float]
@@ -114,7 +114,7 @@ def param_column(param: Tuple[str, str]) -> str:
 
 # ---- The chunk: runs on a worker, returns only metrics -------------------
 
-def run_chunk(job: Dict[str, Any], runs: Sequence[Run]) -> BatchTable:
+def run_chunk(job: Dict[str, Any], runs: Sequence[Run]) -> BatchTable[Any]:
     """Runs `runs` of `job` as a metrics-only C++ batch (job["threads"]
     threads; no trajectory kept) and returns their table (metrics_table).
     Runs sharing scene parameters share one modified model."""
@@ -142,17 +142,18 @@ def run_chunk(job: Dict[str, Any], runs: Sequence[Run]) -> BatchTable:
     return metrics_table(runs, results)
 
 
-def metrics_table(runs: Sequence[Run], results: Sequence[Any]) -> BatchTable:
-    """The table of a chunk: `run` (the row's index in the whole batch), one
-    column per scene parameter of the run (param_column), then simloop.table's
-    columns for the results (the parameters, the metrics unrounded, warning
-    counts for every name in WARNING_NAMES, diverged): the same table a local
-    metrics-only batch gives, so chunks join and Parquet files append."""
-    local = table(list(results))
+def metrics_table(runs: Sequence[Run], results: Sequence[Any]) -> BatchTable[Any]:
+    """The table of a chunk, without its results: `run` (the row's index in
+    the whole batch), one column per scene parameter of the run
+    (param_column), then simloop.table's other columns for the results (the
+    parameters, the metrics unrounded, warning counts for every name in
+    WARNING_NAMES, diverged): the same table a local metrics-only batch
+    gives, so chunks join and Parquet files append."""
+    local = _table(list(results), keep_results=False)
     columns: Dict[str, np.ndarray] = {"run": np.array([run[0] for run in runs], dtype=np.int64)}
     for j, (kind, name, _) in enumerate(runs[0][3] if runs else ()):
         columns[param_column((kind, name))] = np.array([run[3][j][2] for run in runs], dtype=np.float64)
-    columns.update(local.columns)
+    columns.update((name, values) for name, values in local.columns.items() if name != "run")
     return BatchTable(columns)
 
 
@@ -254,7 +255,7 @@ def chunk_ranges(total: int, chunk_size: int) -> List[Tuple[int, int]]:
 
 
 def iter_chunks(job: Dict[str, Any], runs: Sequence[Run], executor: object, *, chunk_size: Optional[int] = None,
-                skip: Iterable[int] = ()) -> Iterator[Tuple[int, BatchTable]]:
+                skip: Iterable[int] = ()) -> Iterator[Tuple[int, BatchTable[Any]]]:
     """Runs `runs` in chunks on `executor` and yields (chunk index, columns)
     as chunks finish (not in order). Chunks whose index is in `skip` are
     not run."""
@@ -268,9 +269,9 @@ def iter_chunks(job: Dict[str, Any], runs: Sequence[Run], executor: object, *, c
 
 
 def run_table(job: Dict[str, Any], runs: Sequence[Run], executor: object, *, chunk_size: Optional[int] = None,
-              progress: Optional[Callable[[int, int], object]] = None) -> BatchTable:
+              progress: Optional[Callable[[int, int], object]] = None) -> BatchTable[Any]:
     """Every run's metrics, in the order of `runs`. progress(runs_done, runs_total) after each chunk."""
-    chunks: Dict[int, BatchTable] = {}
+    chunks: Dict[int, BatchTable[Any]] = {}
     done = 0
     for index, chunk in iter_chunks(job, runs, executor, chunk_size=chunk_size):
         chunks[index] = chunk
@@ -292,7 +293,8 @@ def _chunk_size(chunk_size: Optional[int]) -> Optional[int]:
 # ---- The API's executor= paths (arguments already checked by the callers) --
 
 def run_batch_on(executor: object, configs: Sequence["_core.RunConfig"], model: object, threads: Optional[int],
-                 chunk_size: Optional[int], progress: Optional[Callable[[int, int], object]]) -> BatchTable:
+                 chunk_size: Optional[int],
+                 progress: Optional[Callable[[int, int], object]]) -> BatchTable["_core.RunResult"]:
     """simloop.run_batch(..., executor=...): configs as run_batch built them."""
     first = configs[0] if configs else None
     job = {"kind": "chapter", "scene": scene_source(model), "versions": versions(), "threads": _threads(threads),
@@ -305,7 +307,8 @@ def run_batch_on(executor: object, configs: Sequence["_core.RunConfig"], model: 
 
 def run_scenario_batch_on(executor: object, scenario: Any, seeds: Sequence[int], timesteps: Sequence[Optional[float]],
                           *, rng: str, steps: Optional[int], perturb: bool, threads: Optional[int],
-                          chunk_size: Optional[int], progress: Optional[Callable[[int, int], object]]) -> BatchTable:
+                          chunk_size: Optional[int], progress: Optional[Callable[[int, int], object]]
+                          ) -> BatchTable["_core.ScenarioResult"]:
     """simloop.run_scenario_batch(..., executor=...)."""
     job = scenario_job(scenario, rng=rng, steps=steps, perturb=perturb, threads=_threads(threads))
     runs = [(i, s, t, ()) for i, (s, t) in enumerate(itertools.product(seeds, timesteps))]

@@ -11,7 +11,7 @@ reaches the caller).
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Callable, Iterable, List, Literal, Optional, Union, overload
+from typing import TYPE_CHECKING, Callable, Iterable, List, Optional, Union, overload
 
 from . import _core
 from ._checks import (ModelLike, Progress, _check_bool, _check_int, _check_progress, _check_real, _check_seed,
@@ -118,54 +118,36 @@ def draw_shove(seed: int = 0, steps: int = 2000, rng: str = "mt19937_64") -> "_c
     return _core.draw_shove(_check_seed("seed", seed), _check_int("steps", steps, 1), _check_str("rng", rng))
 
 
-# Typed for the checker: full results unless metrics_only or an executor (then a BatchTable).
-@overload
-def run_batch(seeds: Iterable[int] = (0,), timesteps: Iterable[float] = (0.002,), *, steps: int = 2000,
-              perturb: bool = True, smoke: bool = False, model: ModelLike = None, record_every: int = 1,
-              audit_energy: bool = False, threads: Optional[int] = None, rng: str = "mt19937_64",
-              progress: Progress = None, metrics_only: Literal[False] = False, executor: None = None,
-              chunk_size: Optional[int] = None) -> List[RunResult]: ...
-
-
-@overload
-def run_batch(seeds: Iterable[int] = (0,), timesteps: Iterable[float] = (0.002,), *, steps: int = 2000,
-              perturb: bool = True, smoke: bool = False, model: ModelLike = None, record_every: int = 1,
-              audit_energy: bool = False, threads: Optional[int] = None, rng: str = "mt19937_64",
-              progress: Progress = None, metrics_only: Literal[True], executor: object = None,
-              chunk_size: Optional[int] = None) -> "BatchTable": ...
-
-
-@overload
 def run_batch(seeds: Iterable[int] = (0,), timesteps: Iterable[float] = (0.002,), *, steps: int = 2000,
               perturb: bool = True, smoke: bool = False, model: ModelLike = None, record_every: int = 1,
               audit_energy: bool = False, threads: Optional[int] = None, rng: str = "mt19937_64",
               progress: Progress = None, metrics_only: bool = False, executor: object = None,
-              chunk_size: Optional[int] = None) -> "Union[List[RunResult], BatchTable]": ...
+              chunk_size: Optional[int] = None) -> "BatchTable[RunResult]":
+    """Runs every (seed, timestep) pair over one compiled model, in parallel,
+    and returns a simloop.BatchTable: one row per run.
 
-
-def run_batch(seeds: Iterable[int] = (0,), timesteps: Iterable[float] = (0.002,), *, steps: int = 2000,
-              perturb: bool = True, smoke: bool = False, model: ModelLike = None, record_every: int = 1,
-              audit_energy: bool = False, threads: Optional[int] = None, rng: str = "mt19937_64",
-              progress: Progress = None, metrics_only: bool = False, executor: object = None,
-              chunk_size: Optional[int] = None) -> "Union[List[RunResult], BatchTable]":
-    """Runs every (seed, timestep) pair over one compiled model, in parallel.
-
-    Results come in the order of itertools.product(seeds, timesteps), and each
+    Runs come in the order of itertools.product(seeds, timesteps), and each
     is bitwise identical to run() with the same arguments, whatever `threads`
     is (None: one worker per core). Each worker steps its own MuJoCo data;
     the model is shared. Every argument is checked before any run starts.
     progress: as for run(), over the steps of all the runs.
-    metrics_only: keep no trajectories and return a simloop.BatchTable, one
-    row per run (the parameters, the metrics unrounded, the shove, warning
-    counts), whose memory does not grow with the runs' lengths:
-    .to_pandas(), .to_arrow(), table["lateral_drift"].
+
+    The table is the same in every mode below (the same columns, order and
+    dtypes, the same bits): `run` (the row's index in the batch), the
+    parameters, the metrics unrounded, the shove, warning counts and
+    diverged; table["lateral_drift"], table.row(i), .to_pandas(),
+    .to_arrow(). Run locally without metrics_only, the batch also keeps
+    each run's RunResult (trajectory and all) as table.results, in the
+    rows' order: table.results[i] is run i.
+
+    metrics_only: keep no trajectories (and no results: table.results
+    raises ValueError), so that memory does not grow with the runs' lengths.
 
     executor: a dask.distributed Client or a concurrent.futures.Executor
     (simloop.distributed): the runs go out in chunks of chunk_size (None: a
     default), each chunk run on a worker by the C++ batch with `threads`
-    threads (None: 1), metrics only, and a BatchTable comes back (one row
-    per run, in the same order, the same bits as a local metrics-only
-    batch). model must then be None or an MJCF path; progress is called as
+    threads (None: 1), metrics only (no results come back), in the same
+    order. model must then be None or an MJCF path; progress is called as
     progress(runs_done, runs_total) as chunks finish.
     """
     seed_list = [_check_seed("seeds[%d]" % i, s) for i, s in enumerate(_sequence("seeds", seeds))]
@@ -179,12 +161,11 @@ def run_batch(seeds: Iterable[int] = (0,), timesteps: Iterable[float] = (0.002,)
 
         _check_before_sending(configs)
         return run_batch_on(executor, configs, model, threads, chunk_size, _check_progress(progress))
-    if metrics_only:
-        from .tables import table  # numpy: `import simloop` does not load it
+    from .tables import _table  # numpy: `import simloop` does not load it
 
-        return table(_core.run_batch(load_model(model), configs, workers, keep_rows=False,
-                                     progress=_check_progress(progress)))
-    return _core.run_batch(load_model(model), configs, workers, progress=_check_progress(progress))
+    results = _core.run_batch(load_model(model), configs, workers, keep_rows=not metrics_only,
+                              progress=_check_progress(progress))
+    return _table(results, keep_results=not metrics_only)
 
 
 def _check_before_sending(configs: List[_core.RunConfig]) -> None:

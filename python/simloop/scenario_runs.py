@@ -5,7 +5,7 @@ a policy deciding them (policy=).
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any, Iterable, List, Literal, Optional, Tuple, Union, overload
+from typing import TYPE_CHECKING, Any, Iterable, Optional, Tuple
 
 from . import _core
 from ._checks import (Progress, _check_bool, _check_int, _check_progress, _check_real, _check_seed, _check_str,
@@ -98,51 +98,17 @@ def run_scenario(scenario: ScenarioLike, *, seed: int = 0, rng: str = "mt19937_6
                               progress=_check_progress(progress))
 
 
-# Typed for the checker: full results unless metrics_only or an executor (then a BatchTable).
-@overload
-def run_scenario_batch(scenario: ScenarioLike, seeds: Iterable[int] = (0,),
-                       timesteps: Iterable[Optional[float]] = (None,), *, rng: str = "mt19937_64",
-                       steps: Optional[int] = None, perturb: bool = True, record_every: int = 1,
-                       model: Optional[_core.Model] = None, threads: Optional[int] = None,
-                       progress: Progress = None, controls: Any = None, initial_state: Any = None,
-                       metrics_only: Literal[False] = False, executor: None = None, chunk_size: Optional[int] = None,
-                       policy: Optional[Policy] = None,
-                       control_every: int = 1) -> List[ScenarioResult]: ...
-
-
-@overload
-def run_scenario_batch(scenario: ScenarioLike, seeds: Iterable[int] = (0,),
-                       timesteps: Iterable[Optional[float]] = (None,), *, rng: str = "mt19937_64",
-                       steps: Optional[int] = None, perturb: bool = True, record_every: int = 1,
-                       model: Optional[_core.Model] = None, threads: Optional[int] = None,
-                       progress: Progress = None, controls: Any = None, initial_state: Any = None,
-                       metrics_only: Literal[True], executor: object = None, chunk_size: Optional[int] = None,
-                       policy: Optional[Policy] = None,
-                       control_every: int = 1) -> BatchTable: ...
-
-
-@overload
 def run_scenario_batch(scenario: ScenarioLike, seeds: Iterable[int] = (0,),
                        timesteps: Iterable[Optional[float]] = (None,), *, rng: str = "mt19937_64",
                        steps: Optional[int] = None, perturb: bool = True, record_every: int = 1,
                        model: Optional[_core.Model] = None, threads: Optional[int] = None,
                        progress: Progress = None, controls: Any = None, initial_state: Any = None,
                        metrics_only: bool = False, executor: object = None, chunk_size: Optional[int] = None,
-                       policy: Optional[Policy] = None,
-                       control_every: int = 1) -> Union[List[ScenarioResult], BatchTable]: ...
+                       policy: Optional[Policy] = None, control_every: int = 1) -> BatchTable[ScenarioResult]:
+    """Runs a scenario once per (seed, timestep) pair, in parallel over one
+    scene, and returns a simloop.BatchTable: one row per run.
 
-
-def run_scenario_batch(scenario: ScenarioLike, seeds: Iterable[int] = (0,),
-                       timesteps: Iterable[Optional[float]] = (None,), *, rng: str = "mt19937_64",
-                       steps: Optional[int] = None, perturb: bool = True, record_every: int = 1,
-                       model: Optional[_core.Model] = None, threads: Optional[int] = None,
-                       progress: Progress = None, controls: Any = None, initial_state: Any = None,
-                       metrics_only: bool = False, executor: object = None, chunk_size: Optional[int] = None,
-                       policy: Optional[Policy] = None,
-                       control_every: int = 1) -> Union[List[ScenarioResult], BatchTable]:
-    """Runs a scenario once per (seed, timestep) pair, in parallel over one scene.
-
-    Results come in the order of itertools.product(seeds, timesteps), and each
+    Runs come in the order of itertools.product(seeds, timesteps), and each
     is bitwise identical to run_scenario() with the same arguments, whatever
     `threads` is (None: one worker per core). A timestep of None is the
     scenario's own (or the scene's). The scene is compiled once per distinct
@@ -150,19 +116,24 @@ def run_scenario_batch(scenario: ScenarioLike, seeds: Iterable[int] = (0,),
     checked before any starts, and so is the memory all the kept trajectories
     take together. progress: as for run(), over the steps of all the runs.
 
+    The table is the same in every mode (the same columns, order and dtypes,
+    the same bits): `run` (the row's index in the batch), the parameters,
+    each recorded body's final position and speed, the disturbances as
+    drawn, warning counts and diverged, unrounded. Run locally without
+    metrics_only, the batch also keeps each run's ScenarioResult (trajectory
+    and all) as table.results, in the rows' order.
+
     controls: (runs, steps, nu), run i following controls[i], or (steps, nu)
     for every run; initial_state: (runs, state_size) or (state_size,). As
     for run_scenario(), and read in place. runs is len(seeds) *
-    len(timesteps), in the results' order.
-    metrics_only: keep no trajectories and return a simloop.BatchTable (one
-    row per run: the parameters, each recorded body's final position and
-    speed, the disturbances as drawn, warning counts; unrounded), whose
-    memory does not grow with the runs' lengths. .to_pandas(), .to_arrow().
+    len(timesteps), in the rows' order.
+    metrics_only: keep no trajectories (and no results: table.results
+    raises ValueError), so that memory does not grow with the runs' lengths.
 
     executor: a dask.distributed Client or a concurrent.futures.Executor, as
-    for run_batch(): chunks on workers, metrics only, a BatchTable back (the
-    scenario travels as its TOML text; model must be None; controls and
-    initial_state stay local).
+    for run_batch(): chunks on workers, metrics only, no results back (the
+    scenario travels as its TOML text; model must be None; controls,
+    initial_state and policy are refused).
 
     policy, control_every: as for run_scenario(); one policy for every run,
     called with the GIL held from whichever worker reaches a decision (the
@@ -195,22 +166,21 @@ def run_scenario_batch(scenario: ScenarioLike, seeds: Iterable[int] = (0,),
                                      progress=_check_progress(progress))
     configs = [_core.ScenarioConfig(s, rng, t, step_count, perturb, every) for s in seed_list for t in timestep_list]
     metrics_only = _check_bool("metrics_only", metrics_only)
+    from .tables import _table  # numpy: `import simloop` does not load it
+
     if policy is not None:
         if controls is not None or initial_state is not None or metrics_only:
             raise ValueError("policy with controls, initial_state or metrics_only is not supported: give the "
                              "policy alone (its runs keep their trajectories and start from the reset pose)")
         if not configs:
-            return []
+            return _table([], keep_results=True)
         decide, decide_every = _decider(policy, control_every, scene, scenario, configs[0])
-        return _core.run_scenario_batch(scene, scenario._core, configs, workers, decide=decide,
-                                        control_every=decide_every, progress=_check_progress(progress))
+        return _table(_core.run_scenario_batch(scene, scenario._core, configs, workers, decide=decide,
+                                               control_every=decide_every, progress=_check_progress(progress)),
+                      keep_results=True)
     _check_no_control_every(control_every)
     own = _inputs_array("controls", controls, (2, 3), "shaped (runs, steps, nu) or (steps, nu)")
     start = _inputs_array("initial_state", initial_state, (1, 2), "shaped (runs, state_size) or (state_size,)")
     results = _core.run_scenario_batch(scene, scenario._core, configs, workers, controls=own, initial_state=start,
                                        keep_rows=not metrics_only, progress=_check_progress(progress))
-    if metrics_only:
-        from .tables import table  # numpy: `import simloop` does not load it
-
-        return table(results)
-    return results
+    return _table(results, keep_results=not metrics_only)

@@ -1,16 +1,23 @@
 """Batch and sweep results as tables: one row per run, flat columns.
 
     >>> import simloop
-    >>> results = simloop.run_batch(seeds=range(8))
-    >>> simloop.to_pandas(results)            # a pandas.DataFrame, 8 rows
+    >>> batch = simloop.run_batch(seeds=range(8))
+    >>> batch.to_pandas()                     # a pandas.DataFrame, 8 rows
+    >>> batch.results[0].trajectory           # run 0's RunResult, kept
     >>> simloop.run_batch(seeds=range(10_000), metrics_only=True).to_arrow()
 
-`table(results)` turns a list of RunResult (from run / run_batch) or of
-ScenarioResult (from run_scenario / run_scenario_batch) into a BatchTable:
-numpy columns, one row per run, in the list's order. A metrics-only batch
-returns one directly. `to_pandas(results)` and `to_arrow(results)` are
-`table(results).to_pandas()` and `.to_arrow()`; SweepResult has its own
-`.to_pandas()` and `.to_arrow()`, one row per timestep.
+run_batch and run_scenario_batch return a BatchTable in every mode (rows
+kept, metrics_only=True, executor=), with the same columns: numpy columns,
+one row per run in itertools.product order, the first column `run` (the
+row's index in the batch). A batch run locally without metrics_only also
+keeps its runs' results (table.results); the others keep none.
+
+`table(results)` turns a list of RunResult (from run) or of ScenarioResult
+(from run_scenario) into the same kind of BatchTable, one row per run in the
+list's order, keeping the list as its results. `to_pandas(results)` and
+`to_arrow(results)` are `table(results).to_pandas()` and `.to_arrow()`;
+SweepResult has its own `.to_pandas()` and `.to_arrow()`, one row per
+timestep (and no `run` column).
 
 Columns are flat and typed: numbers only (no lists: box_final_pos is
 box_final_pos_x, _y, _z), integers as int64 (the seed as uint64), flags as
@@ -30,11 +37,12 @@ they are imported only when a conversion asks for them.
 from __future__ import annotations
 
 import math
-from typing import Any, Dict, Iterable, List, Mapping, Sequence
+from typing import Any, Dict, Generic, Iterable, Iterator, List, Mapping, Optional, Sequence, TypeVar, overload
 
 import numpy as np
 
 from . import _core
+from ._checks import _check_int, _describe
 
 WARNING_NAMES = tuple(_core.WARNING_NAMES)
 # The warnings that mean the run's state blew up or was reset by MuJoCo.
@@ -51,21 +59,56 @@ def _need(module: str) -> Any:
                           f"pip install 'simloop[tables]'") from None
 
 
-class BatchTable:
-    """Runs as a table: numpy columns of equal length, one row per run.
+# The kind of result a table's rows come from: RunResult (run_batch,
+# table of RunResults) or ScenarioResult (run_scenario_batch, ...).
+Result = TypeVar("Result", covariant=True)
+_Kind = TypeVar("_Kind")
 
-    table["lateral_drift"] is a column (a numpy array); table.column_names
-    their order; len(table) the runs; to_pandas() a pandas.DataFrame,
-    to_arrow() a pyarrow.Table, to_dict() {name: list}. Tables pickle, and
+_NO_RESULTS = ("this BatchTable holds no results, only its columns: metrics_only=True and executor= batches "
+               "keep none (run the batch locally without them to keep each run's result)")
+
+
+class BatchTable(Generic[Result]):
+    """Runs as a table: numpy columns of equal length, one row per run, and
+    the runs' results when they were kept.
+
+    What run_batch and run_scenario_batch return, locally, metrics-only or
+    on an executor alike: the same columns, in the same order, of the same
+    dtypes, the first being `run`, the row's index in the batch
+    (itertools.product order). table["lateral_drift"] is a column (a numpy
+    array); table.column_names their order; len(table) the runs;
+    table.row(i) run i's row as a dict; table.results the runs' results
+    (RunResult or ScenarioResult, trajectories and all) in the rows' order,
+    when the table has them (has_results: a local batch without
+    metrics_only; a metrics-only or executor batch has none, and asking for
+    them raises ValueError). Like a pandas DataFrame, iterating a table
+    yields its column names, and `name in table` is about columns; a table
+    is indexed by column name only (table[0] raises TypeError: use
+    table.row(0) or table.results[0]).
+
+    to_pandas() a pandas.DataFrame, to_arrow() a pyarrow.Table, to_dict()
+    {name: list}. Tables pickle (with their results), compare equal when
+    their columns are (results are not compared), and
     BatchTable.concat(tables) joins tables of the same columns end to end.
     """
 
-    def __init__(self, columns: Mapping[str, np.ndarray]) -> None:
+    @overload
+    def __init__(self: "BatchTable[Any]", columns: Mapping[str, np.ndarray]) -> None: ...
+
+    @overload
+    def __init__(self, columns: Mapping[str, np.ndarray], results: Sequence[Result]) -> None: ...
+
+    def __init__(self, columns: Mapping[str, np.ndarray], results: Optional[Sequence[Result]] = None) -> None:
+        """columns: name -> values, all of one length; results: None, or
+        one result per row (table.results)."""
         self._columns: Dict[str, np.ndarray] = {name: np.asarray(values) for name, values in columns.items()}
         lengths = {len(values) for values in self._columns.values()}
         if len(lengths) > 1:
             raise ValueError(f"columns must all have the same length, got lengths {sorted(lengths)}")
         self._rows = lengths.pop() if lengths else 0
+        self._results: Optional[List[Result]] = None if results is None else list(results)
+        if self._results is not None and len(self._results) != self._rows:
+            raise ValueError(f"results must hold one result per row ({self._rows}), got {len(self._results)}")
 
     @property
     def column_names(self) -> List[str]:
@@ -76,10 +119,40 @@ class BatchTable:
         """Every column by name (the arrays themselves: do not write to them)."""
         return dict(self._columns)
 
+    @property
+    def has_results(self) -> bool:
+        """Whether the table holds its runs' results (table.results)."""
+        return self._results is not None
+
+    @property
+    def results(self) -> List[Result]:
+        """The runs' results, one per row in the rows' order (the list itself:
+        do not change it). ValueError if the table has none (has_results)."""
+        if self._results is None:
+            raise ValueError(_NO_RESULTS)
+        return self._results
+
+    def row(self, index: int) -> Dict[str, Any]:
+        """Row `index` (negative counts from the end) as {column name: value},
+        the values as Python's int, float, bool and str."""
+        i = _check_int("index", index)
+        if not -self._rows <= i < self._rows:
+            raise IndexError(f"index {i} is out of range for a table of {self._rows} rows")
+        return {name: values[i].item() if isinstance(values[i], np.generic) else values[i]
+                for name, values in self._columns.items()}
+
     def __len__(self) -> int:
         return self._rows
 
+    def __iter__(self) -> Iterator[str]:
+        """The column names, as a pandas.DataFrame's iteration gives them."""
+        return iter(self._columns)
+
     def __getitem__(self, name: str) -> np.ndarray:
+        if not isinstance(name, str):
+            shown = _describe(name)
+            raise TypeError(f"a BatchTable is indexed by column name, got {shown}: table.row(i) is run i's row as "
+                            "a dict, table.results[i] its result (when the batch kept them)")
         if name not in self._columns:
             raise KeyError(f"no column named {name!r}; see table.column_names")
         return self._columns[name]
@@ -116,18 +189,25 @@ class BatchTable:
                          for name, values in self._columns.items()})
 
     @staticmethod
-    def concat(tables: Iterable["BatchTable"]) -> "BatchTable":
-        """The tables' rows end to end (they must have the same columns, in the same order)."""
+    def concat(tables: Iterable["BatchTable[_Kind]"]) -> "BatchTable[_Kind]":
+        """The tables' rows end to end (they must have the same columns, in
+        the same order), with their results if every table has them. The
+        columns are joined as they are: a `run` column keeps each table's
+        own values."""
         parts = list(tables)
         if not parts:
             return BatchTable({})
-        names = parts[0].column_names
         for i, part in enumerate(parts):
             if not isinstance(part, BatchTable):
                 raise TypeError(f"tables[{i}] must be a BatchTable, got {type(part).__name__}")
+        names = parts[0].column_names
+        for i, part in enumerate(parts):
             if part.column_names != names:
                 raise ValueError(f"tables[{i}] has other columns than tables[0]")
-        return BatchTable({name: np.concatenate([p._columns[name] for p in parts]) for name in names})
+        columns = {name: np.concatenate([p._columns[name] for p in parts]) for name in names}
+        if all(p._results is not None for p in parts):
+            return BatchTable(columns, [r for p in parts for r in p.results])
+        return BatchTable(columns)
 
 
 def _warning_counts(row: Dict[str, Any], warnings: Sequence[Any]) -> None:
@@ -203,7 +283,7 @@ def _column(name: str, values: List[Any]) -> np.ndarray:
     return np.array(values, dtype=np.float64)
 
 
-def _from_rows(rows: List[Dict[str, Any]]) -> BatchTable:
+def _from_rows(rows: List[Dict[str, Any]]) -> BatchTable[Any]:
     names: Dict[str, None] = {}
     for row in rows:
         names.update(dict.fromkeys(row))
@@ -214,22 +294,51 @@ def _from_rows(rows: List[Dict[str, Any]]) -> BatchTable:
     return BatchTable({name: _column(name, [row.get(name) for row in rows]) for name in ordered})
 
 
-def table(results: Iterable[Any]) -> BatchTable:
-    """A BatchTable of a list of RunResult or of ScenarioResult, one row per run."""
+@overload
+def table(results: BatchTable[_Kind]) -> BatchTable[_Kind]: ...
+
+
+@overload
+def table(results: Iterable[_core.RunResult]) -> BatchTable[_core.RunResult]: ...
+
+
+@overload
+def table(results: Iterable[_core.ScenarioResult]) -> BatchTable[_core.ScenarioResult]: ...
+
+
+@overload
+def table(results: Iterable[Any]) -> BatchTable[Any]: ...
+
+
+def table(results: Iterable[Any]) -> BatchTable[Any]:
+    """A BatchTable of a list of RunResult or of ScenarioResult, one row per
+    run in the list's order (its `run` column the index in the list), which
+    keeps the list as table.results. A BatchTable is returned as it is."""
     if isinstance(results, BatchTable):
         return results
+    return _table(results, keep_results=True)
+
+
+def _table(results: Iterable[Any], keep_results: bool) -> BatchTable[Any]:
+    """table(results), keeping the results or not (a metrics-only batch's
+    results have no trajectories: the table is all they are kept for)."""
     if isinstance(results, (_core.RunResult, _core.ScenarioResult, str, bytes)) or not isinstance(results, Iterable):
         raise TypeError(f"results must be a list of RunResult or of ScenarioResult, got {type(results).__name__}")
     items = list(results)
-    kinds = {type(r) for r in items}
-    if kinds == {_core.RunResult}:
-        return _from_rows([_run_row(r) for r in items])
-    if kinds == {_core.ScenarioResult}:
-        return _from_rows([_scenario_row(r) for r in items])
-    if not items:
-        return BatchTable({})
-    raise TypeError("results must be a list of RunResult or of ScenarioResult, not a mix, got "
-                    + ", ".join(sorted(k.__name__ for k in kinds)))
+    # RunResult first: it is a kind of ScenarioResult (the chapter's report on the one run record).
+    run_results = sum(isinstance(r, _core.RunResult) for r in items)
+    if run_results == len(items) and items:
+        rows = [_run_row(r) for r in items]
+    elif not run_results and all(isinstance(r, _core.ScenarioResult) for r in items):
+        rows = [_scenario_row(r) for r in items]
+    else:
+        kinds = {type(r).__name__ for r in items}
+        raise TypeError("results must be a list of RunResult or of ScenarioResult, not a mix, got "
+                        + ", ".join(sorted(kinds)))
+    columns = _from_rows(rows).columns
+    if items:  # an empty list has no columns at all, not even `run`
+        columns = {"run": np.arange(len(items), dtype=np.int64), **columns}
+    return BatchTable(columns, items) if keep_results else BatchTable(columns)
 
 
 def to_pandas(results: Iterable[Any]) -> Any:
@@ -242,7 +351,7 @@ def to_arrow(results: Iterable[Any]) -> Any:
     return table(results).to_arrow()
 
 
-def sweep_table(result: Any) -> BatchTable:
+def sweep_table(result: Any) -> BatchTable[Any]:
     """A sweep as a BatchTable: one row per timestep, ascending."""
     edge = result.edge
     rows = []

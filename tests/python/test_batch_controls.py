@@ -63,13 +63,13 @@ def test_a_batch_of_own_controls_and_states_is_each_run_alone(threads):
     batch = simloop.run_scenario_batch(PUSHT, seeds=seeds, timesteps=[0.002, 0.004], steps=steps, controls=u,
                                        initial_state=starts, threads=threads)
     assert len(batch) == 6
-    for i, (a, b) in enumerate(zip(batch, alone)):
+    for i, (a, b) in enumerate(zip(batch.results, alone)):
         assert same(a, b), f"run {i}"
-    assert batch[0].final_state.tobytes() != batch[2].final_state.tobytes()
+    assert batch.results[0].final_state.tobytes() != batch.results[2].final_state.tobytes()
     # One (steps, nu) array and one state for every run: broadcast.
     shared = simloop.run_scenario_batch(PUSHT, seeds=seeds, steps=steps, controls=u[0], initial_state=start,
                                         threads=threads)
-    for s, r in zip(seeds, shared):
+    for s, r in zip(seeds, shared.results):
         assert same(r, simloop.run_scenario(PUSHT, seed=s, steps=steps, controls=u[0], initial_state=start))
 
 

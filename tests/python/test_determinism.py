@@ -46,7 +46,7 @@ def test_python_command_sim_loop_and_run_agree_byte_for_byte(tmp_path, flags):
 def test_metrics_json_is_what_python_json_writes():
     # The C++ writer against Python's own json.dumps, over runs whose numbers
     # span signs, magnitudes and exponent forms.
-    for result in simloop.run_batch(seeds=range(8), timesteps=(0.002, 0.03, 0.5, 3.0), steps=300):
+    for result in simloop.run_batch(seeds=range(8), timesteps=(0.002, 0.03, 0.5, 3.0), steps=300).results:
         assert result.metrics_json() == json.dumps(result.metrics, indent=2, sort_keys=True) + "\n"
 
 
@@ -66,11 +66,11 @@ def test_run_batch_over_100_seeds_equals_sequential_runs():
     for threads in (1, 2):
         batch = simloop.run_batch(seeds=seeds, steps=400, threads=threads)
         assert len(batch) == 100
-        for one, many in zip(sequential, batch):
+        for one, many in zip(sequential, batch.results):
             assert many.metrics == one.metrics
             assert many.trajectory.tobytes() == one.trajectory.tobytes()
 
 
 def test_run_batch_orders_seeds_then_timesteps():
     batch = simloop.run_batch(seeds=[3, 4], timesteps=[0.002, 0.01], steps=50)
-    assert [(r.metrics["seed"], r.timestep) for r in batch] == [(3, 0.002), (3, 0.01), (4, 0.002), (4, 0.01)]
+    assert [(r.metrics["seed"], r.timestep) for r in batch.results] == [(3, 0.002), (3, 0.01), (4, 0.002), (4, 0.01)]

@@ -52,22 +52,26 @@ def client():
 
 
 def assert_same_as_local(table, local) -> None:
-    """Every column the table takes from the final state equals the local run's, bit for bit."""
-    assert len(table) == len(local)
-    final = np.array([r.trajectory[-1] for r in local])
+    """The table is the local batch's (kept rows) column for column, bit for bit, without its results; and
+    every column the table takes from the final state equals the local run's."""
+    assert isinstance(table, simloop.BatchTable) and not table.has_results
+    assert table == local and table.column_names == local.column_names
+    runs = local.results
+    assert len(table) == len(runs)
+    final = np.array([r.trajectory[-1] for r in runs])
     at = {name: final[:, k] for k, name in enumerate(simloop.COLUMN_NAMES)}
-    assert np.array_equal(table["run"], np.arange(len(local)))
-    assert np.array_equal(table["seed"], np.array([r.config.seed for r in local], dtype=np.uint64))
-    assert np.array_equal(table["timestep"], np.array([r.timestep for r in local]))
+    assert np.array_equal(table["run"], np.arange(len(runs)))
+    assert np.array_equal(table["seed"], np.array([r.config.seed for r in runs], dtype=np.uint64))
+    assert np.array_equal(table["timestep"], np.array([r.timestep for r in runs]))
     for axis in "xyz":
         assert np.array_equal(table[f"box_final_pos_{axis}"], at[f"box_{axis}"])
     assert np.array_equal(table["pusher_final_x"], at["pusher_x"])
     speed = [math.sqrt(vx * vx + vy * vy + vz * vz) for vx, vy, vz in zip(at["box_vx"], at["box_vy"], at["box_vz"])]
     assert np.array_equal(table["box_final_speed"], np.array(speed))
     # The metric, rounded as metrics.json rounds it, agrees too (a second, independent route).
-    assert np.array_equal(np.round(table["box_final_speed"], 6), [r.metrics["box_final_speed"] for r in local])
-    assert np.array_equal(table["shove_force_y"], [r.shove.force_y for r in local])
-    assert table["warning_mjWARN_BADQACC"].sum() == sum(w.count for r in local for w in r.warnings
+    assert np.array_equal(np.round(table["box_final_speed"], 6), [r.metrics["box_final_speed"] for r in runs])
+    assert np.array_equal(table["shove_force_y"], [r.shove.force_y for r in runs])
+    assert table["warning_mjWARN_BADQACC"].sum() == sum(w.count for r in runs for w in r.warnings
                                                          if w.name == "mjWARN_BADQACC")
 
 
@@ -79,21 +83,22 @@ def test_a_local_cluster_gives_the_bits_of_a_local_batch(client, local):
     assert_same_as_local(table, local)
     assert seen[-1] == (60, 60) and len(seen) == 9  # one call per chunk of 7 (the last has 4)
     assert table.to_arrow().num_rows == 60 and list(table.to_pandas().columns) == table.column_names
-    # The whole table is a local metrics-only batch's, column for column, bit for bit.
+    # The whole table is a local metrics-only batch's too, column for column (`run` included), bit for bit.
     alone = simloop.run_batch(SEEDS, TIMESTEPS, steps=STEPS, metrics_only=True)
-    assert simloop.BatchTable({k: v for k, v in table.columns.items() if k != "run"}) == alone
+    assert table == alone and [table[k].dtype for k in table] == [alone[k].dtype for k in alone]
 
 
 def test_scenario_batches_and_sweeps_on_a_cluster_are_the_local_bits(client):
     scenario = simloop.Scenario.from_file(PUSHT)
     local = simloop.run_scenario_batch(scenario, seeds=range(5), timesteps=[None, 0.004])
     table = simloop.run_scenario_batch(PUSHT, seeds=range(5), timesteps=[None, 0.004], executor=client, chunk_size=3)
+    assert table == local and not table.has_results  # the local batch's table, `run` and all
     for body in ("tblock", "pusher"):
         for axis in "xyz":
             assert np.array_equal(table[f"{body}_final_pos_{axis}"],
-                                  [r.column(f"{body}_{axis}")[-1] for r in local])
-    assert np.array_equal(table["disturbance0_fy"], [r.disturbances[0]["force"][1] for r in local])
-    assert np.array_equal(table["steps"], [r.steps for r in local])
+                                  [r.column(f"{body}_{axis}")[-1] for r in local.results])
+    assert np.array_equal(table["disturbance0_fy"], [r.disturbances[0]["force"][1] for r in local.results])
+    assert np.array_equal(table["steps"], [r.steps for r in local.results])
 
     timesteps = [0.004, 0.001, 0.05, 0.002, 0.004]
     swept = simloop.sweep(timesteps, duration=1.0, executor=client, chunk_size=2)

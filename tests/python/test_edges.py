@@ -39,7 +39,7 @@ def test_python_takes_the_commands_ranges():
     # The largest record_every runs: the first and the final state.
     result = simloop.run(steps=10, record_every=simloop.MAX_RECORD_EVERY)
     assert result.rows == 2 and list(result.column("step")) == [0.0, 10.0]
-    assert simloop.run_batch(seeds=[0], steps=5, record_every=simloop.MAX_RECORD_EVERY)[0].rows == 2
+    assert simloop.run_batch(seeds=[0], steps=5, record_every=simloop.MAX_RECORD_EVERY).results[0].rows == 2
     for kwargs in ({"steps": 2**62}, {"record_every": 2**62}, {"steps": I64_MAX}):
         with pytest.raises(ValueError, match=r"must be at most 4611686018427387903, got "):
             simloop.run(**kwargs)

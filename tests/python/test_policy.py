@@ -134,7 +134,7 @@ def test_batches_with_a_policy_equal_sequential_runs(threads):
     for seed in range(4):
         for timestep in (None, 0.001):
             alone = simloop.run_scenario(scenario, seed=seed, timestep=timestep, policy=policy, control_every=20)
-            assert same_bits(batch[i].trajectory, alone.trajectory), (seed, timestep)
+            assert same_bits(batch.results[i].trajectory, alone.trajectory), (seed, timestep)
             i += 1
 
 

@@ -50,5 +50,5 @@ def test_scenarios_and_their_results():
 
 def test_a_metrics_only_table():
     t = simloop.run_batch(seeds=range(3), steps=10, metrics_only=True)
-    assert repr(t) == (f"BatchTable(rows=3, columns=[seed, rng, timestep, steps, perturb, record_every, ... "
+    assert repr(t) == (f"BatchTable(rows=3, columns=[run, seed, rng, timestep, steps, perturb, ... "
                        f"({len(t.column_names)} columns)])")

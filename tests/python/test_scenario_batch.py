@@ -29,18 +29,18 @@ def test_a_batch_is_bitwise_what_the_runs_give_alone(name, seeds, timesteps):
     for threads in (1, 2, 7):
         batch = simloop.run_scenario_batch(scenario, seeds=seeds, timesteps=timesteps, threads=threads)
         assert len(batch) == len(alone)
-        for i, (a, b) in enumerate(zip(batch, alone)):
+        for i, (a, b) in enumerate(zip(batch.results, alone)):
             assert same(a, b), f"{name} run {i}, {threads} threads"
 
 
 def test_the_order_is_itertools_product_and_options_reach_every_run():
     batch = simloop.run_scenario_batch(SCENES / "pusht.toml", seeds=[3, 4], timesteps=[0.004, 0.002], steps=200,
                                        record_every=10, perturb=False, threads=2)
-    assert [(r.seed, r.timestep) for r in batch] == [(3, 0.004), (3, 0.002), (4, 0.004), (4, 0.002)]
-    assert all(r.steps == 200 and r.rows == 21 and r.disturbances == [] for r in batch)
+    assert [(r.seed, r.timestep) for r in batch.results] == [(3, 0.004), (3, 0.002), (4, 0.004), (4, 0.002)]
+    assert all(r.steps == 200 and r.rows == 21 and r.disturbances == [] for r in batch.results)
     # no disturbances: the seed changes nothing
-    assert batch[0].trajectory.tobytes() == batch[2].trajectory.tobytes()
-    assert np.isfinite(batch[1].column("tblock_x")).all()
+    assert batch.results[0].trajectory.tobytes() == batch.results[2].trajectory.tobytes()
+    assert np.isfinite(batch.results[1].column("tblock_x")).all()
 
 
 def test_progress_counts_every_run_and_bad_arguments_are_refused_first():
@@ -57,4 +57,5 @@ def test_progress_counts_every_run_and_bad_arguments_are_refused_first():
         simloop.run_scenario_batch(SCENES / "pusht.toml", seeds=3)
     with pytest.raises(ValueError, match="no body named"):
         simloop.run_scenario_batch(simloop.Scenario(SCENES / "pusht.xml", record={"bodies": ["tblok"]}), seeds=[0, 1])
-    assert simloop.run_scenario_batch(SCENES / "pusht.toml", seeds=[]) == []
+    empty = simloop.run_scenario_batch(SCENES / "pusht.toml", seeds=[])
+    assert len(empty) == 0 and empty.column_names == [] and empty.results == []

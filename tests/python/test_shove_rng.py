@@ -69,7 +69,7 @@ def test_the_default_is_still_mt19937_64():
 
 def test_batch_takes_the_generator_too():
     batch = simloop.run_batch(seeds=[0, 1, 2], steps=20, rng="numpy", threads=2)
-    assert [r.shove.force_y for r in batch] == [numpy_shove(s)[0] * numpy_shove(s)[1] for s in (0, 1, 2)]
+    assert [r.shove.force_y for r in batch.results] == [numpy_shove(s)[0] * numpy_shove(s)[1] for s in (0, 1, 2)]
 
 
 @pytest.mark.parametrize("python", [True, False])

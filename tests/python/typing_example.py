@@ -45,7 +45,17 @@ for warning in diverged.warnings:
     assert_type(warning.name, str)
 
 batch = simloop.run_batch(seeds=[0, 1], steps=100, threads=1)
-assert_type(batch, List[simloop.RunResult])
+assert_type(batch, simloop.BatchTable[simloop.RunResult])
+assert_type(batch.results, List[simloop.RunResult])
+assert_type(batch.results[0].trajectory, NDArray[np.float64])
+assert isinstance(batch.results[0], simloop.RunResult)
+assert_type(batch["lateral_drift"], np.ndarray)
+assert_type(batch.row(0), Dict[str, Any])
+for column_name in batch:
+    assert_type(column_name, str)
+    assert isinstance(column_name, str)
+assert_type(simloop.table(batch.results), simloop.BatchTable[simloop.RunResult])
+assert_type(simloop.run_batch(seeds=[0], steps=10, metrics_only=True), simloop.BatchTable[simloop.RunResult])
 
 model = simloop.load_model()
 assert_type(model, simloop.Model)
@@ -111,8 +121,10 @@ assert_type(policy_result, simloop.ScenarioResult)
 assert_type(policy_result.final_state, NDArray[np.float64])
 
 table = simloop.run_scenario_batch(scenario, seeds=[0, 1], steps=50, metrics_only=True, threads=1)
-assert_type(table, simloop.BatchTable)
-assert isinstance(table, simloop.BatchTable)
+assert_type(table, simloop.BatchTable[simloop.ScenarioResult])
+assert isinstance(table, simloop.BatchTable) and not table.has_results
+assert_type(simloop.run_scenario_batch(scenario, steps=50, threads=1).results, List[simloop.ScenarioResult])
+assert_type(simloop.BatchTable.concat([table, table]), simloop.BatchTable[simloop.ScenarioResult])
 assert_type(table.to_dict(), Dict[str, List[Any]])
 
 

@@ -21,3 +21,7 @@ for warning in result.warnings:
     name: int = warning.name  # error: assignment
 contacts: int = simloop.Sim().contacts  # error: assignment
 simloop.run_scenario(simloop.Scenario.chapter()).column(0)  # error: arg-type
+# A batch is a table: indexed by column name (a run is batch.results[i]), iterated over its column names.
+simloop.run_batch(steps=10)[0]  # error: index
+for run_result in simloop.run_batch(steps=10):
+    run_result.metrics  # error: attr-defined
