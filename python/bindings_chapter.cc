@@ -52,11 +52,6 @@ py::tuple column_names(int first, int end) {
   return names;
 }
 
-simloop::ShoveRng shove_rng(const std::string& name) {
-  const std::optional<simloop::ShoveRng> rng = simloop::parse_rng(name);
-  if (!rng) throw py::value_error("rng must be 'mt19937_64' or 'numpy', got '" + name + "'");
-  return *rng;
-}
 std::string run_call(const char* name, const simloop::RunConfig& c) {
   return std::string(name) + "(steps=" + std::to_string(c.num_steps()) +
          ", record_every=" + std::to_string(c.record_every) + ")";

@@ -191,6 +191,14 @@ inline py::array vector_array(const std::vector<double>& values) { return vec(va
 inline std::string py_bool(bool b) { return b ? "True" : "False"; }
 inline std::string py_str_repr(const std::string& text) { return py::repr(py::str(text)).cast<std::string>(); }
 
+// A generator by its name, as every config's rng= takes it; ValueError for
+// any other.
+inline simloop::ShoveRng shove_rng(const std::string& name) {
+  const std::optional<simloop::ShoveRng> rng = simloop::parse_rng(name);
+  if (!rng) throw py::value_error("rng must be 'mt19937_64' or 'numpy', got '" + name + "'");
+  return *rng;
+}
+
 // A run's trajectory as a (rows, columns) read-only view of its own buffer,
 // and one column of it as a strided view. No copy.
 inline py::array trajectory_view(const py::object& owner, const simloop::Trajectory& t) {

@@ -144,9 +144,7 @@ void bind_scenario(py::module_& m) {
   py::class_<simloop::ScenarioConfig>(m, "ScenarioConfig")
       .def(py::init([](std::uint64_t seed, const std::string& rng, std::optional<double> timestep,
                        std::optional<std::int64_t> steps, bool perturb, std::int64_t record_every) {
-             const std::optional<simloop::ShoveRng> generator = simloop::parse_rng(rng);
-             if (!generator) throw py::value_error("rng must be 'mt19937_64' or 'numpy', got '" + rng + "'");
-             return simloop::ScenarioConfig{seed, *generator, timestep, steps, perturb, record_every};
+             return simloop::ScenarioConfig{seed, shove_rng(rng), timestep, steps, perturb, record_every};
            }),
            "seed"_a, "rng"_a, "timestep"_a, "steps"_a, "perturb"_a, "record_every"_a)
       .def("__repr__", [](const simloop::ScenarioConfig& c) {
