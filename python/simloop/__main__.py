@@ -343,17 +343,15 @@ def _run(opts: "_core.CommandLine", model: "_core.Model", scenario: "Optional[_c
     made from the same run, all put in place together."""
     global _outputs_written
     rrd = out / "sim_loop.rrd"
-    recording: Any = None  # a ChapterRecording or a ScenarioRecording
+    recording: Any = None  # a recording.Recording: the chapter's (ChapterRecording) or a scenario's
     result: Union[_core.RunResult, _core.ScenarioResult]
     if opts.rerun:  # rerun imported, and the recording's file begun, before anything is written
-        if scenario is None:
-            from .recording import ChapterRecording
+        from .recording import ChapterRecording, Recording, scenario_recording_id
 
+        if scenario is None:
             recording = ChapterRecording(opts.run, opts.model_path or None, model, rrd)
         else:
-            from .scenario_recording import ScenarioRecording
-
-            recording = ScenarioRecording(model, rrd, _run_key(args, opts))
+            recording = Recording(model, rrd, scenario_recording_id(_run_key(args, opts)))
     also = recording.files if recording is not None else []
     try:
         with progress_bar("running") as progress:

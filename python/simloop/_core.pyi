@@ -39,7 +39,7 @@ WARNING_NAMES: Final[tuple[str, ...]]
 SCENARIO_SWEEP_TOLERANCE: Final[float]
 # What the bindings read as a float64 array (copied or converted).
 _ArrayLike = ArrayLike
-# run_scenario_to_files's drawing (scenario_recording.ScenarioRecording): the
+# run_scenario_to_files's drawing (recording.Recording): the
 # trajectory's column names once, then blocks of rows (each row the columns,
 # then x y z qw qx qy qz per moving body), then the result before the files
 # are put in place.

@@ -1,4 +1,6 @@
-"""The .rrd recording, opened and checked against the run it records."""
+"""The chapter's .rrd recording, opened and checked against the run it
+records: its scene drawn from the scene's own geometry, as any scenario's is
+(test_scenario_recording.py), with the chapter's shove arrow and plots."""
 
 import numpy as np
 import pyarrow as pa
@@ -9,9 +11,9 @@ import simloop
 from conftest import run_command
 from simloop import recording
 
-TEMPORAL = ["/world/objects/box", "/world/robot/pusher", "/world/objects/box/shove", "/plots/box/x",
-            "/plots/box/y", "/plots/box/z", "/plots/box/speed", "/plots/pusher/x", "/plots/contacts"]
-ENERGY = ["/plots/energy/" + name for name in simloop.ENERGY_COLUMN_NAMES]
+TEMPORAL = ["/world/bodies/box", "/world/bodies/pusher", "/world/bodies/box/shove", "/plots/box_x",
+            "/plots/box_y", "/plots/box_z", "/plots/box_speed", "/plots/pusher_x", "/plots/ncon"]
+ENERGY = ["/plots/" + name for name in simloop.ENERGY_COLUMN_NAMES]
 
 
 def load_chunks(path, store=None):
@@ -59,8 +61,9 @@ def recorded(tmp_path_factory):
 def test_entities_timelines_and_every_step(recorded):
     chunks, result = recorded
     assert {entity for entity, static in chunks if not static} == set(TEMPORAL)
-    assert {entity for entity, static in chunks if static} >= {"/world/floor", "/world/objects/box",
-                                                                "/world/robot/pusher", "/plots/box/z"}
+    assert {entity for entity, static in chunks if static} == {
+        "/world/static/floor", "/world/bodies/box/box_geom", "/world/bodies/pusher/pusher_geom", "/plots/box_x",
+        "/plots/box_y", "/plots/box_z", "/plots/box_speed", "/plots/pusher_x", "/plots/ncon", "/__properties"}
     times = result.column("time")
     for entity in TEMPORAL:
         columns = chunks[(entity, False)]
@@ -69,16 +72,18 @@ def test_entities_timelines_and_every_step(recorded):
         np.testing.assert_allclose(np.array(columns["sim_time"]) / 1e9, times, rtol=0, atol=1e-9)
 
 
-def test_static_boxes_and_the_floor(recorded):
+def test_the_scenes_own_boxes_and_the_floor(recorded):
     chunks, result = recorded
-    box = chunks[("/world/objects/box", True)]
-    pusher = chunks[("/world/robot/pusher", True)]
+    box = chunks[("/world/bodies/box/box_geom", True)]
+    pusher = chunks[("/world/bodies/pusher/pusher_geom", True)]
+    # The chapter's scene's sizes and colours (rgba 0.85 0.3 0.25, 0.25 0.45 0.85), packed 0xRRGGBBAA.
     np.testing.assert_allclose(box["Boxes3D:half_sizes"][0], [[0.05, 0.05, 0.05]])
     np.testing.assert_allclose(pusher["Boxes3D:half_sizes"][0], [[0.04, 0.12, 0.05]])
-    # Colours are packed 0xRRGGBBAA.
-    assert box["Boxes3D:colors"][0] == [(217 << 24) | (76 << 16) | (64 << 8) | 255]
+    assert box["Boxes3D:colors"][0] == [(217 << 24) | (77 << 16) | (64 << 8) | 255]
     assert pusher["Boxes3D:colors"][0] == [(64 << 24) | (115 << 16) | (217 << 8) | 255]
-    floor = chunks[("/world/floor", True)]
+    assert box["Transform3D:translation"][0] == [[0.0, 0.0, 0.0]]  # each geom sits at its body's origin
+    floor = chunks[("/world/static/floor", True)]
+    assert floor["Transform3D:translation"][0] == [[0.0, 0.0, 0.0]]  # the plane's own frame is the world's
     centre, half = np.array(floor["Boxes3D:centers"][0][0]), np.array(floor["Boxes3D:half_sizes"][0][0])
     assert abs(centre[2] + half[2]) < 1e-6  # its top is the floor, z = 0
     # It covers the chapter's 4 m x 4 m floor and everywhere the box went.
@@ -91,7 +96,7 @@ def test_static_boxes_and_the_floor(recorded):
 
 def test_box_pose_matches_the_trajectory(recorded):
     chunks, result = recorded
-    box = chunks[("/world/objects/box", False)]
+    box = chunks[("/world/bodies/box", False)]
     rows = result.trajectory
     names = simloop.COLUMN_NAMES
     translations = np.array([t[0] for t in box["Transform3D:translation"]])
@@ -100,25 +105,28 @@ def test_box_pose_matches_the_trajectory(recorded):
     quats = np.array([q[0] for q in box["Transform3D:quaternion"]])
     wxyz = rows[:, [names.index(c) for c in ("box_qw", "box_qx", "box_qy", "box_qz")]]
     np.testing.assert_allclose(quats, wxyz[:, [1, 2, 3, 0]], atol=1e-6)  # rerun is x-y-z-w
-    pusher = np.array([t[0] for t in chunks[("/world/robot/pusher", False)]["Transform3D:translation"]])
-    np.testing.assert_allclose(pusher[:, 0], rows[:, names.index("pusher_x")], atol=1e-6)
-    np.testing.assert_allclose(pusher[:, 1:], 0.0 * pusher[:, 1:] + [0.0, 0.05], atol=1e-7)
+    pusher = chunks[("/world/bodies/pusher", False)]
+    translations = np.array([t[0] for t in pusher["Transform3D:translation"]])
+    np.testing.assert_allclose(translations[:, 0], rows[:, names.index("pusher_x")], atol=1e-6)
+    np.testing.assert_allclose(translations[:, 1:], 0.0 * translations[:, 1:] + [0.0, 0.05], atol=1e-7)
+    assert np.ptp(translations[:, 0]) > 4  # it does move
+    assert all(q == [[0.0, 0.0, 0.0, 1.0]] for q in pusher["Transform3D:quaternion"])  # a slide never turns it
 
 
 def test_the_series_are_the_trajectory_exactly(recorded):
     chunks, result = recorded
-    for entity, column in (("/plots/box/x", "box_x"), ("/plots/box/y", "box_y"), ("/plots/box/z", "box_z"),
-                           ("/plots/pusher/x", "pusher_x"), ("/plots/contacts", "ncon")):
-        np.testing.assert_array_equal(scalars(chunks, entity), result.column(column), err_msg=entity)
+    for column in ("box_x", "box_y", "box_z", "pusher_x", "ncon"):
+        np.testing.assert_array_equal(scalars(chunks, "/plots/" + column), result.column(column), err_msg=column)
     v = np.column_stack([result.column(c) for c in ("box_vx", "box_vy", "box_vz")])
-    np.testing.assert_allclose(scalars(chunks, "/plots/box/speed"), np.linalg.norm(v, axis=1), rtol=1e-15)
-    # Each series is named for the viewer's legend.
-    assert chunks[("/plots/box/z", True)]["SeriesLines:names"][0] == ["box z (m), height of its centre"]
+    np.testing.assert_allclose(scalars(chunks, "/plots/box_speed"), np.linalg.norm(v, axis=1), rtol=1e-15)
+    # Each series is named for the viewer's legend, the box's in the box's colour.
+    assert chunks[("/plots/box_z", True)]["SeriesLines:names"][0] == ["box z (m), height of its centre"]
+    assert chunks[("/plots/box_z", True)]["SeriesLines:colors"][0] == [(217 << 24) | (77 << 16) | (64 << 8) | 255]
 
 
 def test_the_arrow_shows_the_shove_exactly_while_it_acts(recorded):
     chunks, result = recorded
-    arrows = chunks[("/world/objects/box/shove", False)]
+    arrows = chunks[("/world/bodies/box/shove", False)]
     vectors = np.array([v[0] for v in arrows["Arrows3D:vectors"]])
     origins = np.array([o[0] for o in arrows["Arrows3D:origins"]])
     steps = np.arange(0, 2001)
@@ -131,16 +139,39 @@ def test_the_arrow_shows_the_shove_exactly_while_it_acts(recorded):
     assert np.all(origins == 0.0)
 
 
+def test_a_model_of_the_chapters_layout_is_drawn_as_it_is(tmp_path):
+    # The pusher is whichever body actuator 0 drives, whatever its name, with its own shape and home.
+    scene = tmp_path / "ram.xml"
+    scene.write_text(simloop._core.PUSHER_SCENE_XML.replace('<body name="pusher" pos="0 0 0.05">',
+                                                            '<body name="ram" pos="0 0.1 0.05">')
+                     .replace('size="0.04 0.12 0.05"', 'size="0.03 0.2 0.05"'))
+    chunks = load_chunks(record_with_command(tmp_path, "m", ["--smoke", "--model", str(scene)]))
+    result = simloop.run(model=scene, smoke=True)
+    assert ("/world/bodies/pusher", False) not in chunks
+    np.testing.assert_allclose(chunks[("/world/bodies/ram/pusher_geom", True)]["Boxes3D:half_sizes"][0],
+                               [[0.03, 0.2, 0.05]])
+    ram = np.array([t[0] for t in chunks[("/world/bodies/ram", False)]["Transform3D:translation"]])
+    np.testing.assert_allclose(ram[:, 0], result.column("pusher_x"), atol=1e-6)
+    np.testing.assert_allclose(ram[:, 1:], 0.0 * ram[:, 1:] + [0.1, 0.05], atol=1e-7)
+
+
+def test_record_writes_an_in_memory_run_as_the_command_does(tmp_path):
+    from_command = record_with_command(tmp_path, "c", ["--smoke", "--seed", "3"])
+    path = recording.record(simloop.run(smoke=True, seed=3), tmp_path / "r.rrd")
+    assert path == tmp_path / "r.rrd" and recordings(path) == recordings(from_command)
+    assert load_chunks(path) == load_chunks(from_command)
+
+
 def test_break_its_peak_is_in_the_file(tmp_path):
     rrd = record_with_command(tmp_path, "b", ["--timestep", "0.05", "--no-perturb"])
     chunks = load_chunks(rrd)
-    z = scalars(chunks, "/plots/box/z")
-    steps = chunks[("/plots/box/z", False)]["step"]
+    z = scalars(chunks, "/plots/box_z")
+    steps = chunks[("/plots/box_z", False)]["step"]
     trajectory_z = simloop.run(timestep=0.05, perturb=False).column("box_z")
     assert z.max() == trajectory_z.max()
     assert steps[int(np.argmax(z))] == int(np.argmax(trajectory_z))
     # The transform carries it too (as float32).
-    box_z = np.array([t[0][2] for t in chunks[("/world/objects/box", False)]["Transform3D:translation"]])
+    box_z = np.array([t[0][2] for t in chunks[("/world/bodies/box", False)]["Transform3D:translation"]])
     assert abs(box_z.max() - trajectory_z.max()) < 1e-6
 
 
@@ -151,7 +182,7 @@ def test_the_energy_audit_is_recorded_when_on(tmp_path):
     for entity, column in zip(ENERGY, simloop.ENERGY_COLUMN_NAMES):
         np.testing.assert_array_equal(scalars(chunks, entity), result.column(column), err_msg=entity)
     plain = load_chunks(record_with_command(tmp_path, "p", ["--smoke"]))
-    assert not any(entity.startswith("/plots/energy") for entity, _ in plain)
+    assert not any(entity in ENERGY for entity, _ in plain)
 
 
 def test_the_recording_id_follows_the_run(tmp_path):
@@ -204,7 +235,8 @@ def test_the_blueprint_opens_the_3d_view_beside_the_time_series(tmp_path):
     assert single("/" + right, "container_kind")[0] == 3  # Vertical: the time series, stacked
     views = single("/" + right, "contents")
     assert all(single("/" + v, "class_identifier") == ["TimeSeries"] for v in views)
-    assert single("/" + views[0] + "/ViewContents", "query") == ["/plots/box/z"]
+    assert single("/" + views[0] + "/ViewContents", "query") == ["/plots/box_z"]
+    assert single("/time_panel", "timeline") == ["sim_time"]  # the timeline the chapter says to scrub
 
 
 def test_no_rerun_writes_no_recording(tmp_path):
