@@ -122,7 +122,8 @@ void bind_model(py::module_& m) {
             if (type == mjOBJ_ACTUATOR) {
               return py::dict("ctrlrange"_a = py::make_tuple(raw->actuator_ctrlrange[2 * id],
                                                              raw->actuator_ctrlrange[2 * id + 1]),
-                              "ctrllimited"_a = raw->actuator_ctrllimited[id] != 0);
+                              "ctrllimited"_a = raw->actuator_ctrllimited[id] != 0,
+                              "joint"_a = raw->actuator_trntype[id] == mjTRN_JOINT ? raw->actuator_trnid[2 * id] : -1);
             }
             if (type == mjOBJ_SENSOR) {
               return py::dict("adr"_a = raw->sensor_adr[id], "dim"_a = raw->sensor_dim[id]);

@@ -443,18 +443,12 @@ class Recording:
 
 def _pusher_body(model: _core.Model) -> Tuple[str, Any]:
     """The name of the body actuator 0 drives (the chapter's pusher, whatever a
-    --model scene calls it) and its orientation at rest (w x y z). Python
-    cannot read which joint an actuator drives, so: with every qpos address
-    holding its own index, Sim.pusher_x is the pusher joint's address."""
-    import numpy as np
-
-    sim = _core.Sim(model)
-    rest = sim.array("xquat").copy()  # a new Sim is at rest (qpos0), as pusher_track reads it
-    sim.array("qpos")[:] = np.arange(model.nq)
-    address = int(sim.pusher_x)
-    body = next(info["body"] for info in (model.object_info("joint", j) for j in range(model.njnt))
-                if info["qposadr"] == address)
-    return model.names("body")[body] or f"body{body}", rest[body]
+    --model scene calls it: Model checked that it drives a slide or hinge
+    joint) and that body's orientation at rest (w x y z)."""
+    joint = model.object_info("actuator", 0)["joint"]
+    body = model.object_info("joint", joint)["body"]
+    rest = _core.Sim(model).array("xquat")[body].copy()  # a new Sim is at rest (qpos0), as pusher_track reads it
+    return model.names("body")[body] or f"body{body}", rest
 
 
 class ChapterRecording(Recording):
