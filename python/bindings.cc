@@ -67,6 +67,7 @@ PYBIND11_MODULE(_core, m) {
     }
   });
 
+  simloop_py::bind_args(m);
   simloop_py::bind_model(m);
   simloop_py::bind_record(m);
   simloop_py::bind_chapter(m);

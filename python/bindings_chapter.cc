@@ -149,8 +149,9 @@ void bind_chapter(py::module_& m) {
           "The energy audit's totals, J (None unless audit_energy).")
       .def_readonly("shove", &RunResult::shove)
       .def_readonly("config", &RunResult::config)
-      .def("metrics_json", py::overload_cast<const RunResult&>(&simloop::metrics_json), "metrics.json's text.")
-      .def("summary", py::overload_cast<const RunResult&>(&simloop::summary_text),
+      .def("metrics_json", no_arguments<RunResult, &simloop::metrics_json>("RunResult.metrics_json"),
+           "metrics.json's text.")
+      .def("summary", no_arguments<RunResult, &simloop::summary_text>("RunResult.summary"),
            "The lines sim_loop prints about the run.")
       .def("write", &write_result<RunResult>, "out"_a,
           "Writes metrics.json and trajectory.csv into out (a directory, made if missing), the bytes sim_loop "

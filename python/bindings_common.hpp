@@ -232,10 +232,34 @@ auto long_call(py::object progress, const std::string& what, Work&& work) {
   return result;
 }
 
+// Python arguments as C++ values, or a one-line TypeError or ValueError
+// naming the argument (bindings_args.cc; simloop._checks uses them too).
+std::string show(const py::handle& value);
+std::string describe(const py::handle& value);
+py::str check_path(const std::string& name, const py::handle& value, const std::string& what);
+py::bytes check_text(const std::string& name, const py::handle& value);
+double check_real(const std::string& name, const py::handle& value);
+inline std::filesystem::path path_arg(const std::string& name, const py::handle& value, const std::string& what) {
+  return py::cast<std::filesystem::path>(check_path(name, value, what));
+}
+// A method that takes no arguments, answering extra ones in Python's own
+// one line (pybind11's TypeError would list the signature over several).
+template <class Result, std::string (*Text)(const Result&)>
+auto no_arguments(std::string method) {
+  return [method = std::move(method)](const Result& r, const py::args& extra) {
+    if (!extra.empty()) {
+      throw py::type_error(method + "() takes 1 positional argument but " + std::to_string(extra.size() + 1) +
+                           " were given");
+    }
+    return Text(r);
+  };
+}
+
 // result.write(out): metrics.json and trajectory.csv into out, as
 // simloop::write_outputs writes them for this kind of result.
 template <class Result>
-std::pair<std::filesystem::path, std::filesystem::path> write_result(const Result& r, const std::filesystem::path& out) {
+std::pair<std::filesystem::path, std::filesystem::path> write_result(const Result& r, const py::object& out_arg) {
+  const std::filesystem::path out = path_arg("out", out_arg, "a directory");
   py::gil_scoped_release release;
   const simloop::OutputFiles files =
       naming_failures("write(" + out.string() + ")", [&] { return simloop::write_outputs(r, out); });
@@ -254,11 +278,14 @@ void bind_sweep_outputs(py::class_<Result>& result, const char* edge_doc) {
             return py::float_(r.points[static_cast<size_t>(r.edge_index)].timestep);
           },
           edge_doc)
-      .def("csv", Csv)
-      .def("summary", Summary)
+      .def("csv", no_arguments<Result, Csv>(py::str(result.attr("__name__")).cast<std::string>() + ".csv"),
+           "sweep.csv's text.")
+      .def("summary", no_arguments<Result, Summary>(py::str(result.attr("__name__")).cast<std::string>() + ".summary"),
+           "The sweep's table, edge and criterion.")
       .def(
           "write",
-          [](const Result& r, const std::filesystem::path& out) {
+          [](const Result& r, const py::object& out_arg) {
+            const std::filesystem::path out = path_arg("out", out_arg, "a directory");
             simloop::prepare_output_dir(out);
             simloop::write_file_atomically(out / "sweep.csv", Csv(r));
             return out / "sweep.csv";
@@ -268,6 +295,7 @@ void bind_sweep_outputs(py::class_<Result>& result, const char* edge_doc) {
 
 // The topics' bindings, in the order bindings.cc registers them (a type is
 // registered before any signature names it).
+void bind_args(py::module_& m);
 void bind_model(py::module_& m);
 void bind_record(py::module_& m);
 void bind_chapter(py::module_& m);

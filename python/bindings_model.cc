@@ -56,19 +56,22 @@ void bind_model(py::module_& m) {
       .def_static("pusher_scene", &simloop::Model::pusher_scene, "The chapter's scene.")
       .def_static(
           "from_xml_string",
-          [](std::string_view xml, std::string_view source) {
-            return naming_failures("Model.from_xml_string", [&] { return simloop::Model::from_xml_string(xml, source); });
+          [](const py::object& xml, const py::object& source) {
+            const auto text = std::string(check_text("xml", xml)), name = std::string(check_text("source", source));
+            return naming_failures("Model.from_xml_string", [&] { return simloop::Model::from_xml_string(text, name); });
           },
           "xml"_a, "source"_a = "<string>",
-          "Compiles MJCF text; it needs a body 'box' on a free joint and an actuator 0 on a slide or "
-          "hinge joint.")
+          "Compiles MJCF text (str or UTF-8 bytes); source names it in errors. simloop.MujocoError if MuJoCo "
+          "rejects it.")
       .def_static(
           "from_file",
-          [](const std::filesystem::path& path) {
+          [](const py::object& path_arg_) {
+            const std::filesystem::path path = path_arg("path", path_arg_, "an MJCF file");
             return naming_failures("Model.from_file(" + path.string() + ")",
                                    [&] { return simloop::Model::from_file(path.string()); });
           },
-          "path"_a, "Compiles an MJCF file.")
+          "path"_a,
+          "Compiles an MJCF file: OSError if it cannot be read, simloop.MujocoError if MuJoCo rejects it.")
       .def_static(
           "_copy_of_address",
           [](std::uintptr_t address, std::string_view source) {
@@ -77,7 +80,12 @@ void bind_model(py::module_& m) {
             return simloop::Model::copy_of(reinterpret_cast<const mjModel*>(address), source);
           },
           "address"_a, "source"_a, "A copy of the mjModel at `address` (a mujoco.MjModel's _address).")
-      .def("with_timestep", &simloop::Model::with_timestep, "timestep"_a, "A copy with opt.timestep set.")
+      .def(
+          "with_timestep",
+          [](const simloop::Model& model, const py::object& timestep) {
+            return model.with_timestep(check_real("timestep", timestep));
+          },
+          "timestep"_a, "A copy with opt.timestep set (a positive, finite number).")
       .def_property_readonly("timestep", &simloop::Model::timestep)
       .def_property_readonly("nq", [](const simloop::Model& model) { return model.get()->nq; })
       .def_property_readonly("nv", [](const simloop::Model& model) { return model.get()->nv; })

@@ -22,11 +22,14 @@ using simloop::RunRecord;
 
 namespace {
 
-int column_index(const RunRecord& r, const std::string& name) {
+// A column's index by its name, as a str (a name UTF-8 cannot encode is in
+// no result: KeyError too).
+int column_index(const RunRecord& r, const py::handle& name) {
+  if (!py::isinstance<py::str>(name)) throw py::type_error("name must be a str (a column name), got " + describe(name));
   for (size_t c = 0; c < r.columns.size(); ++c) {
-    if (r.columns[c].name == name) return static_cast<int>(c);
+    if (py::str(r.columns[c].name).equal(name)) return static_cast<int>(c);
   }
-  throw py::key_error("no trajectory column named '" + name + "'; see result.column_names");
+  throw py::key_error("no trajectory column named " + show(name) + "; see result.column_names");
 }
 
 }  // namespace
@@ -69,7 +72,7 @@ void bind_record(py::module_& m) {
           "(rows, columns) read-only float64 view; columns as in column_names.")
       .def(
           "column",
-          [](const py::object& self, const std::string& name) {
+          [](const py::object& self, const py::object& name) {
             const auto& r = self.cast<const RunRecord&>();
             return column_view(self, r.trajectory, column_index(r, name));
           },
@@ -111,8 +114,9 @@ void bind_record(py::module_& m) {
             return py::module_::import("json").attr("loads")(simloop::metrics_json(r));
           },
           "The dict metrics.json holds (floats rounded to 6 decimals).")
-      .def("metrics_json", py::overload_cast<const RunRecord&>(&simloop::metrics_json), "metrics.json's text.")
-      .def("summary", py::overload_cast<const RunRecord&>(&simloop::summary_text),
+      .def("metrics_json", no_arguments<RunRecord, &simloop::metrics_json>("ScenarioResult.metrics_json"),
+           "metrics.json's text.")
+      .def("summary", no_arguments<RunRecord, &simloop::summary_text>("ScenarioResult.summary"),
            "The lines the command prints about the run.")
       .def(
           "trajectory_csv",

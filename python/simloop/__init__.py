@@ -21,7 +21,6 @@ except ImportError as _error:
         raise
     raise ImportError(_message) from None
 
-from . import _compiled_methods
 from ._checks import load_model
 from ._gym_registry import register_when_gymnasium_loads
 from .policy import Observation
@@ -98,7 +97,5 @@ def __getattr__(name: str) -> object:
     raise AttributeError(f"module 'simloop' has no attribute {name!r}")
 
 
-# The compiled classes' checked methods, before anyone can reach the classes.
-_compiled_methods.install()
 # Gymnasium: simloop/Chapter-v0, simloop/PushT-v0, simloop/Scenario-v0 (simloop/gym.py).
 register_when_gymnasium_loads()

@@ -38,21 +38,14 @@ MAX_RECORD_EVERY = _core.MAX_RECORD_EVERY
 # threads: None is one per core; Python's API takes 1 to this many.
 MAX_THREADS = 4096
 
-
-def _show(value: object) -> str:
-    """repr(value) for an error message: one line, at most 80 characters."""
-    try:
-        text = repr(value)
-    except Exception:  # an int past Python's digit limit, or a broken __repr__
-        if isinstance(value, int):
-            return f"an int of {value.bit_length()} bits"
-        return f"a {type(value).__name__}"
-    text = " ".join(line.strip() for line in text.splitlines())  # numpy arrays print on several lines
-    return text if len(text) <= 80 else text[:77] + "..."
-
-
-def _describe(value: object) -> str:
-    return f"{_show(value)} ({type(value).__name__})"
+# One wording for an argument's type, the compiled methods' and the
+# package's (python/bindings_args.cc): repr on one line, with the type's name;
+# a path (str, bytes, os.PathLike), text (str or bytes), a real number.
+_show = _core._show
+_describe = _core._describe
+_check_path = _core._check_path
+_check_text = _core._check_text
+_check_real = _core._check_real
 
 
 def _check_int(name: str, value: object, minimum: int = I64_MIN, maximum: int = I64_MAX) -> int:
@@ -82,50 +75,10 @@ def _check_bool(name: str, value: object) -> bool:
     return bool(value)
 
 
-def _check_real(name: str, value: object) -> float:
-    """A number as the float the core takes (its range is the core's to check)."""
-    if isinstance(value, bool) or not isinstance(value, numbers.Real):
-        raise TypeError(f"{name} must be a number, got {_describe(value)}")
-    try:
-        return float(value)
-    except OverflowError:  # an int beyond any float
-        raise ValueError(f"{name} must be a number a float can hold, got {_show(value)}") from None
-
-
 def _check_str(name: str, value: object) -> str:
     if not isinstance(value, str):
         raise TypeError(f"{name} must be a str, got {_describe(value)}")
     return value
-
-
-def _check_path(name: str, value: object, what: str) -> str:
-    """A path as str (bytes decoded as os.fsdecode does: undecodable bytes
-    become surrogates, which the core encodes back to the same bytes)."""
-    if isinstance(value, (str, bytes, os.PathLike)):
-        try:
-            value = os.fsdecode(value)
-        except TypeError:  # an os.PathLike whose __fspath__ returns neither
-            pass
-    if not isinstance(value, str):
-        raise TypeError(f"{name} must be a path (str, bytes or os.PathLike), got {_describe(value)}")
-    if not value:
-        raise ValueError(f"{name} must name {what}, got ''")
-    if "\0" in value:
-        raise ValueError(f"{name} must not contain a NUL character, got {_show(value)}")
-    return value
-
-
-def _check_text(name: str, value: object) -> bytes:
-    """str or bytes as the bytes the core reads (str as UTF-8)."""
-    if isinstance(value, str):
-        try:
-            return value.encode("utf-8")
-        except UnicodeEncodeError as e:
-            raise ValueError(f"{name} must be text that UTF-8 can encode, got {value[e.start:e.end]!r} "
-                             f"at index {e.start}") from None
-    if isinstance(value, bytes):
-        return value
-    raise TypeError(f"{name} must be a str or bytes, got {_describe(value)}")
 
 
 def _check_progress(progress: object) -> Progress:

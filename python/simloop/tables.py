@@ -37,7 +37,7 @@ they are imported only when a conversion asks for them.
 from __future__ import annotations
 
 import math
-from typing import Any, Dict, Generic, Iterable, Iterator, List, Mapping, Optional, Sequence, TypeVar, overload
+from typing import Any, Dict, Generic, Iterable, Iterator, List, Mapping, Optional, Sequence, TypeVar, Union, overload
 
 import numpy as np
 
@@ -307,15 +307,22 @@ def table(results: Iterable[_core.ScenarioResult]) -> BatchTable[_core.ScenarioR
 
 
 @overload
+def table(results: _core.SweepResult) -> BatchTable[Any]: ...
+
+
+@overload
 def table(results: Iterable[Any]) -> BatchTable[Any]: ...
 
 
-def table(results: Iterable[Any]) -> BatchTable[Any]:
+def table(results: Union[_core.SweepResult, Iterable[Any]]) -> BatchTable[Any]:
     """A BatchTable of a list of RunResult or of ScenarioResult, one row per
     run in the list's order (its `run` column the index in the list), which
-    keeps the list as table.results. A BatchTable is returned as it is."""
+    keeps the list as table.results; of a SweepResult, one row per timestep
+    (sweep_table). A BatchTable is returned as it is."""
     if isinstance(results, BatchTable):
         return results
+    if isinstance(results, _core.SweepResult):
+        return sweep_table(results)
     return _table(results, keep_results=True)
 
 
@@ -341,13 +348,13 @@ def _table(results: Iterable[Any], keep_results: bool) -> BatchTable[Any]:
     return BatchTable(columns, items) if keep_results else BatchTable(columns)
 
 
-def to_pandas(results: Iterable[Any]) -> Any:
-    """table(results).to_pandas(): a pandas.DataFrame, one row per run."""
+def to_pandas(results: Union[_core.SweepResult, Iterable[Any]]) -> Any:
+    """table(results).to_pandas(): a pandas.DataFrame, one row per run (or timestep)."""
     return table(results).to_pandas()
 
 
-def to_arrow(results: Iterable[Any]) -> Any:
-    """table(results).to_arrow(): a pyarrow.Table, one row per run."""
+def to_arrow(results: Union[_core.SweepResult, Iterable[Any]]) -> Any:
+    """table(results).to_arrow(): a pyarrow.Table, one row per run (or timestep)."""
     return table(results).to_arrow()
 
 

@@ -89,13 +89,13 @@ def test_arrow_types_follow_the_columns():
 
 def test_a_sweep_is_one_row_per_timestep():
     sweep = simloop.sweep(timesteps=[0.001, 0.002, 0.05, 0.1], duration=1.0)
-    df = sweep.to_pandas()
+    df = simloop.to_pandas(sweep)
     assert df["timestep"].tolist() == [p.timestep for p in sweep.points]
     assert df["stable"].tolist() == [p.stable for p in sweep.points]
     assert df["peak_box_z"].tolist() == [p.peak_box_z for p in sweep.points]
     assert df["edge"].tolist() == [p.timestep == sweep.edge for p in sweep.points]
     assert df["steps"].dtype == np.int64 and df["warnings"].dtype == np.int64
-    assert sweep.to_arrow().num_rows == 4
+    assert simloop.to_arrow(sweep).num_rows == 4 and simloop.table(sweep)["timestep"].tolist() == df["timestep"].tolist()
 
 
 def test_tables_pickle_and_concatenate():

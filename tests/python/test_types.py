@@ -186,6 +186,9 @@ class _Stub:
             params.append((a.arg, i < len(args.posonlyargs) or a.arg.startswith("__"),
                            ast.unparse(a.annotation) if a.annotation else "object",
                            None if d is None else ast.unparse(d)))
+        if args.vararg:  # pybind11's py::args: "*args: object"; a stub may say Never (none may be given)
+            annotation = ast.unparse(args.vararg.annotation) if args.vararg.annotation else "object"
+            params.append(("*" + args.vararg.arg, False, "object" if annotation == "Never" else annotation, None))
         for a, d in zip(args.kwonlyargs, args.kw_defaults):
             params.append((a.arg, False, ast.unparse(a.annotation) if a.annotation else "object",
                            None if d is None else ast.unparse(d)))

@@ -1,0 +1,91 @@
+// Python arguments as the C++ values they become, or a one-line TypeError or
+// ValueError naming the argument (pybind11's own TypeError lists every
+// signature over several lines). The package's own checks (simloop._checks)
+// use these too, so each argument type has one wording.
+#include <pybind11/pybind11.h>
+
+#include <string>
+
+#include "bindings_common.hpp"
+
+namespace simloop_py {
+
+using namespace pybind11::literals;
+
+std::string show(const py::handle& value) {
+  py::str text;
+  try {
+    text = py::repr(value);
+  } catch (const py::error_already_set&) {  // an int past Python's digit limit, or a broken __repr__
+    if (PyLong_Check(value.ptr())) {
+      return "an int of " + std::to_string(value.attr("bit_length")().cast<long long>()) + " bits";
+    }
+    return std::string("a ") + Py_TYPE(value.ptr())->tp_name;
+  }
+  py::list lines;  // one line: numpy arrays print on several
+  for (const py::handle line : text.attr("splitlines")()) lines.append(line.attr("strip")());
+  py::str line = py::str(" ").attr("join")(lines);
+  if (py::len(line) > 80) line = py::str(line[py::slice(0, 77, 1)]).attr("__add__")("...");
+  return line.cast<std::string>();
+}
+
+std::string describe(const py::handle& value) {
+  return show(value) + " (" + py::type::handle_of(value).attr("__name__").cast<std::string>() + ")";
+}
+
+py::str check_path(const std::string& name, const py::handle& value, const std::string& what) {
+  py::object path = py::reinterpret_borrow<py::object>(value);
+  if (py::isinstance<py::str>(value) || py::isinstance<py::bytes>(value) ||
+      py::isinstance(value, py::module_::import("os").attr("PathLike"))) {
+    try {
+      path = py::module_::import("os").attr("fsdecode")(value);
+    } catch (py::error_already_set& e) {  // an os.PathLike whose __fspath__ returns neither
+      if (!e.matches(PyExc_TypeError)) throw;
+    }
+  }
+  if (!py::isinstance<py::str>(path)) {
+    throw py::type_error(name + " must be a path (str, bytes or os.PathLike), got " + describe(value));
+  }
+  const auto text = path.cast<py::str>();
+  if (py::len(text) == 0) throw py::value_error(name + " must name " + what + ", got ''");
+  if (text.contains(py::str("\0", 1))) {
+    throw py::value_error(name + " must not contain a NUL character, got " + show(text));
+  }
+  return text;
+}
+
+py::bytes check_text(const std::string& name, const py::handle& value) {
+  if (py::isinstance<py::bytes>(value)) return py::reinterpret_borrow<py::bytes>(value);
+  if (!py::isinstance<py::str>(value)) throw py::type_error(name + " must be a str or bytes, got " + describe(value));
+  PyObject* utf8 = PyUnicode_AsUTF8String(value.ptr());
+  if (utf8 != nullptr) return py::reinterpret_steal<py::bytes>(utf8);
+  py::error_already_set error;
+  if (!error.matches(PyExc_UnicodeEncodeError)) throw error;
+  const auto start = error.value().attr("start").cast<py::ssize_t>();
+  const py::object bad = value[py::slice(start, start + 1, 1)];
+  throw py::value_error(name + " must be text that UTF-8 can encode, got " + show(bad) + " at index " +
+                        std::to_string(start));
+}
+
+double check_real(const std::string& name, const py::handle& value) {
+  if (PyBool_Check(value.ptr()) || !py::isinstance(value, py::module_::import("numbers").attr("Real"))) {
+    throw py::type_error(name + " must be a number, got " + describe(value));
+  }
+  const double number = PyFloat_AsDouble(value.ptr());
+  if (number == -1.0 && PyErr_Occurred()) {
+    py::error_already_set error;
+    if (!error.matches(PyExc_OverflowError)) throw error;
+    throw py::value_error(name + " must be a number a float can hold, got " + show(value));
+  }
+  return number;
+}
+
+void bind_args(py::module_& m) {
+  m.def("_show", &show, "value"_a, "repr(value) for an error message: one line, at most 80 characters.");
+  m.def("_describe", &describe, "value"_a, "show(value) and its type's name.");
+  m.def("_check_path", &check_path, "name"_a, "value"_a, "what"_a);
+  m.def("_check_text", &check_text, "name"_a, "value"_a);
+  m.def("_check_real", &check_real, "name"_a, "value"_a);
+}
+
+}  // namespace simloop_py
