@@ -167,6 +167,26 @@ void judge_sweep(SweepResult& result) {
   result.edge_index = sweep_edge(result.points, [](const SweepPoint& p) { return p.stable; });
 }
 
+SweepResult join_sweeps(const std::vector<SweepResult>& parts) {
+  if (parts.empty()) throw InvalidArgument("join_sweeps needs at least one sweep, got none");
+  SweepResult joined;
+  joined.duration = parts.front().duration;
+  for (const SweepResult& part : parts) {
+    if (part.duration != joined.duration) {
+      throw InvalidArgument("join_sweeps: the sweeps' durations differ, " + python_float_repr(joined.duration) +
+                            " and " + python_float_repr(part.duration));
+    }
+    for (const SweepPoint& p : part.points) {
+      if (!joined.points.empty() && !(p.timestep > joined.points.back().timestep)) {
+        throw InvalidArgument("join_sweeps: the sweeps' timesteps do not ascend at " + python_float_repr(p.timestep));
+      }
+      joined.points.push_back(p);
+    }
+  }
+  judge_sweep(joined);
+  return joined;
+}
+
 std::string sweep_csv(const SweepResult& result) {
   std::string out =
       "timestep,steps,peak_box_z,max_abs_box_y,final_box_x,final_box_y,final_box_z,final_pusher_x,warnings,"

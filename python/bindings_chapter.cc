@@ -6,7 +6,6 @@
 #include <pybind11/stl/filesystem.h>
 
 #include <algorithm>
-#include <array>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -14,7 +13,6 @@
 #include <vector>
 
 #include "bindings_common.hpp"
-#include "bindings_pickle.hpp"
 #include "warning_counter.hpp"
 #include "simloop/batch.hpp"
 #include "simloop/model.hpp"
@@ -55,23 +53,6 @@ py::tuple column_names(int first, int end) {
 std::string run_call(const char* name, const simloop::RunConfig& c) {
   return std::string(name) + "(steps=" + std::to_string(c.num_steps()) +
          ", record_every=" + std::to_string(c.record_every) + ")";
-}
-
-template <class Io, class Result>
-void chapter_result_fields(Io& io, Result& r) {
-  record_fields(io, r);
-  io.field(r.config.seed);
-  io.field(r.config.steps);
-  io.field(r.config.timestep);
-  io.field(r.config.perturb);
-  io.field(r.config.smoke);
-  io.field(r.config.record_every);
-  io.field(r.config.audit_energy);
-  io.field(r.config.rng);
-  io.field(r.metrics);
-  io.field(r.unrounded_metrics);
-  io.field(r.shove);
-  io.field(r.energy);
 }
 
 }  // namespace
@@ -163,8 +144,7 @@ void bind_chapter(py::module_& m) {
                simloop::python_float_repr(r.metrics.lateral_drift) + ", warnings=" + std::to_string(r.warnings.size()) +
                ")";
       })
-      .def(pickling<RunResult, &chapter_result_fields<FieldWriter, const RunResult>,
-                    &chapter_result_fields<FieldReader, RunResult>>("RunResult"));
+      .def(pickle_as_bytes<RunResult, &simloop::run_result_from_bytes>());
   m.def(
       "run",
       [](const simloop::Model& model, const simloop::RunConfig& config, py::object progress) {
@@ -230,7 +210,8 @@ void bind_chapter(py::module_& m) {
         }
         return "SweepResult(points=" + std::to_string(r.points.size()) + range + ", duration=" +
                simloop::python_float_repr(r.duration) + ", edge=" + edge + ")";
-      });
+      })
+      .def(pickle_as_bytes<simloop::SweepResult, &simloop::sweep_result_from_bytes>());
   m.def(
       "sweep",
       [](const simloop::Model& model, const std::vector<double>& timesteps, double duration, int threads,
@@ -249,43 +230,8 @@ void bind_chapter(py::module_& m) {
   m.attr("STABLE_SINK") = simloop::kStableSink;
   m.attr("BOX_REST_Z") = simloop::kBoxRestZ;
 
-  // A sweep run in chunks on a cluster's workers comes back as plain data
-  // and is put together as one SweepResult (python/simloop/distributed.py).
-  m.def(
-      "sweep_point_fields",
-      [](const simloop::SweepPoint& p) {
-        const simloop::EnergyTotals& e = p.energy;
-        return py::make_tuple(p.timestep, p.steps, p.peak_box_z, p.max_abs_box_y, p.final_box_x, p.final_box_y,
-                              p.final_box_z, p.final_pusher_x, p.warnings,
-                              py::make_tuple(e.energy_start, e.energy_end, e.work_actuator, e.work_shove,
-                                             e.work_passive, e.work_constraint, e.work_constraint_positive,
-                                             e.unexplained));
-      },
-      "point"_a);
-  m.def(
-      "sweep_result_from_fields",
-      [](double duration, const std::vector<py::tuple>& points) {
-        simloop::SweepResult result;
-        result.duration = duration;
-        for (const py::tuple& f : points) {
-          simloop::SweepPoint p;
-          p.timestep = f[0].cast<double>();
-          p.steps = f[1].cast<std::int64_t>();
-          p.peak_box_z = f[2].cast<double>();
-          p.max_abs_box_y = f[3].cast<double>();
-          p.final_box_x = f[4].cast<double>();
-          p.final_box_y = f[5].cast<double>();
-          p.final_box_z = f[6].cast<double>();
-          p.final_pusher_x = f[7].cast<double>();
-          p.warnings = f[8].cast<int>();
-          const auto e = f[9].cast<std::array<double, 8>>();
-          p.energy = {e[0], e[1], e[2], e[3], e[4], e[5], e[6], e[7]};
-          result.points.push_back(p);
-        }
-        simloop::judge_sweep(result);
-        return result;
-      },
-      "duration"_a, "points"_a);
+  // A sweep run in chunks on a cluster's workers (python/simloop/distributed.py).
+  m.def("join_sweeps", &simloop::join_sweeps, "parts"_a);
   m.def("sweep_steps", &simloop::sweep_steps, "duration"_a, "timestep"_a);
 }
 

@@ -14,6 +14,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <system_error>
 #include <utility>
 #include <vector>
@@ -22,6 +23,7 @@
 
 #include "simloop/control.hpp"
 #include "simloop/output.hpp"
+#include "simloop/record_bytes.hpp"
 #include "simloop/run.hpp"
 
 namespace simloop_py {
@@ -264,6 +266,18 @@ std::pair<std::filesystem::path, std::filesystem::path> write_result(const Resul
   const simloop::OutputFiles files =
       naming_failures("write(" + out.string() + ")", [&] { return simloop::write_outputs(r, out); });
   return {files.metrics, files.trajectory};
+}
+
+// py::pickle for a result: the library's bytes (record_bytes.hpp) and back.
+// A state that is not bytes (the (version, fields) tuples of pickle format 3)
+// reads as no bytes: refused as damaged or from another simloop version.
+template <class Result, Result (*Read)(std::string_view)>
+auto pickle_as_bytes() {
+  return py::pickle([](const Result& r) -> py::object { return py::bytes(simloop::to_bytes(r)); },
+                    [](const py::object& state) {
+                      if (!py::isinstance<py::bytes>(state)) return Read({});
+                      return Read(state.cast<py::bytes>());
+                    });
 }
 
 // What every kind of sweep result offers beside its own figures: its edge,

@@ -10,7 +10,6 @@
 #include <utility>
 
 #include "bindings_common.hpp"
-#include "bindings_pickle.hpp"
 #include "simloop/number_format.hpp"
 #include "simloop/output.hpp"
 #include "simloop/run_record.hpp"
@@ -135,8 +134,7 @@ void bind_record(py::module_& m) {
                ", disturbances=" + std::to_string(r.schedule.forces.size()) +
                ", warnings=" + std::to_string(r.warnings.size()) + ")";
       })
-      .def(pickling<RunRecord, &record_fields<FieldWriter, const RunRecord>, &record_fields<FieldReader, RunRecord>>(
-          "ScenarioResult"));
+      .def(pickle_as_bytes<RunRecord, &simloop::record_from_bytes>());
 }
 
 }  // namespace simloop_py

@@ -13,7 +13,6 @@
 #include <vector>
 
 #include "bindings_common.hpp"
-#include "bindings_pickle.hpp"
 #include "simloop/model.hpp"
 #include "simloop/number_format.hpp"
 #include "simloop/output.hpp"

@@ -78,6 +78,12 @@ inline constexpr std::int64_t kMinSweepSteps = 4;
 // (on a cluster's workers, in chunks of timesteps) are judged the same way.
 void judge_sweep(SweepResult& result);
 
+// One sweep from `parts` run apart (a cluster's chunks of timesteps), in
+// order: their points joined, then judged (judge_sweep). Throws
+// InvalidArgument if there are no parts, their durations differ, or the
+// joined timesteps do not ascend.
+[[nodiscard]] SweepResult join_sweeps(const std::vector<SweepResult>& parts);
+
 // sweep.csv: a header and one line per timestep.
 [[nodiscard]] std::string sweep_csv(const SweepResult& result);
 

@@ -322,10 +322,9 @@ def scenario_job(scenario: Any, *, rng: str = "mt19937_64", steps: Optional[int]
 
 
 def _sweep_chunk(scene: Tuple[str, str], versions_expected: Sequence[str], timesteps: Sequence[float],
-                 duration: float, threads: int) -> List[Tuple[Any, ...]]:
+                 duration: float, threads: int) -> "_core.SweepResult":
     _check_versions(versions_expected)
-    result = _core.sweep(_scene(scene), list(timesteps), duration, threads)
-    return [_core.sweep_point_fields(p) for p in result.points]
+    return _core.sweep(_scene(scene), list(timesteps), duration, threads)  # pickles as bytes, bits unchanged
 
 
 def sweep_on(executor: object, timesteps: Sequence[float], duration: float, model: object, threads: Optional[int],
@@ -343,11 +342,11 @@ def sweep_on(executor: object, timesteps: Sequence[float], duration: float, mode
     source, count = scene_source(model), _threads(threads)
     ranges = chunk_ranges(len(ordered), size)
     tasks = ((k, (source, versions(), ordered[a:b], duration, count)) for k, (a, b) in enumerate(ranges))
-    points: Dict[int, List[Tuple[Any, ...]]] = {}
+    parts: Dict[int, "_core.SweepResult"] = {}
     done = 0
-    for key, fields in pool.map_unordered(_sweep_chunk, tasks, window=max(8, 4 * pool.workers())):
-        points[key] = fields
-        done += len(fields)
+    for key, part in pool.map_unordered(_sweep_chunk, tasks, window=max(8, 4 * pool.workers())):
+        parts[key] = part
+        done += len(part.points)
         if progress is not None:
             progress(done, len(ordered))
-    return _core.sweep_result_from_fields(duration, [p for k in sorted(points) for p in points[k]])
+    return _core.join_sweeps([parts[k] for k in sorted(parts)])  # judged as one sweep

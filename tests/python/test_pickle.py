@@ -1,4 +1,4 @@
-"""Model, Sim, RunResult and ScenarioResult pickle, and come back from worker
+"""Model, Sim, RunResult, ScenarioResult and SweepResult pickle, and come back from worker
 processes as they were, bit for bit."""
 
 from __future__ import annotations
@@ -45,11 +45,16 @@ def test_damaged_pickles_are_refused_with_a_message():
     with pytest.raises(simloop.MujocoError, match="<saved model>: (loading the saved model: |not a model MuJoCo)"):
         simloop.Model.__new__(simloop.Model).__setstate__(b"not a model")
     result = simloop.run(steps=20)
-    version, fields = result.__getstate__()
+    state = result.__getstate__()  # simloop's bytes: the format's version (a uint32) first
+    assert isinstance(state, bytes) and state[:4] == (4).to_bytes(4, "little")
     with pytest.raises(ValueError, match="cannot unpickle a RunResult: the saved fields are damaged"):
-        simloop.RunResult.__new__(simloop.RunResult).__setstate__((version, fields[:-40]))
-    with pytest.raises(ValueError, match="pickled by another simloop version"):
-        simloop.RunResult.__new__(simloop.RunResult).__setstate__((version + 1, fields))
+        simloop.RunResult.__new__(simloop.RunResult).__setstate__(state[:-40])
+    with pytest.raises(ValueError, match=r"pickled by another simloop version \(format 5; this one reads 4\)"):
+        simloop.RunResult.__new__(simloop.RunResult).__setstate__((5).to_bytes(4, "little") + state[4:])
+    with pytest.raises(ValueError, match="cannot unpickle a RunResult: .* from another simloop version"):
+        simloop.RunResult.__new__(simloop.RunResult).__setstate__((3, state))  # format 3's (version, fields)
+    with pytest.raises(ValueError, match="cannot unpickle a ScenarioResult: the saved fields are a RunResult's"):
+        simloop.ScenarioResult.__new__(simloop.ScenarioResult).__setstate__(state)
 
 
 @pytest.mark.parametrize("scene", ["pusht.xml", "walker.xml"])
@@ -88,6 +93,10 @@ def test_results_pickle_field_by_field():
     assert repr(again.disturbances) == repr(scenario.disturbances)
     assert np.array_equal(again.final_state, scenario.final_state)  # where a continuation starts
     assert again.final_state.size > 0
+
+    sweep = simloop.sweep([0.002, 0.005, 0.02], duration=1.0)
+    swept = pickle.loads(pickle.dumps(sweep))
+    assert swept.csv() == sweep.csv() and swept.summary() == sweep.summary() and swept.edge == sweep.edge
 
 
 @needs_worker_processes
