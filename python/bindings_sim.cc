@@ -336,19 +336,13 @@ void bind_sim(py::module_& m) {
             std::lock_guard<std::mutex> lock(e.mutex);
             const std::size_t n = e.episodes.count();
             const auto width = static_cast<py::ssize_t>(e.episodes.width());
-            if (static_cast<std::size_t>(actions.size()) != n * static_cast<std::size_t>(e.episodes.nu())) {
-              throw py::value_error("actions must hold " + std::to_string(n) + " x " + std::to_string(e.episodes.nu()) +
-                                    " values, got " + std::to_string(actions.size()));
-            }
-            if (active && static_cast<std::size_t>(active->size()) != n) {
-              throw py::value_error("active must hold " + std::to_string(n) + " flags");
-            }
             std::vector<std::uint8_t> terminated(n, 0), truncated(n, 0);
             const std::uint8_t* mask = active ? active->data() : nullptr;
             const auto work_steps = every > 0 ? static_cast<double>(every) * static_cast<double>(n) : 0.0;
             const auto stepping = [&](simloop::RunControl* control) {
-              e.episodes.step(actions.data(), every, mask, e.observations.data(), terminated.data(), truncated.data(),
-                              threads, control);
+              e.episodes.step(actions.data(), static_cast<std::size_t>(actions.size()), every, mask,
+                              active ? static_cast<std::size_t>(active->size()) : 0, e.observations.data(),
+                              terminated.data(), truncated.data(), threads, control);
             };
             if (work_steps <= static_cast<double>(simloop::RunControl::kChunkSteps)) {
               py::gil_scoped_release release;  // nothing long to interrupt
