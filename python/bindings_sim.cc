@@ -106,19 +106,18 @@ auto locked(R (simloop::Sim::*fn)() const noexcept) {
   };
 }
 
-// A numpy view of `count` (x `width`) doubles at `values`, owned by `owner`
-// (the Sim or Model Python object), which the view keeps alive through its
-// base. Safe because a Sim's mjData and a Model's mjModel never move.
-py::array owned_view(const py::object& owner, double* values, py::ssize_t count, py::ssize_t width, bool writable) {
+// A numpy view of a Sim's array, owned by `owner` (the Sim's Python object),
+// which the view keeps alive through its base: safe because a Sim's mjData
+// never moves.
+py::array owned_view(const py::object& owner, const simloop::ArrayView& array) {
   static double empty = 0.0;  // a size-0 view still needs a pointer to own nothing
-  double* at = count > 0 ? values : &empty;
-  const auto item = static_cast<py::ssize_t>(sizeof(double));
-  py::array view = width > 0 ? py::array(py::dtype::of<double>(), {count, width}, {item * width, item}, at, owner)
-                             : py::array(py::dtype::of<double>(), {count}, {item}, at, owner);
-  if (!writable) py::detail::array_proxy(view.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
+  double* at = array.rows > 0 ? array.data : &empty;
+  const py::ssize_t rows = array.rows, width = array.width, item = sizeof(double);
+  py::array view = width > 0 ? py::array(py::dtype::of<double>(), {rows, width}, {item * width, item}, at, owner)
+                             : py::array(py::dtype::of<double>(), {rows}, {item}, at, owner);
+  if (!array.writable) py::detail::array_proxy(view.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
   return view;
 }
-
 
 // Observations live in one (count, width) buffer the Python side reads
 // after each call (copied out: a returned array never changes later).
@@ -169,18 +168,12 @@ void bind_sim(py::module_& m) {
         s.sim.set_ctrl(values.data(), static_cast<size_t>(values.size()));
       }, "values"_a)
       .def_property_readonly("ctrl", locked(&simloop::Sim::ctrl))
-      .def("apply_force", locked(&simloop::Sim::apply_force), "force"_a)
-      .def("clear_force", locked(&simloop::Sim::clear_force))
       .def("apply_wrench", [](PySim& s, int body, std::optional<std::array<double, 3>> force,
                               std::optional<std::array<double, 3>> torque) {
         SimLock lock(s);
         s.sim.apply_wrench(body, force ? &*force : nullptr, torque ? &*torque : nullptr);
       }, "body"_a, "force"_a, "torque"_a)
       .def("clear_forces", locked(&simloop::Sim::clear_forces))
-      .def_property_readonly("applied_force", [](PySim& s) {
-        SimLock lock(s);
-        return vec(s.sim.applied_force().data(), 3);
-      })
       .def("forward", locked(&simloop::Sim::forward))
       .def("get_state", [](PySim& s) {
         SimLock lock(s);
@@ -216,22 +209,16 @@ void bind_sim(py::module_& m) {
           [](const py::object& self, const std::string& name) {
             PySim& s = self.cast<PySim&>();
             SimLock lock(s);  // for the model's sizes; the view itself outlives the lock, as documented
-            const mjModel* mm = s.sim.model().get();
-            mjData* d = s.sim.data();
-            // Inputs and state: writable. What MuJoCo derives: read-only.
-            if (name == "qpos") return owned_view(self, d->qpos, mm->nq, 0, true);
-            if (name == "qvel") return owned_view(self, d->qvel, mm->nv, 0, true);
-            if (name == "ctrl") return owned_view(self, d->ctrl, mm->nu, 0, true);
-            if (name == "act") return owned_view(self, d->act, mm->na, 0, true);
-            if (name == "qfrc_applied") return owned_view(self, d->qfrc_applied, mm->nv, 0, true);
-            if (name == "xfrc_applied") return owned_view(self, d->xfrc_applied, mm->nbody, 6, true);
-            if (name == "sensordata") return owned_view(self, d->sensordata, mm->nsensordata, 0, false);
-            if (name == "actuator_force") return owned_view(self, d->actuator_force, mm->nu, 0, false);
-            if (name == "xpos") return owned_view(self, d->xpos, mm->nbody, 3, false);
-            if (name == "xquat") return owned_view(self, d->xquat, mm->nbody, 4, false);
-            throw py::value_error("no Sim array named '" + name + "'");
+            return owned_view(self, s.sim.array(name));
           },
           "name"_a, "A numpy view into this Sim's mjData (keeps the Sim alive).")
+      .def(
+          "read",
+          [](PySim& s, const std::string& name, long long start, long long count) {
+            SimLock lock(s);
+            return vector_array(s.sim.read(name, start, count));
+          },
+          "name"_a, "start"_a, "count"_a, "A copy of values start .. start+count-1 of array(name), flattened.")
       .def(
           "step",
           [](PySim& s, std::int64_t n) {
@@ -259,20 +246,6 @@ void bind_sim(py::module_& m) {
           "n"_a, "progress"_a)
       .def_property_readonly("time", locked(&simloop::Sim::time))
       .def_property_readonly("steps_taken", locked(&simloop::Sim::steps_taken))
-      .def_property_readonly("box_position", [](PySim& s) {
-        SimLock lock(s);
-        return vec(s.sim.box_position().data(), 3);
-      })
-      .def_property_readonly("box_quaternion", [](PySim& s) {
-        SimLock lock(s);
-        return vec(s.sim.box_quaternion().data(), 4);
-      })
-      .def_property_readonly("box_velocity", [](PySim& s) {
-        SimLock lock(s);
-        return vec(s.sim.box_velocity().data(), 3);
-      })
-      .def_property_readonly("pusher_x", locked(&simloop::Sim::pusher_x))
-      .def_property_readonly("pusher_velocity", locked(&simloop::Sim::pusher_velocity))
       .def_property_readonly("contacts", locked(&simloop::Sim::contacts))
       .def_property_readonly("warnings", locked(&simloop::Sim::warnings))
       // Pickled as its model (MuJoCo's binary, with this Sim's timestep), its
