@@ -105,15 +105,21 @@ void Episodes::reset(std::size_t i, std::uint64_t seed, double* observation) {
   s.observe(e, observation);
 }
 
-void Episodes::step(const double* actions, std::int64_t every, const std::uint8_t* active, double* observations,
-                    std::uint8_t* terminated, std::uint8_t* truncated, int threads, RunControl* control) {
+void Episodes::step(const double* actions, std::size_t action_count, std::int64_t every, const std::uint8_t* active,
+                    std::size_t active_count, double* observations, std::uint8_t* terminated, std::uint8_t* truncated,
+                    int threads, RunControl* control) {
   Impl& s = *impl_;
+  const std::size_t count = s.episodes.size();
+  const int nu = detail::compat::as_int(s.model.get()->nu);
+  if (action_count != count * static_cast<std::size_t>(nu)) {
+    throw InvalidArgument("actions must hold " + std::to_string(count) + " x " + std::to_string(nu) + " values, got " +
+                          std::to_string(action_count));
+  }
+  if (active && active_count != count) throw InvalidArgument("active must hold " + std::to_string(count) + " flags");
   if (every < 1 || every > kMaxSteps) {
     throw InvalidArgument("control_every must be from 1 to " + std::to_string(kMaxSteps) + ", got " +
                           std::to_string(every));
   }
-  const std::size_t count = s.episodes.size();
-  const int nu = detail::compat::as_int(s.model.get()->nu);
   const int width = s.recorder->width();
   std::vector<std::int64_t> steps(count, 0);  // each job's steps, for progress
   for (std::size_t i = 0; i < count; ++i) {

@@ -79,6 +79,24 @@ std::string listing(const mjModel* m, mjtObj type, std::vector<std::string>& nam
   return out;
 }
 
+// mjData's arrays by name, sized by the model: inputs and state writable,
+// what MuJoCo derives read-only. (mjData's arrays are its pointers, so a
+// const mjData still hands them out; read() only copies.)
+ArrayView array_of(const mjModel* m, const mjData* d, std::string_view name) {
+  using detail::compat::as_int;
+  if (name == "qpos") return {d->qpos, as_int(m->nq), 0, true};
+  if (name == "qvel") return {d->qvel, as_int(m->nv), 0, true};
+  if (name == "ctrl") return {d->ctrl, as_int(m->nu), 0, true};
+  if (name == "act") return {d->act, as_int(m->na), 0, true};
+  if (name == "qfrc_applied") return {d->qfrc_applied, as_int(m->nv), 0, true};
+  if (name == "xfrc_applied") return {d->xfrc_applied, as_int(m->nbody), 6, true};
+  if (name == "sensordata") return {d->sensordata, as_int(m->nsensordata), 0, false};
+  if (name == "actuator_force") return {d->actuator_force, as_int(m->nu), 0, false};
+  if (name == "xpos") return {d->xpos, as_int(m->nbody), 3, false};
+  if (name == "xquat") return {d->xquat, as_int(m->nbody), 4, false};
+  throw InvalidArgument("no Sim array named '" + std::string(name) + "'");
+}
+
 }  // namespace
 
 Sim::Sim(const Model& model) : model_(model), data_(model) { reset(); }
@@ -165,17 +183,6 @@ void Sim::set_ctrl(const double* values, std::size_t count) {
   std::copy(values, values + count, data_.get()->ctrl);
 }
 
-void Sim::apply_force(const std::array<double, 3>& force) {
-  for (double f : force) require_finite(f, "force");
-  double* slot = data_.get()->xfrc_applied + 6 * model_.layout().box_body;
-  for (int i = 0; i < 3; ++i) slot[i] = force[i];
-}
-
-void Sim::clear_force() {
-  double* slot = data_.get()->xfrc_applied + 6 * model_.layout().box_body;
-  for (int i = 0; i < 3; ++i) slot[i] = 0.0;
-}
-
 void Sim::apply_wrench(int body, const std::array<double, 3>* force, const std::array<double, 3>* torque) {
   (void)checked_index(mjOBJ_BODY, body);
   if (force) {
@@ -226,11 +233,6 @@ std::array<double, 6> Sim::body_velocity(int body) const {
   return velocity;
 }
 
-std::array<double, 3> Sim::applied_force() const {
-  const double* slot = data_.get()->xfrc_applied + 6 * model_.layout().box_body;
-  return {slot[0], slot[1], slot[2]};
-}
-
 void Sim::check_steps(std::int64_t n) { check_count("n", n, kMaxSteps); }
 
 void Sim::step(std::int64_t n, RunControl* control) {
@@ -253,25 +255,6 @@ void Sim::step(std::int64_t n, RunControl* control) {
   }
 }
 
-std::array<double, 3> Sim::box_position() const {
-  const double* q = data_.get()->qpos + model_.layout().box_qposadr;
-  return {q[0], q[1], q[2]};
-}
-
-std::array<double, 4> Sim::box_quaternion() const {
-  const double* q = data_.get()->qpos + model_.layout().box_qposadr + 3;
-  return {q[0], q[1], q[2], q[3]};
-}
-
-std::array<double, 3> Sim::box_velocity() const {
-  const double* v = data_.get()->qvel + model_.layout().box_dofadr;
-  return {v[0], v[1], v[2]};
-}
-
-double Sim::pusher_x() const { return data_.get()->qpos[model_.layout().pusher_qposadr]; }
-
-double Sim::pusher_velocity() const { return data_.get()->qvel[model_.layout().pusher_dofadr]; }
-
 std::vector<Contact> Sim::contacts() const {
   const mjModel* m = model_.get();
   const mjData* d = data_.get();
@@ -284,6 +267,18 @@ std::vector<Contact> Sim::contacts() const {
     out.push_back({g1 ? g1 : "", g2 ? g2 : "", c.dist, {c.pos[0], c.pos[1], c.pos[2]}});
   }
   return out;
+}
+
+ArrayView Sim::array(std::string_view name) { return array_of(model_.get(), data_.get(), name); }
+
+std::vector<double> Sim::read(std::string_view name, long long start, long long count) const {
+  const ArrayView view = array_of(model_.get(), data_.get(), name);
+  const long long size = static_cast<long long>(view.rows) * std::max(view.width, 1);
+  if (start < 0 || count < 0 || count > size - start) {
+    throw InvalidArgument(std::string(name) + " has " + std::to_string(size) + " values: cannot read " +
+                          std::to_string(count) + " from index " + std::to_string(start));
+  }
+  return std::vector<double>(view.data + start, view.data + start + count);
 }
 
 std::vector<Warning> Sim::warnings() const { return counter_->warnings(); }

@@ -101,6 +101,14 @@ void bind_model(py::module_& m) {
       .def_property_readonly("name", &simloop::Model::name, "<mujoco model=...>'s name ('' if none).")
       .def_property_readonly("has_chapter_layout", &simloop::Model::has_chapter_layout,
                              "True if the scene has the chapter's box and pusher (the chapter's loop runs on it).")
+      .def_property_readonly(
+          "chapter_layout",
+          [](const simloop::Model& model) {
+            const simloop::SceneLayout& at = model.layout();  // ValueError naming what the scene lacks
+            return py::dict("box_body"_a = at.box_body, "box_qposadr"_a = at.box_qposadr, "box_dofadr"_a = at.box_dofadr,
+                            "pusher_qposadr"_a = at.pusher_qposadr, "pusher_dofadr"_a = at.pusher_dofadr);
+          },
+          "Where the chapter's box and pusher are (body id, qpos and qvel addresses).")
       .def_property_readonly("nbody", [](const simloop::Model& model) { return model.get()->nbody; })
       .def_property_readonly("njnt", [](const simloop::Model& model) { return model.get()->njnt; })
       .def_property_readonly("na", [](const simloop::Model& model) { return model.get()->na; })

@@ -6,8 +6,10 @@
 #include <pybind11/stl.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -76,49 +78,31 @@ class SimLock {
   PySim& s_;
 };
 
-// A Sim method as a Python method that holds the Sim's lock.
-template <class R, class... Args>
-auto locked(R (simloop::Sim::*fn)(Args...)) {
-  return [fn](PySim& s, Args... args) -> R {
+using Doubles = py::array_t<double, py::array::c_style | py::array::forcecast>;
+using Part3 = std::optional<std::array<double, 3>>;  // a force or torque, or None
+
+// fn(sim, args...) -- a Sim method or a function of a Sim -- as a Python
+// method that holds the Sim's lock. Args: the Python arguments' types.
+template <class... Args, class Fn>
+auto locked(Fn fn) {
+  return [fn](PySim& s, Args... args) {
     SimLock lock(s);
-    return (s.sim.*fn)(std::forward<Args>(args)...);
-  };
-}
-template <class R, class... Args>
-auto locked(R (simloop::Sim::*fn)(Args...) noexcept) {
-  return [fn](PySim& s, Args... args) -> R {
-    SimLock lock(s);
-    return (s.sim.*fn)(std::forward<Args>(args)...);
-  };
-}
-template <class R>
-auto locked(R (simloop::Sim::*fn)() const) {
-  return [fn](PySim& s) -> R {
-    SimLock lock(s);
-    return (s.sim.*fn)();
-  };
-}
-template <class R>
-auto locked(R (simloop::Sim::*fn)() const noexcept) {
-  return [fn](PySim& s) -> R {
-    SimLock lock(s);
-    return (s.sim.*fn)();
+    return std::invoke(fn, s.sim, args...);
   };
 }
 
-// A numpy view of `count` (x `width`) doubles at `values`, owned by `owner`
-// (the Sim or Model Python object), which the view keeps alive through its
-// base. Safe because a Sim's mjData and a Model's mjModel never move.
-py::array owned_view(const py::object& owner, double* values, py::ssize_t count, py::ssize_t width, bool writable) {
+// A numpy view of a Sim's array, owned by `owner` (the Sim's Python object),
+// which the view keeps alive through its base: safe because a Sim's mjData
+// never moves.
+py::array owned_view(const py::object& owner, const simloop::ArrayView& array) {
   static double empty = 0.0;  // a size-0 view still needs a pointer to own nothing
-  double* at = count > 0 ? values : &empty;
-  const auto item = static_cast<py::ssize_t>(sizeof(double));
-  py::array view = width > 0 ? py::array(py::dtype::of<double>(), {count, width}, {item * width, item}, at, owner)
-                             : py::array(py::dtype::of<double>(), {count}, {item}, at, owner);
-  if (!writable) py::detail::array_proxy(view.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
+  double* at = array.rows > 0 ? array.data : &empty;
+  const py::ssize_t rows = array.rows, width = array.width, item = sizeof(double);
+  py::array view = width > 0 ? py::array(py::dtype::of<double>(), {rows, width}, {item * width, item}, at, owner)
+                             : py::array(py::dtype::of<double>(), {rows}, {item}, at, owner);
+  if (!array.writable) py::detail::array_proxy(view.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
   return view;
 }
-
 
 // Observations live in one (count, width) buffer the Python side reads
 // after each call (copied out: a returned array never changes later).
@@ -152,86 +136,50 @@ void bind_sim(py::module_& m) {
              return naming_failures("Sim", [&] { return std::make_unique<PySim>(model); });
            }),
            "model"_a)
-      .def("copy", [](PySim& s) {
-        SimLock lock(s);
-        return naming_failures("Sim.copy", [&] { return std::make_unique<PySim>(s.sim); });
-      }, "An independent copy: its own data, the same (shared, read-only) model.")
+      .def("copy", locked([](const simloop::Sim& sim) {
+             return naming_failures("Sim.copy", [&] { return std::make_unique<PySim>(sim); });
+           }), "An independent copy: its own data, the same (shared, read-only) model.")
       .def("reset", locked(&simloop::Sim::reset))
-      .def("reset_to_keyframe", locked(&simloop::Sim::reset_to_keyframe), "key"_a)
-      .def("set_timestep", locked(&simloop::Sim::set_timestep), "timestep"_a)
+      .def("reset_to_keyframe", locked<int>(&simloop::Sim::reset_to_keyframe), "key"_a)
+      .def("set_timestep", locked<double>(&simloop::Sim::set_timestep), "timestep"_a)
       .def_property_readonly("timestep", locked(&simloop::Sim::timestep))
-      .def("set_ctrl", [](PySim& s, double value) {
-        SimLock lock(s);
-        s.sim.set_ctrl(value);
-      }, "value"_a)
-      .def("set_ctrl_vector", [](PySim& s, const py::array_t<double, py::array::c_style | py::array::forcecast>& values) {
-        SimLock lock(s);
-        s.sim.set_ctrl(values.data(), static_cast<size_t>(values.size()));
-      }, "values"_a)
+      .def("set_ctrl", locked<double>(py::overload_cast<double>(&simloop::Sim::set_ctrl)), "value"_a)
+      .def("set_ctrl_vector", locked<const Doubles&>([](auto& sim, const auto& values) {
+             sim.set_ctrl(values.data(), static_cast<size_t>(values.size()));
+           }), "values"_a)
       .def_property_readonly("ctrl", locked(&simloop::Sim::ctrl))
-      .def("apply_force", locked(&simloop::Sim::apply_force), "force"_a)
-      .def("clear_force", locked(&simloop::Sim::clear_force))
-      .def("apply_wrench", [](PySim& s, int body, std::optional<std::array<double, 3>> force,
-                              std::optional<std::array<double, 3>> torque) {
-        SimLock lock(s);
-        s.sim.apply_wrench(body, force ? &*force : nullptr, torque ? &*torque : nullptr);
-      }, "body"_a, "force"_a, "torque"_a)
+      .def("apply_wrench", locked<int, Part3, Part3>([](auto& sim, int body, const auto& force, const auto& torque) {
+             sim.apply_wrench(body, force ? &*force : nullptr, torque ? &*torque : nullptr);
+           }), "body"_a, "force"_a, "torque"_a)
       .def("clear_forces", locked(&simloop::Sim::clear_forces))
-      .def_property_readonly("applied_force", [](PySim& s) {
-        SimLock lock(s);
-        return vec(s.sim.applied_force().data(), 3);
-      })
       .def("forward", locked(&simloop::Sim::forward))
-      .def("get_state", [](PySim& s) {
-        SimLock lock(s);
-        const std::vector<double> state = s.sim.state();
-        return vec(state.data(), state.size());
-      })
-      .def("set_state", [](PySim& s, const py::array_t<double, py::array::c_style>& state) {
-        SimLock lock(s);
-        s.sim.set_state(state.data(), static_cast<size_t>(state.size()));
-      }, "state"_a)
-      .def_property_readonly("state_layout", [](PySim& s) {
-        SimLock lock(s);
-        return s.sim.state_layout();
-      })
-      .def("id", [](PySim& s, const std::string& kind, const std::string& name) {
-        SimLock lock(s);  // set_timestep may be swapping the model on another thread
-        return s.sim.id(object_type(kind), name);
-      }, "kind"_a, "name"_a)
-      .def("checked_index", [](PySim& s, const std::string& kind, long long index) {
-        SimLock lock(s);
-        return s.sim.checked_index(object_type(kind), index);
-      }, "kind"_a, "index"_a)
-      .def("body_velocity", [](PySim& s, int body) {
-        SimLock lock(s);
-        return vec(s.sim.body_velocity(body).data(), 6);
-      }, "body"_a)
-      .def_property_readonly("model", [](PySim& s) {
-        SimLock lock(s);
-        return s.sim.model();
-      }, "This Sim's own model (with its timestep).")
+      .def("get_state", locked([](const simloop::Sim& sim) { return vector_array(sim.state()); }))
+      .def("set_state", locked<const py::array_t<double, py::array::c_style>&>([](auto& sim, const auto& state) {
+             sim.set_state(state.data(), static_cast<size_t>(state.size()));
+           }), "state"_a)
+      .def_property_readonly("state_layout", locked(&simloop::Sim::state_layout))
+      // Names are looked up locked too: set_timestep may be swapping the model.
+      .def("id", locked<const std::string&, const std::string&>([](auto& sim, const auto& kind, const auto& name) {
+             return sim.id(object_type(kind), name);
+           }), "kind"_a, "name"_a)
+      .def("checked_index", locked<const std::string&, long long>([](auto& sim, const auto& kind, long long index) {
+             return sim.checked_index(object_type(kind), index);
+           }), "kind"_a, "index"_a)
+      .def("body_velocity", locked<int>([](auto& sim, int body) { return vec(sim.body_velocity(body).data(), 6); }),
+           "body"_a)
+      .def_property_readonly("model", locked(&simloop::Sim::model), "This Sim's own model (with its timestep).")
       .def(
           "array",
           [](const py::object& self, const std::string& name) {
             PySim& s = self.cast<PySim&>();
             SimLock lock(s);  // for the model's sizes; the view itself outlives the lock, as documented
-            const mjModel* mm = s.sim.model().get();
-            mjData* d = s.sim.data();
-            // Inputs and state: writable. What MuJoCo derives: read-only.
-            if (name == "qpos") return owned_view(self, d->qpos, mm->nq, 0, true);
-            if (name == "qvel") return owned_view(self, d->qvel, mm->nv, 0, true);
-            if (name == "ctrl") return owned_view(self, d->ctrl, mm->nu, 0, true);
-            if (name == "act") return owned_view(self, d->act, mm->na, 0, true);
-            if (name == "qfrc_applied") return owned_view(self, d->qfrc_applied, mm->nv, 0, true);
-            if (name == "xfrc_applied") return owned_view(self, d->xfrc_applied, mm->nbody, 6, true);
-            if (name == "sensordata") return owned_view(self, d->sensordata, mm->nsensordata, 0, false);
-            if (name == "actuator_force") return owned_view(self, d->actuator_force, mm->nu, 0, false);
-            if (name == "xpos") return owned_view(self, d->xpos, mm->nbody, 3, false);
-            if (name == "xquat") return owned_view(self, d->xquat, mm->nbody, 4, false);
-            throw py::value_error("no Sim array named '" + name + "'");
+            return owned_view(self, s.sim.array(name));
           },
           "name"_a, "A numpy view into this Sim's mjData (keeps the Sim alive).")
+      .def("read", locked<const std::string&, long long, long long>([](auto& sim, const auto& name, auto start,
+                                                                         auto count) {
+             return vector_array(sim.read(name, start, count));
+           }), "name"_a, "start"_a, "count"_a, "A copy of values start .. start+count-1 of array(name), flattened.")
       .def(
           "step",
           [](PySim& s, std::int64_t n) {
@@ -259,20 +207,6 @@ void bind_sim(py::module_& m) {
           "n"_a, "progress"_a)
       .def_property_readonly("time", locked(&simloop::Sim::time))
       .def_property_readonly("steps_taken", locked(&simloop::Sim::steps_taken))
-      .def_property_readonly("box_position", [](PySim& s) {
-        SimLock lock(s);
-        return vec(s.sim.box_position().data(), 3);
-      })
-      .def_property_readonly("box_quaternion", [](PySim& s) {
-        SimLock lock(s);
-        return vec(s.sim.box_quaternion().data(), 4);
-      })
-      .def_property_readonly("box_velocity", [](PySim& s) {
-        SimLock lock(s);
-        return vec(s.sim.box_velocity().data(), 3);
-      })
-      .def_property_readonly("pusher_x", locked(&simloop::Sim::pusher_x))
-      .def_property_readonly("pusher_velocity", locked(&simloop::Sim::pusher_velocity))
       .def_property_readonly("contacts", locked(&simloop::Sim::contacts))
       .def_property_readonly("warnings", locked(&simloop::Sim::warnings))
       // Pickled as its model (MuJoCo's binary, with this Sim's timestep), its
@@ -280,13 +214,12 @@ void bind_sim(py::module_& m) {
       .def(py::pickle(
           [](PySim& s) {
             SimLock lock(s);
-            const std::vector<double> state = s.sim.state();
-            return py::make_tuple(s.sim.model(), vec(state.data(), state.size()), s.sim.steps_taken());
+            return py::make_tuple(s.sim.model(), vector_array(s.sim.state()), s.sim.steps_taken());
           },
           [](const py::tuple& t) {
             if (t.size() != 3) throw py::value_error("cannot unpickle a Sim: expected (model, state, steps_taken)");
             auto s = std::make_unique<PySim>(t[0].cast<simloop::Model>());
-            const auto state = t[1].cast<py::array_t<double, py::array::c_style | py::array::forcecast>>();
+            const auto state = t[1].cast<Doubles>();
             s->sim.set_state(state.data(), static_cast<size_t>(state.size()));
             s->sim.set_steps_taken(t[2].cast<std::int64_t>());
             return s;
@@ -304,11 +237,9 @@ void bind_sim(py::module_& m) {
       .def_property_readonly("timestep", [](PyEpisodes& e) { return e.episodes.model().timestep(); })
       .def_property_readonly("column_names",
                              [](PyEpisodes& e) {
-                               py::tuple names(e.episodes.columns().size());
-                               for (size_t i = 0; i < e.episodes.columns().size(); ++i) {
-                                 names[i] = py::str(e.episodes.columns()[i].name);
-                               }
-                               return names;
+                               py::list names;
+                               for (const simloop::Column& c : e.episodes.columns()) names.append(c.name);
+                               return py::tuple(names);
                              })
       .def_property_readonly("ctrl_range",
                              [](PyEpisodes& e) {
@@ -330,25 +261,19 @@ void bind_sim(py::module_& m) {
           "i"_a, "seed"_a)
       .def(
           "step",
-          [](PyEpisodes& e, const py::array_t<double, py::array::c_style | py::array::forcecast>& actions,
-             std::int64_t every, const std::optional<py::array_t<std::uint8_t, py::array::c_style | py::array::forcecast>>& active,
+          [](PyEpisodes& e, const Doubles& actions, std::int64_t every,
+             const std::optional<py::array_t<std::uint8_t, py::array::c_style | py::array::forcecast>>& active,
              int threads) {
             std::lock_guard<std::mutex> lock(e.mutex);
             const std::size_t n = e.episodes.count();
             const auto width = static_cast<py::ssize_t>(e.episodes.width());
-            if (static_cast<std::size_t>(actions.size()) != n * static_cast<std::size_t>(e.episodes.nu())) {
-              throw py::value_error("actions must hold " + std::to_string(n) + " x " + std::to_string(e.episodes.nu()) +
-                                    " values, got " + std::to_string(actions.size()));
-            }
-            if (active && static_cast<std::size_t>(active->size()) != n) {
-              throw py::value_error("active must hold " + std::to_string(n) + " flags");
-            }
             std::vector<std::uint8_t> terminated(n, 0), truncated(n, 0);
             const std::uint8_t* mask = active ? active->data() : nullptr;
             const auto work_steps = every > 0 ? static_cast<double>(every) * static_cast<double>(n) : 0.0;
             const auto stepping = [&](simloop::RunControl* control) {
-              e.episodes.step(actions.data(), every, mask, e.observations.data(), terminated.data(), truncated.data(),
-                              threads, control);
+              e.episodes.step(actions.data(), static_cast<std::size_t>(actions.size()), every, mask,
+                              active ? static_cast<std::size_t>(active->size()) : 0, e.observations.data(),
+                              terminated.data(), truncated.data(), threads, control);
             };
             if (work_steps <= static_cast<double>(simloop::RunControl::kChunkSteps)) {
               py::gil_scoped_release release;  // nothing long to interrupt

@@ -62,11 +62,14 @@ class Episodes {
   // length without that. Inactive episodes' rows and flags are left alone.
   // Episodes step in parallel on `threads` workers (0: one per core; the
   // batches' pool), each independent of the others: the same bits whatever
-  // the thread count. Checked before any step: every active episode was
-  // reset and has not ended, every action is finite, every is from 1 to
-  // kMaxSteps (InvalidArgument naming the episode or argument).
-  void step(const double* actions, std::int64_t every, const std::uint8_t* active, double* observations,
-            std::uint8_t* terminated, std::uint8_t* truncated, int threads = 1, RunControl* control = nullptr);
+  // the thread count. Checked before any step: actions holds action_count
+  // = count() x nu() values and active (if given) active_count = count()
+  // flags, every active episode was reset and has not ended, every action is
+  // finite, every is from 1 to kMaxSteps (InvalidArgument naming the episode
+  // or argument).
+  void step(const double* actions, std::size_t action_count, std::int64_t every, const std::uint8_t* active,
+            std::size_t active_count, double* observations, std::uint8_t* terminated, std::uint8_t* truncated,
+            int threads = 1, RunControl* control = nullptr);
 
   // Episode i's physics steps taken since its reset, its sim time, and the
   // warnings it raised (MuJoCo's and simloop_DIVERGED).

@@ -1,14 +1,14 @@
 // The loop's rhythm, one call at a time, for people who write their own loop:
 // write intent (ctrl), write interference (a force on a body), step, look.
-// Any scene: the chapter's accessors (box_position, pusher_x, apply_force on
-// the box) throw InvalidArgument on a scene without the chapter's layout;
-// everything else works on any model.
+// Any scene, and nothing of the chapter's own: its parts are found through
+// Model::layout() and read through array(), read() or data().
 #pragma once
 
 #include <array>
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -22,6 +22,16 @@ struct Contact {
   std::string geom2;
   double dist = 0.0;  // signed distance; negative is penetration, m
   std::array<double, 3> pos{};  // contact point, world frame, m
+};
+
+// One of mjData's arrays, as Sim::array names it: `rows` values, or rows x
+// `width` when width > 0 (a row a body). writable: an input or the state,
+// which a caller may write; otherwise something MuJoCo derives.
+struct ArrayView {
+  double* data = nullptr;
+  int rows = 0;
+  int width = 0;
+  bool writable = false;
 };
 
 class Sim {
@@ -64,18 +74,12 @@ class Sim {
   // (InvalidArgument naming the sizes or the index).
   void set_ctrl(const double* values, std::size_t count);
 
-  // An external force on the box (N, world frame), added on top of physics
-  // through xfrc_applied. IT PERSISTS: MuJoCo never clears it, so it acts on
-  // every following step until clear_force(). Forgetting that is the
-  // chapter's classic bug. Throws InvalidArgument unless finite.
-  void apply_force(const std::array<double, 3>& force);
-  void clear_force();
-  [[nodiscard]] std::array<double, 3> applied_force() const;
-
   // A force (N) and/or torque (N m) on any body, world frame, at the body's
   // origin, written into its xfrc_applied; a part not given (null) is left
-  // as it was. It persists as above, until clear_forces(). Throws
-  // InvalidArgument for a bad body or a non-finite value, writing nothing.
+  // as it was. IT PERSISTS: MuJoCo never clears it, so it acts on every
+  // following step until cleared (forgetting that is the chapter's classic
+  // bug). Throws InvalidArgument for a bad body or a non-finite value,
+  // writing nothing.
   void apply_wrench(int body, const std::array<double, 3>* force, const std::array<double, 3>* torque);
   // Zeros every body's xfrc_applied.
   void clear_forces() noexcept;
@@ -109,15 +113,6 @@ class Sim {
 
   [[nodiscard]] double time() const noexcept { return data_.get()->time; }
   [[nodiscard]] std::int64_t steps_taken() const noexcept { return steps_; }
-  // The box's free joint: position (m), quaternion (w, x, y, z), linear
-  // velocity (m/s, world) -- the state now, from qpos/qvel. The chapter's
-  // scene only: InvalidArgument naming what another scene lacks.
-  [[nodiscard]] std::array<double, 3> box_position() const;
-  [[nodiscard]] std::array<double, 4> box_quaternion() const;
-  [[nodiscard]] std::array<double, 3> box_velocity() const;
-  // The pusher's joint position and velocity (the chapter's scene only).
-  [[nodiscard]] double pusher_x() const;
-  [[nodiscard]] double pusher_velocity() const;
   // The contacts MuJoCo found in its last collision pass.
   [[nodiscard]] std::vector<Contact> contacts() const;
   // Warnings MuJoCo raised since construction or reset.
@@ -128,6 +123,14 @@ class Sim {
   // Writes through it take effect at the next step.
   [[nodiscard]] mjData* data() noexcept { return data_.get(); }
   [[nodiscard]] const mjData* data() const noexcept { return data_.get(); }
+  // mjData's array `name`: qpos, qvel, ctrl, act, qfrc_applied, xfrc_applied
+  // (nbody x 6) writable; sensordata, actuator_force, xpos (nbody x 3), xquat
+  // (nbody x 4) not. Throws InvalidArgument for another name.
+  [[nodiscard]] ArrayView array(std::string_view name);
+  // A copy of values start .. start+count-1 of array(name), row after row
+  // (a joint's slice of qpos, say). Throws InvalidArgument unless they lie
+  // inside it.
+  [[nodiscard]] std::vector<double> read(std::string_view name, long long start, long long count) const;
 
  private:
   Model model_;

@@ -92,6 +92,7 @@ class Sim:
 
     def _make_views(self) -> None:
         self._views = {name: self._sim.array(name) for name in _ARRAYS}
+        self._layout: Optional[Dict[str, int]] = None  # the chapter's, found at its first use
 
     @classmethod
     def _wrapping(cls, core: "_core.Sim") -> "Sim":
@@ -238,7 +239,8 @@ class Sim:
                 raise ValueError("torque needs body=...: the chapter's apply_force(force) pushes the box only")
             if force is None:
                 raise TypeError("apply_force needs a force (and body=... for a body other than the chapter's box)")
-            self._sim.apply_force(self._force_components("force", force))
+            components = self._force_components("force", force)
+            self._sim.apply_wrench(self._chapter("box_body"), components, None)
             return
         index, _ = self._lookup("body", body)
         if force is None and torque is None:
@@ -265,7 +267,7 @@ class Sim:
 
     def clear_force(self) -> None:
         """Stops pushing the chapter's box: writes zero into its xfrc_applied force."""
-        self._sim.clear_force()
+        self._sim.apply_wrench(self._chapter("box_body"), [0.0, 0.0, 0.0], None)
 
     def clear_forces(self) -> None:
         """Zeros every body's xfrc_applied (forces and torques)."""
@@ -274,7 +276,7 @@ class Sim:
     @property
     def applied_force(self) -> NDArray[np.float64]:
         """The force now written on the chapter's box (a copy), N."""
-        return self._sim.applied_force
+        return self._sim.read("xfrc_applied", 6 * self._chapter("box_body"), 3)
 
     # --- State.
 
@@ -325,31 +327,39 @@ class Sim:
     def steps_taken(self) -> int:
         return self._sim.steps_taken
 
-    # --- The chapter's scene.
+    # --- The chapter's scene: its box's free joint and its pusher's joint, read
+    # from the state now (qpos, qvel) in one locked call each.
+
+    def _chapter(self, part: str) -> int:
+        """Where a part of the chapter's scene is (Model.chapter_layout): ValueError
+        naming what another scene lacks."""
+        if self._layout is None:
+            self._layout = self.model.chapter_layout
+        return self._layout[part]
 
     @property
     def box_position(self) -> NDArray[np.float64]:
         """The box's position now (x, y, z), m: a copy."""
-        return self._sim.box_position
+        return self._sim.read("qpos", self._chapter("box_qposadr"), 3)
 
     @property
     def box_quaternion(self) -> NDArray[np.float64]:
         """The box's orientation now, (w, x, y, z) as MuJoCo stores it: a copy."""
-        return self._sim.box_quaternion
+        return self._sim.read("qpos", self._chapter("box_qposadr") + 3, 4)
 
     @property
     def box_velocity(self) -> NDArray[np.float64]:
         """The box's linear velocity now, m/s, world frame: a copy."""
-        return self._sim.box_velocity
+        return self._sim.read("qvel", self._chapter("box_dofadr"), 3)
 
     @property
     def pusher_x(self) -> float:
         """The pusher's slide-joint position, m."""
-        return self._sim.pusher_x
+        return float(self._sim.read("qpos", self._chapter("pusher_qposadr"), 1)[0])
 
     @property
     def pusher_velocity(self) -> float:
-        return self._sim.pusher_velocity
+        return float(self._sim.read("qvel", self._chapter("pusher_dofadr"), 1)[0])
 
     @property
     def contacts(self) -> List[_core.Contact]:

@@ -203,7 +203,8 @@ TEST(Episodes, FollowTheBitsOfAPolicyRunGivenItsActions) {
   std::uint8_t terminated = 9, truncated = 9;
   for (std::size_t k = 0; k < policy.steps.size(); ++k) {
     EXPECT_TRUE(same_bits(observation.data(), policy.observations[k].data(), width)) << "decision " << k;
-    episodes.step(policy.actions[k].data(), 50, nullptr, observation.data(), &terminated, &truncated);
+    episodes.step(policy.actions[k].data(), policy.actions[k].size(), 50, nullptr, 0, observation.data(), &terminated,
+                  &truncated);
     EXPECT_EQ(terminated, 0);
     EXPECT_EQ(truncated, k + 1 == policy.steps.size() ? 1 : 0) << "decision " << k;
   }
@@ -212,7 +213,8 @@ TEST(Episodes, FollowTheBitsOfAPolicyRunGivenItsActions) {
   for (std::size_t c = 0; c < width; ++c) {
     if (!r.columns[c].input) EXPECT_TRUE(same_bits(&observation[c], &r.final_row[c], 1)) << r.columns[c].name;
   }
-  EXPECT_THROW(episodes.step(policy.actions[0].data(), 50, nullptr, observation.data(), &terminated, &truncated),
+  EXPECT_THROW(episodes.step(policy.actions[0].data(), policy.actions[0].size(), 50, nullptr, 0, observation.data(),
+                             &terminated, &truncated),
                simloop::InvalidArgument);  // ended: reset first
 }
 
@@ -230,7 +232,7 @@ TEST(Episodes, ManyAtOnceEqualEachAloneWhateverTheThreadCount) {
     std::vector<double> o(static_cast<std::size_t>(one.width()));
     std::uint8_t term = 0, trunc = 0;
     one.reset(0, 100 + i, o.data());
-    for (std::size_t call = 0; call < 5; ++call) one.step(actions_at(call, i).data(), 37, nullptr, o.data(), &term, &trunc);
+    for (std::size_t call = 0; call < 5; ++call) one.step(actions_at(call, i).data(), 2, 37, nullptr, 0, o.data(), &term, &trunc);
     alone_obs.push_back(o);
   }
   for (int threads : {1, 2, 4}) {
@@ -245,7 +247,7 @@ TEST(Episodes, ManyAtOnceEqualEachAloneWhateverTheThreadCount) {
         const auto a = actions_at(call, i);
         actions.insert(actions.end(), a.begin(), a.end());
       }
-      many.step(actions.data(), 37, nullptr, obs.data(), term.data(), trunc.data(), threads);
+      many.step(actions.data(), actions.size(), 37, nullptr, 0, obs.data(), term.data(), trunc.data(), threads);
     }
     for (std::size_t i = 0; i < n; ++i) {
       EXPECT_TRUE(same_bits(obs.data() + i * width, alone_obs[i].data(), width)) << i << ", " << threads << " threads";
@@ -264,7 +266,7 @@ TEST(Episodes, InactiveOnesStayWhereTheyAre) {
   const std::vector<double> actions = {0.5, 0.5, 0.5, 0.5};
   const std::uint8_t active[] = {1, 0};
   std::uint8_t term[2] = {7, 7}, trunc[2] = {7, 7};
-  e.step(actions.data(), 20, active, obs.data(), term, trunc);
+  e.step(actions.data(), actions.size(), 20, active, 2, obs.data(), term, trunc);
   EXPECT_EQ(e.steps_taken(0), 20);
   EXPECT_EQ(e.steps_taken(1), 0);
   EXPECT_EQ(term[1], 7);
@@ -279,12 +281,23 @@ TEST(Episodes, BadInputIsRefusedBeforeAnyStep) {
   std::uint8_t term[2], trunc[2];
   std::vector<double> actions = {0.5, 0.5, 0.5, 0.5};
   e.reset(0, 1, obs.data());
-  EXPECT_THROW(e.step(actions.data(), 10, nullptr, obs.data(), term, trunc), simloop::InvalidArgument);  // 1 not reset
+  EXPECT_THROW(e.step(actions.data(), 4, 10, nullptr, 0, obs.data(), term, trunc), simloop::InvalidArgument);  // 1 not reset
   e.reset(1, 1, obs.data());
   actions[3] = std::numeric_limits<double>::quiet_NaN();
-  EXPECT_THROW(e.step(actions.data(), 10, nullptr, obs.data(), term, trunc), simloop::InvalidArgument);
+  EXPECT_THROW(e.step(actions.data(), 4, 10, nullptr, 0, obs.data(), term, trunc), simloop::InvalidArgument);
   actions[3] = 0.0;
-  EXPECT_THROW(e.step(actions.data(), 0, nullptr, obs.data(), term, trunc), simloop::InvalidArgument);
+  EXPECT_THROW(e.step(actions.data(), 4, 0, nullptr, 0, obs.data(), term, trunc), simloop::InvalidArgument);
+  const auto message_of = [&](std::size_t action_count, const std::uint8_t* active, std::size_t active_count) {
+    try {
+      e.step(actions.data(), action_count, 10, active, active_count, obs.data(), term, trunc);
+    } catch (const simloop::InvalidArgument& error) {
+      return std::string(error.what());
+    }
+    return std::string("(no InvalidArgument)");
+  };
+  const std::uint8_t both[] = {1, 1};
+  EXPECT_EQ(message_of(3, nullptr, 0), "actions must hold 2 x 2 values, got 3");
+  EXPECT_EQ(message_of(4, both, 1), "active must hold 2 flags");
   EXPECT_EQ(e.steps_taken(0), 0);
   EXPECT_THROW(e.reset(2, 0, obs.data()), simloop::InvalidArgument);
 }
@@ -301,7 +314,7 @@ TEST(Episodes, ADivergingEpisodeTerminates) {
   e.reset(0, 0, obs.data());
   const double action = 1.0;
   std::uint8_t term = 0, trunc = 0;
-  while (!term && !trunc) e.step(&action, 10, nullptr, obs.data(), &term, &trunc);
+  while (!term && !trunc) e.step(&action, 1, 10, nullptr, 0, obs.data(), &term, &trunc);
   EXPECT_EQ(term, 1);
   EXPECT_EQ(trunc, 0);
   EXPECT_LT(e.steps_taken(0), 400);

@@ -77,16 +77,13 @@ TEST(Model, DataFitsModelsOfTheSameStructureOnly) {
 TEST(Model, MissingPiecesAreNamed) {
   // Any scene loads (scenarios run on any scene); the chapter's loop, which
   // reads the box and the pusher, refuses one without them, naming what is
-  // missing (once at load: layout(); again in run() and Sim's box and pusher reads).
+  // missing (once at load: layout(); again in run()).
   const simloop::Model crate = simloop::Model::from_xml_string(scene_with("name=\"box\"", "name=\"crate\""), "test.xml");
   EXPECT_FALSE(crate.has_chapter_layout());
   EXPECT_NE(message_of<simloop::InvalidArgument>([&] { (void)crate.layout(); })
                 .find("test.xml: the model has no body named \"box\""),
             std::string::npos);
   EXPECT_EQ(message_of<simloop::InvalidArgument>([&] { (void)simloop::run(crate, simloop::RunConfig{}); }),
-            crate.missing_layout());
-  // Sim runs any scene; its chapter-only reads refuse this one.
-  EXPECT_EQ(message_of<simloop::InvalidArgument>([&] { (void)simloop::Sim(crate).box_position(); }),
             crate.missing_layout());
   EXPECT_NE(message_of<simloop::InvalidArgument>([] {
               (void)simloop::Model::from_xml_string(scene_with("<freejoint/>", "<joint type=\"slide\"/>")).layout();

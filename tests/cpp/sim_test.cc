@@ -1,6 +1,7 @@
 // Sim: the chapter's loop written with it, step by step, on the chapter's
-// scene; and Sim on any scene: names, inputs, forces, state, keyframes,
-// copies, and a model saved as bytes and loaded back.
+// scene (its box and pusher found through the layout); and Sim on any scene:
+// names, arrays, inputs, forces, state, keyframes, copies, and a model saved
+// as bytes and loaded back.
 #include <gtest/gtest.h>
 
 #include <array>
@@ -57,33 +58,39 @@ TEST(Sim, TheChaptersLoopWrittenWithSimMatchesRun) {
   config.steps = 600;
   const auto reference = simloop::run(scene(), config);
   simloop::Sim sim(scene());
+  const simloop::SceneLayout& at = scene().layout();
   const simloop::Shove& shove = reference.shove;
+  const std::array<double, 3> push{0.0, shove.force_y(), 0.0}, none{};
   for (std::int64_t step = 0; step < config.steps; ++step) {
     sim.set_ctrl(1.0);
-    if (step == shove.start_step) sim.apply_force({0.0, shove.force_y(), 0.0});
-    if (step == shove.start_step + shove.num_steps) sim.clear_force();
+    if (step == shove.start_step) sim.apply_wrench(at.box_body, &push, nullptr);
+    if (step == shove.start_step + shove.num_steps) sim.apply_wrench(at.box_body, &none, nullptr);
     sim.step();
   }
   const std::int64_t last = reference.trajectory.rows() - 1;
-  const auto pos = sim.box_position();
+  const std::vector<double> pos = sim.read("qpos", at.box_qposadr, 3);
   for (int i = 0; i < 3; ++i) EXPECT_EQ(pos[i], reference.trajectory.at(last, ChapterColumns::kBoxX + i));
-  EXPECT_EQ(sim.pusher_x(), reference.trajectory.at(last, ChapterColumns::kPusherX));
+  EXPECT_EQ(sim.data()->qpos[at.pusher_qposadr], reference.trajectory.at(last, ChapterColumns::kPusherX));
   EXPECT_EQ(sim.time(), reference.sim_time);
   EXPECT_EQ(sim.steps_taken(), 600);
 }
 
 TEST(Sim, AnAppliedForcePersistsUntilCleared) {
   simloop::Sim sim(scene());
-  sim.apply_force({0.0, 9.0, 0.0});
+  const simloop::SceneLayout& at = scene().layout();
+  const double* applied = sim.data()->xfrc_applied + 6 * at.box_body;
+  const double* velocity = sim.data()->qvel + at.box_dofadr;
+  const std::array<double, 3> push{0.0, 9.0, 0.0};
+  sim.apply_wrench(at.box_body, &push, nullptr);
   sim.step(10);
-  EXPECT_EQ(sim.applied_force()[1], 9.0);  // MuJoCo did not clear it
-  const double vy_after_10 = sim.box_velocity()[1];
+  EXPECT_EQ(applied[1], 9.0);  // MuJoCo did not clear it
+  const double vy_after_10 = velocity[1];
   sim.step(10);
-  EXPECT_GT(sim.box_velocity()[1], vy_after_10);  // still pushing: still accelerating
-  sim.clear_force();
-  EXPECT_EQ(sim.applied_force()[1], 0.0);
+  EXPECT_GT(velocity[1], vy_after_10);  // still pushing: still accelerating
+  sim.clear_forces();
+  EXPECT_EQ(applied[1], 0.0);
   sim.step(200);
-  EXPECT_NEAR(sim.box_velocity()[1], 0.0, 1e-3);  // friction stops it once the force is gone
+  EXPECT_NEAR(velocity[1], 0.0, 1e-3);  // friction stops it once the force is gone
 }
 
 TEST(Sim, ReadsContactsAndResets) {
@@ -101,11 +108,10 @@ TEST(Sim, ReadsContactsAndResets) {
   sim.reset();
   EXPECT_EQ(sim.time(), 0.0);
   EXPECT_EQ(sim.ctrl(), 0.0);
-  EXPECT_EQ(sim.box_position()[0], 0.4);
+  EXPECT_EQ(sim.read("qpos", scene().layout().box_qposadr, 1)[0], 0.4);
   EXPECT_EQ(sim.timestep(), 0.01);  // the timestep is the model's, kept across reset
   EXPECT_THROW(sim.step(0), simloop::InvalidArgument);
   EXPECT_THROW(sim.set_ctrl(NAN), simloop::InvalidArgument);
-  EXPECT_THROW(sim.apply_force({0.0, INFINITY, 0.0}), simloop::InvalidArgument);
   EXPECT_THROW(sim.set_timestep(0.0), simloop::InvalidArgument);
 }
 
@@ -116,14 +122,33 @@ TEST(PusherTrack, SlidesAlongXFromItsRestPose) {
   EXPECT_EQ(track.q0, 0.0);
 }
 
-TEST(SimAny, RunsASceneWithoutTheChaptersLayoutAndSaysWhatTheChaptersReadsNeed) {
+TEST(SimAny, RunsASceneWithoutTheChaptersLayout) {
   const Model walker = scene("walker.xml");
   Sim sim(walker);
   drive(sim, 50);
   EXPECT_EQ(sim.steps_taken(), 50);
   EXPECT_NE(sim.data()->qpos[2], walker.get()->qpos0[2]);  // the walker moved
-  EXPECT_EQ(message_of([&] { (void)sim.box_position(); }), walker.missing_layout());
-  EXPECT_EQ(message_of([&] { sim.apply_force({1.0, 0.0, 0.0}); }), walker.missing_layout());
+}
+
+TEST(SimAny, NamedArraysAreMjDatasOwnAndReadsStayInside) {
+  Sim sim(scene("walker.xml"));
+  drive(sim, 20);
+  const mjModel* m = sim.model().get();
+  const simloop::ArrayView qpos = sim.array("qpos");
+  EXPECT_EQ(qpos.data, sim.data()->qpos);
+  EXPECT_EQ(qpos.rows, m->nq);
+  EXPECT_EQ(qpos.width, 0);
+  EXPECT_TRUE(qpos.writable);
+  const simloop::ArrayView xquat = sim.array("xquat");
+  EXPECT_EQ(xquat.rows, m->nbody);
+  EXPECT_EQ(xquat.width, 4);
+  EXPECT_FALSE(xquat.writable);
+  EXPECT_EQ(message_of([&] { (void)sim.array("qacc"); }), "no Sim array named 'qacc'");
+  EXPECT_EQ(sim.read("xquat", 4, 4), std::vector<double>(sim.data()->xquat + 4, sim.data()->xquat + 8));
+  EXPECT_EQ(sim.read("qvel", m->nv, 0), std::vector<double>());
+  EXPECT_EQ(message_of([&] { (void)sim.read("qvel", m->nv - 1, 2); }),
+            "qvel has " + std::to_string(m->nv) + " values: cannot read 2 from index " + std::to_string(m->nv - 1));
+  EXPECT_NE(message_of([&] { (void)sim.read("qvel", -1, 1); }), "(no InvalidArgument)");
 }
 
 TEST(SimAny, UnknownNamesListWhatTheSceneHasWithALikelyFix) {

@@ -408,13 +408,13 @@ def test_the_comparison_sees_a_missing_parameter_and_a_wrong_type(tmp_path):
     text = STUB.read_text()
     broken = text.replace("def run(model: Model, config: RunConfig, progress: _Progress = None) -> RunResult: ...",
                           "def run(model: Model, config: RunConfig) -> RunResult: ...")
-    broken = broken.replace("    def pusher_x(self) -> float: ...", "    def pusher_x(self) -> int: ...")
+    broken = broken.replace("    def ctrl(self) -> float: ...", "    def ctrl(self) -> int: ...")
     assert broken.count("\n") == text.count("\n") and broken != text
     (tmp_path / "_core.pyi").write_text(broken)
     new = sorted(set(_compare(_Stub(tmp_path / "_core.pyi"))) - set(_compare(_Stub(STUB))))
     assert len(new) == 2, new
-    assert new[0].startswith("Sim.pusher_x: returns float in the module, int in the stub; the module has: "
-                             "@property def pusher_x(self) -> float: ..."), new
+    assert new[0].startswith("Sim.ctrl: returns float in the module, int in the stub; the module has: "
+                             "@property def ctrl(self) -> float: ..."), new
     assert new[1].startswith("run: parameters (model, config, progress) in the module, (model, config) in the stub; "
                              "the module has: def run(model: Model, config: RunConfig, progress: object = None)"), new
 
