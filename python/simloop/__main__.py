@@ -346,7 +346,8 @@ def _run(opts: "_core.CommandLine", model: "_core.Model", scenario: "Optional[_c
     recording: Any = None  # a recording.Recording: the chapter's (ChapterRecording) or a scenario's
     result: Union[_core.RunResult, _core.ScenarioResult]
     if opts.rerun:  # rerun imported, and the recording's file begun, before anything is written
-        from .recording import ChapterRecording, Recording, scenario_recording_id
+        from .chapter_recording import ChapterRecording
+        from .recording import Recording, scenario_recording_id
 
         if scenario is None:
             recording = ChapterRecording(opts.run, opts.model_path or None, model, rrd)

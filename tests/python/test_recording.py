@@ -9,7 +9,7 @@ import rerun.chunk
 
 import simloop
 from conftest import run_command
-from simloop import recording
+from simloop import chapter_recording as recording
 
 TEMPORAL = ["/world/bodies/box", "/world/bodies/pusher", "/world/bodies/box/shove", "/plots/box_x",
             "/plots/box_y", "/plots/box_z", "/plots/box_speed", "/plots/pusher_x", "/plots/ncon"]
