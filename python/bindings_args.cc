@@ -2,6 +2,7 @@
 // ValueError naming the argument (pybind11's own TypeError lists every
 // signature over several lines). The package's own checks (simloop._checks)
 // use these too, so each argument type has one wording.
+#include <pybind11/gil_safe_call_once.h>
 #include <pybind11/pybind11.h>
 
 #include <string>
@@ -11,6 +12,27 @@
 namespace simloop_py {
 
 using namespace pybind11::literals;
+
+namespace {
+
+// The Python types the checks test against, looked up once: some checks run
+// on every call of a stepping loop (Sim.ctrl = value), where importing the
+// modules again each time would double their cost. Kept for the process's
+// life, as pybind11 keeps its own.
+struct PythonTypes {
+  py::object path_like, fsdecode, real;
+};
+const PythonTypes& python_types() {
+  PYBIND11_CONSTINIT static py::gil_safe_call_once_and_store<PythonTypes> storage;
+  return storage
+      .call_once_and_store_result([] {
+        const py::module_ os = py::module_::import("os");
+        return PythonTypes{os.attr("PathLike"), os.attr("fsdecode"), py::module_::import("numbers").attr("Real")};
+      })
+      .get_stored();
+}
+
+}  // namespace
 
 std::string show(const py::handle& value) {
   py::str text;
@@ -35,10 +57,10 @@ std::string describe(const py::handle& value) {
 
 py::str check_path(const std::string& name, const py::handle& value, const std::string& what) {
   py::object path = py::reinterpret_borrow<py::object>(value);
-  if (py::isinstance<py::str>(value) || py::isinstance<py::bytes>(value) ||
-      py::isinstance(value, py::module_::import("os").attr("PathLike"))) {
+  const bool str = py::isinstance<py::str>(value);  // a str is its own path: no call to make
+  if (py::isinstance<py::bytes>(value) || (!str && py::isinstance(value, python_types().path_like))) {
     try {
-      path = py::module_::import("os").attr("fsdecode")(value);
+      path = python_types().fsdecode(value);
     } catch (py::error_already_set& e) {  // an os.PathLike whose __fspath__ returns neither
       if (!e.matches(PyExc_TypeError)) throw;
     }
@@ -68,7 +90,8 @@ py::bytes check_text(const std::string& name, const py::handle& value) {
 }
 
 double check_real(const std::string& name, const py::handle& value) {
-  if (PyBool_Check(value.ptr()) || !py::isinstance(value, py::module_::import("numbers").attr("Real"))) {
+  if (PyFloat_Check(value.ptr())) return PyFloat_AS_DOUBLE(value.ptr());  // the common case (numpy's float64 too)
+  if (PyBool_Check(value.ptr()) || !py::isinstance(value, python_types().real)) {
     throw py::type_error(name + " must be a number, got " + describe(value));
   }
   const double number = PyFloat_AsDouble(value.ptr());

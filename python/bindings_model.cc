@@ -57,7 +57,8 @@ void bind_model(py::module_& m) {
       .def_static(
           "from_xml_string",
           [](const py::object& xml, const py::object& source) {
-            const auto text = std::string(check_text("xml", xml)), name = std::string(check_text("source", source));
+            const auto text = std::string(check_text("xml", xml));
+            const auto name = std::string(check_text("source", source));
             return naming_failures("Model.from_xml_string", [&] { return simloop::Model::from_xml_string(text, name); });
           },
           "xml"_a, "source"_a = "<string>",
@@ -65,8 +66,8 @@ void bind_model(py::module_& m) {
           "rejects it.")
       .def_static(
           "from_file",
-          [](const py::object& path_arg_) {
-            const std::filesystem::path path = path_arg("path", path_arg_, "an MJCF file");
+          [](const py::object& given) {
+            const std::filesystem::path path = path_arg("path", given, "an MJCF file");
             return naming_failures("Model.from_file(" + path.string() + ")",
                                    [&] { return simloop::Model::from_file(path.string()); });
           },
