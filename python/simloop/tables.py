@@ -16,8 +16,8 @@ keeps its runs' results (table.results); the others keep none.
 (from run_scenario) into the same kind of BatchTable, one row per run in the
 list's order, keeping the list as its results. `to_pandas(results)` and
 `to_arrow(results)` are `table(results).to_pandas()` and `.to_arrow()`;
-SweepResult has its own `.to_pandas()` and `.to_arrow()`, one row per
-timestep (and no `run` column).
+of a SweepResult, `table(sweep)` is one row per timestep (and no `run`
+column).
 
 Columns are flat and typed: numbers only (no lists: box_final_pos is
 box_final_pos_x, _y, _z), integers as int64 (the seed as uint64), flags as
