@@ -201,21 +201,25 @@ inline simloop::ShoveRng shove_rng(const std::string& name) {
   return *rng;
 }
 
+// A view numpy must not let Python write through (what MuJoCo derives, or
+// a finished run's rows).
+inline py::array read_only(py::array view) {
+  py::detail::array_proxy(view.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
+  return view;
+}
+
 // A run's trajectory as a (rows, columns) read-only view of its own buffer,
 // and one column of it as a strided view. No copy.
 inline py::array trajectory_view(const py::object& owner, const simloop::Trajectory& t) {
   const auto item = static_cast<py::ssize_t>(sizeof(double));
-  py::array view(py::dtype::of<double>(), {static_cast<py::ssize_t>(t.rows()), static_cast<py::ssize_t>(t.columns())},
-                 {item * t.columns(), item}, t.data(), owner);
-  py::detail::array_proxy(view.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
-  return view;
+  return read_only(py::array(py::dtype::of<double>(),
+                             {static_cast<py::ssize_t>(t.rows()), static_cast<py::ssize_t>(t.columns())},
+                             {item * t.columns(), item}, t.data(), owner));
 }
 inline py::array column_view(const py::object& owner, const simloop::Trajectory& t, int column) {
   const auto item = static_cast<py::ssize_t>(sizeof(double));
-  py::array view(py::dtype::of<double>(), {static_cast<py::ssize_t>(t.rows())}, {item * t.columns()},
-                 t.data() + column, owner);
-  py::detail::array_proxy(view.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
-  return view;
+  return read_only(py::array(py::dtype::of<double>(), {static_cast<py::ssize_t>(t.rows())}, {item * t.columns()},
+                             t.data() + column, owner));
 }
 
 // A kind of MuJoCo object by its word ("body", "joint", "actuator", "sensor",

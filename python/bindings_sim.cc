@@ -100,8 +100,7 @@ py::array owned_view(const py::object& owner, const simloop::ArrayView& array) {
   const py::ssize_t rows = array.rows, width = array.width, item = sizeof(double);
   py::array view = width > 0 ? py::array(py::dtype::of<double>(), {rows, width}, {item * width, item}, at, owner)
                              : py::array(py::dtype::of<double>(), {rows}, {item}, at, owner);
-  if (!array.writable) py::detail::array_proxy(view.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
-  return view;
+  return array.writable ? view : read_only(view);
 }
 
 // Observations live in one (count, width) buffer the Python side reads
