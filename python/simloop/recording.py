@@ -50,10 +50,13 @@ an error, not a hang or a truncated file.
 
 from __future__ import annotations
 
+import contextlib
 import os
+import signal
+import threading
 import uuid
 from pathlib import Path
-from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, Iterator, List, Mapping, Optional, Sequence, Tuple, Union
 
 from . import _core
 
@@ -133,6 +136,31 @@ def _layout(plots: Any) -> Any:
                          rrb.TimePanel(timeline="sim_time"), collapse_panels=False)
 
 
+@contextlib.contextmanager
+def _signals_wait() -> Iterator[None]:
+    """Ctrl-C and the terminating signals wait for the block to end, then act
+    as they would have (the signal is raised again). rerun's RecordingStream
+    stopped by a KeyboardInterrupt inside its constructor is left half-made,
+    and its __del__ then prints a traceback under the command's one line.
+    Python runs signal handlers on the main thread only: elsewhere, nothing
+    to do."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    caught: List[int] = []
+    previous = {}
+    for signum in _core.TERMINATING_SIGNALS:  # Ctrl-C among them
+        if signal.getsignal(signum) not in (signal.SIG_IGN, None):
+            previous[signum] = signal.signal(signum, lambda number, frame: caught.append(number))
+    try:
+        yield
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
+        if caught:
+            signal.raise_signal(caught[0])
+
+
 class RrdFile:
     """A RecordingStream whose file simloop writes. rerun's file sink writes
     to a pipe (_core.PipedFile); a thread of simloop's appends every byte,
@@ -151,8 +179,9 @@ class RrdFile:
         self.piped: Any = _core.PipedFile(self.target)
         self.rec: Any = None
         try:
-            self.rec = rr.RecordingStream(application_id, recording_id=recording_id, send_properties=False)
-            self.rec.save(self.piped.writer_path)
+            with _signals_wait():
+                self.rec = rr.RecordingStream(application_id, recording_id=recording_id, send_properties=False)
+                self.rec.save(self.piped.writer_path)
         except BaseException:
             self.close()
             raise
