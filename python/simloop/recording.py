@@ -139,9 +139,10 @@ def _layout(plots: Any) -> Any:
 @contextlib.contextmanager
 def _signals_wait() -> Iterator[None]:
     """Ctrl-C and the terminating signals wait for the block to end, then act
-    as they would have (the signal is raised again). rerun's RecordingStream
-    stopped by a KeyboardInterrupt inside its constructor is left half-made,
-    and its __del__ then prints a traceback under the command's one line.
+    as they would have (the signal is raised again). rerun objects stopped
+    half-way print under the command's one line: a RecordingStream stopped
+    inside its constructor prints a traceback from its __del__, a blueprint
+    stopped between its MemorySink and the send warns "Dropping data".
     Python runs signal handlers on the main thread only: elsewhere, nothing
     to do."""
     if threading.current_thread() is not threading.main_thread():
@@ -295,7 +296,8 @@ class Recording:
             self._rec.log(entity, _pose(rr, plane), static=True)
             self._rec.log(entity, rr.Boxes3D(centers=[centre], half_sizes=[half], colors=[_rgba(plane["rgba"])],
                                              fill_mode="solid"), static=True)
-        self._rec.send_blueprint(self._blueprint(), make_active=False, make_default=True)
+        with _signals_wait():  # rerun's blueprint passes through a MemorySink that warns if dropped full
+            self._rec.send_blueprint(self._blueprint(), make_active=False, make_default=True)
         self._rec.send_recording_name(self._name(result))
         self.file.finish()
 

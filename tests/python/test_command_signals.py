@@ -108,3 +108,43 @@ def test_a_signal_the_command_was_started_ignoring_stays_ignored(tmp_path, which
         _, err = proc.communicate(timeout=120)
     assert proc.returncode == 0, err
     assert {p.name for p in (tmp_path / "o").iterdir()} == OUTPUTS
+
+
+# A signal landing inside rerun: rerun's objects stopped half-way print under
+# the command's line (a half-made RecordingStream's __del__ prints a traceback;
+# a blueprint dropped between its MemorySink and the send warns). The random
+# moments above hit these rarely; here the signal is raised at exactly those
+# points, from inside rerun's own calls.
+INSIDE_RERUN = {
+    "making the RecordingStream": """
+import rerun as rr
+real = rr.RecordingStream.__init__
+def init(self, *args, **kwargs):
+    signal.raise_signal(SIG)
+    real(self, *args, **kwargs)
+rr.RecordingStream.__init__ = init
+""",
+    "sending the blueprint": """
+import rerun.sinks as sinks
+real = sinks.create_in_memory_blueprint
+def create(*args, **kwargs):
+    made = real(*args, **kwargs)
+    signal.raise_signal(SIG)
+    return made
+sinks.create_in_memory_blueprint = create
+""",
+}
+
+
+@pytest.mark.parametrize("where", sorted(INSIDE_RERUN))
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+def test_a_signal_inside_rerun_ends_the_run_with_one_line(tmp_path, where, sig):
+    pytest.importorskip("rerun")
+    script = (f"import runpy, signal, sys\nSIG = signal.{sig.name}\n{INSIDE_RERUN[where]}\n"
+              f"sys.argv = ['simloop', '--steps', '50', '--out', {str(tmp_path / 'out')!r}]\n"
+              "runpy.run_module('simloop', run_name='__main__')\n")
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120,
+                          preexec_fn=_defaults)
+    assert proc.returncode == 128 + sig, (where, proc.returncode, proc.stderr)
+    assert proc.stderr == f"sim-loop: interrupted ({sig.name}); the earlier outputs were left as they were\n", where
+    assert not (tmp_path / "out").exists() or not list((tmp_path / "out").iterdir()), where
