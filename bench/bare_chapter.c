@@ -4,7 +4,7 @@
 
      build/bare_chapter OUT STEPS SHOVE_START SHOVE_STEPS SHOVE_Y SEED [binary|csv]
 
-   It loads the scene from the XML text sim_loop loads (cpp/model.cc's, put in
+   It loads the scene from the XML text sim_loop loads (cpp/chapter_scene.cc's, put in
    a header by cmake/SceneXmlHeader.cmake) through a one-file virtual file
    system as sim_loop does, sets ctrl[0] = 1, writes SHOVE_Y newtons in y on
    the box from step SHOVE_START for SHOVE_STEPS steps (the benchmark reads the

@@ -36,7 +36,7 @@ double median(std::vector<double> v) {
 
 // The chapter's loop with nothing around it: no trajectory, no warning
 // bookkeeping, no error guard.
-[[gnu::noinline]] void bare_loop(const mjModel* m, mjData* d, const simloop::SceneLayout& at, const simloop::Shove& shove,
+[[gnu::noinline]] void bare_loop(const mjModel* m, mjData* d, const simloop::ChapterLayout& at, const simloop::Shove& shove,
                std::int64_t steps) {
   mj_resetData(m, d);
   mj_forward(m, d);
@@ -130,7 +130,7 @@ struct Pairing {
 }  // namespace
 
 int serve() {
-  const simloop::Model model = simloop::Model::pusher_scene();
+  const simloop::Model model = simloop::pusher_scene();
   const simloop::RunConfig config;
   for (std::string line; std::getline(std::cin, line);) {
     simloop::RunResult result;
@@ -145,7 +145,7 @@ int main(int argc, char** argv) {
   if (argc > 1 && std::strcmp(argv[1], "--serve") == 0) return serve();
   const int rounds = argc > 1 ? std::atoi(argv[1]) : 41;
   const std::int64_t steps = argc > 2 ? std::atoll(argv[2]) : 2000;
-  const simloop::Model model = simloop::Model::pusher_scene();
+  const simloop::Model model = simloop::pusher_scene();
   // One Data for both loops: two arenas would sit at different addresses,
   // and cache aliasing then biases one loop by several percent per process.
   simloop::Data data(model);
@@ -156,7 +156,7 @@ int main(int argc, char** argv) {
   const simloop::Shove shove = simloop::draw_shove(config.seed, steps);
 
   // Same inputs, same physics: the two loops must end in the same state.
-  bare_loop(model.get(), bare_data.get(), model.layout(), shove, steps);
+  bare_loop(model.get(), bare_data.get(), simloop::chapter_layout(model), shove, steps);
   double bare_qpos[8];
   std::memcpy(bare_qpos, bare_data.get()->qpos, sizeof bare_qpos);
   const simloop::RunResult check = simloop::run(model, config, driver_data);
@@ -165,7 +165,7 @@ int main(int argc, char** argv) {
   Pairing chapter;
   simloop::RunResult sink;
   chapter.rounds(
-      rounds, [&] { bare_loop(model.get(), bare_data.get(), model.layout(), shove, steps); },
+      rounds, [&] { bare_loop(model.get(), bare_data.get(), simloop::chapter_layout(model), shove, steps); },
       [&] { sink = simloop::run(model, config, driver_data); });
   std::printf("bench_loop: %d rounds of %lld steps each\n", rounds, static_cast<long long>(steps));
   std::printf("the chapter's run (%lld rows), %s\n", static_cast<long long>(check.trajectory.rows()),

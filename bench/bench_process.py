@@ -8,7 +8,7 @@ in instructions and CPU time).
 
 What "the same run" is, and why this is the fair comparison:
 
-- Both load the chapter's scene from the same XML text (cpp/model.cc's; CMake
+- Both load the chapter's scene from the same XML text (cpp/chapter_scene.cc's; CMake
   copies it into bare_chapter) through a one-file virtual file system, on the
   same libmujoco, set ctrl[0] = 1, apply seed 0's shove in its window (its
   start, length and force read from sim_loop's trajectory.csv and given to the

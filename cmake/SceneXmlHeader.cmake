@@ -1,7 +1,7 @@
-# Writes the chapter's scene, the XML text cpp/model.cc holds in its raw
+# Writes the chapter's scene, the XML text cpp/chapter_scene.cc holds in its raw
 # string kPusherSceneXml, as a C string literal in a header, so that
 # bench/bare_chapter.c loads the very text sim_loop loads (one copy of it, in
-# the library). Run at build time: cmake -DIN=cpp/model.cc -DOUT=... -P this.
+# the library). Run at build time: cmake -DIN=cpp/chapter_scene.cc -DOUT=... -P this.
 file(READ "${IN}" _text)
 set(_open "kPusherSceneXml = R\"(")
 string(FIND "${_text}" "${_open}" _begin)

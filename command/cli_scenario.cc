@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <string>
 
+#include "simloop/chapter_scene.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/number_format.hpp"
 #include "simloop/sweep.hpp"
@@ -83,8 +84,8 @@ void check_run_inputs(Options& opts, const Model& scene, const Scenario* scenari
     if (opts.command == Command::kSweep) complete_scenario_sweep(opts, scene, *scenario);
     return;
   }
-  if (!scene.has_chapter_layout()) {
-    throw UsageError("--model: " + scene.missing_layout() +
+  if (const std::string missing = simloop::chapter_layout_missing(scene); !missing.empty()) {
+    throw UsageError("--model: " + missing +
                      "; for any other scene, name the body to shove (--body) or run a --scenario");
   }
   if (!opts.model_path.empty() && !opts.timestep_given) opts.run.timestep = scene.timestep();  // the scene's own

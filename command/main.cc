@@ -161,7 +161,7 @@ int run_main(int argc, char** argv) {
                                  : opts.model_path.empty() ? "--model" : "--model " + opts.model_path;
   try {
     model = scenario                   ? simloop::load_scene(*scenario)
-            : opts.model_path.empty() ? simloop::Model::pusher_scene()
+            : opts.model_path.empty() ? simloop::pusher_scene()
                                       : simloop::Model::from_file(opts.model_path);
   } catch (const simloop::Error& e) {
     g_exit_at_once = 0;

@@ -19,61 +19,9 @@ namespace simloop {
 namespace {
 
 
-constexpr std::string_view kPusherSceneXml = R"(<mujoco model="pusher_scene">
-  <compiler autolimits="true"/>
-  <worldbody>
-    <light pos="0 0 3" dir="0 0 -1"/>
-    <geom name="floor" type="plane" size="2 2 0.1" rgba="0.85 0.85 0.85 1"/>
-    <body name="box" pos="0.4 0 0.05">
-      <freejoint/>
-      <geom name="box_geom" type="box" size="0.05 0.05 0.05" mass="0.5" rgba="0.85 0.3 0.25 1"/>
-    </body>
-    <body name="pusher" pos="0 0 0.05">
-      <joint name="pusher_slide" type="slide" axis="1 0 0" damping="4"/>
-      <geom name="pusher_geom" type="box" size="0.04 0.12 0.05" mass="1.0" rgba="0.25 0.45 0.85 1"/>
-    </body>
-  </worldbody>
-  <actuator>
-    <motor name="push_motor" joint="pusher_slide" gear="10" ctrlrange="-1 1"/>
-  </actuator>
-</mujoco>
-)";
-
 struct ModelDeleter {
   void operator()(const mjModel* m) const noexcept { mj_deleteModel(const_cast<mjModel*>(m)); }
 };
-
-// Finds what the loop needs; throws InvalidArgument naming what is missing.
-SceneLayout resolve_layout(const mjModel* m, std::string_view source) {
-  const std::string where(source);
-  SceneLayout at;
-  at.box_body = mj_name2id(m, mjOBJ_BODY, "box");
-  if (at.box_body < 0) {
-    throw InvalidArgument(where + ": the model has no body named \"box\"");
-  }
-  if (m->body_jntnum[at.box_body] != 1 || m->jnt_type[m->body_jntadr[at.box_body]] != mjJNT_FREE) {
-    throw InvalidArgument(where + ": body \"box\" must have exactly one joint, a free joint");
-  }
-  const int box_joint = m->body_jntadr[at.box_body];
-  at.box_qposadr = m->jnt_qposadr[box_joint];
-  at.box_dofadr = m->jnt_dofadr[box_joint];
-
-  if (m->nu < 1) {
-    throw InvalidArgument(where + ": the model has no actuator (the loop writes ctrl[0])");
-  }
-  if (m->actuator_trntype[0] != mjTRN_JOINT) {
-    throw InvalidArgument(where + ": actuator 0 must drive a joint (the pusher)");
-  }
-  at.pusher_joint = m->actuator_trnid[0];
-  const int type = m->jnt_type[at.pusher_joint];
-  if (type != mjJNT_SLIDE && type != mjJNT_HINGE) {
-    throw InvalidArgument(where + ": actuator 0 must drive a slide or hinge joint (its position is pusher_x)");
-  }
-  at.pusher_body = m->jnt_bodyid[at.pusher_joint];
-  at.pusher_qposadr = m->jnt_qposadr[at.pusher_joint];
-  at.pusher_dofadr = m->jnt_dofadr[at.pusher_joint];
-  return at;
-}
 
 // mj_loadXML reads from a file name; text in memory goes through a one-file
 // virtual file system (compat::OneFileVfs). A scene from outside is compiled
@@ -91,25 +39,10 @@ mjModel* load_xml(const char* filename, const mjVFS* vfs, std::string_view sourc
 }  // namespace
 
 Model Model::adopt(mjModel* raw, std::string_view source, std::vector<std::string> load_warnings) {
-  std::shared_ptr<const mjModel> owned(raw, ModelDeleter{});
-  SceneLayout layout;
-  try {
-    layout = resolve_layout(raw, source);
-  } catch (const InvalidArgument& e) {
-    layout = SceneLayout{};
-    layout.missing = e.what();
-  }
-  Model model(std::move(owned), layout);
+  Model model(std::shared_ptr<const mjModel>(raw, ModelDeleter{}), std::make_shared<const std::string>(source));
   model.load_warnings_ = std::make_shared<const std::vector<std::string>>(std::move(load_warnings));
   return model;
 }
-
-const SceneLayout& Model::layout() const {
-  if (!layout_.missing.empty()) throw InvalidArgument(layout_.missing);
-  return layout_;
-}
-
-std::string_view pusher_scene_xml() noexcept { return kPusherSceneXml; }
 
 void detail::check_xml_size(std::size_t size, std::string_view source) {
   if (size == 0) {
@@ -132,11 +65,11 @@ Model Model::from_xml_string(std::string_view xml, std::string_view source) {
   return adopt(raw, source, std::move(warnings));
 }
 
-Model Model::pusher_scene() {
+Model Model::from_own_xml(std::string_view xml, std::string_view source) {
   detail::install_mujoco_handlers(/*plugins=*/false);
-  const detail::compat::OneFileVfs vfs("model.xml", kPusherSceneXml, "pusher scene", "XML");
+  const detail::compat::OneFileVfs vfs("model.xml", xml, source, "XML");
   std::vector<std::string> warnings;
-  return adopt(load_xml("model.xml", vfs.get(), "pusher scene", warnings, false), "pusher scene", std::move(warnings));
+  return adopt(load_xml("model.xml", vfs.get(), source, warnings, false), source, std::move(warnings));
 }
 
 Model Model::from_file(const std::string& path) {
@@ -161,7 +94,7 @@ Model Model::with_timestep(double timestep) const {
     throw MujocoError(std::string("copying the model for timestep ") + python_float_repr(timestep) + " s: " + e.what());
   }
   copy->opt.timestep = timestep;
-  Model model(std::shared_ptr<const mjModel>(copy, ModelDeleter{}), layout_);
+  Model model(std::shared_ptr<const mjModel>(copy, ModelDeleter{}), source_);
   model.load_warnings_ = load_warnings_;
   return model;
 }

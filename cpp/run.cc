@@ -54,7 +54,7 @@ std::uint64_t cgroup_memory_max() noexcept {
 // step as the chapter reads them (ncon: the contacts the last step found).
 class ChapterRecorder final : public RowRecorder {
  public:
-  ChapterRecorder(const SceneLayout& at, int columns) : at_(at), columns_(chapter_columns(columns)) {}
+  ChapterRecorder(const ChapterLayout& at, int columns) : at_(at), columns_(chapter_columns(columns)) {}
   [[nodiscard]] const std::vector<Column>& columns() const noexcept override { return columns_; }
   void before_step(double* row, std::int64_t step, const mjModel* /*m*/, const mjData* d,
                    bool inputs) const noexcept override {
@@ -76,13 +76,13 @@ class ChapterRecorder final : public RowRecorder {
   void after_step(double* /*row*/, const mjModel* /*m*/, const mjData* /*d*/) const noexcept override {}
 
  private:
-  SceneLayout at_;
+  ChapterLayout at_;
   std::vector<Column> columns_;
 };
 
 // The chapter's inputs as a schedule: full throttle on actuator 0 from step
 // 0, and the shove on the box for its window (if the run is perturbed).
-Schedule chapter_schedule(const SceneLayout& at, const Shove& shove, std::int64_t steps, bool perturb) {
+Schedule chapter_schedule(const ChapterLayout& at, const Shove& shove, std::int64_t steps, bool perturb) {
   Schedule schedule;
   schedule.steps = steps;
   schedule.control_changes.push_back({0, 0, 1.0});
@@ -103,7 +103,7 @@ Schedule chapter_schedule(const SceneLayout& at, const Shove& shove, std::int64_
 // audit, the energy of each row's state and the work done up to it.
 class ChapterWatch final : public detail::StepObserver {
  public:
-  ChapterWatch(const mjModel* m, const SceneLayout& at, std::int64_t shove_start, bool audit)
+  ChapterWatch(const mjModel* m, const ChapterLayout& at, std::int64_t shove_start, bool audit)
       : box_body_(at.box_body), shove_start_(shove_start), audit_(audit), energy_(detail::compat::as_int(m->nv)) {}
 
   void before_step(std::int64_t step, const mjModel* /*m*/, const mjData* d) noexcept override {
@@ -274,7 +274,7 @@ RunResult detail::run_counted_elsewhere(const Model& model_in, const RunConfig& 
   const mjModel* m = model.get();
   const bool d_is_reset = workspace.fresh_for(model);  // before get(), which ends that
   mjData* d = workspace.get();
-  const SceneLayout& at = model.layout();
+  const ChapterLayout at = chapter_layout(model);
   const std::int64_t steps = config.num_steps();
 
   RunResult result;

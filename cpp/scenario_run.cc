@@ -1,3 +1,4 @@
+#include "simloop/chapter_scene.hpp"
 #include "simloop/scenario_run.hpp"
 
 #include <algorithm>
@@ -19,7 +20,7 @@
 namespace simloop {
 
 Model load_scene(const Scenario& scenario) {
-  if (scenario.scene.empty()) return Model::pusher_scene();
+  if (scenario.scene.empty()) return pusher_scene();
   return Model::from_file(scenario.scene.string());
 }
 

@@ -283,22 +283,4 @@ std::vector<double> Sim::read(std::string_view name, long long start, long long 
 
 std::vector<Warning> Sim::warnings() const { return counter_->warnings(); }
 
-PusherTrack pusher_track(const Model& model) {
-  const mjModel* m = model.get();
-  const SceneLayout& at = model.layout();
-  Data scratch(model);
-  mjData* d = scratch.get();
-  detail::mujoco_call([&] {
-    mj_resetData(m, d);
-    mj_kinematics(m, d);
-  });
-  PusherTrack track;
-  for (int i = 0; i < 3; ++i) track.rest_position[i] = d->xpos[3 * at.pusher_body + i];
-  if (m->jnt_type[at.pusher_joint] == mjJNT_SLIDE) {
-    for (int i = 0; i < 3; ++i) track.axis[i] = d->xaxis[3 * at.pusher_joint + i];
-  }
-  track.q0 = m->qpos0[at.pusher_qposadr];
-  return track;
-}
-
 }  // namespace simloop

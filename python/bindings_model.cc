@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "bindings_common.hpp"
+#include "simloop/chapter_scene.hpp"
 #include "simloop/model.hpp"
 #include "simloop/number_format.hpp"
 #include "simloop/scenario_run.hpp"
@@ -53,7 +54,7 @@ mjtObj object_type(const std::string& kind) {
 
 void bind_model(py::module_& m) {
   py::class_<simloop::Model>(m, "Model", "A compiled MuJoCo world: read-only, shared by every run on it.")
-      .def_static("pusher_scene", &simloop::Model::pusher_scene, "The chapter's scene.")
+      .def_static("pusher_scene", &simloop::pusher_scene, "The chapter's scene.")
       .def_static(
           "from_xml_string",
           [](const py::object& xml, const py::object& source) {
@@ -100,12 +101,13 @@ void bind_model(py::module_& m) {
                ">";
       })
       .def_property_readonly("name", &simloop::Model::name, "<mujoco model=...>'s name ('' if none).")
-      .def_property_readonly("has_chapter_layout", &simloop::Model::has_chapter_layout,
+      .def_property_readonly("has_chapter_layout",
+                             [](const simloop::Model& model) { return simloop::chapter_layout_missing(model).empty(); },
                              "True if the scene has the chapter's box and pusher (the chapter's loop runs on it).")
       .def_property_readonly(
           "chapter_layout",
           [](const simloop::Model& model) {
-            const simloop::SceneLayout& at = model.layout();  // ValueError naming what the scene lacks
+            const simloop::ChapterLayout at = simloop::chapter_layout(model);  // ValueError naming what the scene lacks
             return py::dict("box_body"_a = at.box_body, "box_qposadr"_a = at.box_qposadr, "box_dofadr"_a = at.box_dofadr,
                             "pusher_qposadr"_a = at.pusher_qposadr, "pusher_dofadr"_a = at.pusher_dofadr);
           },

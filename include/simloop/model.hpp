@@ -17,35 +17,16 @@
 
 namespace simloop {
 
-// The chapter's scene: a floor, a free red box, a blue pusher on a slide
-// joint along x driven by one motor. Identical to the chapter's XML except for
-// <compiler autolimits="true"/>, without which MuJoCo 2.2 rejects the
-// motor's ctrlrange (current MuJoCo defaults to it, so it loads on both).
-[[nodiscard]] std::string_view pusher_scene_xml() noexcept;
-
-// Where the chapter's loop finds the things it reads and writes, resolved
-// once by name. A scene without them still loads (scenarios run on any
-// scene); the chapter's loop then refuses it, saying what is missing.
-struct SceneLayout {
-  int box_body = -1;       // body named "box"
-  int box_qposadr = -1;    // its free joint: qpos[adr..adr+7) = xyz + wxyz quaternion
-  int box_dofadr = -1;     // qvel[adr..adr+6) = linear velocity (world) + angular (local)
-  int pusher_joint = -1;   // the slide/hinge joint that actuator 0 drives
-  int pusher_body = -1;    // the body that joint moves
-  int pusher_qposadr = -1;
-  int pusher_dofadr = -1;
-  std::string missing;     // why the scene lacks the chapter's layout ("" when it has it)
-};
-
 class Model {
  public:
-  // The embedded chapter scene.
-  [[nodiscard]] static Model pusher_scene();
   // Any MJCF text. `source` names it in errors.
   [[nodiscard]] static Model from_xml_string(std::string_view xml,
                                              std::string_view source = "<string>");
   // An MJCF file on disk (includes and meshes resolve relative to it).
   [[nodiscard]] static Model from_file(const std::string& path);
+  // The library's own MJCF text (the chapter's scene), known to compile:
+  // compiled here, not in a child process as a scene from outside is.
+  [[nodiscard]] static Model from_own_xml(std::string_view xml, std::string_view source);
 
   // A copy with opt.timestep set (the model is frozen while stepping; between
   // runs it is ours to edit, as the chapter says). Throws InvalidArgument
@@ -73,13 +54,9 @@ class Model {
 
   [[nodiscard]] const mjModel* get() const noexcept { return model_.get(); }
   [[nodiscard]] double timestep() const noexcept { return model_->opt.timestep; }
-  // The chapter's layout: a body "box" on a free joint and an actuator 0
-  // that drives a slide or hinge joint. Throws InvalidArgument naming what
-  // the scene lacks.
-  [[nodiscard]] const SceneLayout& layout() const;
-  [[nodiscard]] bool has_chapter_layout() const noexcept { return layout_.missing.empty(); }
-  // Why the scene lacks the chapter's layout, naming the model ("" if it has it).
-  [[nodiscard]] const std::string& missing_layout() const noexcept { return layout_.missing; }
+  // Where the model came from, as errors name it: its path, or the
+  // `source` it was loaded with.
+  [[nodiscard]] const std::string& source() const noexcept { return *source_; }
   // What MuJoCo warned while it parsed and compiled the scene (its parser's
   // "XML contains a 'NaN'", its compiler's test step's warnings), each on
   // one line; the commands report them as they report stepping warnings.
@@ -89,12 +66,12 @@ class Model {
   }
 
  private:
-  // Takes ownership of a freshly loaded model and resolves its layout.
+  // Takes ownership of a freshly loaded model.
   static Model adopt(mjModel* raw, std::string_view source, std::vector<std::string> load_warnings = {});
-  Model(std::shared_ptr<const mjModel> model, SceneLayout layout)
-      : model_(std::move(model)), layout_(layout) {}
+  Model(std::shared_ptr<const mjModel> model, std::shared_ptr<const std::string> source)
+      : model_(std::move(model)), source_(std::move(source)) {}
   std::shared_ptr<const mjModel> model_;
-  SceneLayout layout_;
+  std::shared_ptr<const std::string> source_;
   std::shared_ptr<const std::vector<std::string>> load_warnings_;
   friend class Data;  // which mjModel a Data was made for
 };

@@ -7,6 +7,7 @@
 #include <string_view>
 #include <vector>
 
+#include "simloop/chapter_scene.hpp"
 #include "simloop/control.hpp"
 #include "simloop/model.hpp"
 #include "simloop/rows.hpp"

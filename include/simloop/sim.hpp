@@ -1,7 +1,7 @@
 // The loop's rhythm, one call at a time, for people who write their own loop:
 // write intent (ctrl), write interference (a force on a body), step, look.
 // Any scene, and nothing of the chapter's own: its parts are found through
-// Model::layout() and read through array(), read() or data().
+// chapter_layout() (chapter_scene.hpp) and read through array(), read() or data().
 #pragma once
 
 #include <array>
@@ -13,7 +13,8 @@
 #include <vector>
 
 #include "simloop/model.hpp"
-#include "simloop/run.hpp"
+#include "simloop/control.hpp"
+#include "simloop/rows.hpp"
 
 namespace simloop {
 
@@ -139,16 +140,5 @@ class Sim {
   struct Counter;
   std::shared_ptr<Counter> counter_;
 };
-
-// Where the pusher body is for a given joint position: for a slide joint,
-// rest_position + axis * (q - q0); for a hinge, rest_position. Used to draw
-// the pusher from the trajectory's pusher_x (exact when the joint's parent
-// does not move, as in the chapter's scene).
-struct PusherTrack {
-  std::array<double, 3> rest_position{};  // body position at qpos0, world
-  std::array<double, 3> axis{};           // slide axis, world; zero for a hinge
-  double q0 = 0.0;                        // the joint's qpos0
-};
-[[nodiscard]] PusherTrack pusher_track(const Model& model);
 
 }  // namespace simloop

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "simloop/chapter_scene.hpp"
 #include "simloop/batch.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/output.hpp"
@@ -14,7 +15,7 @@ namespace {
 using simloop::Trajectory;
 
 const simloop::Model& scene() {
-  static const simloop::Model model = simloop::Model::pusher_scene();
+  static const simloop::Model model = simloop::pusher_scene();
   return model;
 }
 

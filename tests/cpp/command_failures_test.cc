@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "command_util.hpp"
+#include "simloop/chapter_scene.hpp"
 #include "simloop/model.hpp"
 #include "test_util.hpp"
 

@@ -14,7 +14,7 @@
 namespace {
 
 const simloop::Model& scene() {
-  static const simloop::Model model = simloop::Model::pusher_scene();
+  static const simloop::Model model = simloop::pusher_scene();
   return model;
 }
 

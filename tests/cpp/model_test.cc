@@ -35,12 +35,12 @@ std::string message_of(F&& f) {
 }
 
 TEST(Model, ChapterSceneLoadsWithTheChaptersLayout) {
-  const simloop::Model model = simloop::Model::pusher_scene();
+  const simloop::Model model = simloop::pusher_scene();
   const mjModel* m = model.get();
   EXPECT_EQ(m->nq, 8);  // box free joint 7 + pusher slide 1: "eight numbers"
   EXPECT_EQ(m->nv, 7);
   EXPECT_EQ(m->nu, 1);
-  const simloop::SceneLayout& at = model.layout();
+  const simloop::ChapterLayout at = simloop::chapter_layout(model);
   EXPECT_EQ(at.box_qposadr, 0);
   EXPECT_EQ(at.box_dofadr, 0);
   EXPECT_EQ(at.pusher_qposadr, 7);
@@ -52,7 +52,7 @@ TEST(Model, ChapterSceneLoadsWithTheChaptersLayout) {
 }
 
 TEST(Model, WithTimestepCopiesAndLeavesTheOriginal) {
-  const simloop::Model model = simloop::Model::pusher_scene();
+  const simloop::Model model = simloop::pusher_scene();
   const simloop::Model coarse = model.with_timestep(0.05);
   EXPECT_EQ(coarse.timestep(), 0.05);
   EXPECT_EQ(model.timestep(), 0.002);
@@ -64,7 +64,7 @@ TEST(Model, WithTimestepCopiesAndLeavesTheOriginal) {
 }
 
 TEST(Model, DataFitsModelsOfTheSameStructureOnly) {
-  const simloop::Model model = simloop::Model::pusher_scene();
+  const simloop::Model model = simloop::pusher_scene();
   const simloop::Data data(model);
   EXPECT_TRUE(data.fits(model.with_timestep(0.05)));
   const simloop::Model bigger = simloop::Model::from_xml_string(
@@ -79,27 +79,27 @@ TEST(Model, MissingPiecesAreNamed) {
   // reads the box and the pusher, refuses one without them, naming what is
   // missing (once at load: layout(); again in run()).
   const simloop::Model crate = simloop::Model::from_xml_string(scene_with("name=\"box\"", "name=\"crate\""), "test.xml");
-  EXPECT_FALSE(crate.has_chapter_layout());
-  EXPECT_NE(message_of<simloop::InvalidArgument>([&] { (void)crate.layout(); })
+  EXPECT_NE(simloop::chapter_layout_missing(crate), "");
+  EXPECT_NE(message_of<simloop::InvalidArgument>([&] { (void)simloop::chapter_layout(crate); })
                 .find("test.xml: the model has no body named \"box\""),
             std::string::npos);
   EXPECT_EQ(message_of<simloop::InvalidArgument>([&] { (void)simloop::run(crate, simloop::RunConfig{}); }),
-            crate.missing_layout());
+            simloop::chapter_layout_missing(crate));
   EXPECT_NE(message_of<simloop::InvalidArgument>([] {
-              (void)simloop::Model::from_xml_string(scene_with("<freejoint/>", "<joint type=\"slide\"/>")).layout();
+              (void)simloop::chapter_layout(simloop::Model::from_xml_string(scene_with("<freejoint/>", "<joint type=\"slide\"/>")));
             }).find("body \"box\" must have exactly one joint, a free joint"),
             std::string::npos);
   const std::string no_actuator = scene_with(
       "<motor name=\"push_motor\" joint=\"pusher_slide\" gear=\"10\" ctrlrange=\"-1 1\"/>", "");
   EXPECT_NE(message_of<simloop::InvalidArgument>([&] {
-              (void)simloop::Model::from_xml_string(no_actuator).layout();
+              (void)simloop::chapter_layout(simloop::Model::from_xml_string(no_actuator));
             }).find("no actuator"),
             std::string::npos);
   const std::string ball = scene_with("type=\"slide\" axis=\"1 0 0\"", "type=\"ball\"");
-  EXPECT_NE(message_of<simloop::InvalidArgument>([&] { (void)simloop::Model::from_xml_string(ball).layout(); })
+  EXPECT_NE(message_of<simloop::InvalidArgument>([&] { (void)simloop::chapter_layout(simloop::Model::from_xml_string(ball)); })
                 .find("slide or hinge"),
             std::string::npos);
-  EXPECT_TRUE(simloop::Model::pusher_scene().has_chapter_layout());
+  EXPECT_EQ(simloop::chapter_layout_missing(simloop::pusher_scene()), "");
 }
 
 TEST(Model, InvalidXmlRaisesMujocosOwnMessageAndWritesNoLog) {
@@ -166,7 +166,7 @@ TEST(Model, MujocoErrorsBecomeExceptionsAndWriteNoLog) {
 
     // While stepping: mj_step raises mju_error for an integrator it does not
     // know. (Model is read-only by design; the test reaches past that.)
-    const simloop::Model broken = simloop::Model::pusher_scene().with_timestep(0.002);
+    const simloop::Model broken = simloop::pusher_scene().with_timestep(0.002);
     const_cast<mjModel*>(broken.get())->opt.integrator = 99;
     const std::string step_msg =
         message_of<simloop::MujocoError>([&] { (void)simloop::run(broken, simloop::RunConfig{}); });
@@ -175,7 +175,7 @@ TEST(Model, MujocoErrorsBecomeExceptionsAndWriteNoLog) {
     // The process carries on, and a good model still runs.
     simloop::RunConfig smoke;
     smoke.smoke = true;
-    EXPECT_EQ(simloop::run(simloop::Model::pusher_scene(), smoke).metrics.steps, 300);
+    EXPECT_EQ(simloop::run(simloop::pusher_scene(), smoke).metrics.steps, 300);
   });
   EXPECT_FALSE(fs::exists(dir.path() / "MUJOCO_LOG.TXT"));
 }

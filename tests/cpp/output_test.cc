@@ -69,7 +69,7 @@ std::vector<std::string> split(const std::string& line) {
 }
 
 TEST(TrajectoryCsv, RoundTripsEveryDoubleExactly) {
-  const simloop::Model model = simloop::Model::pusher_scene();
+  const simloop::Model model = simloop::pusher_scene();
   simloop::RunConfig config;
   config.steps = 400;
   config.record_every = 3;
@@ -103,7 +103,7 @@ TEST(TrajectoryCsv, RoundTripsEveryDoubleExactly) {
 TEST(Outputs, WriteBothFilesAndReplaceOldOnes) {
   test::TempDir dir;
   const fs::path out = dir.path() / "nested" / "out";
-  const simloop::Model model = simloop::Model::pusher_scene();
+  const simloop::Model model = simloop::pusher_scene();
   simloop::RunConfig config;
   config.smoke = true;
   const simloop::RunResult r = simloop::run(model, config);
@@ -164,7 +164,7 @@ TEST(Outputs, FailedWriteKeepsTheOldFile) {
 }
 
 TEST(Summary, SaysWhatTheChapterSays) {
-  const simloop::Model model = simloop::Model::pusher_scene();
+  const simloop::Model model = simloop::pusher_scene();
   simloop::RunConfig config;
   config.smoke = true;
   const simloop::RunResult shoved = simloop::run(model, config);
@@ -190,7 +190,7 @@ TEST(Summary, OnlyMujocosBadValueWarningsGetTheResetNote) {
   // divergence warning is no such reset, and must not claim one.
   simloop::RunConfig config;
   config.steps = 100;
-  simloop::RunResult result = simloop::run(simloop::Model::pusher_scene(), config);
+  simloop::RunResult result = simloop::run(simloop::pusher_scene(), config);
   result.warnings = {simloop::Warning{"simloop_DIVERGED", 3, 40, "body \"box\" went through the floor"}};
   std::string text = simloop::summary_text(result);
   EXPECT_NE(text.find("simloop warning simloop_DIVERGED: raised 3 times, first in step 40: body"), std::string::npos)
@@ -203,7 +203,7 @@ TEST(Summary, OnlyMujocosBadValueWarningsGetTheResetNote) {
 }
 
 TEST(Summary, ACutShortShoveSaysHowManyStepsItActed) {
-  const simloop::Model model = simloop::Model::pusher_scene();
+  const simloop::Model model = simloop::pusher_scene();
   simloop::RunConfig config;
   config.steps = 60;  // the shove starts at step 30, so the run ends 30 steps into it
   const std::string text = simloop::summary_text(simloop::run(model, config));
@@ -227,7 +227,7 @@ std::set<std::string> names_in(const fs::path& dir) {
 // The commands' streamed trajectory.csv is the file the in-memory result
 // gives, byte for byte, for runs that flush many times and runs that never do.
 TEST(Outputs, StreamedTrajectoryIsTheInMemoryOneByteForByte) {
-  const simloop::Model model = simloop::Model::pusher_scene();
+  const simloop::Model model = simloop::pusher_scene();
   struct Case {
     std::int64_t steps;
     std::int64_t record_every;
@@ -266,7 +266,7 @@ void write_old_outputs(const fs::path& dir) {
 simloop::RunResult smoke_result() {
   simloop::RunConfig config;
   config.smoke = true;
-  return simloop::run(simloop::Model::pusher_scene(), config);
+  return simloop::run(simloop::pusher_scene(), config);
 }
 
 // After a failed write_outputs: the old files as they were, nothing else.
@@ -367,7 +367,7 @@ TEST(Outputs, AFullDiskWhileStreamingLeavesTheOldFilesAndNoTemporaryOnes) {
     const FileSizeLimit limit(50'000);
     simloop::RunConfig config;
     config.steps = steps;
-    const simloop::Model model = simloop::Model::pusher_scene();
+    const simloop::Model model = simloop::pusher_scene();
     simloop::Data workspace(model);
     simloop::OutputWriter writer(dir.path());
     // The sink writes every ~1 MB: 2000 rows (~0.7 MB) meet the limit at
@@ -379,7 +379,7 @@ TEST(Outputs, AFullDiskWhileStreamingLeavesTheOldFilesAndNoTemporaryOnes) {
 }
 
 TEST(Outputs, AnInterruptedWriterLeavesTheOldFilesAndNoTemporaryOnes) {
-  const simloop::Model model = simloop::Model::pusher_scene();
+  const simloop::Model model = simloop::pusher_scene();
   test::TempDir dir;
   write_old_outputs(dir.path());
   simloop::RunConfig config;

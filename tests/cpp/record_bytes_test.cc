@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "simloop/chapter_scene.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/output.hpp"
 #include "simloop/record_bytes.hpp"
@@ -44,7 +45,7 @@ simloop::RunResult chapter_run(std::int64_t steps) {
   config.record_every = 7;
   config.audit_energy = true;
   config.rng = simloop::ShoveRng::kNumpy;
-  return simloop::run(simloop::Model::pusher_scene(), config);
+  return simloop::run(simloop::pusher_scene(), config);
 }
 
 // `bytes` with the sizeof(T) bytes at `at` replaced by `value`'s.
@@ -94,7 +95,7 @@ TEST(RecordBytes, AScenarioRunComesBackBitForBit) {
 
 TEST(RecordBytes, ASweepComesBackJudgedAsItWas) {
   const simloop::SweepResult sweep =
-      simloop::sweep(simloop::Model::pusher_scene(), {0.002, 0.005, 0.02}, 1.0, 1);
+      simloop::sweep(simloop::pusher_scene(), {0.002, 0.005, 0.02}, 1.0, 1);
   const simloop::SweepResult back = simloop::sweep_result_from_bytes(simloop::to_bytes(sweep));
   EXPECT_EQ(simloop::sweep_csv(back), simloop::sweep_csv(sweep));
   EXPECT_EQ(simloop::sweep_summary(back), simloop::sweep_summary(sweep));
@@ -103,7 +104,7 @@ TEST(RecordBytes, ASweepComesBackJudgedAsItWas) {
 }
 
 TEST(RecordBytes, ChunksOfASweepJoinAsTheWholeSweep) {
-  const simloop::Model scene = simloop::Model::pusher_scene();
+  const simloop::Model scene = simloop::pusher_scene();
   const simloop::SweepResult whole = simloop::sweep(scene, {0.002, 0.005, 0.02}, 1.0, 1);
   const std::vector<simloop::SweepResult> parts = {simloop::sweep(scene, {0.002}, 1.0, 1),
                                                    simloop::sweep(scene, {0.005, 0.02}, 1.0, 1)};

@@ -6,6 +6,7 @@
 #include <cstring>
 #include <memory>
 
+#include "simloop/chapter_scene.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/model.hpp"
 #include "simloop/recorder.hpp"
@@ -20,7 +21,7 @@ struct Loaded {
 
 // The scene through MuJoCo directly: the loop needs nothing but mjModel.
 Loaded load(const char* file) {
-  (void)simloop::Model::pusher_scene();  // installs simloop's MuJoCo handlers
+  (void)simloop::pusher_scene();  // installs simloop's MuJoCo handlers
   char error[512] = "";
   mjModel* m = mj_loadXML((std::string(SIMLOOP_TEST_SCENES) + "/" + file).c_str(), nullptr, error, sizeof error);
   if (m == nullptr) throw std::runtime_error(error);

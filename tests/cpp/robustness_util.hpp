@@ -10,7 +10,7 @@
 namespace test {
 
 inline const simloop::Model& scene() {
-  static const simloop::Model model = simloop::Model::pusher_scene();
+  static const simloop::Model model = simloop::pusher_scene();
   return model;
 }
 

@@ -19,7 +19,7 @@ bool same_doubles(const std::vector<double>& a, const std::vector<double>& b) {
 }
 
 TEST(RunRecord, TheChaptersRunIsLabelledAsTheChaptersScenarioAndEndsInTheSameState) {
-  const simloop::Model model = simloop::Model::pusher_scene();
+  const simloop::Model model = simloop::pusher_scene();
   simloop::RunConfig config;
   config.seed = 3;
   config.steps = 600;
@@ -56,7 +56,7 @@ TEST(RunRecord, TheBaselineHasNoDisturbanceInItsRecord) {
   simloop::RunConfig config;
   config.steps = 100;
   config.perturb = false;
-  const simloop::RunResult result = simloop::run(simloop::Model::pusher_scene(), config);
+  const simloop::RunResult result = simloop::run(simloop::pusher_scene(), config);
   EXPECT_TRUE(result.schedule.forces.empty());
   EXPECT_TRUE(result.disturbed_bodies.empty());
   EXPECT_FALSE(result.perturb);
@@ -65,7 +65,7 @@ TEST(RunRecord, TheBaselineHasNoDisturbanceInItsRecord) {
 TEST(RunRecord, TheChaptersMetricsAreItsOwnAndAsARecordItsScenarios) {
   simloop::RunConfig config;
   config.steps = 200;
-  const simloop::RunResult result = simloop::run(simloop::Model::pusher_scene(), config);
+  const simloop::RunResult result = simloop::run(simloop::pusher_scene(), config);
   EXPECT_EQ(simloop::metrics_json(result), simloop::metrics_json(result.metrics));
   const simloop::RunRecord& record = result;
   const std::string as_record = simloop::metrics_json(record);
@@ -78,7 +78,7 @@ TEST(RunRecord, TheChaptersMetricsAreItsOwnAndAsARecordItsScenarios) {
 TEST(RunRecord, WritingARunWhoseRowsWereStreamedIsRefused) {
   simloop::RunConfig config;
   config.steps = 50;
-  const simloop::Model model = simloop::Model::pusher_scene();
+  const simloop::Model model = simloop::pusher_scene();
   simloop::Data data(model);
   simloop::DiscardRows discard;
   const simloop::RunResult streamed = simloop::run(model, config, data, &discard);

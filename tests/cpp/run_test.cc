@@ -17,7 +17,7 @@ using simloop::ChapterColumns;
 using simloop::Trajectory;
 
 const simloop::Model& scene() {
-  static const simloop::Model model = simloop::Model::pusher_scene();
+  static const simloop::Model model = simloop::pusher_scene();
   return model;
 }
 

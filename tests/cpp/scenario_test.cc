@@ -18,7 +18,7 @@ using simloop::Scenario;
 using simloop::When;
 
 const mjModel* chapter_model() {
-  static const simloop::Model model = simloop::Model::pusher_scene();
+  static const simloop::Model model = simloop::pusher_scene();
   return model.get();
 }
 

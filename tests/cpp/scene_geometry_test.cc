@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "simloop/chapter_scene.hpp"
 #include "simloop/model.hpp"
 #include "simloop/scene_geometry.hpp"
 
@@ -31,7 +32,7 @@ TEST(SceneGeometry, ListsEveryVisibleGeomWithItsShapeAndColour) {
 }
 
 TEST(SceneGeometry, MeshesAreTheirBoundingBoxesAndMaterialsGiveColour) {
-  (void)simloop::Model::pusher_scene();
+  (void)simloop::pusher_scene();
   const char* xml = R"(<mujoco>
     <asset>
       <mesh name="wedge" vertex="0 0 0  1 0 0  0 2 0  0 0 3"/>

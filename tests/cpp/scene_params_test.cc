@@ -40,7 +40,7 @@ std::string error_of(const simloop::Model& model, const std::vector<simloop::Sce
 }
 
 TEST(SceneParams, TheScenesOwnValuesChangeNoBit) {
-  const simloop::Model scene = simloop::Model::pusher_scene();
+  const simloop::Model scene = simloop::pusher_scene();
   const simloop::RunResult original = run_on(scene);
   // The chapter's geoms all have MuJoCo's default friction 1, the box weighs
   // 0.5 kg, the pusher's slide has damping 4.
@@ -60,7 +60,7 @@ TEST(SceneParams, TheScenesOwnValuesChangeNoBit) {
 }
 
 TEST(SceneParams, OtherValuesChangeTheRunAndLeaveTheOriginalAlone) {
-  const simloop::Model scene = simloop::Model::pusher_scene();
+  const simloop::Model scene = simloop::pusher_scene();
   const double box_x = run_on(scene).trajectory.at(600, simloop::ChapterColumns::kBoxX);
   for (const simloop::SceneParam& p : std::vector<simloop::SceneParam>{
            {Kind::kFriction, "", 0.3}, {Kind::kMass, "box", 2.0}, {Kind::kDamping, "pusher_slide", 20.0}}) {
@@ -73,7 +73,7 @@ TEST(SceneParams, OtherValuesChangeTheRunAndLeaveTheOriginalAlone) {
 }
 
 TEST(SceneParams, WhatEachParamWrites) {
-  const simloop::Model scene = simloop::Model::pusher_scene();
+  const simloop::Model scene = simloop::pusher_scene();
   const mjModel* s = scene.get();
   const int box = mj_name2id(s, mjOBJ_BODY, "box");
   const int box_geom = mj_name2id(s, mjOBJ_GEOM, "box_geom");
@@ -105,7 +105,7 @@ TEST(SceneParams, WhatEachParamWrites) {
 }
 
 TEST(SceneParams, BadNamesAndValuesAreRefusedByName) {
-  const simloop::Model scene = simloop::Model::pusher_scene();
+  const simloop::Model scene = simloop::pusher_scene();
   EXPECT_EQ(error_of(scene, {{Kind::kMass, "bx", 1.0}}),
             "mass of 'bx' = 1.0: no body named 'bx' (did you mean 'box'?); bodies: world, box, pusher");
   EXPECT_EQ(error_of(scene, {{Kind::kFriction, "box_gem", 1.0}}),

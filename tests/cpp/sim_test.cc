@@ -24,7 +24,7 @@ using simloop::Trajectory;
 
 // The chapter's scene, loaded once.
 const simloop::Model& scene() {
-  static const simloop::Model model = simloop::Model::pusher_scene();
+  static const simloop::Model model = simloop::pusher_scene();
   return model;
 }
 
@@ -58,7 +58,7 @@ TEST(Sim, TheChaptersLoopWrittenWithSimMatchesRun) {
   config.steps = 600;
   const auto reference = simloop::run(scene(), config);
   simloop::Sim sim(scene());
-  const simloop::SceneLayout& at = scene().layout();
+  const simloop::ChapterLayout at = simloop::chapter_layout(scene());
   const simloop::Shove& shove = reference.shove;
   const std::array<double, 3> push{0.0, shove.force_y(), 0.0}, none{};
   for (std::int64_t step = 0; step < config.steps; ++step) {
@@ -77,7 +77,7 @@ TEST(Sim, TheChaptersLoopWrittenWithSimMatchesRun) {
 
 TEST(Sim, AnAppliedForcePersistsUntilCleared) {
   simloop::Sim sim(scene());
-  const simloop::SceneLayout& at = scene().layout();
+  const simloop::ChapterLayout at = simloop::chapter_layout(scene());
   const double* applied = sim.data()->xfrc_applied + 6 * at.box_body;
   const double* velocity = sim.data()->qvel + at.box_dofadr;
   const std::array<double, 3> push{0.0, 9.0, 0.0};
@@ -108,7 +108,7 @@ TEST(Sim, ReadsContactsAndResets) {
   sim.reset();
   EXPECT_EQ(sim.time(), 0.0);
   EXPECT_EQ(sim.ctrl(), 0.0);
-  EXPECT_EQ(sim.read("qpos", scene().layout().box_qposadr, 1)[0], 0.4);
+  EXPECT_EQ(sim.read("qpos", simloop::chapter_layout(scene()).box_qposadr, 1)[0], 0.4);
   EXPECT_EQ(sim.timestep(), 0.01);  // the timestep is the model's, kept across reset
   EXPECT_THROW(sim.step(0), simloop::InvalidArgument);
   EXPECT_THROW(sim.set_ctrl(NAN), simloop::InvalidArgument);
