@@ -136,7 +136,9 @@ std::vector<RunResult> run_batch(const Model& model, const std::vector<RunConfig
   detail::check_threads(threads);
   for (std::size_t i = 0; i < configs.size(); ++i) detail::check_run(i, [&] { validate(configs[i]); });
   if (sinks.empty()) {
-    check_kept_trajectories(configs);
+    std::vector<KeptRows> kept;
+    for (const RunConfig& config : configs) kept.push_back(kept_rows(config));
+    check_kept_rows(kept);
   } else if (sinks.size() != configs.size() || std::find(sinks.begin(), sinks.end(), nullptr) != sinks.end()) {
     throw InvalidArgument("sinks: one RowSink per config, none null, got " + std::to_string(sinks.size()) +
                           " for " + std::to_string(configs.size()) + " configs");

@@ -254,7 +254,7 @@ RunRecord detail::run_schedule_counted_elsewhere(const mjModel* m, mjData* d, co
                                                          RowSink* sink, RunControl* control, const RunInputs& inputs) {
   detail::check_schedule_run(schedule.steps, record_every);
   check_inputs(m, inputs, schedule.steps);
-  if (sink == nullptr) detail::check_kept_rows(schedule.steps, record_every, recorder.width());
+  if (sink == nullptr) check_kept_rows({{schedule.steps, record_every, recorder.width()}});
   RunRecord result;
   detail::KeepRows keep(result.trajectory);
   detail::LoopResult loop =

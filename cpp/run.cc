@@ -20,35 +20,6 @@
 namespace simloop {
 namespace {
 
-// "1.6 TiB": a byte count for people.
-std::string human_bytes(std::uint64_t bytes) {
-  static constexpr const char* kUnits[] = {"bytes", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB"};
-  double value = static_cast<double>(bytes);
-  int unit = 0;
-  while (value >= 1024.0 && unit < 6) {
-    value /= 1024.0;
-    ++unit;
-  }
-  char text[32];
-  if (unit == 0) {
-    std::snprintf(text, sizeof text, "%llu bytes", static_cast<unsigned long long>(bytes));
-  } else {
-    std::snprintf(text, sizeof text, "%.1f %s", value, kUnits[unit]);
-  }
-  return text;
-}
-
-// The cgroup (v2) memory limit at /sys/fs/cgroup (a container's own limit),
-// or UINT64_MAX if none.
-std::uint64_t cgroup_memory_max() noexcept {
-  std::FILE* f = std::fopen("/sys/fs/cgroup/memory.max", "r");
-  if (f == nullptr) return std::numeric_limits<std::uint64_t>::max();
-  unsigned long long limit = 0;
-  const bool numeric = std::fscanf(f, "%llu", &limit) == 1;  // "max" when unlimited
-  std::fclose(f);
-  return numeric && limit > 0 ? limit : std::numeric_limits<std::uint64_t>::max();
-}
-
 // The chapter's row: the state entering the step and the inputs just written
 // (NaN in the final row, which has no step after it), all read before the
 // step as the chapter reads them (ncon: the contacts the last step found).
@@ -157,101 +128,14 @@ void validate(const RunConfig& config) {
   check_count("record_every", config.record_every, kMaxRecordEvery);
 }
 
-std::uint64_t trajectory_memory_budget() noexcept {
-  std::uint64_t limit = std::numeric_limits<std::uint64_t>::max();
-  const long pages = ::sysconf(_SC_PHYS_PAGES);
-  const long page_size = ::sysconf(_SC_PAGE_SIZE);
-  if (pages > 0 && page_size > 0) {
-    limit = static_cast<std::uint64_t>(pages) * static_cast<std::uint64_t>(page_size);
-  }
-  limit = std::min(limit, cgroup_memory_max());
-  for (const int resource : {RLIMIT_AS, RLIMIT_DATA}) {
-    struct rlimit rl {};
-    if (::getrlimit(resource, &rl) == 0 && rl.rlim_cur != RLIM_INFINITY) {
-      limit = std::min<std::uint64_t>(limit, rl.rlim_cur);
-    }
-  }
-  return limit / 2;
-}
-
-std::uint64_t kept_trajectory_bytes(const RunConfig& config) noexcept {
-  const auto rows = static_cast<std::uint64_t>(Trajectory::rows_for(config.num_steps(), config.record_every));
-  const std::uint64_t row_bytes =
-      sizeof(double) * static_cast<std::uint64_t>(config.audit_energy ? ChapterColumns::kNumColumns
-                                                                      : ChapterColumns::kNumBaseColumns);
-  constexpr std::uint64_t kMax = std::numeric_limits<std::uint64_t>::max();
-  return rows > kMax / row_bytes ? kMax : rows * row_bytes;
-}
-
-void check_kept_trajectories(const std::vector<RunConfig>& configs, std::uint64_t budget) {
-  constexpr std::uint64_t kMax = std::numeric_limits<std::uint64_t>::max();
-  std::uint64_t total = 0;
-  std::size_t largest = 0;
-  std::uint64_t largest_bytes = 0;
-  for (std::size_t i = 0; i < configs.size(); ++i) {
-    const std::uint64_t bytes = kept_trajectory_bytes(configs[i]);
-    total = bytes > kMax - total ? kMax : total + bytes;
-    if (bytes > largest_bytes) {
-      largest = i;
-      largest_bytes = bytes;
-    }
-  }
-  if (total <= budget) return;
-  const RunConfig& c = configs[largest];
-  std::ostringstream msg;
-  msg << "steps " << c.num_steps() << " with record_every " << c.record_every;
-  if (configs.size() == 1) {
-    msg << " would keep " << human_bytes(total) << " of trajectory in memory";
-  } else {
-    msg << " (run " << largest << ", the largest of " << configs.size() << " runs) and the others would keep "
-        << human_bytes(total) << " of trajectories in memory";
-  }
-  msg << " (at most " << human_bytes(budget)
-      << " allowed: half of the machine's memory or the process's limit); raise record_every, "
-         "or let sim_loop stream it to a file";
-  throw InvalidArgument(msg.str());
-}
-
-void detail::check_kept_rows(std::int64_t steps, std::int64_t record_every, int columns) {
-  const std::uint64_t budget = trajectory_memory_budget();
-  const long double bytes = static_cast<long double>(Trajectory::rows_for(steps, record_every)) * columns * sizeof(double);
-  if (bytes <= static_cast<long double>(budget)) return;
-  std::ostringstream msg;
-  msg << "steps " << steps << " with record_every " << record_every << " would keep "
-      << human_bytes(bytes >= 1.8e19L ? std::numeric_limits<std::uint64_t>::max() : static_cast<std::uint64_t>(bytes))
-      << " of trajectory (" << columns << " columns) in memory (at most " << human_bytes(budget)
-      << " allowed: half of the machine's memory or the process's limit); raise record_every, "
-         "or let sim_loop stream it to a file";
-  throw InvalidArgument(msg.str());
-}
-
-void detail::check_kept_rows(const std::vector<std::array<std::int64_t, 3>>& runs) {
-  if (runs.size() == 1) return check_kept_rows(runs[0][0], runs[0][1], static_cast<int>(runs[0][2]));
-  const std::uint64_t budget = trajectory_memory_budget();
-  long double total = 0.0L, largest_bytes = -1.0L;
-  std::size_t largest = 0;
-  for (std::size_t i = 0; i < runs.size(); ++i) {
-    const long double bytes =
-        static_cast<long double>(Trajectory::rows_for(runs[i][0], runs[i][1])) * runs[i][2] * sizeof(double);
-    total += bytes;
-    if (bytes > largest_bytes) {
-      largest = i;
-      largest_bytes = bytes;
-    }
-  }
-  if (total <= static_cast<long double>(budget)) return;
-  std::ostringstream msg;
-  msg << "steps " << runs[largest][0] << " with record_every " << runs[largest][1] << " (run " << largest
-      << ", the largest of " << runs.size() << " runs) and the others would keep "
-      << human_bytes(total >= 1.8e19L ? std::numeric_limits<std::uint64_t>::max() : static_cast<std::uint64_t>(total))
-      << " of trajectories in memory (at most " << human_bytes(budget)
-      << " allowed: half of the machine's memory or the process's limit); raise record_every";
-  throw InvalidArgument(msg.str());
+KeptRows kept_rows(const RunConfig& config) noexcept {
+  return {config.num_steps(), config.record_every,
+          config.audit_energy ? ChapterColumns::kNumColumns : ChapterColumns::kNumBaseColumns};
 }
 
 RunResult run(const Model& model, const RunConfig& config) {
   validate(config);
-  check_kept_trajectories({config});  // before allocating anything
+  check_kept_rows({kept_rows(config)});  // before allocating anything
   Data workspace(model);
   return detail::run_counted_elsewhere(model, config, workspace, nullptr, nullptr);
 }
@@ -259,7 +143,7 @@ RunResult run(const Model& model, const RunConfig& config) {
 RunResult run(const Model& model, const RunConfig& config, Data& workspace, RowSink* sink,
               RunControl* control) {
   validate(config);
-  if (sink == nullptr) check_kept_trajectories({config});
+  if (sink == nullptr) check_kept_rows({kept_rows(config)});
   if (control) control->add_total(config.num_steps());
   return detail::run_counted_elsewhere(model, config, workspace, sink, control);
 }

@@ -49,15 +49,6 @@ class RowBlock {
   std::vector<double> values_;
 };
 
-// Throws InvalidArgument if a run of `steps` steps keeping every
-// `record_every`-th row of `columns` doubles would not fit the memory budget
-// (trajectory_memory_budget), saying how much it needs and what to change.
-void check_kept_rows(std::int64_t steps, std::int64_t record_every, int columns);
-
-// The same for several runs kept in memory together (a batch): each entry
-// is one run's {steps, record_every, columns}; the message names the largest.
-void check_kept_rows(const std::vector<std::array<std::int64_t, 3>>& runs);
-
 // Throws InvalidArgument unless steps and record_every are each from 1 to
 // kMaxSteps / kMaxRecordEvery (run_schedule's own check).
 void check_schedule_run(std::int64_t steps, std::int64_t record_every);

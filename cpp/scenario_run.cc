@@ -120,7 +120,7 @@ std::vector<RunRecord> run_scenario_batch(const Model& scene, const Scenario& sc
   std::list<std::pair<double, Model>> models;  // stable addresses for model_of
   std::vector<const Model*> model_of;
   std::vector<PreparedRun> runs;
-  std::vector<std::array<std::int64_t, 3>> kept;
+  std::vector<KeptRows> kept;
   for (std::size_t i = 0; i < configs.size(); ++i) {
     const ScenarioConfig& config = configs[i];
     detail::check_run(i, [&] {
@@ -135,7 +135,7 @@ std::vector<RunRecord> run_scenario_batch(const Model& scene, const Scenario& sc
       if (sinks[i] == nullptr) kept.push_back({run.schedule.steps, config.record_every, run.recorder->width()});
     });
   }
-  if (!kept.empty()) detail::check_kept_rows(kept);
+  if (!kept.empty()) check_kept_rows(kept);
 
   std::vector<RunRecord> results(configs.size());
   std::vector<std::int64_t> steps;

@@ -21,7 +21,7 @@ namespace simloop {
 // stopped (Interrupted) and watched; its poll runs on the calling thread.
 // Batches keep their runs' trajectories in memory: the whole batch is
 // refused up front (InvalidArgument) if together they would not fit
-// (check_kept_trajectories, summed over the runs).
+// (check_kept_rows, summed over the runs).
 [[nodiscard]] std::vector<RunResult> run_batch(const Model& model, const std::vector<RunConfig>& configs,
                                                int threads = 0, RunControl* control = nullptr);
 

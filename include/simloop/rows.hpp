@@ -105,4 +105,30 @@ class DiscardRows final : public RowSink {
   void write(const double* /*rows*/, std::int64_t /*count*/) override {}
 };
 
+// How much memory the trajectories runs keep (no RowSink: Python's run,
+// batches) may take: half of the least of the machine's physical memory,
+// the cgroup's memory.max and the process's RLIMIT_AS / RLIMIT_DATA
+// (ulimit -v / -d), in bytes. Runs over it are refused before they start
+// rather than left to the allocator (which may only fail after minutes of
+// stepping, or summon the OOM killer).
+[[nodiscard]] std::uint64_t trajectory_memory_budget() noexcept;
+
+// One run's kept trajectory: Trajectory::rows_for(steps, record_every) rows
+// of `columns` doubles.
+struct KeptRows {
+  std::int64_t steps = 0;
+  std::int64_t record_every = 1;
+  int columns = 0;
+  [[nodiscard]] std::uint64_t bytes() const noexcept;  // saturates at UINT64_MAX
+};
+
+// Throws InvalidArgument if runs that keep their trajectories in memory would
+// together take more than `budget` bytes, saying how much they need and what
+// to change: "steps 10000000000 with record_every 1 would keep 1.6 TiB of
+// trajectory (22 columns) in memory (at most 11.6 GiB allowed: ...); raise
+// record_every, or let sim_loop stream it to a file". For several runs (a
+// batch) the sum is weighed and the message names the largest. Every run of
+// the library that keeps its rows calls it before it allocates them.
+void check_kept_rows(const std::vector<KeptRows>& runs, std::uint64_t budget = trajectory_memory_budget());
+
 }  // namespace simloop

@@ -38,26 +38,9 @@ struct RunConfig {
 // streams its rows to a RowSink keeps none of them.)
 void validate(const RunConfig& config);
 
-// How much memory a run's kept trajectory (no RowSink: Python's run, batches,
-// sweeps of kept runs) may take: half of the least of the machine's physical
-// memory, the cgroup's memory.max and the process's RLIMIT_AS / RLIMIT_DATA
-// (ulimit -v / -d), in bytes. Runs over it are refused before they start
-// rather than left to the allocator (which may only fail after minutes of
-// stepping, or summon the OOM killer).
-[[nodiscard]] std::uint64_t trajectory_memory_budget() noexcept;
-
-// Bytes of trajectory a run keeps in memory without a RowSink (saturates at
-// UINT64_MAX; the config must be valid).
-[[nodiscard]] std::uint64_t kept_trajectory_bytes(const RunConfig& config) noexcept;
-
-// Throws InvalidArgument if runs that keep their trajectories in memory would
-// together take more than `budget` bytes, saying how much they need and what
-// to change: "steps 10000000000 with record_every 1 would keep 1.6 TiB of
-// trajectory in memory (the limit is 11.6 GiB, half of this machine's
-// memory); raise record_every, or stream the rows (sim_loop writes them to
-// trajectory.csv as it goes)". run() and run_batch() call it.
-void check_kept_trajectories(const std::vector<RunConfig>& configs,
-                             std::uint64_t budget = trajectory_memory_budget());
+// The rows a run keeps in memory without a RowSink: what check_kept_rows
+// (rows.hpp) weighs before run() and run_batch() start (the config must be valid).
+[[nodiscard]] KeptRows kept_rows(const RunConfig& config) noexcept;
 
 // metrics.json: the chapter's keys, floats already rounded to 6 decimals.
 struct Metrics {

@@ -68,29 +68,30 @@ TEST(Robustness, ValidateEnforcesTheDocumentedRanges) {
 
 TEST(Robustness, AKeptTrajectoryTooLargeIsRefusedSayingHowMuchAndWhatToChange) {
   const std::string message = invalid_argument([] { (void)simloop::run(scene(), config_with(10'000'000'000)); });
-  EXPECT_EQ(message.rfind("steps 10000000000 with record_every 1 would keep 1.6 TiB of trajectory in memory", 0), 0u)
+  EXPECT_EQ(message.rfind("steps 10000000000 with record_every 1 would keep 1.6 TiB of trajectory (22 columns) in memory", 0), 0u)
       << message;
   EXPECT_NE(message.find("raise record_every"), std::string::npos) << message;
   // The same run with a coarser record fits.
   simloop::RunConfig sparse = config_with(10'000'000'000, 1'000'000'000);
-  EXPECT_NO_THROW(simloop::check_kept_trajectories({sparse}));
+  EXPECT_NO_THROW(simloop::check_kept_rows({simloop::kept_rows(sparse)}));
 }
 
 TEST(Robustness, TheBudgetIsExactAndBatchesSumTheirRuns) {
   const simloop::RunConfig c = config_with(1000);  // 1001 rows of 22 doubles
   const std::uint64_t bytes = 1001 * 22 * 8;
-  EXPECT_EQ(simloop::kept_trajectory_bytes(c), bytes);
+  const simloop::KeptRows kept = simloop::kept_rows(c);
+  EXPECT_EQ(kept.bytes(), bytes);
   simloop::RunConfig audited = c;
   audited.audit_energy = true;
-  EXPECT_EQ(simloop::kept_trajectory_bytes(audited), 1001u * ChapterColumns::kNumColumns * 8);
-  EXPECT_NO_THROW(simloop::check_kept_trajectories({c}, bytes));
-  EXPECT_THROW(simloop::check_kept_trajectories({c}, bytes - 1), simloop::InvalidArgument);
+  EXPECT_EQ(simloop::kept_rows(audited).bytes(), 1001u * ChapterColumns::kNumColumns * 8);
+  EXPECT_NO_THROW(simloop::check_kept_rows({kept}, bytes));
+  EXPECT_THROW(simloop::check_kept_rows({kept}, bytes - 1), simloop::InvalidArgument);
   // Two runs each fit alone, not together.
-  EXPECT_NO_THROW(simloop::check_kept_trajectories({c}, bytes * 3 / 2));
-  const std::string message = invalid_argument([&] { simloop::check_kept_trajectories({c, c}, bytes * 3 / 2); });
-  EXPECT_NE(message.find("of 2 runs"), std::string::npos) << message;
+  EXPECT_NO_THROW(simloop::check_kept_rows({kept}, bytes * 3 / 2));
+  const std::string message = invalid_argument([&] { simloop::check_kept_rows({kept, kept}, bytes * 3 / 2); });
+  EXPECT_NE(message.find("(run 0, the largest of 2 runs) and the others would keep"), std::string::npos) << message;
   // Saturates instead of wrapping.
-  EXPECT_EQ(simloop::kept_trajectory_bytes(config_with(simloop::kMaxSteps)), std::numeric_limits<std::uint64_t>::max());
+  EXPECT_EQ(simloop::kept_rows(config_with(simloop::kMaxSteps)).bytes(), std::numeric_limits<std::uint64_t>::max());
 }
 
 TEST(Robustness, TheBudgetFollowsTheProcessLimit) {
