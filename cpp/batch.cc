@@ -12,6 +12,7 @@
 #include <system_error>
 #include <thread>
 
+#include "chapter_detail.hpp"
 #include "run_detail.hpp"
 #include "simloop/errors.hpp"
 

@@ -26,7 +26,6 @@
 #include "simloop/control.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/recorder.hpp"
-#include "simloop/run.hpp"
 #include "simloop/scenario.hpp"
 
 namespace simloop::detail {

@@ -12,6 +12,7 @@
 
 #include "energy_audit.hpp"
 #include "loop.hpp"
+#include "chapter_detail.hpp"
 #include "run_detail.hpp"
 #include "simloop/recorder.hpp"
 #include "simloop/errors.hpp"

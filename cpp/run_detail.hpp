@@ -11,7 +11,6 @@
 
 #include "simloop/errors.hpp"
 #include "simloop/recorder.hpp"
-#include "simloop/run.hpp"
 #include "simloop/scenario_run.hpp"
 
 namespace simloop::detail {
@@ -68,11 +67,6 @@ void check_schedule_run(std::int64_t steps, std::int64_t record_every);
 // A scenario as one run of `config` sees it: its length replaced by
 // config.steps, its disturbances dropped unless config.perturb.
 [[nodiscard]] Scenario configured_scenario(const Scenario& scenario, const ScenarioConfig& config);
-
-// run() without announcing its steps to the control: a batch announces all
-// of its runs' steps up front, so progress has its true total from the start.
-[[nodiscard]] RunResult run_counted_elsewhere(const Model& model, const RunConfig& config, Data& workspace,
-                                              RowSink* sink, RunControl* control);
 
 // A batch's checks before any run starts: threads is at least 0 (0: one
 // per core), and run i's own checks, their InvalidArgument prefixed "run i: ".

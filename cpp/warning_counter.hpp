@@ -7,7 +7,7 @@
 
 #include <mujoco/mujoco.h>
 
-#include "simloop/run.hpp"
+#include "simloop/rows.hpp"
 
 namespace simloop::detail {
 

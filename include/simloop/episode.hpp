@@ -19,7 +19,6 @@
 #include "simloop/control.hpp"
 #include "simloop/model.hpp"
 #include "simloop/recorder.hpp"
-#include "simloop/run.hpp"
 #include "simloop/scenario.hpp"
 #include "simloop/scenario_run.hpp"
 
