@@ -2,15 +2,18 @@
 what the chapter says to look for added on top.
 
 ChapterRecording is the chapter's run (run_to_files) on the same recorder,
-its scene drawn like any other (the chapter's: world/static/floor,
-world/bodies/box/box_geom, world/bodies/pusher/pusher_geom). What it adds:
+its scene drawn like any other. What it adds:
+- the chapter's entity paths, "the same entity paths every chapter uses":
+  world/objects/box and world/robot/pusher (a --model scene's pusher under
+  its own name: world/robot/<body>), each with its geoms below it
+  (world/objects/box/box_geom); the floor at world/static/floor.
 - the poses, from the chapter's trajectory: the box's from box_x..box_qz
   (qpos, the state entering each step; the chapter logs mjData.xpos, which
   mj_step computed before integrating, so it lags qpos by one step); the
   pusher's (whichever body actuator 0 drives) its home pose moved by pusher_x
   along its slide axis. Only these two bodies are drawn: a --model scene's
   other moving bodies are not in the trajectory.
-- world/bodies/box/shove: an Arrows3D, the shove scaled by 0.02 while it acts
+- world/objects/box/shove: an Arrows3D, the shove scaled by 0.02 while it acts
   and zero-length otherwise. A child of the box, so drawn in the box's frame:
   logged from the box's origin, with the world-frame shove rotated into that
   frame (the chapter passes world coordinates there, which would put the
@@ -159,6 +162,10 @@ class ChapterRecording(Recording):
         pusher = rest + np.outer(cols["pusher_x"] - q0, axis), np.tile(self._pusher_quat, (len(block), 1))
         return {"box": box, self._pusher: pusher}
 
+    def _entity(self, body: str) -> str:
+        """The chapter's paths: the pusher under world/robot, the box under world/objects."""
+        return f"world/robot/{body}" if body == self._pusher else f"world/objects/{body}"
+
     def _style(self, name: str) -> Tuple[str, Optional[Sequence[int]]]:
         if name in ENERGY_COLORS:
             return name + " (J)", ENERGY_COLORS[name]
@@ -173,7 +180,7 @@ class ChapterRecording(Recording):
         self._send_series("box_speed", times, np.sqrt(cols["box_vx"] ** 2 + cols["box_vy"] ** 2 + cols["box_vz"] ** 2))
         # The final row has no step after it, so no shove (its input cells are NaN).
         shove = SHOVE_ARROW_SCALE * np.nan_to_num(np.column_stack([cols["shove_x"], cols["shove_y"], cols["shove_z"]]))
-        self._rec.send_columns("world/bodies/box/shove", indexes=times,
+        self._rec.send_columns(f"{self._entity('box')}/shove", indexes=times,
                                columns=self._rr.Arrows3D.columns(origins=np.zeros_like(shove),
                                                                  vectors=_rotate_into_body(_box_quat(cols), shove)))
         z = cols["box_z"][np.isfinite(cols["box_z"])]

@@ -231,8 +231,8 @@ class Recording:
     (RrdFile). `bodies`: the moving bodies the rows pose (None: all of them,
     as run_scenario_to_files gives them).
 
-    The hooks below (_poses, _style, _send_more, _blueprint, _name) are where
-    a kind of run says what its rows hold; chapter_recording.ChapterRecording
+    The hooks below (_entity, _poses, _style, _send_more, _blueprint, _name)
+    are where a kind of run says what its rows hold and where it draws them; chapter_recording.ChapterRecording
     is the one other."""
 
     def __init__(self, model: _core.Model, path: Union[str, "os.PathLike[str]"], recording_id: str,
@@ -260,7 +260,7 @@ class Recording:
                         continue
                     entity = f"world/static/{geom['name']}"
                 elif geom["body"] in drawn:
-                    entity = f"world/bodies/{geom['body']}/{geom['name']}"
+                    entity = f"{self._entity(geom['body'])}/{geom['name']}"
                 else:
                     continue  # welded to the world under a body of its own (it never moves), or not posed
                 shape = _shape(rr, geom)
@@ -338,7 +338,7 @@ class Recording:
                 low, high = finite.min(axis=0), finite.max(axis=0)
                 self._low = low if self._low is None else np.minimum(self._low, low)
                 self._high = high if self._high is None else np.maximum(self._high, high)
-            self._rec.send_columns(f"world/bodies/{body}", indexes=times,  # rerun's quaternions are x y z w
+            self._rec.send_columns(self._entity(body), indexes=times,  # rerun's quaternions are x y z w
                                    columns=rr.Transform3D.columns(translation=np.ascontiguousarray(position),
                                                                   quaternion=quat_wxyz[:, [1, 2, 3, 0]]))
         for name in self._series:
@@ -356,6 +356,10 @@ class Recording:
                                columns=self._rr.Scalars.columns(scalars=np.ascontiguousarray(values)))
 
     # What a kind of run says about its rows; these are a scenario's.
+    def _entity(self, body: str) -> str:
+        """Where a moving body is drawn: world/bodies/<body>."""
+        return f"world/bodies/{body}"
+
     def _poses(self, block: Any, cols: Mapping[str, Any]) -> Dict[str, Tuple[Any, Any]]:
         """{body: (positions, w x y z quaternions)}, a row each: here the poses after the trajectory's columns."""
         at = len(self._names)

@@ -11,7 +11,9 @@ import simloop
 from conftest import run_command
 from simloop import chapter_recording as recording
 
-TEMPORAL = ["/world/bodies/box", "/world/bodies/pusher", "/world/bodies/box/shove", "/plots/box_x",
+# The box, the pusher and the shove at the chapter's own paths ("the same entity
+# paths every chapter uses").
+TEMPORAL = ["/world/objects/box", "/world/robot/pusher", "/world/objects/box/shove", "/plots/box_x",
             "/plots/box_y", "/plots/box_z", "/plots/box_speed", "/plots/pusher_x", "/plots/ncon"]
 ENERGY = ["/plots/" + name for name in simloop.ENERGY_COLUMN_NAMES]
 
@@ -62,7 +64,7 @@ def test_entities_timelines_and_every_step(recorded):
     chunks, result = recorded
     assert {entity for entity, static in chunks if not static} == set(TEMPORAL)
     assert {entity for entity, static in chunks if static} == {
-        "/world/static/floor", "/world/bodies/box/box_geom", "/world/bodies/pusher/pusher_geom", "/plots/box_x",
+        "/world/static/floor", "/world/objects/box/box_geom", "/world/robot/pusher/pusher_geom", "/plots/box_x",
         "/plots/box_y", "/plots/box_z", "/plots/box_speed", "/plots/pusher_x", "/plots/ncon", "/__properties"}
     times = result.column("time")
     for entity in TEMPORAL:
@@ -74,8 +76,8 @@ def test_entities_timelines_and_every_step(recorded):
 
 def test_the_scenes_own_boxes_and_the_floor(recorded):
     chunks, result = recorded
-    box = chunks[("/world/bodies/box/box_geom", True)]
-    pusher = chunks[("/world/bodies/pusher/pusher_geom", True)]
+    box = chunks[("/world/objects/box/box_geom", True)]
+    pusher = chunks[("/world/robot/pusher/pusher_geom", True)]
     # The chapter's scene's sizes and colours (rgba 0.85 0.3 0.25, 0.25 0.45 0.85), packed 0xRRGGBBAA.
     np.testing.assert_allclose(box["Boxes3D:half_sizes"][0], [[0.05, 0.05, 0.05]])
     np.testing.assert_allclose(pusher["Boxes3D:half_sizes"][0], [[0.04, 0.12, 0.05]])
@@ -96,7 +98,7 @@ def test_the_scenes_own_boxes_and_the_floor(recorded):
 
 def test_box_pose_matches_the_trajectory(recorded):
     chunks, result = recorded
-    box = chunks[("/world/bodies/box", False)]
+    box = chunks[("/world/objects/box", False)]
     rows = result.trajectory
     names = simloop.COLUMN_NAMES
     translations = np.array([t[0] for t in box["Transform3D:translation"]])
@@ -105,7 +107,7 @@ def test_box_pose_matches_the_trajectory(recorded):
     quats = np.array([q[0] for q in box["Transform3D:quaternion"]])
     wxyz = rows[:, [names.index(c) for c in ("box_qw", "box_qx", "box_qy", "box_qz")]]
     np.testing.assert_allclose(quats, wxyz[:, [1, 2, 3, 0]], atol=1e-6)  # rerun is x-y-z-w
-    pusher = chunks[("/world/bodies/pusher", False)]
+    pusher = chunks[("/world/robot/pusher", False)]
     translations = np.array([t[0] for t in pusher["Transform3D:translation"]])
     np.testing.assert_allclose(translations[:, 0], rows[:, names.index("pusher_x")], atol=1e-6)
     np.testing.assert_allclose(translations[:, 1:], 0.0 * translations[:, 1:] + [0.0, 0.05], atol=1e-7)
@@ -126,7 +128,7 @@ def test_the_series_are_the_trajectory_exactly(recorded):
 
 def test_the_arrow_shows_the_shove_exactly_while_it_acts(recorded):
     chunks, result = recorded
-    arrows = chunks[("/world/bodies/box/shove", False)]
+    arrows = chunks[("/world/objects/box/shove", False)]
     vectors = np.array([v[0] for v in arrows["Arrows3D:vectors"]])
     origins = np.array([o[0] for o in arrows["Arrows3D:origins"]])
     steps = np.arange(0, 2001)
@@ -147,10 +149,10 @@ def test_a_model_of_the_chapters_layout_is_drawn_as_it_is(tmp_path):
                      .replace('size="0.04 0.12 0.05"', 'size="0.03 0.2 0.05"'))
     chunks = load_chunks(record_with_command(tmp_path, "m", ["--smoke", "--model", str(scene)]))
     result = simloop.run(model=scene, smoke=True)
-    assert ("/world/bodies/pusher", False) not in chunks
-    np.testing.assert_allclose(chunks[("/world/bodies/ram/pusher_geom", True)]["Boxes3D:half_sizes"][0],
+    assert ("/world/robot/pusher", False) not in chunks
+    np.testing.assert_allclose(chunks[("/world/robot/ram/pusher_geom", True)]["Boxes3D:half_sizes"][0],
                                [[0.03, 0.2, 0.05]])
-    ram = np.array([t[0] for t in chunks[("/world/bodies/ram", False)]["Transform3D:translation"]])
+    ram = np.array([t[0] for t in chunks[("/world/robot/ram", False)]["Transform3D:translation"]])
     np.testing.assert_allclose(ram[:, 0], result.column("pusher_x"), atol=1e-6)
     np.testing.assert_allclose(ram[:, 1:], 0.0 * ram[:, 1:] + [0.1, 0.05], atol=1e-7)
 
@@ -171,7 +173,7 @@ def test_break_its_peak_is_in_the_file(tmp_path):
     assert z.max() == trajectory_z.max()
     assert steps[int(np.argmax(z))] == int(np.argmax(trajectory_z))
     # The transform carries it too (as float32).
-    box_z = np.array([t[0][2] for t in chunks[("/world/bodies/box", False)]["Transform3D:translation"]])
+    box_z = np.array([t[0][2] for t in chunks[("/world/objects/box", False)]["Transform3D:translation"]])
     assert abs(box_z.max() - trajectory_z.max()) < 1e-6
 
 
