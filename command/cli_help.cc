@@ -14,6 +14,9 @@ pusher on a slide joint at full throttle, and a seeded sideways shove on the
 box halfway through. Writes metrics.json and trajectory.csv into --out.
 
 options:
+  --chapter         the book's run as closely as this build allows: the shove
+                    drawn as the chapter draws it (--rng numpy: +9.8 N for
+                    seed 0, as the book prints)
   --seed N          seeds the shove direction and strength (0 .. 2^64-1; default 0)
   --rng NAME        the generator that draws the shove: mt19937_64 (default,
                     std::mt19937_64) or numpy (the chapter's

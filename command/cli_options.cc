@@ -194,6 +194,11 @@ Options parse(int argc, const char* const* argv) {
       const std::optional<ShoveRng> rng = parse_rng(v);
       if (!rng) throw UsageError("--rng must be mt19937_64 or numpy, got " + quoted(v));
       opts.run.rng = *rng;
+      opts.rng_given = true;
+    } else if (arg == "--chapter") {
+      run_only();
+      no_value();
+      opts.chapter = true;
     } else if (arg == "--steps") {
       run_only();
       opts.run.steps = static_cast<std::int64_t>(parse_u64(arg, value(), 1, static_cast<std::uint64_t>(kMaxSteps)));
@@ -256,6 +261,13 @@ Options parse(int argc, const char* const* argv) {
     } else {
       throw UsageError("unexpected argument " + quoted(arg) + " (see --help)");
     }
+  }
+  if (opts.chapter) {  // the chapter draws its shove with numpy's default_rng
+    if (opts.rng_given && opts.run.rng != ShoveRng::kNumpy) {
+      throw UsageError("--chapter draws the shove as the chapter does (--rng numpy); it cannot be combined with --rng " +
+                       std::string(rng_name(opts.run.rng)));
+    }
+    opts.run.rng = ShoveRng::kNumpy;
   }
   if (sweeping && opts.is_scenario()) {
     // A scenario sweep: its span and grid depend on the scenario and its

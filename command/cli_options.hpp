@@ -37,6 +37,8 @@ struct Options {
   std::vector<std::pair<std::string, double>> ctrls;  // --ctrl ACTUATOR=VALUE, in order
   bool timestep_given = false;  // --timestep was given (else the scene's or scenario's own)
   bool steps_given = false;     // --steps or --smoke was given (else the scenario's length)
+  bool rng_given = false;       // --rng was given
+  bool chapter = false;         // --chapter: the book's run as closely as this build allows
   bool rerun = true;       // accepted for the chapter's command lines; sim_loop records nothing
   bool help = false;
   bool version = false;

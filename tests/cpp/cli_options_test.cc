@@ -44,6 +44,18 @@ TEST(CliOptions, RngPicksTheShovesGenerator) {
   EXPECT_EQ(parse({"--rng", "numpy", "--rng", "mt19937_64"}).run.rng, simloop::ShoveRng::kMt19937_64);
 }
 
+TEST(CliOptions, ChapterDrawsTheShoveAsTheChapterDoes) {
+  // The book's seed 0 shove is +9.8 N: numpy's default_rng, not the default generator.
+  const simloop::cli::Options o = parse({"--chapter"});
+  EXPECT_EQ(o.run.rng, simloop::ShoveRng::kNumpy);
+  EXPECT_NEAR(simloop::draw_shove(o.run.seed, o.run.num_steps(), o.run.rng).force_y(), 9.8, 0.05);
+  EXPECT_EQ(parse({"--rng", "numpy", "--chapter"}).run.rng, simloop::ShoveRng::kNumpy);
+  EXPECT_EQ(usage_error({"--chapter", "--rng", "mt19937_64"}),
+            "--chapter draws the shove as the chapter does (--rng numpy); it cannot be combined with --rng mt19937_64");
+  EXPECT_EQ(usage_error({"--chapter=yes"}), "--chapter takes no value, got 'yes'");
+  EXPECT_EQ(usage_error({"sweep", "--chapter"}), "--chapter is not a sweep option (see sweep --help)");
+}
+
 TEST(CliOptions, ParsesEveryFlagInBothSpellings) {
   const auto o = parse({"--seed", "18446744073709551615", "--steps=10", "--timestep", "0.05", "--smoke",
                         "--out=o", "--no-perturb", "--no-rerun", "--record-every", "5", "--model", "m.xml"});

@@ -84,6 +84,22 @@ def test_both_commands_say_which_generator_drew_the_shove(tmp_path, python):
 
 
 @pytest.mark.parametrize("python", [True, False])
+def test_chapter_is_the_books_run_the_numpy_shove_and_the_same_bytes(tmp_path, python):
+    """--chapter, named in the README's first screen: the book's +9.8 N, and
+    exactly the files --rng numpy writes."""
+    chapter = run_command(["--chapter", "--no-rerun", "--out", "c"], tmp_path, python=python)
+    numpy_run = run_command(["--rng", "numpy", "--no-rerun", "--out", "n"], tmp_path, python=python)
+    assert chapter.returncode == 0 and numpy_run.returncode == 0, chapter.stderr + numpy_run.stderr
+    assert "shove: +9.8 N in y for 50 steps" in chapter.stdout
+    for name in ("metrics.json", "trajectory.csv"):
+        assert (tmp_path / "c" / name).read_bytes() == (tmp_path / "n" / name).read_bytes(), name
+    refused = run_command(["--chapter", "--rng", "mt19937_64", "--out", "o"], tmp_path, python=python)
+    assert refused.returncode == 2 and refused.stderr.count("\n") == 1, refused.stderr
+    assert "--chapter draws the shove as the chapter does (--rng numpy)" in refused.stderr
+    assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("python", [True, False])
 def test_a_bad_generator_is_refused_by_name(tmp_path, python):
     proc = run_command(["--rng", "pcg64", "--out", "o"], tmp_path, python=python)
     assert proc.returncode == 2
