@@ -3,6 +3,8 @@
 # sudo when not root), then builds the C++ tree. With --python, also makes a
 # virtual environment and installs the package into it (pip install
 # ".[test]": scikit-build-core builds the module from the same CMake tree).
+# With --command, builds only the command sim_loop (and the library it
+# needs): the first run, without the tests and benchmarks.
 # Called by scripts/run.sh and scripts/test.sh; safe to rerun.
 #
 # Which MuJoCo: SIMLOOP_MUJOCO=system (the default) builds on Debian's
@@ -11,8 +13,11 @@
 # into build-pypi/ and .venv-pypi, which then holds that mujoco too.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
-with_python=0
-[[ ${1:-} == --python ]] && with_python=1
+with_python=0 targets=()
+case ${1:-} in
+  --python) with_python=1 ;;
+  --command) targets=(--target sim_loop) ;;
+esac
 
 python=${PYTHON:-python3}
 mujoco=${SIMLOOP_MUJOCO:-system}
@@ -72,7 +77,7 @@ if [[ $mujoco == pypi ]]; then
   cmake_args=(-DSIMLOOP_MUJOCO=pypi "-DSIMLOOP_MUJOCO_PYTHON=$PWD/$venv/bin/python")
 fi
 cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release "${cmake_args[@]}" >/dev/null
-cmake --build "$build" -j "$(nproc)"
+cmake --build "$build" -j "$(nproc)" "${targets[@]}"
 
 if ((with_python)); then
   [[ -x $venv/bin/python ]] || "$python" -m venv "$venv"
