@@ -1,5 +1,5 @@
 // --plot: sim_loop hands the chart to the Python package in a child process,
-// and reports its failure or a stop in one line.
+// and reports its failure (cli::Failure) or a stop (Interrupted) in one line.
 #include <fcntl.h>
 #include <poll.h>
 #include <signal.h>
@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <string>
 
+#include "command.hpp"
 #include "sim_loop.hpp"
 
 extern char** environ;
@@ -23,7 +24,7 @@ namespace sim_loop {
 // --plot: the chart is drawn by the Python package (matplotlib), which reads
 // the CSV just written. The interpreter: $SIMLOOP_PYTHON if set, else the one
 // CMake recorded (the project's .venv, which scripts/test.sh makes).
-int plot_with_python(const std::filesystem::path& out, const char* what) {
+std::filesystem::path plot_with_python(const std::filesystem::path& out, const char* what) {
   const char* env = std::getenv("SIMLOOP_PYTHON");
   const std::string python = env && *env ? env : SIMLOOP_DEFAULT_PYTHON;
   const std::string out_text = out.string();
@@ -32,7 +33,7 @@ int plot_with_python(const std::filesystem::path& out, const char* what) {
   // line (its last line, a traceback's verdict), not as a traceback and ours.
   int err_pipe[2];
   if (::pipe2(err_pipe, O_CLOEXEC) != 0) {
-    return fail(kExitRunFailed, "--plot: cannot start " + python + " (" + std::strerror(errno) + ")");
+    throw simloop::cli::Failure(simloop::cli::kExitRunFailed, "--plot: cannot start " + python + " (" + std::strerror(errno) + ")");
   }
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
@@ -51,7 +52,7 @@ int plot_with_python(const std::filesystem::path& out, const char* what) {
   ::close(err_pipe[1]);
   if (spawned != 0) {
     ::close(err_pipe[0]);
-    return fail(kExitRunFailed, "--plot: cannot start " + python + " (scripts/test.sh installs the simloop package "
+    throw simloop::cli::Failure(simloop::cli::kExitRunFailed, "--plot: cannot start " + python + " (scripts/test.sh installs the simloop package "
                                 "into the project's .venv; or set SIMLOOP_PYTHON to a Python that has it)");
   }
   // Read its stderr until it exits (not until the pipe's end: something it
@@ -91,12 +92,12 @@ int plot_with_python(const std::filesystem::path& out, const char* what) {
       last = err_text.substr(begin, end - begin + 1);
     }
     if (last.rfind("sim-loop: ", 0) == 0) last.erase(0, 10);
-    return fail(kExitRunFailed, "--plot: " + python + " -m simloop plot failed" +
+    throw simloop::cli::Failure(simloop::cli::kExitRunFailed, "--plot: " + python + " -m simloop plot failed" +
                                     (last.empty() ? std::string() : ": " + last) +
                                     " (the outputs above were written; the plot needs the simloop package and "
                                     "matplotlib; scripts/test.sh installs both into the project's .venv)");
   }
-  return 0;
+  return out / (std::string(what) + ".png");
 }
 
 }  // namespace sim_loop

@@ -107,21 +107,6 @@ int fail(int code, const std::string& message) {
   return code;
 }
 
-// Peak resident memory of this process in MiB (VmHWM), or -1 if unknown.
-// Read from /proc rather than getrusage: ru_maxrss also counts the memory of
-// the process we were forked from, before our exec.
-double peak_memory_mib() {
-  std::FILE* status = std::fopen("/proc/self/status", "r");
-  if (status == nullptr) return -1.0;
-  char line[256];
-  double kib = -1.0;
-  while (std::fgets(line, sizeof line, status) != nullptr) {
-    if (std::sscanf(line, "VmHWM: %lf kB", &kib) == 1) break;
-  }
-  std::fclose(status);
-  return kib < 0 ? -1.0 : kib / 1024.0;
-}
-
 // The line and exit code for a stop on a terminating signal.
 int interrupted() {
   const int sig = g_signal != 0 ? g_signal : SIGINT;

@@ -17,12 +17,13 @@
 #include <filesystem>
 #include <string>
 
+#include "command.hpp"
 #include "simloop/control.hpp"
 
 namespace sim_loop {
 
-inline constexpr int kExitRunFailed = 1;
-inline constexpr int kExitUsage = 2;
+using simloop::cli::kExitRunFailed;
+using simloop::cli::kExitUsage;
 // A terminating signal (SIGINT, SIGTERM, SIGHUP, SIGQUIT, SIGPIPE, ...:
 // simloop::kTerminatingSignals) stops the work: exit 128 + the signal's
 // number, as a shell reports a process the signal ended (130 for Ctrl-C, 143
@@ -109,11 +110,11 @@ void install_signal_handlers();
 bool keep_standard_streams_open();
 int finish_stdout(int code);
 int fail(int code, const std::string& message);
-double peak_memory_mib();
 int interrupted();
 void check_stop();
 
-// plot.cc: --plot, drawn by the Python package.
-int plot_with_python(const std::filesystem::path& out, const char* what);
+// plot.cc: --plot, drawn by the Python package: the PNG's path, or
+// cli::Failure naming what went wrong.
+std::filesystem::path plot_with_python(const std::filesystem::path& out, const char* what);
 
 }  // namespace sim_loop

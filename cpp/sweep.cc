@@ -386,7 +386,7 @@ ScenarioSweepResult sweep_scenario(const Model& scene, const Scenario& scenario,
   return result;
 }
 
-std::string scenario_sweep_csv(const ScenarioSweepResult& result) {
+std::string sweep_csv(const ScenarioSweepResult& result) {
   std::string out = "timestep,steps,mujoco_warnings,diverged,peak_speed";
   for (const std::string& b : result.bodies) out += "," + b + "_final_x," + b + "_final_y," + b + "_final_z," + b + "_offset";
   out += ",max_offset,tolerance,blew_up\n";
@@ -410,7 +410,7 @@ std::string scenario_sweep_csv(const ScenarioSweepResult& result) {
   return out;
 }
 
-std::string scenario_sweep_summary(const ScenarioSweepResult& result) {
+std::string sweep_summary(const ScenarioSweepResult& result) {
   char line[512];
   std::string out;
   std::snprintf(line, sizeof line, "swept scenario %s over %zu timesteps, %s s of sim time each\n",

@@ -1,80 +1,203 @@
-// simloop._core's command line: python -m simloop parses its flags with
-// sim_loop's own parser (command/cli_options) and reuses its checks.
+// simloop._core's command: python -m simloop runs sim_loop's own
+// orchestration (command/command.cc) with a Python host: its report through
+// sys.stdout, its progress bar, its recording and its plot (simloop.__main__).
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
 #include <filesystem>
+#include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "bindings_common.hpp"
 #include "cli_options.hpp"
+#include "command.hpp"
 #include "simloop/model.hpp"
-#include "simloop/output.hpp"
+#include "simloop/piped_file.hpp"
 #include "simloop/scenario.hpp"
 
 namespace simloop_py {
+namespace {
 
 using namespace pybind11::literals;
+namespace cli = simloop::cli;
+
+// Arguments as the shell passed them: a str encoded back to its bytes (as
+// os.fsencode does; sys.argv carries undecodable bytes as surrogates), or bytes.
+std::vector<std::string> argument_bytes(const std::vector<py::object>& args) {
+  std::vector<std::string> bytes;
+  for (const py::object& a : args) {
+    PyObject* encoded = PyUnicode_Check(a.ptr()) ? PyUnicode_EncodeFSDefault(a.ptr()) : nullptr;
+    if (PyUnicode_Check(a.ptr()) && !encoded) throw py::error_already_set();
+    const py::object raw = encoded ? py::reinterpret_steal<py::object>(encoded) : a;
+    if (!PyBytes_Check(raw.ptr())) throw py::type_error("command line arguments must be str or bytes");
+    bytes.emplace_back(PyBytes_AS_STRING(raw.ptr()), static_cast<size_t>(PyBytes_GET_SIZE(raw.ptr())));
+  }
+  return bytes;
+}
+
+// Python text as the bytes it stands for (os.fsencode: a path's undecodable
+// bytes come back as they were).
+std::string fs_bytes(const py::handle& text) {
+  return py::module_::import("os").attr("fsencode")(py::str(text)).cast<std::string>();
+}
+
+// The recording a Python host made: its rows go to recording.columns/rows,
+// finish(result) to recording.finish, its files are recording.files.
+class PyRecording final : public cli::Recording {
+ public:
+  PyRecording(py::object recording, std::string line)
+      : recording_(recording), rows_(std::move(recording)), line_(std::move(line)) {}
+  ~PyRecording() override {
+    py::gil_scoped_acquire gil;
+    try {
+      recording_.attr("close")();  // abandons the file unless it was finished
+    } catch (py::error_already_set&) {  // a destructor cannot raise; the run's own error is what matters
+    }
+    recording_ = py::object();
+  }
+  simloop::RowSink& rows() override { return rows_; }
+  std::vector<simloop::PendingFile*> files() override {
+    py::gil_scoped_acquire gil;
+    std::vector<simloop::PendingFile*> files;
+    for (const py::handle f : recording_.attr("files")) files.push_back(&f.cast<simloop::PipedFile*>()->pending());
+    return files;
+  }
+  void finish(const simloop::RunResult& result) override { rows_.finish(result); }
+  void finish(const simloop::RunRecord& result) override { rows_.finish(result); }
+  [[nodiscard]] std::string line() const override { return line_; }
+  void raise_if_failed() { rows_.raise_if_failed(); }
+
+ private:
+  py::object recording_;
+  RowsToPython rows_;
+  std::string line_;
+};
+
+// The host: simloop.__main__._Host's methods. What Python raises in the
+// recording, the progress or the plot becomes the command's one line
+// (host.Failure with its exit code; OSError and ValueError, exit 1);
+// anything else (KeyboardInterrupt, a lost report) passes through as itself.
+class PyHost final : public cli::Host {
+ public:
+  explicit PyHost(py::object host) : host_(std::move(host)) {}
+
+  [[nodiscard]] std::string help(bool sweep) const override { return host_.attr("help")(sweep).cast<std::string>(); }
+  [[nodiscard]] std::string version() const override { return host_.attr("version")().cast<std::string>(); }
+  void print(std::string_view text) override { host_.attr("print")(fs_str(std::string(text))); }
+  void flush() override { host_.attr("flush")(); }
+  int fail(int code, const std::string& line) override { return host_.attr("fail")(code, fs_str(line)).cast<int>(); }
+  void work(const char* label, const std::function<void(simloop::RunControl*)>& work) override {
+    converting([&] {
+      py::object bar = host_.attr("progress")(label);
+      Interruptible run(bar.attr("__enter__")());
+      try {
+        run.run([&](simloop::RunControl* control) {
+          work(control);
+          return 0;
+        });
+        run.finish();
+      } catch (const RowsToPython::Failed&) {
+        bar.attr("__exit__")(py::none(), py::none(), py::none());
+        if (recording_) recording_->raise_if_failed();
+        throw;
+      } catch (...) {
+        bar.attr("__exit__")(py::none(), py::none(), py::none());
+        throw;
+      }
+      bar.attr("__exit__")(py::none(), py::none(), py::none());
+    });
+  }
+  void outputs_written() override { host_.attr("outputs_written")(); }
+  std::unique_ptr<cli::Recording> recording(const cli::Options& opts, const simloop::Model& model,
+                                            const simloop::Scenario* scenario) override {
+    std::unique_ptr<PyRecording> made;
+    converting([&] {
+      const py::object made_here = host_.attr("recording")(opts, model, scenario ? py::cast(*scenario) : py::none());
+      if (made_here.is_none()) return;
+      const auto [recording, line] = made_here.cast<std::pair<py::object, py::object>>();
+      made = std::make_unique<PyRecording>(recording, fs_bytes(line));
+    });
+    recording_ = made.get();
+    return made;
+  }
+  std::filesystem::path plot(const std::filesystem::path& out, const char* what) override {
+    std::filesystem::path png;
+    converting([&] { png = host_.attr("plot")(fs_str(out.string()), what).cast<std::filesystem::path>(); });
+    return png;
+  }
+  int interrupted() override {
+    PyErr_SetNone(PyExc_KeyboardInterrupt);
+    throw py::error_already_set();
+  }
+  [[nodiscard]] bool passes_through(const std::exception_ptr& error) const override {
+    try {
+      std::rethrow_exception(error);
+    } catch (const py::error_already_set&) {
+      return true;
+    } catch (...) {
+      return false;
+    }
+  }
+
+ private:
+  template <class Call>
+  void converting(Call&& call) {
+    try {
+      call();
+    } catch (py::error_already_set& e) {
+      if (e.matches(host_.attr("Failure"))) {
+        throw cli::Failure(e.value().attr("code").cast<int>(), fs_bytes(e.value()));
+      }
+      if (e.matches(PyExc_OSError) || e.matches(PyExc_ValueError)) {
+        throw cli::Failure(cli::kExitRunFailed, fs_bytes(e.value()));
+      }
+      if (e.matches(PyExc_MemoryError)) throw std::bad_alloc();
+      throw;
+    }
+  }
+
+  py::object host_;
+  PyRecording* recording_ = nullptr;  // the run's, while it lives
+};
+
+}  // namespace
 
 void bind_command(py::module_& m) {
   // The command line, parsed by the same code as sim_loop's.
-  py::class_<simloop::cli::Options>(m, "CommandLine")
-      .def_property_readonly("command", [](const simloop::cli::Options& o) {
-        return o.command == simloop::cli::Command::kSweep ? "sweep" : "run";
-      })
-      .def_readonly("sweep_timesteps", &simloop::cli::Options::sweep_timesteps)
-      .def_readonly("sweep_duration", &simloop::cli::Options::sweep_duration)
-      .def_readonly("threads", &simloop::cli::Options::threads)
-      .def_readonly("plot", &simloop::cli::Options::plot)
-      .def_readonly("run", &simloop::cli::Options::run)
+  // The parsed command line, as the host's recording reads it.
+  py::class_<cli::Options>(m, "CommandLine")
+      .def_readonly("sweep_timesteps", &cli::Options::sweep_timesteps)
+      .def_readonly("run", &cli::Options::run)
       // Paths as Python spells file names: undecodable bytes as surrogates.
-      .def_property_readonly("out", [](const simloop::cli::Options& o) { return fs_str(o.out.native()); })
-      .def_property_readonly("model_path", [](const simloop::cli::Options& o) { return fs_str(o.model_path); })
-      .def_readonly("rerun", &simloop::cli::Options::rerun)
-      .def_property_readonly("is_scenario", &simloop::cli::Options::is_scenario)
-      .def_property_readonly("scenario_path", [](const simloop::cli::Options& o) { return fs_str(o.scenario_path); })
-      .def_readonly("help", &simloop::cli::Options::help)
-      .def_readonly("version", &simloop::cli::Options::version);
+      .def_property_readonly("out", [](const cli::Options& o) { return fs_str(o.out.native()); })
+      .def_property_readonly("model_path", [](const cli::Options& o) { return fs_str(o.model_path); })
+      .def_property_readonly("scenario_path", [](const cli::Options& o) { return fs_str(o.scenario_path); });
   // args: str (sys.argv's, encoded back to the bytes the shell passed, as
   // os.fsencode does) or bytes.
   m.def("parse_command_line", [](const std::vector<py::object>& args) {
-    std::vector<std::string> bytes;
-    for (const py::object& a : args) {
-      PyObject* encoded = PyUnicode_Check(a.ptr()) ? PyUnicode_EncodeFSDefault(a.ptr()) : nullptr;
-      if (PyUnicode_Check(a.ptr()) && !encoded) throw py::error_already_set();
-      const py::object raw = encoded ? py::reinterpret_steal<py::object>(encoded) : a;
-      if (!PyBytes_Check(raw.ptr())) throw py::type_error("command line arguments must be str or bytes");
-      bytes.emplace_back(PyBytes_AS_STRING(raw.ptr()), static_cast<size_t>(PyBytes_GET_SIZE(raw.ptr())));
-    }
+    const std::vector<std::string> bytes = argument_bytes(args);
     std::vector<const char*> argv = {"simloop"};
     for (const std::string& a : bytes) argv.push_back(a.c_str());
     try {
-      return simloop::cli::parse(static_cast<int>(argv.size()), argv.data());
-    } catch (const simloop::cli::UsageError& e) {
+      return cli::parse(static_cast<int>(argv.size()), argv.data());
+    } catch (const cli::UsageError& e) {
       set_error_fs(PyExc_ValueError, e.what());
       throw py::error_already_set();
     }
   });
+  m.def(
+      "run_command",
+      [](const std::vector<py::object>& args, py::object host) {
+        PyHost python_host(std::move(host));
+        return cli::run_command(argument_bytes(args), python_host);
+      },
+      "args"_a, "host"_a,
+      "sim_loop's whole command with `host` (simloop.__main__'s) doing the process's part: returns the exit code.");
   m.def("help_text", &simloop::cli::help_text, "program"_a, "recording"_a);
   m.def("sweep_help_text", &simloop::cli::sweep_help_text, "program"_a);
-  m.def("prepare_output_dir", &simloop::prepare_output_dir, "dir"_a);
-  m.def("write_file_atomically", [](const std::filesystem::path& path, const std::string& contents) {
-    simloop::write_file_atomically(path, contents);
-  }, "path"_a, "contents"_a);
-  m.def("scenario_from_flags", &simloop::cli::scenario_from_flags, "options"_a, "scene"_a);
-  m.def(
-      "check_run_inputs",
-      [](simloop::cli::Options& opts, const simloop::Model& scene, const simloop::Scenario* scenario) {
-        try {
-          simloop::cli::check_run_inputs(opts, scene, scenario);
-        } catch (const simloop::cli::UsageError& e) {
-          throw py::value_error(e.what());
-        }
-      },
-      "options"_a, "scene"_a, "scenario"_a = nullptr);
-  m.def("scenario_config_from_flags", &simloop::cli::scenario_config, "options"_a);
 }
 
 }  // namespace simloop_py

@@ -15,7 +15,6 @@
 #include <vector>
 
 #include "bindings_common.hpp"
-#include "cli_options.hpp"
 #include "simloop/model.hpp"
 #include "simloop/output.hpp"
 #include "simloop/output_lock.hpp"
@@ -29,28 +28,6 @@ namespace simloop_py {
 namespace {
 
 using namespace pybind11::literals;
-
-// The chapter's rows to trajectory.csv and, with a drawing, to Python too.
-class Tee final : public simloop::RowSink {
- public:
-  Tee(simloop::RowSink& first, simloop::RowSink* second) : first_(first), second_(second) {}
-  void describe(const std::vector<simloop::Column>& columns) override {
-    first_.describe(columns);
-    if (second_) second_->describe(columns);
-  }
-  void start(int columns, std::int64_t rows) override {
-    first_.start(columns, rows);
-    if (second_) second_->start(columns, rows);
-  }
-  void write(const double* rows, std::int64_t count) override {
-    first_.write(rows, count);
-    if (second_) second_->write(rows, count);
-  }
-
- private:
-  simloop::RowSink& first_;
-  simloop::RowSink* second_;
-};
 
 // The finished files to put in place with the run's two.
 std::vector<simloop::PendingFile*> pending(const std::vector<simloop::PipedFile*>& also) {
@@ -103,17 +80,6 @@ void bind_outputs(py::module_& m) {
   model_class.def_property_readonly(
       "load_warnings", [](const simloop::Model& model) { return model.load_warnings(); },
       "What MuJoCo warned while it parsed and compiled the scene, a line each.");
-  m.def("load_warnings_text", &simloop::load_warnings_text, "model"_a,
-        "The report's lines for Model.load_warnings (both commands print them).");
-
-  m.def(
-      "doing",
-      [](const simloop::cli::Options& opts, const simloop::Model* scene, const simloop::Scenario* scenario) {
-        return simloop::cli::doing(opts, scene, scenario);
-      },
-      "opts"_a, "scene"_a = nullptr, "scenario"_a = nullptr,
-      "What the command was doing, with which inputs, for its error lines (as sim_loop words them).");
-
   py::class_<PyOutputLock>(m, "OutputLock",
                            "One run at a time in an output folder (include/simloop/output_lock.hpp): held until "
                            "release() or the end of a with block; OSError if another process holds it.")
@@ -176,7 +142,7 @@ void bind_outputs(py::module_& m) {
                 simloop::RunControl* control) {
               simloop::OutputWriter writer(out);
               simloop::Data workspace(model);
-              Tee rows(writer.trajectory(), to_python);
+              simloop::TeeRows rows(writer.trajectory(), to_python);
               simloop::RunResult result = simloop::run(model, config, workspace, &rows, control);
               if (to_python) to_python->finish(result);
               const simloop::OutputFiles files = writer.commit(result.metrics, control, extra);

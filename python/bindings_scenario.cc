@@ -211,7 +211,7 @@ void bind_scenario(py::module_& m) {
                ", blew_up=" + (p.blew_up ? "True" : "False") + ")";
       });
   py::class_<simloop::ScenarioSweepResult> sweep_result(m, "ScenarioSweepResult", "A timestep sweep of a scenario.");
-  bind_sweep_outputs<simloop::ScenarioSweepResult, &simloop::scenario_sweep_csv, &simloop::scenario_sweep_summary>(
+  bind_sweep_outputs<simloop::ScenarioSweepResult, &simloop::sweep_csv, &simloop::sweep_summary>(
       sweep_result, "The largest timestep before any blew up (None if even the finest did).");
   sweep_result
       .def_readonly("name", &simloop::ScenarioSweepResult::name)

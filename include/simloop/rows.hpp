@@ -105,6 +105,29 @@ class DiscardRows final : public RowSink {
   void write(const double* /*rows*/, std::int64_t /*count*/) override {}
 };
 
+// Rows to `first` and, if given, to `second` too (a run's trajectory.csv and
+// its recording, say).
+class TeeRows final : public RowSink {
+ public:
+  TeeRows(RowSink& first, RowSink* second) noexcept : first_(first), second_(second) {}
+  void describe(const std::vector<Column>& columns) override {
+    first_.describe(columns);
+    if (second_) second_->describe(columns);
+  }
+  void start(int columns, std::int64_t rows) override {
+    first_.start(columns, rows);
+    if (second_) second_->start(columns, rows);
+  }
+  void write(const double* rows, std::int64_t count) override {
+    first_.write(rows, count);
+    if (second_) second_->write(rows, count);
+  }
+
+ private:
+  RowSink& first_;
+  RowSink* second_;
+};
+
 // How much memory the trajectories runs keep (no RowSink: Python's run,
 // batches) may take: half of the least of the machine's physical memory,
 // the cgroup's memory.max and the process's RLIMIT_AS / RLIMIT_DATA

@@ -159,9 +159,9 @@ struct ScenarioSweepResult {
 // peak_speed, then per recorded body <body>_final_x, _final_y, _final_z and
 // <body>_offset, then max_offset, tolerance (the same on every line) and
 // blew_up (1 or 0).
-[[nodiscard]] std::string scenario_sweep_csv(const ScenarioSweepResult& result);
+[[nodiscard]] std::string sweep_csv(const ScenarioSweepResult& result);
 
 // A table for people, then the edge and the rule.
-[[nodiscard]] std::string scenario_sweep_summary(const ScenarioSweepResult& result);
+[[nodiscard]] std::string sweep_summary(const ScenarioSweepResult& result);
 
 }  // namespace simloop

@@ -1,9 +1,11 @@
 """`python -m simloop` and `sim-loop`: the chapter's command, in Python.
 
-Same flags and defaults as `sim_loop` (the command line is parsed by the same
-C++ code), the same metrics.json and trajectory.csv bytes, the same summary;
+The command is sim_loop's own (command/command.cc, through _core.run_command):
+the same flags, checks, outputs, report and failures. This process adds its
+part as the host (_Host): its report through sys.stdout, its progress bar,
 and, as in the chapter, a rerun recording sim_loop.rrd by default
-(--no-rerun to skip).
+(--no-rerun to skip) and --plot drawn here. `plot` and `batch` are its own
+commands.
 """
 
 from __future__ import annotations
@@ -12,15 +14,13 @@ import os
 import signal
 import sys
 import threading
-import time
 from pathlib import Path
 from types import FrameType
-from typing import Any, Callable, Dict, List, Optional, TextIO, Union
+from typing import Any, Dict, List, Optional, TextIO, Tuple
 
 from . import _core
-from ._checks import load_model
 from ._command import (EXIT_RUN_FAILED, EXIT_SIGINT, EXIT_SIGTERM, EXIT_USAGE, PROGRAM,  # noqa: F401 (the command's)
-                       _catch_terminating_signals, _fail, _peak_memory_mib, _stopped_by)
+                       _catch_terminating_signals, _fail, _stopped_by)
 from .batch_command import batch_command
 from .progress import progress_bar
 
@@ -143,26 +143,6 @@ def _viewer() -> str:
     return relative if os.sep in relative else os.path.join(".", relative)
 
 
-def _sweep(opts: "_core.CommandLine", model: "_core.Model", out: Path,
-           scenario: "Optional[_core.Scenario]" = None) -> None:
-    global _outputs_written
-    result: Union[_core.ScenarioSweepResult, _core.SweepResult]
-    with progress_bar("sweeping") as progress:
-        if scenario is not None:  # sweep --scenario, --body, --ctrl
-            result = _core.sweep_scenario(model, scenario, opts.sweep_timesteps, opts.sweep_duration,
-                                          _core.scenario_config_from_flags(opts), opts.threads, progress)
-        else:
-            result = _core.sweep(model, opts.sweep_timesteps, opts.sweep_duration, opts.threads, progress)
-    csv = result.write(out)
-    _outputs_written = True
-    print(result.summary(), end="")
-    print(f"sweep: {csv}")
-    if opts.plot:  # as for sim_loop sweep: the chart only when asked for
-        from .plots import sweep_png
-
-        print(f"plot: {sweep_png(csv, out / 'sweep.png')}")
-
-
 def main(argv: Optional[List[str]] = None) -> int:
     """The command: SIGTERM, SIGHUP, SIGQUIT (every terminating signal) stop
     it as Ctrl-C does; each ends it with one line and exit 128 + the signal's
@@ -237,7 +217,6 @@ def _run_key(args: List[str], opts: "_core.CommandLine") -> str:
 
 
 def _main(argv: Optional[List[str]]) -> int:
-    started = time.perf_counter()
     args = sys.argv[1:] if argv is None else list(argv)
     # A path from the command line may hold bytes that are not UTF-8 (sys.argv
     # carries them as surrogates): print it back as those bytes, as sim_loop does.
@@ -247,137 +226,80 @@ def _main(argv: Optional[List[str]]) -> int:
         return _plot_command(args[1:])
     if args and args[0] == "batch":
         return batch_command(args[1:])
-    try:
-        opts = _core.parse_command_line(args)
-    except ValueError as e:
-        return _fail(EXIT_USAGE, str(e))
-    if opts.help and opts.command == "sweep":
-        print(_core.sweep_help_text("python -m simloop"), end="")
-        return 0
-    if opts.help:
-        print(_core.help_text(f"python -m simloop (or {PROGRAM})",
-                              "record sim_loop.rrd in --out (the default), or not"), end="")
-        return 0
-    if opts.version:
-        print(f"simloop {_core.__version__} ({_core.MUJOCO_VERSION})")
-        return 0
+    return _core.run_command(args, _Host(args))
 
-    print(f"ch0.1-sim-loop | tier: cpu | {_core.MUJOCO_VERSION} | simloop {_core.__version__}", flush=True)
-    scenario = None
-    if opts.scenario_path:
+
+class _HostFailure(Exception):
+    """A failure of this process's part, as the command's one line."""
+
+    def __init__(self, code: int, line: str) -> None:
+        super().__init__(line)
+        self.code = code
+
+
+class _Host:
+    """What python -m simloop does its own way in sim_loop's command
+    (_core.run_command calls these)."""
+
+    Failure = _HostFailure
+
+    def __init__(self, args: List[str]) -> None:
+        self.args = args
+
+    def help(self, sweep: bool) -> str:
+        if sweep:
+            return _core.sweep_help_text("python -m simloop")
+        return _core.help_text(f"python -m simloop (or {PROGRAM})", "record sim_loop.rrd in --out (the default), or not")
+
+    def version(self) -> str:
+        return f"simloop {_core.__version__} ({_core.MUJOCO_VERSION})"
+
+    def print(self, text: str) -> None:
+        sys.stdout.write(text)
+
+    def flush(self) -> None:
+        sys.stdout.flush()
+
+    def fail(self, code: int, line: str) -> int:
+        return _fail(code, line)
+
+    def progress(self, label: str) -> Any:
+        return progress_bar(label)
+
+    def outputs_written(self) -> None:
+        global _outputs_written
+        _outputs_written = True
+
+    def recording(self, opts: "_core.CommandLine", model: "_core.Model",
+                  scenario: "Optional[_core.Scenario]") -> "Tuple[Any, str]":
+        """The run's recording (rerun imported, and its file begun, before
+        anything is written) and the report's line for it."""
+        rrd = Path(opts.out) / "sim_loop.rrd"
         try:
-            scenario = _core.Scenario.from_file(opts.scenario_path)
-        except (OSError, ValueError) as e:
-            return _fail(EXIT_USAGE, f"--scenario: {e}")
-    try:
-        model = _core.load_scene(scenario) if scenario is not None else load_model(opts.model_path or None)
-    except (OSError, ValueError, _core.MujocoError) as e:
-        theirs = bool(scenario.scene) if scenario is not None else bool(opts.model_path)
-        flag = "--scenario" if scenario is not None else "--model"
-        return _fail(EXIT_USAGE if theirs else EXIT_RUN_FAILED, f"{flag}: {e}")
-    # What MuJoCo said while it loaded the scene, as sim_loop reports it.
-    print(_core.load_warnings_text(model), end="")
-    try:
-        if opts.is_scenario and scenario is None:
-            scenario = _core.scenario_from_flags(opts, model)
-        _core.check_run_inputs(opts, model, scenario)
-    except (OSError, ValueError) as e:
-        return _fail(EXIT_USAGE, str(e))
-    out = Path(opts.out)
-    made = not out.exists()  # a folder this run makes goes again if the run leaves nothing in it
-    try:
-        _core.prepare_output_dir(out)
-        # One run at a time in a folder (the lock sim_loop takes too): held
-        # until the end, released after the folder's removal below.
-        lock = _core.OutputLock(out)
-    except OSError as e:
-        return _fail(EXIT_USAGE, f"--out: {e}")
-    with lock:
-        try:
-            return _run_into(opts, model, scenario, out, started, args)
-        finally:
-            if made:
-                try:
-                    out.rmdir()  # only when empty
-                except OSError:
-                    pass
+            from .chapter_recording import ChapterRecording
+            from .recording import Recording, scenario_recording_id
 
-
-def _run_into(opts: "_core.CommandLine", model: "_core.Model", scenario: "Optional[_core.Scenario]", out: Path,
-              started: float, args: List[str]) -> int:
-    """The run, scenario or sweep into the prepared folder `out`."""
-    if opts.command == "sweep":
-        return _reporting_failures(lambda: _sweep(opts, model, out, scenario), lambda: _core.doing(opts), started,
-                                   lambda e: f"plot: {e} (sweep.csv was written)")  # matplotlib, for sweep.png
-    return _reporting_failures(
-        lambda: _run(opts, model, scenario, out, args),
-        lambda: _core.doing(opts) if scenario is None else _core.doing(opts, model, scenario), started,
-        # rerun for the recording, imported before anything is written; matplotlib for --plot, after
-        lambda e: f"{e} (metrics.json and trajectory.csv were written)" if _outputs_written
-        else f"{e} (nothing was written; --no-rerun runs without the recording)")
-
-
-def _reporting_failures(work: Callable[[], None], doing: Callable[[], str], started: float,
-                        import_failed: Callable[[ImportError], str]) -> int:
-    """work(), then the wall-clock line; a failure as one line (doing(): what
-    the run was doing), exit 1."""
-    try:
-        work()
-    except _core.MujocoError as e:
-        return _fail(EXIT_RUN_FAILED, f"MuJoCo error while {doing()}: {e}")
-    except MemoryError:
-        return _fail(EXIT_RUN_FAILED, f"out of memory while {doing()}")
-    except (OSError, ValueError) as e:
-        return _fail(EXIT_RUN_FAILED, str(e))
-    except ImportError as e:
-        return _fail(EXIT_RUN_FAILED, import_failed(e))
-    print(f"wall-clock: {(time.perf_counter() - started) * 1e3:.1f} ms, peak memory: {_peak_memory_mib():.1f} MiB")
-    return 0
-
-
-def _run(opts: "_core.CommandLine", model: "_core.Model", scenario: "Optional[_core.Scenario]", out: Path,
-         args: List[str]) -> None:
-    """The chapter's run, or a scenario's (--scenario, --body, --ctrl):
-    trajectory.csv written as the loop steps (as sim_loop writes it: the same
-    bytes, in bounded memory), metrics.json, the summary, and the recording
-    made from the same run, all put in place together."""
-    global _outputs_written
-    rrd = out / "sim_loop.rrd"
-    recording: Any = None  # a recording.Recording: the chapter's (ChapterRecording) or a scenario's
-    result: Union[_core.RunResult, _core.ScenarioResult]
-    if opts.rerun:  # rerun imported, and the recording's file begun, before anything is written
-        from .chapter_recording import ChapterRecording
-        from .recording import Recording, scenario_recording_id
-
-        if scenario is None:
-            recording = ChapterRecording(opts.run, opts.model_path or None, model, rrd)
-        else:
-            recording = Recording(model, rrd, scenario_recording_id(_run_key(args, opts)))
-    also = recording.files if recording is not None else []
-    try:
-        with progress_bar("running") as progress:
+            recording: Any
             if scenario is None:
-                result, metrics_path, trajectory_path = _core.run_to_files(
-                    model, opts.run, out, drawing=recording, also=also, progress=progress)
-                columns = ""
+                recording = ChapterRecording(opts.run, opts.model_path or None, model, rrd)
             else:
-                result, metrics_path, trajectory_path = _core.run_scenario_to_files(
-                    model, scenario, _core.scenario_config_from_flags(opts), out, drawing=recording, also=also,
-                    progress=progress)
-                columns = f", {len(result.column_names)} columns"
-    finally:
-        if recording is not None:
-            recording.close()
-    _outputs_written = True
-    print(result.summary(), end="")
-    print(f"metrics: {metrics_path}")
-    print(f"trajectory: {trajectory_path} ({result.rows} rows{columns})")
-    if opts.rerun:
-        print(f"recording: {rrd} -- open it with: {_viewer()} {rrd}")
-    if opts.plot and scenario is None:
-        from .plots import trajectory_png
+                recording = Recording(model, rrd, scenario_recording_id(_run_key(self.args, opts)))
+        except ImportError as e:
+            raise _HostFailure(EXIT_RUN_FAILED, f"{e} (nothing was written; --no-rerun runs without the recording)")
+        return recording, f"recording: {rrd} -- open it with: {_viewer()} {rrd}"
 
-        print(f"plot: {trajectory_png(trajectory_path, out / 'trajectory.png')}")
+    def plot(self, out: str, what: str) -> str:
+        """--plot: out/<what>.png drawn here, from the CSV just written."""
+        folder = Path(out)
+        try:
+            from .plots import sweep_png, trajectory_png
+
+            if what == "sweep":
+                return str(sweep_png(folder / "sweep.csv", folder / "sweep.png"))
+            return str(trajectory_png(folder / "trajectory.csv", folder / "trajectory.png"))
+        except ImportError as e:  # matplotlib
+            written = "sweep.csv was written" if what == "sweep" else "metrics.json and trajectory.csv were written"
+            raise _HostFailure(EXIT_RUN_FAILED, f"{'plot: ' if what == 'sweep' else ''}{e} ({written})")
 
 
 if __name__ == "__main__":

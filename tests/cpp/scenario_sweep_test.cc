@@ -75,7 +75,7 @@ TEST(ScenarioSweep, EachPointIsBitwiseTheRunAloneAndTheFinestIsTheReference) {
   // The same sweep on one thread: the same bits.
   const simloop::ScenarioSweepResult serial =
       simloop::sweep_scenario(scene, scenario, {0.001, 0.002, 0.004, 0.03}, duration, {}, 1);
-  EXPECT_EQ(simloop::scenario_sweep_csv(serial), simloop::scenario_sweep_csv(swept));
+  EXPECT_EQ(simloop::sweep_csv(serial), simloop::sweep_csv(swept));
 }
 
 TEST(ScenarioSweep, BlowsUpOnWarningsOrOnDistanceAndNamesTheEdge) {
@@ -105,9 +105,9 @@ TEST(ScenarioSweep, BlowsUpOnWarningsOrOnDistanceAndNamesTheEdge) {
   EXPECT_GT(far.points[1].max_offset, far.tolerance);
   EXPECT_TRUE(far.points[1].blew_up);
   EXPECT_EQ(far.edge_index, 0);
-  const std::string summary = simloop::scenario_sweep_summary(far);
+  const std::string summary = simloop::sweep_summary(far);
   EXPECT_NE(summary.find("largest timestep before any blew up: 0.0005 s"), std::string::npos) << summary;
-  const std::string csv = simloop::scenario_sweep_csv(far);
+  const std::string csv = simloop::sweep_csv(far);
   EXPECT_EQ(csv.substr(0, csv.find('\n')),
             "timestep,steps,mujoco_warnings,diverged,peak_speed,tblock_final_x,tblock_final_y,tblock_final_z,"
             "tblock_offset,pusher_final_x,pusher_final_y,pusher_final_z,pusher_offset,max_offset,tolerance,blew_up");

@@ -34,7 +34,8 @@ def test_ctrl_c_is_one_line_and_exit_130_and_keeps_the_earlier_outputs(earlier_o
     def interrupted_run(*args, **kwargs):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(simloop._core, "run_to_files", interrupted_run)
+    # The host's progress bar begins the run: a Ctrl-C there stands for one during it.
+    monkeypatch.setattr(command._Host, "progress", interrupted_run)
     try:
         code = command.main(["--seed", "3", "--no-rerun", "--out", str(earlier_outputs)])
     except KeyboardInterrupt:
@@ -46,12 +47,13 @@ def test_ctrl_c_is_one_line_and_exit_130_and_keeps_the_earlier_outputs(earlier_o
 
 
 # The long call a signal interrupts, stood in for by a sleep (which Python
-# interrupts to run its signal handlers): what is tested is the command's
-# handling, not how promptly the bindings notice a signal.
+# interrupts to run its signal handlers) where the host's progress bar begins
+# the run: what is tested is the command's handling, not how promptly the
+# bindings notice a signal.
 SLEEPING_COMMAND = textwrap.dedent("""
     import sys, time
-    import simloop._core, simloop.__main__
-    simloop._core.run_to_files = lambda *args, **kwargs: time.sleep(60)
+    import simloop.__main__
+    simloop.__main__._Host.progress = lambda *args, **kwargs: time.sleep(60)
     sys.exit(simloop.__main__.main(sys.argv[1:]))
 """)
 
