@@ -13,14 +13,17 @@ its scene drawn like any other. What it adds:
   pusher's (whichever body actuator 0 drives) its home pose moved by pusher_x
   along its slide axis. Only these two bodies are drawn: a --model scene's
   other moving bodies are not in the trajectory.
-- world/objects/box/shove: an Arrows3D, the shove scaled by 0.02 while it acts
-  and zero-length otherwise. A child of the box, so drawn in the box's frame:
+- world/objects/box/shove: an Arrows3D (amber, 8 mm thick), the shove scaled
+  by 0.02 while it acts and zero-length otherwise. A child of the box, so drawn in the box's frame:
   logged from the box's origin, with the world-frame shove rotated into that
   frame (the chapter passes world coordinates there, which would put the
   arrow at twice the box's position).
 - its series: plots/box_x, box_y, box_z, pusher_x, ncon, plots/box_speed, and
   with the energy audit plots/<column> for each of its columns, in joules
   (not every column: that would more than double the file).
+- the 3D view's camera following the box: it tracks
+  world/objects/box/camera_frame, an invisible box around it (rerun frames a
+  tracked entity by its bounds).
 - its panels, stacked beside the 3D view: box z first, on a fixed 0.04 to
   0.12 m axis widened only if the box leaves it (the chapter's diagnosis for
   Break It), box y, the pusher's and the box's x, the box's speed, the
@@ -41,13 +44,17 @@ from typing import Any, Dict, Mapping, Optional, Sequence, Tuple, Union
 
 from . import _core
 from ._checks import ModelLike, _pusher_scene, load_model
-from .recording import Recording, _layout, _rotate_into_body
+from .recording import Recording, _eye, _layout, _rotate_into_body
 
 # rerun accepts these application ids as they are (no "/" or ".").
 APPLICATION_ID = "simloop_ch0_1_sim_loop"
 # Every chapter recording id lives in this namespace (uuid5 of the run's parameters).
 RECORDING_NAMESPACE = uuid.UUID("5b1e6c2e-9d7a-4f0e-8a43-0c6f3f1d2a10")
 SHOVE_ARROW_SCALE = 0.02
+# The arrow in a colour of its own (not the box's red), thick enough to see.
+SHOVE_ARROW_COLOR = (255, 190, 0)
+SHOVE_ARROW_RADIUS = 0.008  # m
+CAMERA_FRAME = 0.6  # m, the half size of the region around the box the camera keeps in view
 # The chapter's series' labels (the others are labelled by their column).
 CHAPTER_LABELS = {
     "box_x": "box x (m)",
@@ -145,6 +152,18 @@ class ChapterRecording(Recording):
         self._z_range: Optional[Tuple[float, float]] = None  # the box z's, for its plot's axis
         super().__init__(model, target, config_recording_id(config, model_key), APPLICATION_ID,
                          bodies=["box", self._pusher])
+        try:
+            self._rec.log(f"{self._entity('box')}/shove", self._rr.Arrows3D.from_fields(
+                colors=[SHOVE_ARROW_COLOR], radii=[SHOVE_ARROW_RADIUS]), static=True)
+            # What the camera follows: rerun frames a tracked entity by its
+            # bounds, and the box alone (10 cm) would fill the view; this
+            # invisible frame around it keeps the pusher and the floor in view.
+            self._rec.log(f"{self._entity('box')}/camera_frame", self._rr.Boxes3D(
+                half_sizes=[[CAMERA_FRAME, CAMERA_FRAME, CAMERA_FRAME / 2]], colors=[[0, 0, 0, 0]],
+                fill_mode="majorwireframe", radii=[0.0]), static=True)
+        except BaseException:
+            self.close()
+            raise
 
     def columns(self, names: Sequence[str]) -> None:
         if list(names) != self._expected:  # the run and the recording disagree on what a row holds
@@ -207,7 +226,10 @@ class ChapterRecording(Recording):
         ]
         if self._energy:
             plots.append(panel("energy audit (J)", list(_core.ENERGY_COLUMN_NAMES)))
-        return _layout(rrb.Vertical(*plots))
+        # The camera follows the box (its invisible frame: rerun frames what
+        # it tracks by its bounds); in Break It the pusher runs 211 m away.
+        eye = _eye(self._rr, self._low, self._high, tracking=f"{self._entity('box')}/camera_frame")
+        return _layout(rrb.Vertical(*plots), eye)
 
     def _name(self, result: Any) -> str:
         return recording_name(result)

@@ -8,14 +8,19 @@ viewer opens on it) and `step` (a sequence):
 
 - world/static/<geom>: the world body's geoms, where they are. A plane
   (infinite for MuJoCo's collisions) is a thin slab whose top is the plane,
-  of its own size (1 m where that is 0) widened to reach 0.5 m beyond
-  everywhere the bodies went, so it is logged at the end of the run.
+  of the size the scene gives it (widened to reach 0.5 m beyond where the
+  bodies start, if they start off it): the scene's floor, not the run's.
 - world/bodies/<body>: a Transform3D per row for every body that moves; its
   geoms below it, world/bodies/<body>/<geom>, static, with their shape,
   colour and place on the body: boxes, spheres and ellipsoids, capsules,
   cylinders; meshes as their bounding boxes.
 - plots/<column>: trajectory columns as scalars (float64: the values
-  exactly); a scenario's every column but step and time.
+  exactly); a scenario's every column but step and time, in panels by
+  quantity (positions, orientations, velocities, forces, controls, contacts,
+  the rest), each named with its unit.
+
+The 3D view opens framed on where the moving bodies start (the chapter's
+follows its box instead).
 
 Recording is the recorder, as a scenario's run uses it: the command runs the
 scenario once with run_scenario_to_files(..., drawing=Recording(...)), which
@@ -67,7 +72,7 @@ SCENARIO_APPLICATION_ID = "simloop_scenario"
 BLOCK_ROWS = 4096
 POSE = ("_x", "_y", "_z", "_qw", "_qx", "_qy", "_qz")  # after a scenario's columns, per moving body
 PLANE_THICKNESS = 0.01
-PLANE_MARGIN = 0.5  # how far a plane reaches beyond where the bodies went
+PLANE_MARGIN = 0.5  # how far a plane reaches beyond where the bodies start
 
 
 
@@ -114,7 +119,7 @@ def _pose(rr, geom: Mapping[str, Any]):
 def _plane_slab(geom: Mapping[str, Any], low: Any, high: Any) -> Tuple[list, list]:
     """(centre, half sizes), in the plane's frame, of a slab whose top is the
     plane: the plane's own size, widened to reach PLANE_MARGIN beyond the
-    world box [low, high] where the bodies went (None: nowhere finite)."""
+    world box [low, high] where the bodies start (None: nowhere finite)."""
     import numpy as np
 
     hi = np.asarray(geom["half_size"][:2], dtype=float)
@@ -127,13 +132,41 @@ def _plane_slab(geom: Mapping[str, Any], low: Any, high: Any) -> Tuple[list, lis
     return [*((lo + hi) / 2), -PLANE_THICKNESS / 2], [*((hi - lo) / 2), PLANE_THICKNESS / 2]
 
 
-def _layout(plots: Any) -> Any:
-    """The blueprint: the 3D view on the left, `plots` on the right, on the sim_time timeline."""
+def _layout(plots: Any, eye: Any = None) -> Any:
+    """The blueprint: the 3D view on the left (its camera `eye`), `plots` on
+    the right, on the sim_time timeline."""
     import rerun.blueprint as rrb
 
-    return rrb.Blueprint(rrb.Horizontal(rrb.Spatial3DView(name="the scene", origin="/world"), plots,
+    return rrb.Blueprint(rrb.Horizontal(rrb.Spatial3DView(name="the scene", origin="/world", eye_controls=eye), plots,
                                         column_shares=[3, 2]),
                          rrb.TimePanel(timeline="sim_time"), collapse_panels=False)
+
+
+def _eye(rr: Any, low: Any, high: Any, tracking: Optional[str] = None) -> Any:
+    """A camera on the region [low, high] where the moving bodies start, from
+    the front left and above, far enough to see all of it (at least a metre
+    across); following `tracking`'s entity if given."""
+    import numpy as np
+    import rerun.blueprint as rrb
+
+    if low is None:
+        return None
+    centre = (np.asarray(low) + np.asarray(high)) / 2
+    span = max(1.0, float(np.max(np.asarray(high) - np.asarray(low))))
+    position = centre + span * np.array([-0.6, -1.2, 0.7])
+    return rrb.EyeControls3D(look_target=centre.tolist(), position=position.tolist(), tracking_entity=tracking)
+
+
+# A scenario's panels: each column's quantity, by its name and unit, in this order.
+QUANTITIES = [
+    ("positions (m)", lambda name, unit: unit == "m" and not name[-3:] in ("_qw", "_qx", "_qy", "_qz")),
+    ("orientations (quaternion w x y z)", lambda name, unit: name[-3:] in ("_qw", "_qx", "_qy", "_qz")),
+    ("velocities (m/s, rad/s)", lambda name, unit: unit.startswith("m/s")),
+    ("forces (N, N m)", lambda name, unit: unit.startswith("N")),
+    ("controls", lambda name, unit: name.endswith("_ctrl")),
+    ("contacts", lambda name, unit: name == "ncon"),
+    ("the rest", lambda name, unit: True),
+]
 
 
 @contextlib.contextmanager
@@ -245,10 +278,12 @@ class Recording:
         self._series: List[str] = []  # those plotted
         self._pending: list = []
         self._pending_rows = 0
-        self._planes: list = []  # the world's planes: drawn at the end, under everywhere the bodies went
-        self._low: Any = None  # the smallest and largest finite x, y, z of a body so far
+        self._planes: list = []  # the world's planes: drawn once the bodies' start is known
+        self._low: Any = None  # the smallest and largest finite x, y, z of a body at the start
         self._high: Any = None
+        self._units: Dict[str, str] = {}  # column: unit, from the result
         self.colours: Dict[str, list] = {}  # body: its first geom's colour
+        self.geometry: Dict[str, List[str]] = {}  # body: the entities of its drawn geoms
         self.file = RrdFile(rr, application_id, recording_id, Path(os.fspath(path)))
         self._rec: Any = self.file.rec
         try:
@@ -267,6 +302,7 @@ class Recording:
                 if shape is None:
                     continue
                 self.colours.setdefault(geom["body"], _rgba(geom["rgba"]))
+                self.geometry.setdefault(geom["body"], []).append(entity)
                 self._rec.log(entity, _pose(rr, geom), static=True)
                 self._rec.log(entity, shape, static=True)
         except BaseException:
@@ -287,8 +323,9 @@ class Recording:
 
     def finish(self, result: Any) -> None:
         """Sends what is left, the world's planes, the blueprint and the
-        recording's name (which need the whole run), and checks the file."""
+        recording's name, and checks the file."""
         self._send()
+        self._units = dict(getattr(result, "column_units", {}))
         rr = self._rr
         for plane in self._planes:
             centre, half = _plane_slab(plane, self._low, self._high)
@@ -332,15 +369,15 @@ class Recording:
         cols = {name: block[:, c] for c, name in enumerate(self._names)}
         times = [rr.TimeColumn("sim_time", duration=cols["time"]),
                  rr.TimeColumn("step", sequence=cols["step"].astype(np.int64))]
+        starts = []  # where the bodies are in the run's first row
         for body, (position, quat_wxyz) in self._poses(block, cols).items():
-            finite = position[np.all(np.isfinite(position), axis=1)]
-            if len(finite):
-                low, high = finite.min(axis=0), finite.max(axis=0)
-                self._low = low if self._low is None else np.minimum(self._low, low)
-                self._high = high if self._high is None else np.maximum(self._high, high)
+            if self._low is None and len(position) and np.all(np.isfinite(position[0])):
+                starts.append(position[0])
             self._rec.send_columns(self._entity(body), indexes=times,  # rerun's quaternions are x y z w
                                    columns=rr.Transform3D.columns(translation=np.ascontiguousarray(position),
                                                                   quaternion=quat_wxyz[:, [1, 2, 3, 0]]))
+        if starts:
+            self._low, self._high = np.min(starts, axis=0), np.max(starts, axis=0)
         for name in self._series:
             self._send_series(name, times, cols[name])
         self._send_more(times, cols)
@@ -374,9 +411,19 @@ class Recording:
         """Whatever else a block of rows shows (the chapter's shove)."""
 
     def _blueprint(self) -> Any:
+        """The series in panels by quantity; the 3D view on where the bodies start."""
         import rerun.blueprint as rrb
 
-        return _layout(rrb.TimeSeriesView(name="what was recorded", origin="/plots"))
+        panels: Dict[str, List[str]] = {}
+        for name in self._series:
+            unit = self._units.get(name, "")
+            title = next(title for title, holds in QUANTITIES if holds(name, unit))
+            panels.setdefault(title, []).append(name)
+        views = [rrb.TimeSeriesView(name=title, origin="/plots", contents=[f"/plots/{c}" for c in panels[title]],
+                                    plot_legend=rrb.PlotLegend(corner=rrb.Corner2D.LeftTop, visible=True))
+                 for title, _ in QUANTITIES if title in panels]
+        return _layout(rrb.Vertical(*views) if views else rrb.TimeSeriesView(name="what was recorded", origin="/plots"),
+                       _eye(self._rr, self._low, self._high))
 
     def _name(self, result: Any) -> str:
         """A name for people, shown in the viewer's list of recordings."""

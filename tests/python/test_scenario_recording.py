@@ -119,3 +119,22 @@ def test_a_drawing_that_fails_stops_the_run_and_writes_nothing(tmp_path):
     with pytest.raises(RuntimeError, match="the drawing broke"):
         simloop._core.run_scenario_to_files(scenario.model(), scenario._core, config, tmp_path / "o", drawing=Broken())
     assert list((tmp_path / "o").iterdir()) == []  # no outputs, no temporary files
+
+
+def test_a_scenarios_plots_are_grouped_by_quantity_with_units():
+    """One panel per quantity, named with its unit: a pose's quaternion is not
+    plotted with its positions, nor a force with a velocity."""
+    from simloop.recording import QUANTITIES
+
+    result = simloop.run_scenario(simloop.Scenario.from_file(ROOT / "tests/scenes/pusht.toml"), steps=2)
+    panels = {}
+    for name, unit in result.column_units.items():
+        if name not in ("step", "time"):
+            panels.setdefault(next(title for title, holds in QUANTITIES if holds(name, unit)), []).append(name)
+    assert {"tblock_x", "tblock_y", "tblock_z", "pusher_x", "slide_x_pos"} <= set(panels["positions (m)"])
+    assert {"tblock_qw", "tblock_qz"} <= set(panels["orientations (quaternion w x y z)"])
+    assert {"tblock_vx", "tblock_wz", "slide_x_vel"} <= set(panels["velocities (m/s, rad/s)"])
+    assert {"tblock_fx", "tblock_tz", "push_x_force"} <= set(panels["forces (N, N m)"])
+    assert panels["controls"] == ["push_x_ctrl", "push_y_ctrl"]
+    assert panels["contacts"] == ["ncon"]
+    assert not any(name.endswith(("_qw", "_qx", "_qy", "_qz")) for name in panels["positions (m)"])
