@@ -91,6 +91,17 @@ def _fmt(seconds: float) -> str:
     return f"{seconds:g} s"
 
 
+def _python() -> str:
+    """How to run this Python from here, as a hint prints it: the project's
+    .venv/bin/python (relative when below the current folder), else this one."""
+    venv = Path(__file__).resolve().parent.parent / ".venv" / "bin" / "python"
+    python = venv if venv.exists() else Path(sys.executable)
+    try:
+        return str(python.relative_to(Path.cwd()))
+    except ValueError:
+        return str(python)
+
+
 # ---- 1. the timestep edge ---------------------------------------------------
 
 def check_edge(path: Path) -> Verdict:
@@ -104,7 +115,6 @@ def check_edge(path: Path) -> Verdict:
     edge_index = next(i for i, p in enumerate(points) if p.timestep == result.edge)
     edge, first_unstable = result.edge, points[edge_index + 1].timestep
     low, high = edge / 1.5, first_unstable
-    holds = low <= predicted <= high
     report = [f"you predicted {_fmt(predicted)}."]
     # What your own timestep does, by the same criterion and over the same 4 s.
     if predicted >= 2e-5:
@@ -118,12 +128,15 @@ def check_edge(path: Path) -> Verdict:
     else:
         mine = None
         report.append(f"({_fmt(predicted)} is too fine to run here: {4 / predicted:.0f} steps.)")
+    # Right: in the band below the first unstable timestep, and stable itself
+    # (an answer the same output calls unstable is never called right).
+    holds = low <= predicted < high and (mine is None or mine.stable)
     if holds:
         why = ["Right. Below the edge the push lifts the box 2 to 4 mm through the contacts' softness, whatever "
                "the timestep; past it each step extrapolates so far into the contact that the solver's correction "
                "throws the box up, and the contacts do positive work (the 'contacts +work' column) that no force "
                "explains. The chapter's 0.002 s has a factor of 2 to spare."]
-    elif predicted > high:
+    elif predicted >= high or (mine is not None and not mine.stable):
         if mine is not None and mine.stable:
             why = [f"Your {_fmt(predicted)} is stable on its own, but it is past the edge: the edge is the largest "
                    "timestep below which every timestep is stable, and some smaller ones are not."]
@@ -134,13 +147,16 @@ def check_edge(path: Path) -> Verdict:
     else:
         why = [f"Your {_fmt(predicted)} is stable, and so are timesteps well above it: the edge is higher. The "
                "chapter warns against 0.0002 s for the same reason: ten times the steps for nothing."]
-    hint = ["Try a few timesteps before you predict again and watch the box's height:",
-            "  python -m simloop --timestep T --no-perturb --plot    (trajectory.png; stable: z stays under "
-            "0.055 m and ends above 0.049 m)"]
+    python = _python()
+    hint = ["Try a few timesteps before you predict again, each over the question's 4 s, and watch the box's "
+            "height:",
+            f"  {python} -m simloop --timestep T --steps N --no-perturb --plot    (N = 4 s / T: 2000 at 0.002 s; "
+            "trajectory.png; stable: z stays under 0.055 m and ends above 0.049 m)"]
     solution = [result.summary().rstrip("\n"),
                 f"The edge is {_fmt(edge)}; the next timestep, {_fmt(first_unstable)}, is unstable. Accepted: "
-                f"{low:.2g} to {high:g} s. The edge is a band rather than a line: between 0.003 and 0.005 s the "
-                "hop wavers around the 5 mm criterion (`python -m simloop sweep --plot` draws the whole curve)."]
+                f"from {low:.2g} s up to, not including, {high:g} s, if stable itself. The edge is a band rather "
+                "than a line: between 0.003 and 0.005 s the hop wavers around the 5 mm criterion "
+                f"(`{python} -m simloop sweep --plot` draws the whole curve)."]
     return Verdict(holds, report, why, hint, solution)
 
 

@@ -188,3 +188,36 @@ def test_a_fix_that_is_not_quite_right_is_refused(tmp_path):
     assert proc.returncode == 1
     assert "the shove pushed for 60 steps (simloop.run: 50)" in proc.stdout
     assert "Your fix does not hold yet." in proc.stdout
+
+
+def test_exercise_1_never_calls_right_what_the_same_output_calls_unstable(tmp_path):
+    """The first unstable timestep of the sweep (0.005 s on 2.2.2) was accepted
+    while the same output said 'unstable by the criterion'."""
+    import simloop
+
+    result = simloop.sweep(simloop._core.default_sweep_timesteps())
+    index = next(i for i, p in enumerate(result.points) if p.timestep == result.edge)
+    first_unstable = result.points[index + 1].timestep
+    for answer in (first_unstable, result.edge):
+        folder = tmp_path / str(answer)  # its own attempts file
+        folder.mkdir()
+        proc = check(1, f"{answer!r}\n", folder)
+        said_unstable = "unstable by the criterion" in proc.stdout
+        said_right = "It holds." in proc.stdout or "Right." in proc.stdout
+        assert not (said_unstable and said_right), proc.stdout
+        assert said_right == (answer == result.edge), proc.stdout
+
+
+def test_exercise_1s_hint_command_runs_as_printed(tmp_path):
+    """The hint's command: the venv's python, and the question's 4 s (--steps 4 s / T)."""
+    proc = check(1, "0.05\n", tmp_path)
+    line = next(line for line in proc.stdout.splitlines() if "-m simloop --timestep T" in line)
+    command = line.split("    (")[0].split()
+    assert command[0].endswith("python") and "/" in command[0], command
+    timestep = 0.004
+    runnable = [str(ROOT / command[0]) if not command[0].startswith("/") else command[0]] + [
+        {"T": str(timestep), "N": str(round(4 / timestep))}.get(arg, arg) for arg in command[1:] if arg != "--plot"]
+    run = subprocess.run(runnable + ["--no-rerun", "--out", str(tmp_path / "o")], capture_output=True, text=True,
+                         timeout=120, cwd=ROOT)
+    assert run.returncode == 0, run.stderr
+    assert "stepped 1000 steps of 0.004 s -> 4.00 s of sim time" in run.stdout
