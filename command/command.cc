@@ -10,7 +10,6 @@
 #include "simloop/model.hpp"
 #include "simloop/output_lock.hpp"
 #include "simloop/scenario.hpp"
-#include "simloop/scenario_run.hpp"
 #include "simloop/sweep.hpp"
 #include "simloop/version.hpp"
 
@@ -67,34 +66,21 @@ int sweep_into(Host& host, const Options& opts, Sweep&& sweep) {
   return 0;
 }
 
-// A run's outputs: trajectory.csv written as the loop steps (bounded memory
-// however long the run), metrics.json, the recording if any, all put in
-// place together at the end, or (an error, a signal) none of them.
-template <class Result, class Run>
+// A run into --out (run_to_folder: its files and the recording's, if any,
+// put in place together, or none of them), then its report.
+template <class Run>
 int run_into(Host& host, const Options& opts, const Model& model, const Scenario* scenario, Run&& run) {
   std::unique_ptr<Recording> recording;
   if (opts.rerun) recording = host.recording(opts, model, scenario);  // begun before anything is written
-  std::optional<Result> result;
-  OutputFiles files;
-  host.work("running", [&](RunControl* control) {
-    OutputWriter writer(opts.out);
-    TeeRows rows(writer.trajectory(), recording ? &recording->rows() : nullptr);
-    result.emplace(run(writer, rows, recording.get(), control));
-    if (recording) recording->finish(*result);
-    std::vector<PendingFile*> also;
-    if (recording) also = recording->files();
-    if constexpr (std::is_same_v<Result, RunResult>) {
-      files = writer.commit(result->metrics, control, also);
-    } else {
-      files = writer.commit(metrics_json(*result), control, also);
-    }
-  });
+  std::optional<decltype(run(recording.get(), nullptr))> done;
+  host.work("running", [&](RunControl* control) { done.emplace(run(recording.get(), control)); });
   host.outputs_written();
-  host.print(summary_text(*result));
+  const auto& [result, files] = *done;
+  host.print(summary_text(result));
   host.print(line("metrics", files.metrics));
   host.print(line("trajectory", files.trajectory,
-                  " (" + std::to_string(result->rows) + " rows" +
-                      (scenario ? ", " + std::to_string(result->columns.size()) + " columns" : std::string()) + ")"));
+                  " (" + std::to_string(result.rows) + " rows" +
+                      (scenario ? ", " + std::to_string(result.columns.size()) + " columns" : std::string()) + ")"));
   if (opts.rerun) {
     host.print(recording ? recording->line() + "\n"
                          : std::string("recording: none (sim_loop writes no .rrd; python -m simloop records one)\n"));
@@ -116,20 +102,13 @@ int run_or_sweep(Host& host, const Options& opts, const Model& model, const Scen
     });
   }
   if (scenario) {
-    return run_into<RunRecord>(
-        host, opts, model, scenario,
-        [&](OutputWriter& writer, RowSink& rows, Recording* recording, RunControl* control) {
-          // A recording draws every moving body: the run hands it their poses too.
-          return recording ? run_scenario_drawn(model, *scenario, scenario_config(opts), writer.trajectory(),
-                                                recording->rows(), control)
-                           : run_scenario(model, *scenario, scenario_config(opts), nullptr, &rows, control);
-        });
+    return run_into(host, opts, model, scenario, [&](Recording* recording, RunControl* control) {
+      return run_to_folder(model, *scenario, scenario_config(opts), opts.out, recording, control);
+    });
   }
-  return run_into<RunResult>(host, opts, model, nullptr,
-                             [&](OutputWriter&, RowSink& rows, Recording*, RunControl* control) {
-                               Data workspace(model);
-                               return run(model, opts.run, workspace, &rows, control);
-                             });
+  return run_into(host, opts, model, nullptr, [&](Recording* recording, RunControl* control) {
+    return run_to_folder(model, opts.run, opts.out, recording, control);
+  });
 }
 
 }  // namespace

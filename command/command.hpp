@@ -17,10 +17,7 @@
 
 #include "cli_options.hpp"
 #include "simloop/control.hpp"
-#include "simloop/output.hpp"
-#include "simloop/rows.hpp"
-#include "simloop/run.hpp"
-#include "simloop/run_record.hpp"
+#include "simloop/folder_run.hpp"
 
 namespace simloop::cli {
 
@@ -35,16 +32,10 @@ class Failure : public std::runtime_error {
 };
 
 // A recording made from a run as it streams its files (python -m simloop's
-// rerun recording): the rows go to rows() too; finish(result) is called once
-// the run is done, before its outputs are put in place together with
-// files(). Destroyed unfinished (a failure, a signal), it abandons its file.
-class Recording {
+// rerun recording): a RunDrawing (folder_run.hpp) with the report's line for
+// it. Destroyed unfinished (a failure, a signal), it abandons its file.
+class Recording : public RunDrawing {
  public:
-  virtual ~Recording() = default;
-  [[nodiscard]] virtual RowSink& rows() = 0;
-  [[nodiscard]] virtual std::vector<PendingFile*> files() = 0;
-  virtual void finish(const RunResult& result) = 0;  // the chapter's run
-  virtual void finish(const RunRecord& result) = 0;  // a scenario's
   // The report's line once the outputs are in place.
   [[nodiscard]] virtual std::string line() const = 0;
 };

@@ -1,7 +1,6 @@
-// simloop._core, continued: the commands' outputs. A run written to its
-// folder as it steps (run_to_files, run_scenario_to_files), the folder's
-// lock (OutputLock), the recording's file (PipedFile), and the signals the
-// commands stop on.
+// simloop._core, continued: the commands' outputs. The folder's lock
+// (OutputLock), the recording's file (PipedFile) and its commit, and the
+// signals the commands stop on.
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
@@ -10,8 +9,6 @@
 #include <filesystem>
 #include <optional>
 #include <string>
-#include <tuple>
-#include <utility>
 #include <vector>
 
 #include "bindings_common.hpp"
@@ -19,9 +16,6 @@
 #include "simloop/output.hpp"
 #include "simloop/output_lock.hpp"
 #include "simloop/piped_file.hpp"
-#include "simloop/run.hpp"
-#include "simloop/scenario.hpp"
-#include "simloop/scenario_run.hpp"
 #include "simloop/signals.hpp"
 
 namespace simloop_py {
@@ -37,30 +31,6 @@ std::vector<simloop::PendingFile*> pending(const std::vector<simloop::PipedFile*
     files.push_back(&f->pending());
   }
   return files;
-}
-
-// A run written into an output folder (run_to_files, run_scenario_to_files):
-// `run(to_python, extra, control)` steps it, streaming its rows to the
-// folder's writer and, with a `drawing`, to Python, and commits the files
-// with `also`'s. Interruptible, with failures named by `what`; an exception
-// raised in the drawing reaches Python as itself.
-template <class Run>
-auto run_into_folder(const std::string& what, py::object drawing, const std::vector<simloop::PipedFile*>& also,
-                     py::object progress, Run&& run) {
-  std::optional<RowsToPython> to_python;
-  if (!drawing.is_none()) to_python.emplace(std::move(drawing));
-  const std::vector<simloop::PendingFile*> extra = pending(also);
-  Interruptible work(std::move(progress));
-  try {
-    auto done = work.run([&](simloop::RunControl* control) {
-      return naming_failures(what, [&] { return run(to_python ? &*to_python : nullptr, extra, control); });
-    });
-    work.finish();
-    return done;
-  } catch (const RowsToPython::Failed&) {
-    to_python->raise_if_failed();
-    throw;
-  }
 }
 
 // An OutputLock that Python can release when it chooses (a with block).
@@ -131,54 +101,6 @@ void bind_outputs(py::module_& m) {
         simloop::commit_together(list);
       },
       "files"_a, "Puts finished PipedFiles in place, all or none (commit_together).");
-
-  m.def(
-      "run_to_files",
-      [](const simloop::Model& model, const simloop::RunConfig& config, const std::filesystem::path& out,
-         py::object drawing, const std::vector<simloop::PipedFile*>& also, py::object progress) {
-        return run_into_folder(
-            "run(steps=" + std::to_string(config.num_steps()) + ")", std::move(drawing), also, std::move(progress),
-            [&](RowsToPython* to_python, const std::vector<simloop::PendingFile*>& extra,
-                simloop::RunControl* control) {
-              simloop::OutputWriter writer(out);
-              simloop::Data workspace(model);
-              simloop::TeeRows rows(writer.trajectory(), to_python);
-              simloop::RunResult result = simloop::run(model, config, workspace, &rows, control);
-              if (to_python) to_python->finish(result);
-              const simloop::OutputFiles files = writer.commit(result.metrics, control, extra);
-              return std::make_tuple(std::move(result), files.metrics, files.trajectory);
-            });
-      },
-      "model"_a, "config"_a, "out"_a, "drawing"_a = py::none(), "also"_a = std::vector<simloop::PipedFile*>{},
-      "progress"_a = py::none(),
-      "The chapter's run, writing trajectory.csv as it steps and then metrics.json, with the finished files in "
-      "`also`, all or none; drawing.columns/rows/finish(result) get the rows (sim_loop's run, from Python).");
-
-  m.def(
-      "run_scenario_to_files",
-      [](const simloop::Model& scene, const simloop::Scenario& scenario, const simloop::ScenarioConfig& config,
-         const std::filesystem::path& out, py::object drawing, const std::vector<simloop::PipedFile*>& also,
-         py::object progress) {
-        return run_into_folder(
-            "run_scenario(" + scenario.name + ")", std::move(drawing), also, std::move(progress),
-            [&](RowsToPython* to_python, const std::vector<simloop::PendingFile*>& extra,
-                simloop::RunControl* control) {
-              simloop::OutputWriter writer(out);
-              simloop::RunRecord result =
-                  to_python ? simloop::run_scenario_drawn(scene, scenario, config, writer.trajectory(), *to_python,
-                                                          control)
-                            : simloop::run_scenario(scene, scenario, config, nullptr, &writer.trajectory(), control);
-              if (to_python) to_python->finish(result);
-              const simloop::OutputFiles files =
-                  writer.commit(simloop::metrics_json(result), control, extra);
-              return std::make_tuple(std::move(result), files.metrics, files.trajectory);
-            });
-      },
-      "scene"_a, "scenario"_a, "config"_a, "out"_a, "drawing"_a = py::none(),
-      "also"_a = std::vector<simloop::PipedFile*>{}, "progress"_a = py::none(),
-      "Runs a scenario, writing trajectory.csv as it steps and then metrics.json, with the finished files in "
-      "`also`, all or none; drawing.columns(names) and drawing.rows(array) get the rows and every moving body's "
-      "pose, drawing.finish(result) the result before the files are put in place.");
 }
 
 }  // namespace simloop_py

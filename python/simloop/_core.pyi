@@ -35,21 +35,6 @@ WARNING_NAMES: Final[tuple[str, ...]]
 SCENARIO_SWEEP_TOLERANCE: Final[float]
 # What the bindings read as a float64 array (copied or converted).
 _ArrayLike = ArrayLike
-# run_scenario_to_files's drawing (recording.Recording): the
-# trajectory's column names once, then blocks of rows (each row the columns,
-# then x y z qw qx qy qz per moving body), then the result before the files
-# are put in place.
-class _Drawing(Protocol):
-    def columns(self, names: Sequence[str], /) -> object: ...
-    def rows(self, block: _Float64Array, /) -> object: ...
-    def finish(self, result: ScenarioResult, /) -> object: ...
-
-# run_to_files's drawing (recording.ChapterRecording): blocks of the
-# chapter's rows, then the result before the files are put in place.
-class _ChapterDrawing(Protocol):
-    def rows(self, block: _Float64Array, /) -> object: ...
-    def finish(self, result: RunResult, /) -> object: ...
-
 # A policy: decide(observations) -> controls, called at the control rate.
 _Decide = Callable[..., Any]
 
@@ -315,25 +300,6 @@ def run_scenario_batch(
     progress: _Progress = None,
 ) -> list[ScenarioResult]: ...
 def check_scenario(scene: Model, scenario: Scenario, config: ScenarioConfig) -> None: ...
-# (result, metrics.json's path, trajectory.csv's path); drawing is a callback for the figures.
-def run_scenario_to_files(
-    scene: Model,
-    scenario: Scenario,
-    config: ScenarioConfig,
-    out: _PathLike,
-    drawing: Optional[_Drawing] = None,
-    also: Sequence[PipedFile] = ...,
-    progress: _Progress = None,
-) -> tuple[ScenarioResult, Path, Path]: ...
-# The chapter's run streamed into `out` (as sim_loop writes it), with `also` put in place beside.
-def run_to_files(
-    model: Model,
-    config: RunConfig,
-    out: _PathLike,
-    drawing: Optional[_ChapterDrawing] = None,
-    also: Sequence[PipedFile] = ...,
-    progress: _Progress = None,
-) -> tuple[RunResult, Path, Path]: ...
 def commit_files(files: Sequence[PipedFile]) -> None: ...
 # The signals both commands stop on (include/simloop/signals.hpp).
 TERMINATING_SIGNALS: Final[tuple[int, ...]]

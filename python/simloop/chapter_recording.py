@@ -1,7 +1,7 @@
 """The chapter's run as a rerun recording: the one recorder (recording.py) with
 what the chapter says to look for added on top.
 
-ChapterRecording is the chapter's run (run_to_files) on the same recorder,
+ChapterRecording is the chapter's run on the same recorder,
 its scene drawn like any other. What it adds:
 - the chapter's entity paths, "the same entity paths every chapter uses":
   world/objects/box and world/robot/pusher (a --model scene's pusher under
@@ -139,8 +139,8 @@ def _pusher_body(model: _core.Model) -> Tuple[str, Any]:
 class ChapterRecording(Recording):
     """The chapter's .rrd of one run: the chapter's scene (or a --model scene
     of its layout) on the one recorder, with the chapter's add-ons (see the
-    module's docstring). Pass it as run_to_files's `drawing` and
-    `recording.files` as its `also`. `model_key` identifies the model in the
+    module's docstring), fed by the command's run as it steps and put in
+    place with its outputs. `model_key` identifies the model in the
     recording id (None: the chapter's scene; a path: that file, by its
     bytes); `model` is the scene itself."""
 
@@ -228,7 +228,7 @@ class ChapterRecording(Recording):
             plots.append(panel("energy audit (J)", list(_core.ENERGY_COLUMN_NAMES)))
         # The camera follows the box (its invisible frame: rerun frames what
         # it tracks by its bounds); in Break It the pusher runs 211 m away.
-        eye = _eye(self._rr, self._low, self._high, tracking=f"{self._entity('box')}/camera_frame")
+        eye = _eye(self._low, self._high, tracking=f"{self._entity('box')}/camera_frame")
         return _layout(rrb.Vertical(*plots), eye)
 
     def _name(self, result: Any) -> str:

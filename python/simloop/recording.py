@@ -22,12 +22,12 @@ viewer opens on it) and `step` (a sequence):
 The 3D view opens framed on where the moving bodies start (the chapter's
 follows its box instead).
 
-Recording is the recorder, as a scenario's run uses it: the command runs the
-scenario once with run_scenario_to_files(..., drawing=Recording(...)), which
-writes trajectory.csv as it steps (its columns are the scenario's, recording
-or not) and hands the recording each block of rows followed by every moving
-body's pose (its frame in the world, read where the recorded bodies' poses
-are). The default blueprint opens the 3D view beside one plot of every series.
+Recording is the recorder, as a scenario's run uses it: python -m simloop's
+host (__main__._Host.recording) makes one, and the command's run into --out
+(the library's run_to_folder) writes trajectory.csv as it steps (its columns
+are the scenario's, recording or not) and hands the recording each block of
+rows followed by every moving body's pose (its frame in the world, read where
+the recorded bodies' poses are).
 
 The chapter's run adds its own on top (chapter_recording.ChapterRecording:
 its poses from its trajectory, the shove arrow, its series and panels).
@@ -45,9 +45,9 @@ different bytes.
 
 Rows come in blocks and are sent as columns (rerun's send_columns, one call
 per entity) every BLOCK_ROWS rows, each block written before the next is
-gathered, so memory stays bounded however long the run; the planes, the z
-axis's range and the recording's name, which need the whole run, are logged
-at its end. rerun is imported only here, only when recording; its file sink
+gathered, so memory stays bounded however long the run; the planes, the
+blueprint (with the z axis's range) and the recording's name are logged at
+its end. rerun is imported only here, only when recording; its file sink
 writes into a pipe whose bytes simloop writes to the file and checks
 (RrdFile), so no viewer is spawned, no connection is made, and a full disk is
 an error, not a hang or a truncated file.
@@ -142,7 +142,7 @@ def _layout(plots: Any, eye: Any = None) -> Any:
                          rrb.TimePanel(timeline="sim_time"), collapse_panels=False)
 
 
-def _eye(rr: Any, low: Any, high: Any, tracking: Optional[str] = None) -> Any:
+def _eye(low: Any, high: Any, tracking: Optional[str] = None) -> Any:
     """A camera on the region [low, high] where the moving bodies start, from
     the front left and above, far enough to see all of it (at least a metre
     across); following `tracking`'s entity if given."""
@@ -199,8 +199,8 @@ class RrdFile:
     """A RecordingStream whose file simloop writes. rerun's file sink writes
     to a pipe (_core.PipedFile); a thread of simloop's appends every byte,
     each write checked, to a temporary file beside `target`, which is put in
-    place together with the run's other outputs (pass `piped` to
-    run_to_files's `also`) once finish() has checked it whole. A full disk or
+    place together with the run's other outputs (its `files`) once finish()
+    has checked it whole. A full disk or
     a file-size limit is an OSError naming the file, and rerun itself never
     sees it (the pipe is drained whatever happens), so nothing hangs in
     rerun and nothing half-written is put in place. Waiting for rerun takes
@@ -225,7 +225,7 @@ class RrdFile:
 
     @property
     def files(self) -> list:
-        """What run_to_files's `also` takes: the file, until it is closed."""
+        """The file to put in place with the run's outputs, until it is closed."""
         return [] if self.piped is None else [self.piped]
 
     def flush(self) -> None:
@@ -255,18 +255,17 @@ class RrdFile:
 
 
 class Recording:
-    """The .rrd of one run of `model`'s scene, written as the run goes: pass it
-    as run_scenario_to_files's `drawing` and `recording.files` as its `also`;
-    the run calls columns(names) once, rows(block) per block of rows and
-    finish(result) once it is done, before it puts the outputs in place, all
-    together. close() abandons the file if it was not finished. `path` is
+    """The .rrd of one run of `model`'s scene, written as the run goes: the
+    run calls columns(names) once, rows(block) per block of rows and
+    finish(result) once it is done, before it puts its outputs in place
+    together with `files`. close() abandons the file if it was not finished. `path` is
     where the recording goes; it is written beside it and checked first
     (RrdFile). `bodies`: the moving bodies the rows pose (None: all of them,
-    as run_scenario_to_files gives them).
+    as the command's run gives them).
 
     The hooks below (_entity, _poses, _style, _send_more, _blueprint, _name)
-    are where a kind of run says what its rows hold and where it draws them; chapter_recording.ChapterRecording
-    is the one other."""
+    are where a kind of run says what its rows hold and where it draws them;
+    chapter_recording.ChapterRecording is the one other."""
 
     def __init__(self, model: _core.Model, path: Union[str, "os.PathLike[str]"], recording_id: str,
                  application_id: str = SCENARIO_APPLICATION_ID, bodies: Optional[Sequence[str]] = None) -> None:
@@ -423,7 +422,7 @@ class Recording:
                                     plot_legend=rrb.PlotLegend(corner=rrb.Corner2D.LeftTop, visible=True))
                  for title, _ in QUANTITIES if title in panels]
         return _layout(rrb.Vertical(*views) if views else rrb.TimeSeriesView(name="what was recorded", origin="/plots"),
-                       _eye(self._rr, self._low, self._high))
+                       _eye(self._low, self._high))
 
     def _name(self, result: Any) -> str:
         """A name for people, shown in the viewer's list of recordings."""

@@ -106,18 +106,31 @@ def test_every_moving_body_of_the_walker_is_drawn(tmp_path):
     assert result_model.nq == 11
 
 
-def test_a_drawing_that_fails_stops_the_run_and_writes_nothing(tmp_path):
+def test_a_drawing_that_fails_stops_the_run_and_writes_nothing(tmp_path, capsys):
+    """The command's run into --out with a recording whose rows() raises: the
+    error reaches Python as itself, and nothing is put in place."""
+    from simloop import __main__ as command
+
     class Broken:
+        files: list = []
+
         def columns(self, names):
             pass
 
         def rows(self, block):
             raise RuntimeError("the drawing broke (test)")
 
-    scenario = simloop.Scenario.from_file(SCENES / "pusht.toml")
-    config = simloop._core.ScenarioConfig(0, "mt19937_64", None, None, True, 1)
+        def close(self):
+            pass
+
+    class BrokenRecording(command._Host):
+        def recording(self, opts, model, scenario):
+            return Broken(), "recording: none (test)"
+
+    (tmp_path / "o").mkdir()  # the run's folder: left as it was
+    args = ["--scenario", str(SCENES / "pusht.toml"), "--steps", "50", "--out", str(tmp_path / "o")]
     with pytest.raises(RuntimeError, match="the drawing broke"):
-        simloop._core.run_scenario_to_files(scenario.model(), scenario._core, config, tmp_path / "o", drawing=Broken())
+        simloop._core.run_command(args, BrokenRecording(args))
     assert list((tmp_path / "o").iterdir()) == []  # no outputs, no temporary files
 
 
