@@ -132,6 +132,12 @@ std::vector<double> parse_range(std::string_view flag, std::string_view value) {
 
 }  // namespace
 
+Options parse(const std::vector<std::string>& args) {
+  std::vector<const char*> argv = {"simloop"};
+  for (const std::string& a : args) argv.push_back(a.c_str());
+  return parse(static_cast<int>(argv.size()), argv.data());
+}
+
 Options parse(int argc, const char* const* argv) {
   Options opts;
   const char* timesteps_flag = "--duration";  // what set the sweep's timesteps

@@ -60,6 +60,8 @@ class UsageError : public std::runtime_error {
 // Shared by sim_loop and `python -m simloop`, so both take the same flags and
 // refuse bad ones with the same words.
 [[nodiscard]] Options parse(int argc, const char* const* argv);
+// The same for the arguments alone, without the program's name.
+[[nodiscard]] Options parse(const std::vector<std::string>& args);
 
 // The scenario the quick flags describe (--body, --ctrl; a --scenario file
 // is read with Scenario::from_toml_file): the chapter's run on `scene` (the

@@ -16,13 +16,6 @@
 namespace simloop::cli {
 namespace {
 
-// One argument vector as parse() takes it.
-Options parse_args(const std::vector<std::string>& args) {
-  std::vector<const char*> argv = {"simloop"};
-  for (const std::string& a : args) argv.push_back(a.c_str());
-  return parse(static_cast<int>(argv.size()), argv.data());
-}
-
 std::string line(const char* name, const std::filesystem::path& path, const std::string& more = "") {
   return std::string(name) + ": " + path.string() + more + "\n";
 }
@@ -117,7 +110,7 @@ int run_command(const std::vector<std::string>& args, Host& host) {
   const auto started = std::chrono::steady_clock::now();
   Options opts;
   try {
-    opts = parse_args(args);
+    opts = parse(args);
   } catch (const UsageError& e) {
     return host.fail(kExitUsage, e.what());
   }

@@ -178,11 +178,8 @@ void bind_command(py::module_& m) {
   // args: str (sys.argv's, encoded back to the bytes the shell passed, as
   // os.fsencode does) or bytes.
   m.def("parse_command_line", [](const std::vector<py::object>& args) {
-    const std::vector<std::string> bytes = argument_bytes(args);
-    std::vector<const char*> argv = {"simloop"};
-    for (const std::string& a : bytes) argv.push_back(a.c_str());
     try {
-      return cli::parse(static_cast<int>(argv.size()), argv.data());
+      return cli::parse(argument_bytes(args));
     } catch (const cli::UsageError& e) {
       set_error_fs(PyExc_ValueError, e.what());
       throw py::error_already_set();
@@ -197,6 +194,7 @@ void bind_command(py::module_& m) {
       "args"_a, "host"_a,
       "sim_loop's whole command with `host` (simloop.__main__'s) doing the process's part: returns the exit code.");
   m.def("help_text", &simloop::cli::help_text, "program"_a, "recording"_a);
+  m.def("_peak_memory_mib", &cli::peak_memory_mib, "VmHWM of this process, MiB (-1 if unknown): the report's.");
   m.def("sweep_help_text", &simloop::cli::sweep_help_text, "program"_a);
 }
 

@@ -61,13 +61,5 @@ def _fail(code: int, message: str) -> int:
     return code
 
 
-def _peak_memory_mib() -> float:
-    """VmHWM of this process, MiB (-1 if unknown)."""
-    try:
-        with open("/proc/self/status") as status:
-            for line in status:
-                if line.startswith("VmHWM:"):
-                    return int(line.split()[1]) / 1024.0
-    except OSError:
-        pass
-    return -1.0
+# VmHWM of this process, MiB (-1 if unknown): the one reading both commands report.
+_peak_memory_mib = _core._peak_memory_mib
