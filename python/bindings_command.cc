@@ -166,8 +166,7 @@ class PyHost final : public cli::Host {
 }  // namespace
 
 void bind_command(py::module_& m) {
-  // The command line, parsed by the same code as sim_loop's.
-  // The parsed command line, as the host's recording reads it.
+  // The command line, parsed by sim_loop's own parser, as the host's recording reads it.
   py::class_<cli::Options>(m, "CommandLine")
       .def_readonly("sweep_timesteps", &cli::Options::sweep_timesteps)
       .def_readonly("run", &cli::Options::run)

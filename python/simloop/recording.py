@@ -282,7 +282,6 @@ class Recording:
         self._high: Any = None
         self._units: Dict[str, str] = {}  # column: unit, from the result
         self.colours: Dict[str, list] = {}  # body: its first geom's colour
-        self.geometry: Dict[str, List[str]] = {}  # body: the entities of its drawn geoms
         self.file = RrdFile(rr, application_id, recording_id, Path(os.fspath(path)))
         self._rec: Any = self.file.rec
         try:
@@ -301,7 +300,6 @@ class Recording:
                 if shape is None:
                     continue
                 self.colours.setdefault(geom["body"], _rgba(geom["rgba"]))
-                self.geometry.setdefault(geom["body"], []).append(entity)
                 self._rec.log(entity, _pose(rr, geom), static=True)
                 self._rec.log(entity, shape, static=True)
         except BaseException:
@@ -324,7 +322,7 @@ class Recording:
         """Sends what is left, the world's planes, the blueprint and the
         recording's name, and checks the file."""
         self._send()
-        self._units = dict(getattr(result, "column_units", {}))
+        self._units = dict(result.column_units)
         rr = self._rr
         for plane in self._planes:
             centre, half = _plane_slab(plane, self._low, self._high)
