@@ -10,16 +10,17 @@ import os
 import sys
 from pathlib import Path
 
+HERE = Path(__file__).resolve().parent
+VENV_PYTHON = HERE.parent / ".venv" / "bin" / "python"  # the project's, which scripts/test.sh makes
+
 try:
     import simloop
 except ImportError:  # run as exercises/check.py by the system python3: use the project's .venv
-    VENV_PYTHON = Path(__file__).resolve().parent.parent / ".venv" / "bin" / "python"
     if VENV_PYTHON.exists() and Path(sys.prefix).resolve() != VENV_PYTHON.parent.parent.resolve():
         os.execv(VENV_PYTHON, [str(VENV_PYTHON), *sys.argv])
     print("check.py: needs the simloop package: scripts/test.sh installs it into .venv", file=sys.stderr)
     sys.exit(2)
 
-HERE = Path(__file__).resolve().parent
 FOLDERS = {1: "01_timestep_edge", 2: "02_sticky_shove", 3: "03_predict_drift"}
 # The questions as shipped: check.py grades these copies, never the files a
 # learner edits (02_sticky_shove/loop.py is there to be fixed).
@@ -94,8 +95,7 @@ def _fmt(seconds: float) -> str:
 def _python() -> str:
     """How to run this Python from here, as a hint prints it: the project's
     .venv/bin/python (relative when below the current folder), else this one."""
-    venv = Path(__file__).resolve().parent.parent / ".venv" / "bin" / "python"
-    python = venv if venv.exists() else Path(sys.executable)
+    python = VENV_PYTHON if VENV_PYTHON.exists() else Path(sys.executable)
     try:
         return str(python.relative_to(Path.cwd()))
     except ValueError:
