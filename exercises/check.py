@@ -92,14 +92,18 @@ def _fmt(seconds: float) -> str:
     return f"{seconds:g} s"
 
 
+def _shown(path: Path) -> str:
+    """A path as a printed command gives it: relative when below the current folder."""
+    try:
+        return str(path.relative_to(Path.cwd()))
+    except ValueError:
+        return str(path)
+
+
 def _python() -> str:
     """How to run this Python from here, as a hint prints it: the project's
-    .venv/bin/python (relative when below the current folder), else this one."""
-    python = VENV_PYTHON if VENV_PYTHON.exists() else Path(sys.executable)
-    try:
-        return str(python.relative_to(Path.cwd()))
-    except ValueError:
-        return str(python)
+    .venv/bin/python, else this one."""
+    return _shown(VENV_PYTHON if VENV_PYTHON.exists() else Path(sys.executable))
 
 
 # ---- 1. the timestep edge ---------------------------------------------------
@@ -180,27 +184,45 @@ class CountingSim(simloop.Sim):
             super().step(1, ctrl)
 
 
+# The chapter's own words for this answer ("Set it once and it pushes
+# forever"): within a run, forever ends with the run's last step.
+TO_THE_END = re.compile(r"(?:for ?ever|always|never stops|infinite(?:ly)?|(?:un)?til the end(?: of the run)?|"
+                        r"to the (?:end|last step)(?: of the run)?|(?:for )?(?:all )?the rest of the run|"
+                        r"every (?:remaining )?step(?: to the end)?)[.!]?", re.IGNORECASE)
+
+
 def check_sticky(path: Path) -> Verdict:
-    value, dimension = quantity(answer_lines(path)[0], "the number of steps", ("steps", "time"), "steps")
-    answer = value / TIMESTEP if dimension == "time" else value
-    answer = round(answer) if abs(answer - round(answer)) < 1e-6 else answer
+    text = answer_lines(path)[0]
     # The question as shipped: the pristine loop, whatever the learner's copy now holds.
     shipped = load_module(PRISTINE / FOLDERS[2] / "loop.py", "shipped_loop")
     sim = shipped.chapter_loop(sim=CountingSim())
     actual, shove = sim.shoved, simloop.draw_shove(seed=0, steps=2000)
     after = 2000 - shove.start_step
+    in_words = TO_THE_END.fullmatch(text.strip()) is not None
+    if in_words:
+        answer, said = actual, f"you answered {text.strip()!r}: in this run, to its last step, {actual} steps."
+    else:
+        value, dimension = quantity(text, "the number of steps", ("steps", "time"), "steps")
+        answer = value / TIMESTEP if dimension == "time" else value
+        answer = round(answer) if abs(answer - round(answer)) < 1e-6 else answer
+        said = f"you answered {answer:g} step{'' if answer == 1 else 's'}" + (
+            f" ({value:g} s at {TIMESTEP} s a step)." if dimension == "time" else ".")
     reference = simloop.run(seed=0)
     holds = answer == actual
     report = [f"simloop.run(seed=0): the box ends at y {reference.metrics['box_final_pos'][1]:.3f} m "
               f"(the shove pushed for {shove.steps} steps)",
-              f"the shipped loop.py:  the box ends at y {sim.box_position[1]:.3f} m",
-              f"you answered {answer:g} step{'' if answer == 1 else 's'}" + (f" ({value:g} s at {TIMESTEP} s a step)." if dimension == "time"
-                                                   else ".")]
+              f"the shipped loop.py:  the box ends at y {sim.box_position[1]:.3f} m", said]
     if holds:
         why = [f"Right: written once at step {shove.start_step}, the force stayed in xfrc_applied and pushed on "
                f"every step to the end of the run, {actual} steps, {actual // shove.steps} times the chapter's "
-               f"{shove.steps}. MuJoCo never clears it. The chapter's loop writes 0 explicitly on every step "
-               "outside the shove's window for exactly this reason."]
+               f"{shove.steps}. MuJoCo never clears it" + (": the chapter's 'forever', cut short by the run's end"
+                                                          if in_words else "") +
+               ". The chapter's loop writes 0 explicitly on every step outside the shove's window for exactly "
+               "this reason."]
+    elif abs(answer - actual) <= 2:
+        why = [f"Off by {abs(answer - actual):g}: you have the idea. The force is written before step "
+               f"{shove.start_step}'s mj_step, and the run's last step is step 1999: count the steps from one to "
+               "the other, both included."]
     elif answer == shove.steps:
         why = [f"{shove.steps} is how long the shove was meant to last (shove.steps), and it would be right if "
                "something stopped it after its window. Look for the line that does."]
@@ -222,7 +244,8 @@ def check_sticky(path: Path) -> Verdict:
                 f"{shove.force_y:+.1f} N for {actual * TIMESTEP:g} s instead of {shove.steps * TIMESTEP:g} s drives "
                 f"the box {sim.box_position[1]:.1f} m off its line.",
                 "The fix: clear the force when the window ends (sim.clear_force()), or write the force, zero "
-                "outside the window, on every step, as the chapter's loop does. Then `check.py 2 --fix`."]
+                "outside the window, on every step, as the chapter's loop does. Then check the fix: "
+                f"`{_python()} {_shown(HERE / 'check.py')} 2 --fix`."]
     return Verdict(holds, report, why, hint, solution)
 
 
@@ -295,40 +318,45 @@ def check_drift(path: Path) -> Verdict:
     ok_stays = (stays == "yes") == really_stays
     low, high = at9 * 100 / 2, at9 * 100 * 2
     ok_slide = low <= predicted_cm <= high
-    report = [f"4 N: you said it {'stays' if stays == 'yes' else 'moves'}: "
-              f"{'holds' if ok_stays else 'does not hold'}.",
-              f"9 N: you said {predicted_cm:g} cm: {'holds' if ok_slide else 'does not hold'}."]
+    said = [f"4 N: you said it {'stays' if stays == 'yes' else 'moves'}.", f"9 N: you said {predicted_cm:g} cm."]
     friction = 0.5 * 9.81 * 1.0
     accel = (9.0 - friction) / 0.5
     v = accel * 0.1
     push_cm, coast_cm = 0.5 * accel * 0.1**2 * 100, v * v / (2 * 9.81) * 100
-    why, hint = [], []
+    # Why each part holds or not: said beside a right answer, or with the
+    # solution. Before that, which part is wrong would give the yes/no half
+    # away (a wrong yes is a no), so a first wrong answer hears neither.
+    parts = []
     if ok_stays:
-        why.append(f"4 N: right. It is below what static friction can hold (m g mu = {friction:.2f} N); the box "
-                   f"only creeps {at4 * 1000:.2f} mm, through the contacts' softness.")
+        parts.append(f"4 N: right. It is below what static friction can hold (m g mu = {friction:.2f} N); the box "
+                     f"only creeps {at4 * 1000:.2f} mm, through the contacts' softness.")
     else:
-        why.append(f"4 N: you expected it to {'stay' if stays == 'yes' else 'move more than 2 mm'}; it did not.")
-        hint.append("4 N: compare it with the largest force friction can hold on a 0.5 kg box (m g mu).")
+        parts.append(f"4 N: you expected it to {'stay' if stays == 'yes' else 'move more than 2 mm'}; it did not.")
     if ok_slide:
-        why.append(f"9 N: right: MuJoCo slid it {at9 * 100:.2f} cm; you said {predicted_cm:g} cm, within a factor "
-                   "of 2.")
+        parts.append(f"9 N: right: MuJoCo slid it {at9 * 100:.2f} cm; you said {predicted_cm:g} cm, within a "
+                     "factor of 2.")
     elif predicted_cm > high:
-        why.append(f"9 N: {predicted_cm:g} cm is more than twice what MuJoCo did. Friction acts during the push "
-                   "too, not only after it: only the force above friction accelerates the box.")
-        hint.append("9 N: net force during the push (9 N minus friction), the speed after 0.1 s, then how far "
-                    "friction (a deceleration of mu g) lets it coast.")
+        parts.append(f"9 N: {predicted_cm:g} cm is more than twice what MuJoCo did. Friction acts during the push "
+                     "too, not only after it: only the force above friction accelerates the box.")
     else:
-        why.append(f"9 N: {predicted_cm:g} cm is less than half what MuJoCo did. The box does not stop when the "
-                   "push does: it coasts until friction has taken all its speed.")
-        hint.append("9 N: the speed at release, v = (9 N - friction) / m * 0.1 s, then the coasting distance "
-                    "v^2 / (2 mu g).")
-    solution = [f"4 N: the box moved {at4 * 1000:.2f} mm (it stays). 9 N: it slid {at9 * 100:.2f} cm "
-                f"(accepted: {low:.2f} to {high:.2f} cm).",
-                f"The sum: 9 N - {friction:.2f} N friction = {9 - friction:.2f} N net on 0.5 kg for 0.1 s gives "
-                f"{v:.2f} m/s and {push_cm:.1f} cm; coasting against friction adds {coast_cm:.1f} cm: "
-                f"{push_cm + coast_cm:.1f} cm in all. MuJoCo's contacts are soft, the box creeps even below friction, "
-                "and the friction cone is approximated, so the real slide differs."]
-    return Verdict(ok_stays and ok_slide, report, why, hint, solution)
+        parts.append(f"9 N: {predicted_cm:g} cm is less than half what MuJoCo did. The box does not stop when the "
+                     "push does: it coasts until friction has taken all its speed.")
+    holds = ok_stays and ok_slide
+    why = parts if holds else [
+        "One or both of your predictions do not hold. Which one stays unsaid for now: for the yes/no part, "
+        "that alone would be the answer. The hint covers both."]
+    hint = ["4 N: compare it with the largest force friction can hold on a 0.5 kg box (m g mu).",
+            "9 N: only the force above friction accelerates the box during the push: the speed at release is "
+            "(9 N - friction) / m * 0.1 s; then it coasts until friction (a deceleration of mu g) has taken that "
+            "speed: v^2 / (2 mu g)."]
+    solution = ([] if holds else parts) + [
+        f"4 N: the box moved {at4 * 1000:.2f} mm (it stays). 9 N: it slid {at9 * 100:.2f} cm "
+        f"(accepted: {low:.2f} to {high:.2f} cm).",
+        f"The sum: 9 N - {friction:.2f} N friction = {9 - friction:.2f} N net on 0.5 kg for 0.1 s gives "
+        f"{v:.2f} m/s and {push_cm:.1f} cm; coasting against friction adds {coast_cm:.1f} cm: "
+        f"{push_cm + coast_cm:.1f} cm in all. MuJoCo's contacts are soft, the box creeps even below friction, "
+        "and the friction cone is approximated, so the real slide differs."]
+    return Verdict(holds, said, why, hint, solution)
 
 
 # ---- grading ------------------------------------------------------------------

@@ -1,9 +1,11 @@
 """Each exercise's check grades the shipped question, speaks to the answer
 given, hints before it tells, and (exercise 2) checks the fix separately."""
 
+import re
 import shutil
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -18,11 +20,11 @@ FIXED_LINES = """            sim.apply_force([0.0, shove.force_y, 0.0])
 """
 
 
-def check(exercise, answer_text, tmp_path, *flags, check_py=CHECK):
+def check(exercise, answer_text, tmp_path, *flags, check_py=CHECK, cwd=None):
     answer = tmp_path / "answer.txt"
     answer.write_text(answer_text)
     return subprocess.run([sys.executable, str(check_py), str(exercise), "--answer", str(answer), *flags],
-                          capture_output=True, text=True, timeout=300)
+                          capture_output=True, text=True, timeout=300, cwd=cwd)
 
 
 def fix_loop(path, lines=FIXED_LINES):
@@ -103,16 +105,34 @@ def test_a_first_wrong_answer_gets_a_hint_not_the_solution(exercise, first, seco
     (2, "50", "50 is how long the shove was meant to last"),
     (2, "1", "1 would be right if MuJoCo cleared xfrc_applied after each step"),
     (2, "5000", "cannot have pushed for more than the 1000 steps left"),
+    (2, "999", "Off by 1: you have the idea."),
+    (2, "forever", "the chapter's 'forever', cut short by the run's end"),
+    # Exercise 3 explains each part only beside a right answer or with the solution.
     (3, "stays_at_4N: yes\nslide_at_9N_cm: 30", "30 cm is more than twice what MuJoCo did"),
     (3, "stays_at_4N: yes\nslide_at_9N_cm: 1", "1 cm is less than half what MuJoCo did"),
+    (3, "stays_at_4N: no\nslide_at_9N_cm: 6", "4 N: you expected it to move more than 2 mm; it did not."),
 ])
 def test_the_explanation_answers_the_answer_given(exercise, answer, explanation, tmp_path):
     if answer == "stable_past_the_edge":  # which timestep that is depends on the MuJoCo version
         from expected import expected
 
         answer = expected("exercises.stable_past_the_edge")
-    proc = check(exercise, answer, tmp_path)
+    proc = check(exercise, answer, tmp_path, *(["--reveal"] if exercise == 3 else []))
     assert explanation in proc.stdout, proc.stdout
+
+
+def test_exercise_3s_first_wrong_answer_does_not_say_which_part_is_wrong(tmp_path):
+    """A wrong yes is a no: saying which part failed would give the yes/no half away."""
+    outputs = []
+    for stays, slide in (("yes", "30"), ("no", "6")):  # the slide wrong; the yes/no wrong
+        folder = tmp_path / stays
+        folder.mkdir()
+        proc = check(3, f"stays_at_4N: {stays}\nslide_at_9N_cm: {slide}\n", folder)
+        assert proc.returncode == 1 and "Hint: " in proc.stdout, proc.stdout
+        said = "stays" if stays == "yes" else "moves"
+        outputs.append(proc.stdout.replace(f"you said it {said}.", "you said it X.")
+                       .replace(f"you said {slide} cm.", "you said Y cm."))
+    assert outputs[0] == outputs[1], outputs
 
 
 def test_exercise_1_reports_what_the_learners_own_timestep_did(tmp_path):
@@ -206,6 +226,87 @@ def test_exercise_1_never_calls_right_what_the_same_output_calls_unstable(tmp_pa
         said_right = "It holds." in proc.stdout or "Right." in proc.stdout
         assert not (said_unstable and said_right), proc.stdout
         assert said_right == (answer == result.edge), proc.stdout
+
+
+def _edges():
+    import simloop
+
+    result = simloop.sweep(simloop._core.default_sweep_timesteps())
+    index = next(i for i, p in enumerate(result.points) if p.timestep == result.edge)
+    return result.edge, result.points[index + 1].timestep
+
+
+# A learner's play: every class of answer for each exercise. (answer, exit
+# status, said, never said); "EDGE" and "FIRST_UNSTABLE" are the sweep's, on
+# this MuJoCo. Near answers are wrong answers that deserve a pointed reply.
+LEARNER = {
+    "right": [(1, "EDGE", 0, "Right.", "past the edge"),
+              (2, "1000 steps", 0, "Right:", "Off by"),
+              (2, "forever", 0, "Right:", "Off by"),
+              (2, "until the end of the run", 0, "Right:", "Off by"),
+              (3, "stays_at_4N: y\nslide_at_9N_cm: 5 cm", 0, "4 N: right.", "Hint:")],
+    "near": [(1, "FIRST_UNSTABLE", 1, "already past the edge", "Right."),
+             (2, "1001", 1, "Off by 1", "Right:"),
+             (2, "998", 1, "Off by 2", "Right:"),
+             (3, "stays_at_4N: yes\nslide_at_9N_cm: 12.5", 1, "Hint: 4 N", "MuJoCo slid it")],
+    "wrong": [(1, "0.05", 1, "Break It itself", "Right."),
+              (1, "0.0005", 1, "the edge is higher", "Right."),
+              (2, "50", 1, "meant to last", "Right:"),
+              (2, "1", 1, "cleared xfrc_applied after each step", "Right:"),
+              (3, "stays_at_4N: no\nslide_at_9N_cm: 30", 1, "Hint: 4 N", "4 N: right.")],
+    "nonsense": [(1, "fast", 2, "", "It holds"),
+                 (1, "-0.01", 2, "", "It holds"),
+                 (2, "banana", 2, "", "It holds"),
+                 (2, "1000 N", 2, "", "It holds"),
+                 (3, "stays_at_4N: perhaps\nslide_at_9N_cm: 6", 2, "", "It holds"),
+                 (3, "slide_at_9N_cm: 6", 2, "", "It holds")],
+}
+
+
+@pytest.mark.parametrize("kind, play", [(kind, play) for kind, plays in LEARNER.items() for play in plays],
+                         ids=lambda v: v if isinstance(v, str) else repr(v[:2]))
+def test_a_learner_playing_every_class_of_answer(kind, play, tmp_path):
+    exercise, answer, status, said, never = play
+    if answer in ("EDGE", "FIRST_UNSTABLE"):
+        edge, first_unstable = _edges()
+        answer = repr({"EDGE": edge, "FIRST_UNSTABLE": first_unstable}[answer])
+    proc = check(exercise, answer + "\n", tmp_path)
+    out = proc.stdout
+    assert proc.returncode == status, out + proc.stderr
+    assert said in out and never not in out, out
+    if status == 0:
+        assert "It holds." in out and "does not hold" not in out and "The solution:" not in out
+    elif status == 1:  # a first wrong answer: a hint, never the solution or a word of praise
+        assert "It does not hold." in out and "Hint: " in out and "The solution:" not in out, out
+        assert not re.search(r"\bRight\b|: right\b", out), out
+    else:  # unreadable: one line naming the answer, nothing graded, nothing remembered
+        assert out == "" and proc.stderr.count("\n") == 1 and proc.stderr.startswith("check.py: "), proc.stderr
+        assert not (tmp_path / ".check_attempts.json").exists()
+
+
+def test_every_command_a_check_prints_runs_as_printed(tmp_path):
+    """The hints' and solutions' commands, as a learner would paste them from the project's root."""
+    printed = []
+    for exercise, wrong in ((1, "0.05"), (2, "50"), (3, "stays_at_4N: no\nslide_at_9N_cm: 30")):
+        folder = tmp_path / str(exercise)
+        folder.mkdir()
+        hint = check(exercise, wrong, folder, cwd=ROOT).stdout
+        solution = check(exercise, wrong, folder, "--reveal", cwd=ROOT).stdout
+        printed += re.findall(r"(?:^ +|`)(\S*python3?) (-m simloop [^`(\n]*?|\S*check\.py [^`(\n]*?)\s*(?:`|\(|$)",
+                              hint + solution, re.MULTILINE)
+    commands = {" ".join(c) for c in printed}
+    assert len(commands) == 3, commands  # exercise 1's hint and sweep, exercise 2's --fix
+    for command in commands:
+        words = [{"T": "0.004", "N": "1000"}.get(w, w) for w in command.split()]
+        assert not Path(words[0]).is_absolute() and (ROOT / words[0]).exists(), command
+        out = ["--out", str(tmp_path / "o")] if "-m simloop" in command else []
+        run = subprocess.run(words + out, capture_output=True, text=True, timeout=300, cwd=ROOT)
+        if "--fix" in command:  # the shipped loop: graded, and found still buggy
+            assert run.returncode == 1 and "still the shipped loop" in run.stdout, run.stdout + run.stderr
+        else:
+            assert run.returncode == 0, command + "\n" + run.stderr
+        if "--timestep" in command:
+            assert "stepped 1000 steps of 0.004 s -> 4.00 s of sim time" in run.stdout
 
 
 def test_exercise_1s_hint_command_runs_as_printed(tmp_path):
