@@ -1,11 +1,12 @@
 #!/usr/bin/env bash
 # Installs what simloop needs on Debian 12 and is missing (apt-get, through
-# sudo when not root), then builds the C++ tree. With --python, also makes a
-# virtual environment and installs the package into it (pip install
-# ".[test]": scikit-build-core builds the module from the same CMake tree).
-# With --command, builds only the command sim_loop (and the library it
-# needs): the first run, without the tests and benchmarks.
-# Called by scripts/run.sh and scripts/test.sh; safe to rerun.
+# sudo when not root), then builds. Without a flag, the C++ tree (library,
+# command, tests, benchmarks). With --python, that and a virtual environment
+# with the package and the test tools (pip install ".[test]": scikit-build-core
+# builds the module from the same CMake tree). With --package, only the
+# virtual environment and the package (pip install .): python -m simloop and
+# its recording, without the C++ tests and benchmarks (the first run).
+# Called by scripts/run.sh (--package) and scripts/test.sh (--python); safe to rerun.
 #
 # Which MuJoCo: SIMLOOP_MUJOCO=system (the default) builds on Debian's
 # libmujoco-dev 2.2.2 into build/ and .venv; SIMLOOP_MUJOCO=pypi builds on
@@ -13,10 +14,10 @@
 # into build-pypi/ and .venv-pypi, which then holds that mujoco too.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
-with_python=0 targets=()
+with_python=0 with_tree=1 extras=.[test]
 case ${1:-} in
   --python) with_python=1 ;;
-  --command) targets=(--target sim_loop) ;;
+  --package) with_python=1 with_tree=0 extras=. ;;
 esac
 
 python=${PYTHON:-python3}
@@ -27,7 +28,8 @@ case $mujoco in
   *) echo "setup: SIMLOOP_MUJOCO must be system or pypi, got '$mujoco'" >&2; exit 2 ;;
 esac
 
-apt_packages=(libtomlplusplus-dev libgtest-dev)
+apt_packages=(libtomlplusplus-dev)
+if ((with_tree)); then apt_packages+=(libgtest-dev); fi  # the C++ tests
 if [[ $mujoco == system ]]; then
   # libmujoco-dev's CMake config asks for OpenGL (find_dependency) and its
   # target for /usr/include/libqhull_r, but it depends on neither dev package.
@@ -76,11 +78,13 @@ if [[ $mujoco == pypi ]]; then
   "$venv/bin/python" "${pip[@]}" "$pin"
   cmake_args=(-DSIMLOOP_MUJOCO=pypi "-DSIMLOOP_MUJOCO_PYTHON=$PWD/$venv/bin/python")
 fi
-cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release "${cmake_args[@]}" >/dev/null
-cmake --build "$build" -j "$(nproc)" "${targets[@]}"
+if ((with_tree)); then
+  cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release "${cmake_args[@]}" >/dev/null
+  cmake --build "$build" -j "$(nproc)"
+fi
 
 if ((with_python)); then
   [[ -x $venv/bin/python ]] || "$python" -m venv "$venv"
-  echo "setup: pip install .[test] into $venv"
-  SIMLOOP_MUJOCO=$mujoco "$venv/bin/python" "${pip[@]}" ".[test]"
+  echo "setup: pip install $extras into $venv (builds the module: a few minutes the first time)"
+  SIMLOOP_MUJOCO=$mujoco "$venv/bin/python" "${pip[@]}" "$extras"
 fi
