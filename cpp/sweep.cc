@@ -6,6 +6,8 @@
 #include <cstdio>
 #include <limits>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "divergence.hpp"
 #include "simloop/batch.hpp"
@@ -252,6 +254,30 @@ std::string fixed(double value, int decimals) {
   return text;
 }
 
+// What a row of the chapter's sweep is beside the chapter's own runs: the
+// sweep runs every timestep for the same sim time, not the chapter's 2000
+// steps, so its 0.05 s point is Break It's timestep over 4 s, not Break It.
+std::string chapter_marks(const SweepPoint& point, bool edge) {
+  const RunConfig chapter;
+  std::vector<std::string> marks;
+  if (edge) marks.push_back("edge");
+  for (const auto& [timestep, name] : {std::pair{chapter.timestep, std::string("the chapter")},
+                                       std::pair{kBreakItTimestep, std::string("Break It")}}) {
+    if (point.timestep != timestep) continue;
+    std::string mark = name + "'s timestep";
+    if (point.steps != chapter.steps) {
+      char line[128];
+      std::snprintf(line, sizeof line, " (%lld steps here; %s runs %lld: %g s)", static_cast<long long>(point.steps),
+                    name.c_str(), static_cast<long long>(chapter.steps), static_cast<double>(chapter.steps) * timestep);
+      mark += line;
+    }
+    marks.push_back(mark);
+  }
+  std::string out;
+  for (const std::string& mark : marks) out += (out.empty() ? "  <- " : "; ") + mark;
+  return out;
+}
+
 }  // namespace
 
 std::string sweep_summary(const SweepResult& result) {
@@ -269,7 +295,7 @@ std::string sweep_summary(const SweepResult& result) {
                     fixed(p.max_abs_box_y, 4), fixed(p.final_box_z, 4), fixed(p.energy.work_constraint_positive, 4),
                     fixed(p.energy.unexplained, 4), std::to_string(p.warnings),
                     std::string(p.stable ? "yes" : "no") +
-                        (static_cast<int>(i) == result.edge_index ? "  <- edge" : "")});
+                        chapter_marks(p, static_cast<int>(i) == result.edge_index)});
   }
   out += aligned_table(header, rows);
   out += edge_line(result, "largest stable timestep", "even the finest is unstable");

@@ -26,6 +26,7 @@ namespace simloop {
 inline constexpr double kStableHop = 0.005;   // m
 inline constexpr double kStableSink = 0.001;  // m
 inline constexpr double kBoxRestZ = 0.05;     // m, the chapter's box at rest
+inline constexpr double kBreakItTimestep = 0.05;  // s, Break It's: 25 times the chapter's
 
 struct SweepPoint {
   double timestep = 0.0;

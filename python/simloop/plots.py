@@ -26,7 +26,11 @@ Z_RANGE = (0.04, 0.12)
 # The sweep's z panel: the stable band (-1 mm, +5 mm) and a little around it;
 # points beyond are drawn on the edge, with their values.
 SWEEP_Z_RANGE = (0.040, 0.066)
-CHAPTER_TIMESTEPS = ((0.002, "chapter's 0.002 s"), (0.05, "Break It 0.05 s"))
+# The chapter's two timesteps, and its runs' length (2000 steps at either):
+# a sweep runs each timestep for the same sim time, so its 0.05 s point is
+# Break It's timestep, not Break It's run, and is labelled so.
+CHAPTER_TIMESTEPS = ((0.002, "the chapter's 0.002 s"), (0.05, "Break It's 0.05 s"))
+CHAPTER_STEPS = 2000
 
 
 def _pyplot():
@@ -242,6 +246,9 @@ def sweep_figure(csv: PathLike):
             ax.axvline(edge, color="black", lw=1.2, ls=":", label=f"edge: {edge:.4g} s" if ax is ax_z else None)
         for x, name in CHAPTER_TIMESTEPS:
             ax.axvline(x, color="#2a6f2a", lw=1.0, ls="-.", alpha=0.8)
+            steps = cols["steps"][np.isclose(dt, x, rtol=1e-12)]
+            if len(steps) and steps[0] != CHAPTER_STEPS:
+                name += f"\n{steps[0]:.0f} steps, not {CHAPTER_STEPS}"
             if ax is ax_z:  # named above the panel, clear of the off-scale values
                 ax.annotate(name, (x, 1.0), xycoords=("data", "axes fraction"), xytext=(0, 3),
                             textcoords="offset points", fontsize=8, color="#2a6f2a", ha="center", va="bottom")

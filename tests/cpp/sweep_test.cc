@@ -43,6 +43,20 @@ TEST(Sweep, FindsTheEdgeWhereTheHopBegins) {
   EXPECT_NE(summary.find("largest stable timestep: 0.004 s"), std::string::npos) << summary;
 }
 
+TEST(Sweep, NamesTheChaptersTimestepsByWhatTheyRanHere) {
+  // The sweep's 0.05 s point runs 4 s (80 steps); Break It runs 2000 steps
+  // (100 s) and peaks higher: the table must not pass one off as the other.
+  const std::string four_s = simloop::sweep_summary(simloop::sweep(scene(), {0.002, 0.004, 0.05}, 4.0));
+  EXPECT_NE(four_s.find("yes  <- the chapter's timestep\n"), std::string::npos) << four_s;
+  EXPECT_NE(four_s.find("yes  <- edge\n"), std::string::npos) << four_s;
+  EXPECT_NE(four_s.find("no  <- Break It's timestep (80 steps here; Break It runs 2000: 100 s)\n"), std::string::npos)
+      << four_s;
+  const std::string ten_s = simloop::sweep_summary(simloop::sweep(scene(), {0.002, 0.05}, 10.0));
+  EXPECT_NE(ten_s.find("yes  <- edge; the chapter's timestep (5000 steps here; the chapter runs 2000: 4 s)\n"),
+            std::string::npos)
+      << ten_s;
+}
+
 TEST(Sweep, TheTableStaysAlignedWhateverTheNumbers) {
   // Timesteps with long decimals, and run counts from 1 to 4 digits (a
   // sweep point needs at least kMinSweepSteps steps).

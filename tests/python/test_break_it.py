@@ -185,7 +185,8 @@ def test_sweep_picture_zooms_on_the_band_and_marks_the_rest(tmp_path):
         # The far points are on the edge with their values: Break It's peak at
         # 0.04 s (0.0963 m) and the box under the floor at 0.5 s.
         assert f"{points[0.04].peak_box_z:.3g}" in labels and f"{points[0.5].final_box_z:.3g}" in labels
-        assert "chapter's 0.002 s" in labels and "Break It 0.05 s" in labels
+        # Named by what the sweep ran: Break It's timestep over 4 s is not Break It's 2000 steps.
+        assert "the chapter's 0.002 s" in labels and f"Break It's 0.05 s\n{points[0.05].steps} steps, not 2000" in labels
         assert {line.get_xdata()[0] for line in ax_z.get_lines() if len(line.get_xdata()) == 2} >= {0.002, 0.05}
         for ax in fig.axes:  # every legend beside its axes
             legend = ax.get_legend()

@@ -26,6 +26,31 @@ def test_break_it_the_coarse_timestep_hops_and_drifts():
     assert coarse.warnings == [] and fine.warnings == []
 
 
+@pytest.mark.parametrize("timestep", [0.002, 0.05])
+def test_the_first_step_is_free_fall_whatever_the_timestep(timestep):
+    """The tutorial's 'sink at step 1': the box starts exactly touching the
+    floor, MuJoCo makes a contact a force only once it is in the floor, so
+    step 1 is one step of free fall: 0.04 mm at 0.002 s, 2.45 cm at 0.05 s."""
+    z = simloop.run(timestep=timestep, steps=10, perturb=False).column("box_z")
+    assert z[1] == pytest.approx(0.05 - 9.81 * timestep**2, abs=1e-15)
+    assert z[2] > z[1] - 2 * 9.81 * timestep**2 + 1e-6  # step 2 is not free fall: the contact acts
+
+
+def test_break_its_hops_start_at_the_pusher_and_grow_to_the_peak():
+    """The tutorial's Break It, told from the trajectory: no hop before the
+    pusher touches the box (t = 0.35 s, the contact count rises), hops that
+    grow (the first 2 s stay below the peak), the peak at its step."""
+    run = simloop.run(timestep=0.05, perturb=False)
+    z, ncon = run.column("box_z"), run.column("ncon")
+    first_contact = int(np.argmax(ncon > ncon[0]))
+    assert first_contact == 7
+    assert z[:first_contact + 1].max() < 0.05 + 0.005  # nothing hops before the pusher arrives
+    peak = int(np.argmax(z))
+    assert peak == expected("break_it.peak_step")
+    assert z[peak] == pytest.approx(expected("break_it.peak_z"), abs=5e-5)
+    assert z[:41].max() < z[peak] - 0.015  # the first 2 s hop well below the peak
+
+
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_the_shove_moves_the_box_sideways(seed):
     # Measured lateral_drift: 0.045, 0.054, 0.208 m for seeds 0, 1, 2.
