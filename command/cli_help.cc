@@ -27,8 +27,9 @@ options:
   --out DIR         output directory (default outputs/ch0.1-sim-loop)
   --no-perturb      skip the shove: the baseline run
   --plot            also draw trajectory.png (x of the pusher and the box, box
-                    y and z, contacts; the shove shaded), with matplotlib
-                    through the Python package
+                    y and z, contacts; the shove shaded; for a scenario, each
+                    recorded body's x, y, z and speed, contacts, disturbances
+                    shaded), with matplotlib through the Python package
   --energy-audit    account for every joule: energy and work columns in
                     trajectory.csv, totals in the summary
   --record-every K  write every K-th step to trajectory.csv (default 1; the

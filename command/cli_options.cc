@@ -308,10 +308,6 @@ Options parse(int argc, const char* const* argv) {
                        " and --scenario: the scenario file says what is pushed and driven");
     }
   }
-  if (opts.is_scenario() && opts.plot) {
-    throw UsageError("--plot draws the chapter's run (its box and pusher); a scenario's trajectory.csv has the "
-                     "scene's own columns (not with --scenario, --body or --ctrl)");
-  }
   if (opts.is_scenario() && opts.run.audit_energy) {
     throw UsageError("--energy-audit accounts for the chapter's box and pusher only (not with --scenario, --body or --ctrl)");
   }

@@ -78,7 +78,7 @@ int run_into(Host& host, const Options& opts, const Model& model, const Scenario
     host.print(recording ? recording->line() + "\n"
                          : std::string("recording: none (sim_loop writes no .rrd; python -m simloop records one)\n"));
   }
-  if (opts.plot && !scenario) host.print(line("plot", host.plot(opts.out, "trajectory")));
+  if (opts.plot) host.print(line("plot", host.plot(opts.out, "trajectory")));
   return 0;
 }
 

@@ -8,9 +8,10 @@ axes (the baseline against Break It, say).
 
 from __future__ import annotations
 
+import json
 import os
 from pathlib import Path
-from typing import Iterable, Union
+from typing import Iterable, Optional, Tuple, Union
 
 PathLike = Union[str, "os.PathLike[str]"]
 
@@ -19,6 +20,10 @@ PUSHER_COLOR = "#4073d9"
 CONTACT_COLOR = "#555555"
 # Runs after the first, when comparing: one colour per run.
 RUN_COLORS = ["#d94c40", "#1b7f79", "#8a4fbf", "#c98a00"]
+# A scenario's bodies, one colour each (the chapter's two first); its runs
+# after the first, when comparing, one line style each.
+BODY_COLORS = ["#d94c40", "#4073d9", "#1b7f79", "#8a4fbf", "#c98a00", "#555555", "#e377c2", "#17becf"]
+RUN_STYLES = ["-", "--", ":", "-."]
 REST_Z = 0.05             # the box's centre at rest, m
 # The z axis a sound run and Break It share: fixed, widened only if a run
 # leaves it (autoscaled, 3 mm of contact softness looks as wild as a hop).
@@ -95,9 +100,38 @@ def trajectory_png(csv: PathLike, png: PathLike, compare: Iterable[PathLike] = (
     return _save_and_close(trajectory_figure(csv, compare, x), Path(png))
 
 
+def _scenario_metrics(csv: Path) -> Optional[dict]:
+    """The metrics.json beside a scenario's trajectory.csv (it names the
+    recorded bodies and the disturbances as they ran), or None for the chapter's."""
+    try:
+        metrics = json.loads((csv.parent / "metrics.json").read_text())
+    except (OSError, ValueError):
+        return None
+    return metrics if isinstance(metrics, dict) and "bodies" in metrics else None
+
+
+def _x_axis(runs, x: str) -> Tuple[str, list]:
+    """The x axis to draw against, and the runs' distinct timesteps."""
+    if x not in ("auto", "time", "step"):
+        raise ValueError(f"x must be 'auto', 'time' or 'step', got {x!r}")
+    timesteps = sorted({round(_timestep(run[0]), 12) for run in runs})
+    if x == "auto":
+        x = "step" if len(timesteps) > 1 else "time"
+    return x, timesteps
+
+
+def _x_label(x: str, timesteps: list) -> str:
+    if x == "time":
+        return "sim time (s)"
+    if len(timesteps) > 1:
+        return "step (the runs' timesteps differ: " + " s, ".join(f"{t:g}" for t in timesteps) + " s)"
+    return "step"
+
+
 def trajectory_figure(csv: PathLike, compare: Iterable[PathLike] = (), x: str = "auto"):
     """The run against time: x of the pusher and the box, the box's y and z,
-    and the contact count; the shove's window shaded.
+    and the contact count; the shove's window shaded. A scenario's run (its
+    metrics.json names its bodies) gets scenario_trajectory_figure instead.
 
     compare: other trajectory.csv files, drawn on the same axes (each run in
     its own colour; the box solid, the pusher dashed). x: "time" (sim
@@ -108,14 +142,16 @@ def trajectory_figure(csv: PathLike, compare: Iterable[PathLike] = (), x: str = 
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
-    if x not in ("auto", "time", "step"):
-        raise ValueError(f"x must be 'auto', 'time' or 'step', got {x!r}")
     paths = [Path(csv), *[Path(c) for c in compare]]
+    scenarios = [_scenario_metrics(p) for p in paths]
+    if any(m is not None for m in scenarios):
+        if not all(m is not None for m in scenarios):
+            chapter = next(p for p, m in zip(paths, scenarios) if m is None)
+            raise ValueError(f"{chapter.parent} is the chapter's run and the others a scenario's: draw them apart")
+        return scenario_trajectory_figure([(_read_csv(p), p.parent.name, m) for p, m in zip(paths, scenarios)], x)
     runs = [(_read_csv(p), p.parent.name) for p in paths]
     comparing = len(runs) > 1
-    timesteps = sorted({round(_timestep(cols), 12) for cols, _ in runs})
-    if x == "auto":
-        x = "step" if len(timesteps) > 1 else "time"
+    x, timesteps = _x_axis(runs, x)
     plt = _pyplot()
     fig, (ax_x, ax_y, ax_z, ax_c) = plt.subplots(4, 1, sharex=True, figsize=(9, 9),
                                                  gridspec_kw={"height_ratios": [1.1, 1, 1.2, 0.7]})
@@ -166,21 +202,102 @@ def trajectory_figure(csv: PathLike, compare: Iterable[PathLike] = (), x: str = 
     from matplotlib.ticker import MaxNLocator
 
     ax_c.yaxis.set_major_locator(MaxNLocator(nbins=4, integer=True))  # a count: no 7.5 contacts
-    if x == "time":
-        ax_c.set_xlabel("sim time (s)")
-    elif len(timesteps) > 1:
-        ax_c.set_xlabel("step (the runs' timesteps differ: " + " s, ".join(f"{t:g}" for t in timesteps) + " s)")
-    else:
-        ax_c.set_xlabel("step")
+    ax_c.set_xlabel(_x_label(x, timesteps))
     for ax in (ax_x, ax_y, ax_z, ax_c):
         ax.grid(alpha=0.3)
     title = "ch0.1-sim-loop: " + (" against ".join(name for _, name in runs) if comparing
                                   else describe_run(runs[0][0]))
+    return _titled(fig, title, legend, anchor=0.955, row_height=0.022)
+
+
+def scenario_trajectory_figure(runs, x: str = "auto"):
+    """Any scene's run against time, from its trajectory.csv and metrics.json:
+    each recorded body's x, y and z and its speed, the contact count, and each
+    disturbance's window shaded in its body's colour.
+
+    runs: (columns, name, metrics) per run; runs after the first are drawn on
+    the same axes, dashed, dotted, ... (a body keeps its colour). x: as in
+    trajectory_figure.
+    """
+    import numpy as np
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+    from matplotlib.ticker import MaxNLocator
+
+    x, timesteps = _x_axis(runs, x)
+    bodies: list = []  # in the first run's column order; a body any run recorded
+    for cols, _, metrics in runs:
+        bodies += [b for b in sorted(metrics["bodies"], key=lambda b: list(cols).index(f"{b}_x")
+                                     if f"{b}_x" in cols else len(cols)) if b not in bodies]
+    if not bodies:
+        raise ValueError("the run recorded no bodies ([record] bodies = [...] in the scenario): no positions to draw")
+    colour = {b: BODY_COLORS[i % len(BODY_COLORS)] for i, b in enumerate(bodies)}
+    contacts = any("ncon" in cols for cols, _, _ in runs)
+    plt = _pyplot()
+    ratios = [1, 1, 1, 1] + ([0.6] if contacts else [])
+    fig, axes = plt.subplots(len(ratios), 1, sharex=True, figsize=(10, 2.0 * sum(ratios) + 1.6),
+                             gridspec_kw={"height_ratios": ratios})
+    ax_pos, ax_v = axes[:3], axes[3]
+    legend: list = []
+    for k, (cols, name, metrics) in enumerate(runs):
+        t = cols["time"] if x == "time" else cols["step"]
+        style = RUN_STYLES[k % len(RUN_STYLES)]
+        for b in bodies:
+            if f"{b}_x" not in cols:
+                continue
+            for ax, axis in zip(ax_pos, "xyz"):
+                ax.plot(t, cols[f"{b}_{axis}"], color=colour[b], ls=style, lw=1.3)
+            if all(f"{b}_v{axis}" in cols for axis in "xyz"):
+                speed = np.sqrt(sum(cols[f"{b}_v{axis}"] ** 2 for axis in "xyz"))
+                ax_v.plot(t, speed, color=colour[b], ls=style, lw=1.3)
+        if contacts and "ncon" in cols:
+            axes[4].step(t, cols["ncon"], where="post", color=CONTACT_COLOR, ls=style, lw=1.0)
+        if len(runs) > 1:
+            legend.append((Line2D([], [], color="black", ls=style), f"{name}: {_describe_scenario(cols, metrics)}"))
+        for d in metrics.get("disturbances", []):
+            first, steps = int(d["start_step"]), int(d["steps"])
+            if steps <= 0 or first >= len(t):
+                continue
+            last = min(first + steps, len(t) - 1)
+            shade = colour.get(d["body"], CONTACT_COLOR)
+            for ax in axes:
+                ax.axvspan(t[first], t[last], color=shade, alpha=0.15)
+            force = ", ".join(f"{v:+.2f}" for v in d["force"])
+            torque = ", ".join(f"{v:+.2f}" for v in d["torque"])
+            torque = f", [{torque}] N m" if any(d["torque"]) else ""
+            legend.append((Patch(color=shade, alpha=0.3), (f"{name}: " if len(runs) > 1 else "") +
+                           f"disturbance on {d['body']}: [{force}] N{torque}, steps {first} to {last - 1}"))
+    legend = [(Line2D([], [], color=colour[b], lw=2), b) for b in bodies] + legend
+    for ax, axis in zip(ax_pos, "xyz"):
+        ax.set_ylabel(f"{axis} (m)")
+    ax_v.set_ylabel("speed (m/s)")
+    if contacts:
+        axes[4].set_ylabel("contacts")
+        axes[4].yaxis.set_major_locator(MaxNLocator(nbins=4, integer=True))  # a count: no 7.5 contacts
+    axes[-1].set_xlabel(_x_label(x, timesteps))
+    for ax in axes:
+        ax.grid(alpha=0.3)
+    cols, name, metrics = runs[0]
+    title = (f"scenario {metrics.get('scenario', name)}: " +
+             (" against ".join(n for _, n, _ in runs) if len(runs) > 1 else _describe_scenario(cols, metrics)))
+    return _titled(fig, title, legend, anchor=0.96, row_height=0.018)
+
+
+def _describe_scenario(cols, metrics) -> str:
+    """'1000 steps of 0.002 s, seed 0' (no disturbance: 'no disturbance')."""
+    text = f"{int(cols['step'][-1])} steps of {_timestep(cols):.4g} s, seed {metrics.get('seed', '?')}"
+    return text if metrics.get("disturbances") else text + ", no disturbance"
+
+
+def _titled(fig, title: str, legend: list, anchor: float, row_height: float):
+    """The title, and one legend in two columns above the axes (never on the
+    data), the axes laid out below it (row_height: one legend row's share of
+    the figure's height)."""
     fig.suptitle(title)
     handles, labels = zip(*legend)
     rows = (len(legend) + 1) // 2
-    fig.legend(handles, labels, loc="upper center", bbox_to_anchor=(0.5, 0.955), ncol=2, frameon=False, fontsize=8)
-    fig.tight_layout(rect=(0, 0, 1, 0.99 - 0.022 * rows))
+    fig.legend(handles, labels, loc="upper center", bbox_to_anchor=(0.5, anchor), ncol=2, frameon=False, fontsize=8)
+    fig.tight_layout(rect=(0, 0, 1, anchor + 0.035 - row_height * rows))
     return fig
 
 
