@@ -25,14 +25,21 @@ Episodes, include/simloop/episode.hpp):
 - reward: a scenario has none, so reward(obs, action, next_obs) -> float is
   an argument (default: 0.0 every step).
 - truncated: the episode reached the scenario's length (its last step may
-  take fewer than control_every physics steps). terminated: the simulation
-  diverged (simloop_DIVERGED) or MuJoCo found a bad position, velocity or
-  acceleration and reset its state (mjWARN_BADQPOS, BADQVEL, BADQACC); the
-  episode stops at that physics step and info["warnings"] names them.
+  take fewer than control_every physics steps), or max_episode_steps env
+  steps if given. terminated: the simulation diverged (simloop_DIVERGED) or
+  MuJoCo found a bad position, velocity or acceleration and reset its state
+  (mjWARN_BADQPOS, BADQVEL, BADQACC); the episode stops at that physics step
+  and info["warnings"] names them.
+- info: "step" (physics steps since reset) and "time" (s) always; "seed"
+  (the episode's, a numpy uint64) from reset; "ended_by" on the step that
+  ends an episode: "warning", "length" or "max_episode_steps".
 
 ScenarioVectorEnv steps N such episodes over one compiled model, one MuJoCo
-data each, on C++ threads with the GIL released, with Gymnasium's default
-next-step autoreset. Registered ids (at `import simloop`, once gymnasium is
+data each, on C++ threads with the GIL released. Its infos are Gymnasium's
+vector layout (an array per key, and a "_key" mask of the envs that have it),
+the same as SyncVectorEnv over N ScenarioEnvs gives; its autoreset is any of
+Gymnasium's three modes (autoreset_mode=, next-step by default), and
+reset(options={"reset_mask": mask}) resets the masked envs only. Registered ids (at `import simloop`, once gymnasium is
 imported): simloop/Chapter-v0 (the chapter's run, a decision every 50 steps:
 10 Hz over 500 Hz physics), simloop/PushT-v0 (the PushT scenario shipped in
 simloop/scenes/, a decision every 10 steps) and simloop/Scenario-v0
@@ -62,6 +69,11 @@ Reward = Callable[[np.ndarray, np.ndarray, np.ndarray], float]
 
 # Episodes that end this way are terminated, not truncated (episode.hpp).
 _TERMINATING = ("simloop_DIVERGED", "mjWARN_BADQPOS", "mjWARN_BADQVEL", "mjWARN_BADQACC")
+# An observation's bounds: finite, so Gymnasium's checkers find nothing to
+# remark on, and float32's, so a float32 observation (DtypeObservation, a
+# torch policy's) is in its space too. No state gets near them: MuJoCo resets
+# a state past 1e10 (mjWARN_BADQPOS, ...), which terminates the episode.
+_FINITE = float(np.finfo(np.float32).max)
 
 
 class _Setup:
@@ -84,7 +96,7 @@ class _Setup:
         self.names: Tuple[str, ...] = self.episodes.column_names[2:]
         low, high = self.episodes.ctrl_range
         self.action_space = spaces.Box(low, high, (self.nu,), np.float64)
-        self.observation_space = spaces.Box(-np.inf, np.inf, (len(self.names),), np.float64)
+        self.observation_space = spaces.Box(-_FINITE, _FINITE, (len(self.names),), np.float64)
 
     def actions(self, action: object, shape: Tuple[int, ...]) -> np.ndarray:
         try:
@@ -104,12 +116,43 @@ class _Setup:
             return np.zeros(len(after))
         return np.array([float(self.reward(b, a, o)) for b, a, o in zip(before, actions, after)])
 
-    def info(self, i: int) -> Dict[str, Any]:
+    def info(self, i: int, ended_by: Optional[str] = None) -> Dict[str, Any]:
         out: Dict[str, Any] = {"step": self.episodes.steps_taken(i), "time": self.episodes.time(i)}
         ended = [w.name for w in self.episodes.warnings(i) if w.name in _TERMINATING]
         if ended:
             out["warnings"] = ended
+        if ended_by is not None:
+            out["ended_by"] = ended_by
         return out
+
+
+def _ended_by(terminated: bool, truncated: bool, decisions: int, max_episode_steps: Optional[int]) -> Optional[str]:
+    """Why an episode ended on this step, or None: its own end first (the C++
+    episode's), then the caller's step limit."""
+    if terminated:
+        return "warning"
+    if truncated:
+        return "length"
+    if max_episode_steps is not None and decisions >= max_episode_steps:
+        return "max_episode_steps"
+    return None
+
+
+def _check_options(options: object, known: Sequence[str]) -> Dict[str, Any]:
+    """reset's options: None or a dict of known keys (never silently ignored)."""
+    if options is None:
+        return {}
+    if not isinstance(options, dict):
+        raise TypeError(f"options must be a dict or None, got {_describe(options)}")
+    unknown = sorted(str(k) for k in options if k not in known)
+    if unknown:
+        raise ValueError(f"options: unknown key{'s' if len(unknown) > 1 else ''} {', '.join(map(repr, unknown))} "
+                         f"(known: {', '.join(map(repr, known)) if known else 'none'})")
+    return options
+
+
+def _check_max_episode_steps(value: object) -> Optional[int]:
+    return None if value is None else _check_int("max_episode_steps", value, 1, _core.MAX_STEPS)
 
 
 def _episode_seed(np_random: np.random.Generator, seed: Optional[int]) -> int:
@@ -124,16 +167,18 @@ class ScenarioEnv(gymnasium.Env):
     scenario file's path); see the module's documentation.
 
     control_every: physics steps per env.step (the frame skip). reward:
-    reward(obs, action, next_obs) -> float, default 0.0. rng, timestep,
-    steps, perturb, model: as for run_scenario (steps is the episode's
-    length). No rendering (render_mode None).
+    reward(obs, action, next_obs) -> float, default 0.0. max_episode_steps:
+    truncate after this many env.step calls (None: the scenario's length
+    only). rng, timestep, steps, perturb, model: as for run_scenario (steps
+    is the episode's length in physics steps). No rendering (render_mode None).
     """
 
     metadata = {"render_modes": []}
 
     def __init__(self, scenario: ScenarioLike, *, control_every: int = 1, reward: Optional[Reward] = None,
-                 rng: str = "mt19937_64", timestep: Optional[float] = None, steps: Optional[int] = None,
-                 perturb: bool = True, model: Optional[_core.Model] = None, render_mode: Optional[str] = None) -> None:
+                 max_episode_steps: Optional[int] = None, rng: str = "mt19937_64", timestep: Optional[float] = None,
+                 steps: Optional[int] = None, perturb: bool = True, model: Optional[_core.Model] = None,
+                 render_mode: Optional[str] = None) -> None:
         if render_mode is not None:
             raise ValueError(f"render_mode must be None (simloop environments do not render), got {render_mode!r}")
         self._setup = _Setup(scenario, 1, control_every, reward, rng, timestep, steps, perturb, model)
@@ -141,26 +186,37 @@ class ScenarioEnv(gymnasium.Env):
         self.observation_space = self._setup.observation_space
         self.observation_names = self._setup.names
         self.control_every = self._setup.control_every
+        self.max_episode_steps = _check_max_episode_steps(max_episode_steps)
         self._obs: Optional[np.ndarray] = None
+        self._decisions = 0
+        self._ended = False
 
     def reset(self, *, seed: Optional[int] = None,
               options: Optional[Dict[str, Any]] = None) -> Tuple[np.ndarray, Dict[str, Any]]:
+        _check_options(options, ())
         super().reset(seed=seed)
         episode_seed = _episode_seed(self.np_random, seed)
         self._obs = self._setup.episodes.reset(0, episode_seed)[2:]
+        self._decisions, self._ended = 0, False
         info = self._setup.info(0)
-        info["seed"] = episode_seed
+        info["seed"] = np.uint64(episode_seed)
         return self._obs.copy(), info
 
     def step(self, action: object) -> Tuple[np.ndarray, float, bool, bool, Dict[str, Any]]:
         if self._obs is None:
             raise ValueError("reset() the environment before step()")
+        if self._ended:
+            raise ValueError("the episode has ended: reset() it first")
         actions = self._setup.actions(action, (self._setup.nu,))
         rows, terminated, truncated = self._setup.episodes.step(actions.reshape(1, -1), self.control_every)
         obs = rows[0, 2:]
         reward = float(self._setup.rewards(self._obs[None], actions[None], obs[None])[0])
         self._obs = obs
-        return obs.copy(), reward, bool(terminated[0]), bool(truncated[0]), self._setup.info(0)
+        self._decisions += 1
+        ended_by = _ended_by(bool(terminated[0]), bool(truncated[0]), self._decisions, self.max_episode_steps)
+        self._ended = ended_by is not None
+        return (obs.copy(), reward, ended_by == "warning", self._ended and ended_by != "warning",
+                self._setup.info(0, ended_by))
 
 
 class ScenarioVectorEnv(VectorEnv):
@@ -168,21 +224,36 @@ class ScenarioVectorEnv(VectorEnv):
     data each, stepped together on `threads` C++ threads (None: one per
     core) with the GIL released. Bitwise the same as num_envs ScenarioEnvs
     reset with the same seeds and stepped with the same actions, whatever
-    the thread count. Autoreset: Gymnasium's next-step mode (the step after
-    an episode ends resets it, ignoring its action, with reward 0 and both
-    flags False); the new episode's seed is drawn from that env's own
-    np_random, as ScenarioEnv.reset() without a seed does. infos is {}.
-    Other arguments: as for ScenarioEnv.
+    the thread count, and the same infos as gymnasium.vector.SyncVectorEnv
+    over them gives.
+
+    autoreset_mode: Gymnasium's AutoresetMode (or its value, "NextStep",
+    "SameStep", "Disabled"). NEXT_STEP (the default): the step after an
+    episode ends resets it, ignoring its action, with reward 0 and both flags
+    False. SAME_STEP: the step that ends it resets it at once; the ended
+    episode's observation and info are in infos["final_obs"] and
+    infos["final_info"]. DISABLED: the caller resets ended envs with
+    reset(options={"reset_mask": mask}); stepping one first is an error. An
+    autoreset draws the new episode's seed from that env's own np_random, as
+    ScenarioEnv.reset() without a seed does. Other arguments: as for ScenarioEnv.
     """
 
     metadata = {"render_modes": [], "autoreset_mode": AutoresetMode.NEXT_STEP}
 
     def __init__(self, scenario: ScenarioLike, num_envs: int = 1, *, control_every: int = 1,
-                 reward: Optional[Reward] = None, threads: Optional[int] = None, rng: str = "mt19937_64",
-                 timestep: Optional[float] = None, steps: Optional[int] = None, perturb: bool = True,
-                 model: Optional[_core.Model] = None, render_mode: Optional[str] = None) -> None:
+                 reward: Optional[Reward] = None, max_episode_steps: Optional[int] = None,
+                 autoreset_mode: Union[AutoresetMode, str] = AutoresetMode.NEXT_STEP, threads: Optional[int] = None,
+                 rng: str = "mt19937_64", timestep: Optional[float] = None, steps: Optional[int] = None,
+                 perturb: bool = True, model: Optional[_core.Model] = None, render_mode: Optional[str] = None) -> None:
         if render_mode is not None:
             raise ValueError(f"render_mode must be None (simloop environments do not render), got {render_mode!r}")
+        try:
+            mode = AutoresetMode(autoreset_mode)
+        except ValueError:
+            raise ValueError(f"autoreset_mode must be one of {', '.join(repr(m.value) for m in AutoresetMode)}, "
+                             f"got {_describe(autoreset_mode)}") from None
+        self.metadata = {**type(self).metadata, "autoreset_mode": mode}
+        self.autoreset_mode = mode
         self.num_envs = _check_int("num_envs", num_envs, 1, 1 << 20)
         self._threads = _check_threads(threads)
         self._setup = _Setup(scenario, self.num_envs, control_every, reward, rng, timestep, steps, perturb, model)
@@ -192,22 +263,32 @@ class ScenarioVectorEnv(VectorEnv):
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.observation_names = self._setup.names
         self.control_every = self._setup.control_every
+        self.max_episode_steps = _check_max_episode_steps(max_episode_steps)
         self._rngs: List[Optional[np.random.Generator]] = [None] * self.num_envs
         self._obs: Optional[np.ndarray] = None
-        self._autoreset = np.zeros(self.num_envs, dtype=bool)
+        self._decisions = np.zeros(self.num_envs, dtype=np.int64)
+        self._ended = np.zeros(self.num_envs, dtype=bool)  # ended, not reset yet
 
-    def _reset_one(self, i: int, seed: Optional[int]) -> np.ndarray:
+    def _reset_one(self, i: int, seed: Optional[int], infos: Dict[str, Any]) -> np.ndarray:
         rng = self._rngs[i]
         if seed is not None or rng is None:
             rng, _ = seeding.np_random(seed)  # as gymnasium.Env.reset seeds np_random
             self._rngs[i] = rng
-        return self._setup.episodes.reset(i, _episode_seed(rng, seed))[2:]
+        episode_seed = _episode_seed(rng, seed)
+        obs = self._setup.episodes.reset(i, episode_seed)[2:]
+        self._decisions[i], self._ended[i] = 0, False
+        info = self._setup.info(i)
+        info["seed"] = np.uint64(episode_seed)
+        self._add_info(infos, info, i)
+        return obs
 
     def reset(self, *, seed: Union[int, Sequence[Optional[int]], None] = None,
               options: Optional[Dict[str, Any]] = None) -> Tuple[np.ndarray, Dict[str, Any]]:
         """seed: None, an int (env i gets seed + i, as Gymnasium's vector
-        environments do), or one seed (or None) per env. options: not used
-        (every env is reset)."""
+        environments do), or one seed (or None) per env. options:
+        {"reset_mask": a bool array of num_envs}: reset only those envs (the
+        others keep their episodes, and no info)."""
+        options = _check_options(options, ("reset_mask",))
         if seed is None:
             seeds: List[Optional[int]] = [None] * self.num_envs
         elif isinstance(seed, (int, np.integer)) and not isinstance(seed, bool):
@@ -217,28 +298,59 @@ class ScenarioVectorEnv(VectorEnv):
             seeds = list(cast(Sequence[Optional[int]], seed))
             if len(seeds) != self.num_envs:
                 raise ValueError(f"seed must be None, an int, or {self.num_envs} seeds, got {len(seeds)}")
-        self._obs = np.stack([self._reset_one(i, s) for i, s in enumerate(seeds)])
-        self._autoreset[:] = False
-        return self._obs.copy(), {}
+        mask = np.ones(self.num_envs, dtype=bool)
+        if "reset_mask" in options:
+            mask = options["reset_mask"]
+            if not isinstance(mask, np.ndarray) or mask.dtype != np.bool_ or mask.shape != (self.num_envs,):
+                raise ValueError(f"options['reset_mask'] must be a numpy bool array of shape ({self.num_envs},), "
+                                 f"got {_describe(mask)}")
+            if not mask.any():
+                raise ValueError("options['reset_mask'] resets no env: give at least one True")
+            if self._obs is None and not mask.all():
+                raise ValueError("the first reset must reset every env (no reset_mask, or all True)")
+        obs = self._obs if self._obs is not None else np.zeros((self.num_envs, len(self.observation_names)))
+        infos: Dict[str, Any] = {}
+        for i in np.flatnonzero(mask):
+            obs[i] = self._reset_one(int(i), seeds[i], infos)
+        self._obs = obs
+        return obs.copy(), infos
 
     def step(self, actions: object) -> Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, Dict[str, Any]]:
         if self._obs is None:
             raise ValueError("reset() the environment before step()")
         values = self._setup.actions(actions, (self.num_envs, self._setup.nu))
-        for i in np.flatnonzero(self._autoreset):
-            self._reset_one(int(i), None)
-        active = ~self._autoreset
+        infos: Dict[str, Any] = {}
+        if self.autoreset_mode == AutoresetMode.DISABLED and self._ended.any():
+            raise ValueError(f"env {int(np.flatnonzero(self._ended)[0])} has ended: reset it first "
+                             "(reset(options={'reset_mask': mask}); autoreset_mode is Disabled)")
+        resetting = self._ended.copy() if self.autoreset_mode == AutoresetMode.NEXT_STEP else np.zeros_like(self._ended)
+        for i in np.flatnonzero(resetting):
+            self._obs[i] = self._reset_one(int(i), None, infos)
+        active = ~resetting
         rows, terminated, truncated = self._setup.episodes.step(values, self.control_every, active.astype(np.uint8),
                                                                 self._threads)
         obs = rows[:, 2:]
+        obs[resetting] = self._obs[resetting]
         rewards = np.zeros(self.num_envs)
         if active.any():
             rewards[active] = self._setup.rewards(self._obs[active], values[active], obs[active])
-        terminated &= active
-        truncated &= active
+        self._decisions[active] += 1
+        terminated = terminated.astype(bool) & active
+        truncated = truncated.astype(bool) & active
+        for i in np.flatnonzero(active):
+            ended_by = _ended_by(bool(terminated[i]), bool(truncated[i]), int(self._decisions[i]),
+                                 self.max_episode_steps)
+            info = self._setup.info(int(i), ended_by)
+            if ended_by is not None:
+                truncated[i] = ended_by != "warning"
+                self._ended[i] = True
+                if self.autoreset_mode == AutoresetMode.SAME_STEP:
+                    self._add_info(infos, {"final_obs": obs[i].copy(), "final_info": info}, int(i))
+                    obs[i] = self._reset_one(int(i), None, infos)
+                    continue
+            self._add_info(infos, info, int(i))
         self._obs = obs
-        self._autoreset = terminated | truncated
-        return obs.copy(), rewards, terminated, truncated, {}
+        return obs.copy(), rewards, terminated, truncated, infos
 
 
 def chapter_env(**kwargs: Any) -> ScenarioEnv:
