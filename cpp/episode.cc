@@ -10,6 +10,7 @@
 #include "mujoco_guard.hpp"
 #include "run_detail.hpp"
 #include "simloop/errors.hpp"
+#include "simloop/scene_params.hpp"
 #include "simloop/shove.hpp"
 #include "simloop/state.hpp"
 
@@ -19,7 +20,8 @@ namespace {
 
 // One episode: its own Data, the schedule drawn at its reset, where it is.
 struct Episode {
-  explicit Episode(const Model& model) : data(model), health(model.get()) {}
+  explicit Episode(const Model& shared) : model(shared), data(shared), health(shared.get()) {}
+  Model model;  // the shared one, or a copy with this episode's scene parameters (the same sizes)
   Data data;
   Schedule schedule;
   std::optional<ScheduledInputs> inputs;  // empty until the first reset
@@ -41,7 +43,7 @@ struct Episodes::Impl {
   // The row for the state entering the episode's next step: the inputs
   // scheduled for it written, then what MuJoCo derives from the state.
   void observe(Episode& e, double* observation) const {
-    const mjModel* m = model.get();
+    const mjModel* m = e.model.get();
     mjData* d = e.data.get();
     detail::mujoco_call([&] {
       if (e.step < e.schedule.steps) e.inputs->write(e.step, d);
@@ -87,22 +89,39 @@ void check_index(std::size_t i, std::size_t count) {
 }
 }  // namespace
 
-void Episodes::reset(std::size_t i, std::uint64_t seed, double* observation) {
+void Episodes::reset(std::size_t i, std::uint64_t seed, double* observation, const ResetSpec* reset) {
   Impl& s = *impl_;
   check_index(i, s.episodes.size());
   Episode& e = s.episodes[i];
+  Scenario scenario_for_reset;
+  const Scenario* spec = &s.scenario;
+  if (reset != nullptr) {  // this episode's start instead of the scenario's
+    check_reset(s.resolved, *reset, s.model.get());
+    scenario_for_reset = s.scenario;
+    scenario_for_reset.reset = *reset;
+    spec = &scenario_for_reset;
+  }
   const std::unique_ptr<Draws> draws = make_draws(seed, s.config.rng);
-  e.schedule = build_schedule(s.resolved, s.scenario, s.model.timestep(), *draws);
+  Schedule schedule = build_schedule(s.resolved, *spec, s.model.timestep(), *draws);
+  Model model = with_scene_params(s.model, schedule.start.params);
+  e.schedule = std::move(schedule);
+  e.model = std::move(model);
   e.inputs.emplace(e.schedule, false);  // ctrl is the actions'
   e.step = 0;
-  const mjModel* m = s.model.get();
+  const mjModel* m = e.model.get();
   e.health = detail::StepHealth(m);
   mjData* d = e.data.get();
   detail::guarded_steps(m, 0, 0, [&] {
     mj_resetData(m, d);
+    detail::set_start(m, d, e.schedule.start);
     mj_forward(m, d);  // as run_loop starts
   });
   s.observe(e, observation);
+}
+
+const Model& Episodes::model(std::size_t i) const {
+  check_index(i, impl_->episodes.size());
+  return impl_->episodes[i].model;
 }
 
 void Episodes::step(const double* actions, std::size_t action_count, std::int64_t every, const std::uint8_t* active,
@@ -142,7 +161,7 @@ void Episodes::step(const double* actions, std::size_t action_count, std::int64_
   detail::run_jobs(count, threads, steps, control, [&](std::size_t i, int, RunControl& ctl) {
     if (steps[i] == 0) return;
     Episode& e = s.episodes[i];
-    const mjModel* m = s.model.get();
+    const mjModel* m = e.model.get();
     mjData* d = e.data.get();
     std::copy(actions + i * static_cast<std::size_t>(nu), actions + (i + 1) * static_cast<std::size_t>(nu), d->ctrl);
     const std::int64_t end = e.step + steps[i];

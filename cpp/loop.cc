@@ -47,6 +47,7 @@ LoopResult run_loop(const mjModel* m, mjData* d, const Schedule& schedule, const
     if (inputs.initial_state) {
       set_state(m, d, inputs.initial_state);  // forward, keeping the state as given
     } else {
+      set_start(m, d, schedule.start);
       mj_forward(m, d);
     }
   });

@@ -14,6 +14,7 @@
 // between chunks the rows go to the sink and the control may stop the run.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -101,6 +102,13 @@ struct LoopResult {
 // the steps it happened in; the control's stop throws Interrupted.
 // `d_is_reset`: d is already as mj_resetData leaves it for m (a fresh Data,
 // Data::fresh_for), which the loop then does not do again.
+// Writes the schedule's start (qpos, qvel; either may be empty: the reset's)
+// into `d`, which mj_resetData has just reset. The caller then runs mj_forward.
+inline void set_start(const mjModel* m, mjData* d, const Schedule::Start& start) noexcept {
+  if (!start.qpos.empty()) std::copy_n(start.qpos.data(), m->nq, d->qpos);
+  if (!start.qvel.empty()) std::copy_n(start.qvel.data(), m->nv, d->qvel);
+}
+
 [[nodiscard]] LoopResult run_loop(const mjModel* m, mjData* d, const Schedule& schedule,
                                   const RowRecorder& recorder, std::int64_t record_every, RowSink& rows,
                                   RunControl* control, const RunInputs& inputs,

@@ -5,10 +5,14 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
+#include <utility>
 #include <string>
 #include <vector>
 
 #include "simloop/errors.hpp"
+#include "simloop/number_format.hpp"
+#include "simloop/scene_params.hpp"
 
 namespace simloop {
 
@@ -155,7 +159,51 @@ ResolvedScenario resolve(const Scenario& scenario, const mjModel* m) {
     for (int a = 0; a < m->nu; ++a) r.actuators.push_back(a);
   }
   r.contacts = rec.contacts;
+  r.qpos0.assign(m->qpos0, m->qpos0 + m->nq);
+  r.nv = detail::compat::as_int(m->nv);
+  for (int j = 0; j < m->njnt; ++j) {
+    if (m->jnt_type[j] == mjJNT_FREE) r.quaternions.push_back(m->jnt_qposadr[j] + 3);
+    if (m->jnt_type[j] == mjJNT_BALL) r.quaternions.push_back(m->jnt_qposadr[j]);
+  }
+  check_reset(r, scenario.reset, m);
   return r;
+}
+
+void check_reset(const ResolvedScenario& scenario, const ResetSpec& reset, const mjModel* m) {
+  const auto check_values = [](const std::string& key, const std::vector<double>& values, std::size_t size,
+                               const char* what) {
+    if (!values.empty() && values.size() != size) {
+      throw InvalidArgument(key + " must hold the scene's " + what + " = " + std::to_string(size) + " values, got " +
+                            std::to_string(values.size()));
+    }
+    for (std::size_t i = 0; i < values.size(); ++i) {
+      if (!std::isfinite(values[i])) {
+        throw InvalidArgument(key + "[" + std::to_string(i) + "] must be finite, got " + python_float_repr(values[i]));
+      }
+    }
+  };
+  check_values("reset.qpos", reset.qpos, scenario.qpos0.size(), "nq");
+  check_values("reset.qvel", reset.qvel, static_cast<std::size_t>(scenario.nv), "nv");
+  for (const auto& [key, noise] : {std::pair{"reset.qpos_noise", reset.qpos_noise},
+                                   std::pair{"reset.qvel_noise", reset.qvel_noise}}) {
+    if (!std::isfinite(noise) || noise < 0.0) {
+      throw InvalidArgument(std::string(key) + " must be a finite number >= 0, got " + python_float_repr(noise));
+    }
+  }
+  for (std::size_t i = 0; i < reset.params.size(); ++i) {
+    const ResetSpec::Param& p = reset.params[i];
+    const std::string where = "reset.param[" + std::to_string(i) + "]: ";
+    if (!(p.low <= p.high)) {
+      throw InvalidArgument(where + "its range must have low <= high, got [" + python_float_repr(p.low) + ", " +
+                            python_float_repr(p.high) + "]");
+    }
+    try {
+      check_scene_param(m, {p.kind, p.name, p.low});
+      check_scene_param(m, {p.kind, p.name, p.high});
+    } catch (const InvalidArgument& e) {
+      throw InvalidArgument(where + e.what());
+    }
+  }
 }
 
 }  // namespace simloop

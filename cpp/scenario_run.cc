@@ -16,6 +16,7 @@
 #include "simloop/errors.hpp"
 #include "simloop/number_format.hpp"
 #include "simloop/output.hpp"
+#include "simloop/scene_params.hpp"
 
 namespace simloop {
 
@@ -84,9 +85,11 @@ RunRecord run_scenario(const Model& scene, const Scenario& scenario, const Scena
   if (workspace == nullptr) workspace = &own.emplace(model);
   if (!workspace->fits(model)) throw InvalidArgument("workspace Data was made for a model of another size");
   const PreparedRun run = prepare(model, scenario, config);
-  return labelled(detail::run_schedule_with(model.get(), workspace->get(), *run.recorder, run.schedule,
+  // The run's own scene parameters ([reset] params), on its own copy.
+  const Model with_params = with_scene_params(model, run.schedule.start.params);
+  return labelled(detail::run_schedule_with(with_params.get(), workspace->get(), *run.recorder, run.schedule,
                                             config.record_every, sink, control, inputs),
-                  model.get(), scenario, config);
+                  with_params.get(), scenario, config);
 }
 
 std::vector<RunRecord> run_scenario_batch(const Model& scene, const Scenario& scenario,
@@ -141,7 +144,10 @@ std::vector<RunRecord> run_scenario_batch(const Model& scene, const Scenario& sc
   std::vector<std::int64_t> steps;
   for (const PreparedRun& r : runs) steps.push_back(r.schedule.steps);
   detail::run_jobs(scene, configs.size(), threads, steps, control, [&](std::size_t i, Data& data, RunControl& ctl) {
-    const mjModel* m = model_of[i]->get();
+    // A run with scene parameters of its own ([reset] params) runs on its own
+    // copy, made here rather than up front: one at a time per worker.
+    const Model with_params = with_scene_params(*model_of[i], runs[i].schedule.start.params);
+    const mjModel* m = with_params.get();
     results[i] = labelled(detail::run_schedule_counted_elsewhere(m, data.get(), *runs[i].recorder, runs[i].schedule,
                                                                  configs[i].record_every, sinks[i], &ctl,
                                                                  inputs_of(i)),

@@ -9,10 +9,13 @@
 #include <cstring>
 #include <fstream>
 #include <sstream>
+#include <string>
+#include <utility>
 
 #include <toml++/toml.h>
 
 #include "simloop/errors.hpp"
+#include "simloop/scene_params.hpp"
 #include "simloop/number_format.hpp"
 
 namespace simloop {
@@ -105,6 +108,17 @@ class TableReader {
     if (array == nullptr || array->size() != count) {
       fail(key, "expected an array of " + std::to_string(count) + " numbers, got " + type_name(*node));
     }
+    std::vector<double> out;
+    for (const toml::node& item : *array) out.push_back(as_number(item, key));
+    return out;
+  }
+
+  // An array of numbers of any length (empty when the key is absent).
+  [[nodiscard]] std::vector<double> number_list(std::string_view key) const {
+    const toml::node* node = table_.get(key);
+    if (node == nullptr) return {};
+    const auto* array = node->as_array();
+    if (array == nullptr) fail(key, "expected an array of numbers, got " + type_name(*node));
     std::vector<double> out;
     for (const toml::node& item : *array) out.push_back(as_number(item, key));
     return out;
@@ -312,6 +326,47 @@ DisturbanceSpec read_disturbance(const TableReader& t) {
   return d;
 }
 
+// [reset]: how each run starts. Sizes and names are checked against the
+// scene when the scenario is resolved (check_reset).
+ResetSpec read_reset(const TableReader& t, const toml::table& table, std::string_view source) {
+  t.allow_only({"qpos", "qvel", "qpos_noise", "qvel_noise", "param"});
+  ResetSpec r;
+  r.qpos = t.number_list("qpos");
+  r.qvel = t.number_list("qvel");
+  for (const auto& [key, noise] : {std::pair{"qpos_noise", &r.qpos_noise}, std::pair{"qvel_noise", &r.qvel_noise}}) {
+    *noise = t.number(key).value_or(0.0);
+    if (*noise < 0.0) t.fail(key, "must not be negative (the half-width of a uniform noise), got " + python_float_repr(*noise));
+  }
+  if (const toml::node* node = table.get("param")) {
+    const auto* array = node->as_array();
+    if (array == nullptr || !array->is_array_of_tables()) t.fail("param", "expected [[reset.param]] tables");
+    for (std::size_t i = 0; i < array->size(); ++i) {
+      const TableReader p(*array->get(i)->as_table(), std::string(source), "reset.param[" + std::to_string(i) + "]");
+      p.allow_only({"kind", "name", "value", "uniform"});
+      const std::optional<std::string> kind = p.string("kind");
+      if (!kind) p.fail("kind", "missing: friction, mass, damping or gravity");
+      ResetSpec::Param param;
+      try {
+        param.kind = scene_param_kind(*kind);
+      } catch (const InvalidArgument& e) {
+        p.fail("kind", e.what());
+      }
+      param.name = p.string("name").value_or("");
+      const std::optional<double> value = p.number("value");
+      const std::optional<std::vector<double>> range = p.numbers("uniform", 2);
+      if (value.has_value() == range.has_value()) p.fail("", "give value (fixed) or uniform = [low, high] (drawn per run)");
+      if (range && (*range)[0] > (*range)[1]) {
+        p.fail("uniform", "expected [low, high] with low <= high, got [" + python_float_repr((*range)[0]) + ", " +
+                              python_float_repr((*range)[1]) + "]");
+      }
+      param.low = value ? *value : (*range)[0];
+      param.high = value ? *value : (*range)[1];
+      r.params.push_back(param);
+    }
+  }
+  return r;
+}
+
 }  // namespace
 
 Scenario Scenario::from_toml_file(const std::filesystem::path& path) {
@@ -340,7 +395,7 @@ Scenario Scenario::from_toml_string(std::string_view text, std::string_view sour
                           ": " + std::string(e.description()));
   }
   const TableReader top(root, std::string(source));
-  top.allow_only({"name", "scene", "timestep", "steps", "duration", "control", "disturbance", "record"});
+  top.allow_only({"name", "scene", "timestep", "steps", "duration", "control", "disturbance", "record", "reset"});
   Scenario s;
   s.name = top.string("name").value_or("");
   if (const auto scene = top.string("scene")) {
@@ -381,6 +436,11 @@ Scenario Scenario::from_toml_string(std::string_view text, std::string_view sour
     s.record.actuators = r.strings("actuators");
     s.record.sensors = r.strings("sensors");
     s.record.contacts = r.boolean("contacts").value_or(true);
+  }
+  if (const toml::node* node = root.get("reset")) {
+    const auto* table = node->as_table();
+    if (table == nullptr) top.fail("reset", "expected a [reset] table");
+    s.reset = read_reset(TableReader(*table, std::string(source), "reset"), *table, source);
   }
   return s;
 }

@@ -43,18 +43,23 @@ void check_value(const SceneParam& p) {
   }
 }
 
-// Returns true if the constants mj_setConst derives from the masses must be recomputed.
-bool apply(mjModel* m, const SceneParam& p) {
+// Applies `p` to `m` (with `m` null: only checks it against `scene`).
+// Returns true if the constants mj_setConst derives from the masses must be
+// recomputed.
+bool apply(const mjModel* scene, mjModel* m, const SceneParam& p) {
+  check_value(p);
   switch (p.kind) {
     case SceneParam::Kind::kFriction: {
-      const int first = p.name.empty() ? 0 : find_named(m, mjOBJ_GEOM, detail::compat::as_int(m->ngeom), "geom", "geoms", p);
-      const int end = p.name.empty() ? detail::compat::as_int(m->ngeom) : first + 1;
+      const int first = p.name.empty() ? 0 : find_named(scene, mjOBJ_GEOM, detail::compat::as_int(scene->ngeom), "geom", "geoms", p);
+      const int end = p.name.empty() ? detail::compat::as_int(scene->ngeom) : first + 1;
+      if (m == nullptr) return false;
       for (int g = first; g < end; ++g) m->geom_friction[3 * g] = p.value;
       return false;
     }
     case SceneParam::Kind::kDamping: {
-      const int first = p.name.empty() ? 0 : find_named(m, mjOBJ_JOINT, detail::compat::as_int(m->njnt), "joint", "joints", p);
-      const int end = p.name.empty() ? detail::compat::as_int(m->njnt) : first + 1;
+      const int first = p.name.empty() ? 0 : find_named(scene, mjOBJ_JOINT, detail::compat::as_int(scene->njnt), "joint", "joints", p);
+      const int end = p.name.empty() ? detail::compat::as_int(scene->njnt) : first + 1;
+      if (m == nullptr) return false;
       for (int j = first; j < end; ++j) {
         for (int v = 0; v < m->nv; ++v) {
           if (m->dof_jntid[v] == j) m->dof_damping[v] = p.value;
@@ -64,13 +69,14 @@ bool apply(mjModel* m, const SceneParam& p) {
     }
     case SceneParam::Kind::kMass: {
       if (p.name.empty()) throw InvalidArgument(describe(p) + ": a mass needs a body's name");
-      const int body = find_named(m, mjOBJ_BODY, detail::compat::as_int(m->nbody), "body", "bodies", p);
+      const int body = find_named(scene, mjOBJ_BODY, detail::compat::as_int(scene->nbody), "body", "bodies", p);
       if (body == 0) throw InvalidArgument(describe(p) + ": the world body has no mass to set");
-      const double old_mass = m->body_mass[body];
+      const double old_mass = scene->body_mass[body];
       if (!(old_mass > 0.0)) {
         throw InvalidArgument(describe(p) + ": body '" + p.name +
                               "' has no mass in the scene, so there is no inertia to scale");
       }
+      if (m == nullptr) return false;
       // Same shape, another density: the inertia scales with the mass. An
       // unchanged mass is a factor of exactly 1 and a difference of exactly 0.
       const double factor = p.value / old_mass;
@@ -81,9 +87,25 @@ bool apply(mjModel* m, const SceneParam& p) {
       m->body_subtreemass[0] += difference;
       return true;
     }
+    case SceneParam::Kind::kGravity: {
+      if (!p.name.empty()) throw InvalidArgument(describe(p) + ": gravity is the whole scene's: give no name");
+      if (m == nullptr) return false;
+      const double norm = std::sqrt(m->opt.gravity[0] * m->opt.gravity[0] + m->opt.gravity[1] * m->opt.gravity[1] +
+                                    m->opt.gravity[2] * m->opt.gravity[2]);
+      if (norm == 0.0) {
+        m->opt.gravity[0] = m->opt.gravity[1] = 0.0;
+        m->opt.gravity[2] = -p.value;
+      } else {
+        for (int k = 0; k < 3; ++k) m->opt.gravity[k] *= p.value / norm;
+      }
+      return false;
+    }
   }
   return false;
 }
+
+constexpr SceneParam::Kind kKinds[] = {SceneParam::Kind::kFriction, SceneParam::Kind::kMass,
+                                       SceneParam::Kind::kDamping, SceneParam::Kind::kGravity};
 
 }  // namespace
 
@@ -92,9 +114,21 @@ const char* scene_param_kind_name(SceneParam::Kind kind) noexcept {
     case SceneParam::Kind::kFriction: return "friction";
     case SceneParam::Kind::kMass: return "mass";
     case SceneParam::Kind::kDamping: return "damping";
+    case SceneParam::Kind::kGravity: return "gravity";
   }
   return "?";
 }
+
+SceneParam::Kind scene_param_kind(std::string_view name) {
+  std::string list;
+  for (const SceneParam::Kind kind : kKinds) {
+    if (name == scene_param_kind_name(kind)) return kind;
+    list += (list.empty() ? "'" : ", '") + std::string(scene_param_kind_name(kind)) + "'";
+  }
+  throw InvalidArgument("scene parameter kind must be one of " + list + ", got '" + std::string(name) + "'");
+}
+
+void check_scene_param(const mjModel* m, const SceneParam& param) { (void)apply(m, nullptr, param); }
 
 Model with_scene_params(const Model& model, const std::vector<SceneParam>& params) {
   for (const SceneParam& p : params) check_value(p);
@@ -104,7 +138,7 @@ Model with_scene_params(const Model& model, const std::vector<SceneParam>& param
   Model copy = model.with_timestep(model.timestep());
   mjModel* m = const_cast<mjModel*>(copy.get());
   bool masses_changed = false;
-  for (const SceneParam& p : params) masses_changed = apply(m, p) || masses_changed;
+  for (const SceneParam& p : params) masses_changed = apply(m, m, p) || masses_changed;
   if (masses_changed) {
     mjData* d = nullptr;
     try {

@@ -177,15 +177,7 @@ void bind_model(py::module_& m) {
         std::vector<simloop::SceneParam> converted;
         for (const auto& [kind, name, value] : params) {
           simloop::SceneParam p;
-          if (kind == "friction") {
-            p.kind = simloop::SceneParam::Kind::kFriction;
-          } else if (kind == "mass") {
-            p.kind = simloop::SceneParam::Kind::kMass;
-          } else if (kind == "damping") {
-            p.kind = simloop::SceneParam::Kind::kDamping;
-          } else {
-            throw py::value_error("scene parameter kind must be 'friction', 'mass' or 'damping', got '" + kind + "'");
-          }
+          p.kind = simloop::scene_param_kind(kind);
           p.name = name;
           p.value = value;
           converted.push_back(p);

@@ -247,17 +247,20 @@ void bind_sim(py::module_& m) {
                              })
       .def(
           "reset",
-          [](PyEpisodes& e, std::size_t i, std::uint64_t seed) {
+          [](PyEpisodes& e, std::size_t i, std::uint64_t seed, const std::optional<std::string>& reset) {
             std::lock_guard<std::mutex> lock(e.mutex);
             const auto width = static_cast<std::size_t>(e.episodes.width());
             if (i >= e.episodes.count()) {
               throw py::index_error("episode " + std::to_string(i) + " does not exist: there are " +
                                     std::to_string(e.episodes.count()));
             }
-            e.episodes.reset(i, seed, e.observations.data() + i * width);
+            // This episode's start, as a scenario file's [reset] table says it.
+            std::optional<simloop::ResetSpec> spec;
+            if (reset) spec = simloop::Scenario::from_toml_string(*reset, "reset options").reset;
+            e.episodes.reset(i, seed, e.observations.data() + i * width, spec ? &*spec : nullptr);
             return vec(e.observations.data() + i * width, width);
           },
-          "i"_a, "seed"_a)
+          "i"_a, "seed"_a, "reset"_a = py::none())
       .def(
           "step",
           [](PyEpisodes& e, const Doubles& actions, std::int64_t every,

@@ -43,13 +43,19 @@ class Episodes {
   [[nodiscard]] const std::vector<Column>& columns() const noexcept;
   // The length of an episode, in physics steps.
   [[nodiscard]] std::int64_t steps() const noexcept;
-  // The model the episodes step (the scene at the run's timestep).
+  // The model the episodes step (the scene at the run's timestep); an
+  // episode started with scene parameters steps its own copy (model(i)).
   [[nodiscard]] const Model& model() const noexcept;
+  [[nodiscard]] const Model& model(std::size_t i) const;
 
   // Starts episode i afresh (t = 0, the model's initial state, ctrl 0) with
-  // its disturbances drawn from `seed`, and writes its first observation
-  // into observation[0 .. width()).
-  void reset(std::size_t i, std::uint64_t seed, double* observation);
+  // its disturbances drawn from `seed`, then its start (the scenario's
+  // ResetSpec, or `reset` for this episode instead when given: its state,
+  // noise and scene parameters, drawn from the same seed after the
+  // disturbances), and writes its first observation into
+  // observation[0 .. width()). A bad `reset` throws InvalidArgument
+  // (check_reset) and leaves the episode as it was.
+  void reset(std::size_t i, std::uint64_t seed, double* observation, const ResetSpec* reset = nullptr);
 
   // For each episode i with active[i] (all when `active` is null): writes
   // actions[i*nu .. i*nu+nu) into its ctrl and takes `every` physics steps

@@ -28,6 +28,8 @@
 
 #include <mujoco/mujoco.h>
 
+#include "simloop/model.hpp"
+#include "simloop/scene_params.hpp"
 #include "simloop/shove.hpp"
 
 namespace simloop {
@@ -85,6 +87,29 @@ struct RecordSpec {
   bool contacts = true;                // contact count
 };
 
+// How a run starts, beyond the scene's reset pose: a scenario file's
+// [reset] table, or one episode's reset options (Episodes::reset). What is
+// random is drawn from the run's generator after the disturbances, in this
+// order: each param's value, then the noise on each qpos coordinate, then on
+// each qvel coordinate. Sizes and names are checked when resolved.
+struct ResetSpec {
+  std::vector<double> qpos;  // the scene's nq values, or empty: its qpos0
+  std::vector<double> qvel;  // nv values, or empty: at rest
+  double qpos_noise = 0.0;   // each qpos coordinate plus uniform(-noise, +noise); quaternions renormalised
+  double qvel_noise = 0.0;   // the same for qvel
+  // A scene parameter (scene_params.hpp) for this run only, uniform in [low, high].
+  struct Param {
+    SceneParam::Kind kind = SceneParam::Kind::kFriction;
+    std::string name;
+    double low = 0.0, high = 0.0;
+  };
+  std::vector<Param> params;
+
+  [[nodiscard]] bool empty() const noexcept {
+    return qpos.empty() && qvel.empty() && qpos_noise == 0.0 && qvel_noise == 0.0 && params.empty();
+  }
+};
+
 struct Scenario {
   std::string name;              // for titles and recording ids; the file's stem by default
   std::filesystem::path scene;   // an MJCF file; empty: the chapter's embedded scene
@@ -93,6 +118,7 @@ struct Scenario {
   std::vector<ControlSpec> controls;
   std::vector<DisturbanceSpec> disturbances;
   RecordSpec record;
+  ResetSpec reset;
 
   // The chapter's run: its scene, ctrl 1.0 on push_motor, the shove on box.
   [[nodiscard]] static Scenario chapter();
@@ -119,11 +145,17 @@ struct ResolvedScenario {
   std::vector<Disturbance> disturbances;
   std::vector<int> bodies, joints, actuators, sensors;  // to record
   bool contacts = true;
+  // What the start draws against: the scene's qpos0, its nv, and where its
+  // quaternions sit in qpos (free and ball joints), to renormalise them.
+  std::vector<double> qpos0;
+  int nv = 0;
+  std::vector<int> quaternions;
 };
 
-// Resolves every name in `scenario` against `model`. An unknown name throws
-// InvalidArgument: "no body named 'tblok' (did you mean 'tblock'?); bodies
-// that can move: tblock, pusher". Actuators may be given by index.
+// Resolves every name in `scenario` against `model`, and checks its reset
+// (check_reset). An unknown name throws InvalidArgument: "no body named
+// 'tblok' (did you mean 'tblock'?); bodies that can move: tblock, pusher".
+// Actuators may be given by index.
 [[nodiscard]] ResolvedScenario resolve(const Scenario& scenario, const mjModel* model);
 
 // Every input of a run, decided up front. The loop only reads it.
@@ -143,12 +175,27 @@ struct Schedule {
     std::int64_t asked_end = 0;      // where the scenario asked it to end (may be past the run)
   };
   std::vector<Force> forces;
+  // How the run starts (the scenario's ResetSpec, drawn): qpos and qvel to
+  // set after the reset (empty: the scene's own), and the scene parameters
+  // of this run's own copy of the model (empty: the shared model).
+  struct Start {
+    std::vector<double> qpos, qvel;
+    std::vector<SceneParam> params;
+  };
+  Start start;
 };
 
-// Draws the random disturbances (in scenario order) and lays out the inputs
-// for a run of the scenario's length at `timestep`.
+// Draws the random disturbances (in scenario order), then the start
+// (spec.reset), and lays out the inputs for a run of the scenario's length
+// at `timestep`.
 [[nodiscard]] Schedule build_schedule(const ResolvedScenario& scenario, const Scenario& spec, double timestep,
                                       Draws& draws);
+
+// Checks a ResetSpec against the resolved scene: qpos of nq values, qvel of
+// nv, every value finite, noise finite and >= 0, each param's low <= high
+// and its name and values valid for the scene (InvalidArgument naming the
+// key: "reset.qpos must hold the scene's nq = 7 values, got 3").
+void check_reset(const ResolvedScenario& scenario, const ResetSpec& reset, const mjModel* m);
 
 // The closest of `candidates` to `name` by edit distance, if close enough to
 // be a likely typo; empty otherwise.

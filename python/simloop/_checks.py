@@ -13,7 +13,7 @@ from __future__ import annotations
 import functools
 import numbers
 import os
-from typing import TYPE_CHECKING, Any, Callable, Iterable, List, Optional, Sequence, Union
+from typing import TYPE_CHECKING, Any, Callable, Iterable, List, Mapping, Optional, Sequence, Union
 
 if TYPE_CHECKING:  # (importing numpy would cost every `import simloop` ~50 ms)
     import numpy as np
@@ -57,6 +57,14 @@ def _check_int(name: str, value: object, minimum: int = I64_MIN, maximum: int = 
     if not minimum <= number <= maximum:
         raise ValueError(f"{name} must be an integer from {minimum} to {maximum}, got {_show(number)}")
     return number
+
+
+def _check_keys(name: str, mapping: "Mapping[Any, Any]", known: Sequence[str]) -> None:
+    """A dict's keys, all known: never silently ignored."""
+    unknown = sorted(str(k) for k in mapping if k not in known)
+    if unknown:
+        raise ValueError(f"{name}: unknown key{'s' if len(unknown) > 1 else ''} {', '.join(map(repr, unknown))} "
+                         f"(known: {', '.join(map(repr, known)) if known else 'none'})")
 
 
 def _check_seed(name: str, value: object) -> int:

@@ -22,6 +22,7 @@ if TYPE_CHECKING:
 
 BATCH_USAGE = """usage: python -m simloop batch [--scenario FILE] [--seeds SEEDS] [--timestep S,S,...]
                               [--friction [GEOM=]V,V,...] [--mass BODY=V,V,...] [--damping [JOINT=]V,V,...]
+                              [--gravity G,G,...]
                               [--steps N] [--rng mt19937_64|numpy] [--no-perturb]
                               [--scheduler ADDRESS] [--threads N] [--chunk-size N] [--out FILE.parquet] [--resume]
 
@@ -35,6 +36,7 @@ metrics (unrounded), a count per warning and a diverged flag.
   --friction [GEOM=]V,...  sliding friction of every geom, or of GEOM (repeatable)
   --mass BODY=V,...    BODY's mass, kg, its inertia scaled alike (repeatable)
   --damping [JOINT=]V,...  damping of every joint, or of JOINT (repeatable)
+  --gravity G,...      gravity's strength, m/s^2 (its direction kept)
   --steps N            instead of the scenario's length
   --rng NAME           the generator that draws the scenario's random disturbances
   --no-perturb         no disturbances
@@ -44,7 +46,7 @@ metrics (unrounded), a count per warning and a diverged flag.
   --out FILE           the Parquet file (default outputs/batch.parquet)
   --resume             finish an interrupted batch from FILE.parts/ (what it wrote is not recomputed)
 
-Rows come in the order of itertools.product(friction..., mass..., damping...,
+Rows come in the order of itertools.product(the parameters as given,
 timesteps, seeds): the seed varies fastest. Ctrl-C stops the batch; the
 chunks already done stay in FILE.parts/ for --resume, and FILE is written only
 once it is complete."""
@@ -92,7 +94,8 @@ def _parse_batch_args(args: List[str]) -> Dict[str, Any]:
         "scenario": None, "seeds": [0], "timesteps": [None], "params": [], "steps": None, "rng": "mt19937_64",
         "perturb": True, "scheduler": None, "threads": None, "chunk_size": None,
         "out": "outputs/batch.parquet", "resume": False, "help": False}
-    with_value = {"--scenario", "--seeds", "--timestep", "--friction", "--mass", "--damping", "--steps", "--rng",
+    with_value = {"--scenario", "--seeds", "--timestep", "--friction", "--mass", "--damping", "--gravity",
+                  "--steps", "--rng",
                   "--scheduler", "--threads", "--chunk-size", "--out"}
     i = 0
     while i < len(args):
@@ -121,11 +124,13 @@ def _parse_batch_args(args: List[str]) -> Dict[str, Any]:
             bad = [t for t in opts["timesteps"] if not t > 0]
             if bad:
                 raise _BatchUsage(f"--timestep: {bad[0]!r} is not a positive number of seconds")
-        elif flag in ("--friction", "--mass", "--damping"):
+        elif flag in ("--friction", "--mass", "--damping", "--gravity"):
             kind = flag[2:]
             name, has_name, values = value.rpartition("=")
             if kind == "mass" and not has_name:
                 raise _BatchUsage(f"--mass: '{value}' needs a body: --mass BODY=KG,KG,...")
+            if kind == "gravity" and has_name:
+                raise _BatchUsage(f"--gravity: '{value}': gravity is the whole scene's, give values only: --gravity G,G,...")
             if has_name and not name:
                 raise _BatchUsage(f"{flag}: '{value}' has an empty name before '='")
             column = f"{kind}_{name}" if name else kind

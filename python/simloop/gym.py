@@ -30,6 +30,13 @@ Episodes, include/simloop/episode.hpp):
   MuJoCo found a bad position, velocity or acceleration and reset its state
   (mjWARN_BADQPOS, BADQVEL, BADQACC); the episode stops at that physics step
   and info["warnings"] names them.
+- reset(seed, options): options qpos, qvel (the scene's nq / nv values),
+  qpos_noise, qvel_noise (half-widths of uniform noise, drawn from the
+  episode's seed after its disturbances) and params (scene parameters for
+  this episode: [{"kind": "friction" | "mass" | "damping" | "gravity",
+  "name": ..., "value": v or "uniform": [low, high]}]): the scenario's
+  [reset] table, for this episode (given, they replace the scenario's).
+  Unknown keys, wrong sizes and names are errors; the env stays usable.
 - info: "step" (physics steps since reset) and "time" (s) always; "seed"
   (the episode's, a numpy uint64) from reset; "ended_by" on the step that
   ends an episode: "warning", "length" or "max_episode_steps".
@@ -60,8 +67,8 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from . import _core, _gym_registry
-from ._checks import _check_int, _check_seed, _check_threads, _describe
-from .scenario import Scenario, ScenarioLike, _scenario_and_scene, scenario_config
+from ._checks import _check_int, _check_keys, _check_seed, _check_threads, _describe
+from .scenario import RESET_KEYS, Scenario, ScenarioLike, _scenario_and_scene, reset_toml, scenario_config
 
 PUSHT_SCENARIO = os.path.join(os.path.dirname(os.path.abspath(__file__)), "scenes", "pusht.toml")
 
@@ -144,11 +151,16 @@ def _check_options(options: object, known: Sequence[str]) -> Dict[str, Any]:
         return {}
     if not isinstance(options, dict):
         raise TypeError(f"options must be a dict or None, got {_describe(options)}")
-    unknown = sorted(str(k) for k in options if k not in known)
-    if unknown:
-        raise ValueError(f"options: unknown key{'s' if len(unknown) > 1 else ''} {', '.join(map(repr, unknown))} "
-                         f"(known: {', '.join(map(repr, known)) if known else 'none'})")
+    _check_keys("options", options, known)
     return options
+
+
+def _start(options: Dict[str, Any]) -> Optional[str]:
+    """The episode's start from reset's options, as a [reset] table (None:
+    the scenario's own). Given, it replaces the scenario's [reset] for that
+    episode."""
+    reset = {k: v for k, v in options.items() if k in RESET_KEYS}
+    return reset_toml(reset) if reset else None
 
 
 def _check_max_episode_steps(value: object) -> Optional[int]:
@@ -193,10 +205,10 @@ class ScenarioEnv(gymnasium.Env):
 
     def reset(self, *, seed: Optional[int] = None,
               options: Optional[Dict[str, Any]] = None) -> Tuple[np.ndarray, Dict[str, Any]]:
-        _check_options(options, ())
+        start = _start(_check_options(options, RESET_KEYS))
         super().reset(seed=seed)
         episode_seed = _episode_seed(self.np_random, seed)
-        self._obs = self._setup.episodes.reset(0, episode_seed)[2:]
+        self._obs = self._setup.episodes.reset(0, episode_seed, start)[2:]
         self._decisions, self._ended = 0, False
         info = self._setup.info(0)
         info["seed"] = np.uint64(episode_seed)
@@ -269,13 +281,13 @@ class ScenarioVectorEnv(VectorEnv):
         self._decisions = np.zeros(self.num_envs, dtype=np.int64)
         self._ended = np.zeros(self.num_envs, dtype=bool)  # ended, not reset yet
 
-    def _reset_one(self, i: int, seed: Optional[int], infos: Dict[str, Any]) -> np.ndarray:
+    def _reset_one(self, i: int, seed: Optional[int], infos: Dict[str, Any], start: Optional[str] = None) -> np.ndarray:
         rng = self._rngs[i]
         if seed is not None or rng is None:
             rng, _ = seeding.np_random(seed)  # as gymnasium.Env.reset seeds np_random
             self._rngs[i] = rng
         episode_seed = _episode_seed(rng, seed)
-        obs = self._setup.episodes.reset(i, episode_seed)[2:]
+        obs = self._setup.episodes.reset(i, episode_seed, start)[2:]
         self._decisions[i], self._ended[i] = 0, False
         info = self._setup.info(i)
         info["seed"] = np.uint64(episode_seed)
@@ -285,10 +297,12 @@ class ScenarioVectorEnv(VectorEnv):
     def reset(self, *, seed: Union[int, Sequence[Optional[int]], None] = None,
               options: Optional[Dict[str, Any]] = None) -> Tuple[np.ndarray, Dict[str, Any]]:
         """seed: None, an int (env i gets seed + i, as Gymnasium's vector
-        environments do), or one seed (or None) per env. options:
-        {"reset_mask": a bool array of num_envs}: reset only those envs (the
-        others keep their episodes, and no info)."""
-        options = _check_options(options, ("reset_mask",))
+        environments do), or one seed (or None) per env. options: as for
+        ScenarioEnv.reset (the same start for every env reset, each drawn
+        from its own seed), and "reset_mask": a bool array of num_envs: reset
+        only those envs (the others keep their episodes, and no info)."""
+        options = _check_options(options, ("reset_mask",) + RESET_KEYS)
+        start = _start(options)
         if seed is None:
             seeds: List[Optional[int]] = [None] * self.num_envs
         elif isinstance(seed, (int, np.integer)) and not isinstance(seed, bool):
@@ -311,7 +325,7 @@ class ScenarioVectorEnv(VectorEnv):
         obs = self._obs if self._obs is not None else np.zeros((self.num_envs, len(self.observation_names)))
         infos: Dict[str, Any] = {}
         for i in np.flatnonzero(mask):
-            obs[i] = self._reset_one(int(i), seeds[i], infos)
+            obs[i] = self._reset_one(int(i), seeds[i], infos, start)
         self._obs = obs
         return obs.copy(), infos
 

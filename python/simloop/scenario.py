@@ -23,7 +23,7 @@ import os
 from typing import Any, Dict, Iterable, Mapping, Optional, Sequence, Tuple, Union
 
 from . import _core
-from ._checks import _check_bool, _check_int, _check_real, _check_seed, _check_str, _describe, load_model
+from ._checks import _check_bool, _check_int, _check_keys, _check_real, _check_seed, _check_str, _describe, load_model
 from ._mujoco_check import is_mujoco_model
 
 ScenarioResult = _core.ScenarioResult
@@ -112,6 +112,27 @@ def _toml_table(header: str, items: Mapping[str, object]) -> str:
     return "\n".join(lines) + "\n"
 
 
+RESET_KEYS = ("qpos", "qvel", "qpos_noise", "qvel_noise", "params")
+
+
+def reset_toml(reset: Mapping[str, Any]) -> str:
+    """A [reset] table from {qpos, qvel, qpos_noise, qvel_noise, params}:
+    params is a list of dicts with the file's keys (kind, name, value or
+    uniform = [low, high])."""
+    if not isinstance(reset, Mapping):
+        raise TypeError(f"reset must be a dict, got {_describe(reset)}")
+    _check_keys("reset", reset, RESET_KEYS)
+    text = _toml_table("[reset]", {k: v for k, v in reset.items() if k != "params"})
+    params = reset.get("params") or ()
+    if isinstance(params, Mapping) or not isinstance(params, Iterable):
+        raise TypeError(f"reset params must be a list of dicts, got {_describe(params)}")
+    for param in params:
+        if not isinstance(param, Mapping):
+            raise TypeError(f"each reset param must be a dict (kind, name, value or uniform), got {_describe(param)}")
+        text += "\n" + _toml_table("[[reset.param]]", param)
+    return text
+
+
 class Scenario:
     """A scenario. Scenario(...) builds one from keyword arguments;
     Scenario.from_file(path) reads a TOML file; Scenario.chapter() is the
@@ -126,14 +147,18 @@ class Scenario:
     name or index. disturbances: a list of dicts with the scenario file's keys (body,
     force, torque, newtons, direction, random_sign, start, start_step,
     start_fraction, duration, steps). record: a dict with bodies, joints,
-    actuators, sensors (lists of names) and contacts (bool).
+    actuators, sensors (lists of names) and contacts (bool). reset: how
+    each run starts, a dict with qpos, qvel (the scene's nq / nv values),
+    qpos_noise, qvel_noise (half-widths of uniform noise drawn from the run's
+    seed) and params (a list of dicts: kind "friction", "mass", "damping" or
+    "gravity", name, and value or uniform = [low, high]).
     """
 
     def __init__(self, scene: Union[str, "os.PathLike[str]", None] = None, *, name: str = "",
                  timestep: Optional[float] = None, steps: Optional[int] = None, duration: Optional[float] = None,
                  controls: Optional[Mapping[Union[str, int], Any]] = None,
                  disturbances: Iterable[Mapping[str, Any]] = (),
-                 record: Optional[Mapping[str, Any]] = None) -> None:
+                 record: Optional[Mapping[str, Any]] = None, reset: Optional[Mapping[str, Any]] = None) -> None:
         text = _toml_table("", {"name": name or None, "scene": scene, "timestep": timestep, "steps": steps,
                                 "duration": duration})
         for actuator, value in (controls or {}).items():
@@ -144,6 +169,8 @@ class Scenario:
             text += "\n" + _toml_table("[[disturbance]]", d)
         if record is not None:
             text += "\n" + _toml_table("[record]", record)
+        if reset is not None:
+            text += "\n" + reset_toml(reset)
         self._base = os.getcwd()  # where its relative paths resolve (sent along to workers)
         self._core = _core.Scenario.from_toml(text, "Scenario(...)", self._base)
         self.toml = text

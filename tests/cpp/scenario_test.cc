@@ -10,6 +10,7 @@
 #include "simloop/run.hpp"
 #include "simloop/scenario.hpp"
 #include "simloop/shove.hpp"
+#include "test_util.hpp"
 
 namespace {
 
@@ -22,16 +23,7 @@ const mjModel* chapter_model() {
   return model.get();
 }
 
-// The message of the InvalidArgument that `f` throws ("" if none).
-template <class F>
-std::string error_of(F&& f) {
-  try {
-    f();
-  } catch (const InvalidArgument& e) {
-    return e.what();
-  }
-  return "";
-}
+using test::error_of;
 
 TEST(Scenario, ATomlFileSaysEverythingAsData) {
   const Scenario s = Scenario::from_toml_string(R"(
@@ -97,7 +89,7 @@ TEST(Scenario, BadFilesNameTheKeyAndWhatIsWrong) {
   EXPECT_EQ(error("timestep = -1"), "s.toml: timestep: must be a positive number of seconds, got -1.0");
   EXPECT_EQ(error("setps = 5"),
             "s.toml: setps: unknown key (did you mean 'steps'?); known keys: name, scene, timestep, steps, duration, "
-            "control, disturbance, record");
+            "control, disturbance, record, reset");
   EXPECT_EQ(error("steps = 5\nduration = 1.0"), "s.toml: give only one of duration, steps");
   EXPECT_EQ(error("[[control]]\nvalue = 1"), "s.toml: control[0].actuator: missing: name the actuator (or give its index)");
   EXPECT_EQ(error("[[control]]\nactuator = 'a'\nvalue = 'x'"), "s.toml: control[0].value: expected a number, got a string");
@@ -251,11 +243,6 @@ TEST(DidYouMean, SuggestsOnlyLikelyTypos) {
   EXPECT_EQ(simloop::did_you_mean("x", {}), "");
 }
 
-}  // namespace
-
-#include "test_util.hpp"
-
-namespace {
 
 TEST(Scenario, AControlMayComeFromACsvWithARowPerStep) {
   test::TempDir dir;

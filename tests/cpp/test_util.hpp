@@ -9,6 +9,8 @@
 #include <sstream>
 #include <string>
 
+#include "simloop/errors.hpp"
+
 namespace test {
 
 // A fresh directory under the system's temp dir, removed with its contents.
@@ -30,6 +32,17 @@ class TempDir {
  private:
   std::filesystem::path path_;
 };
+
+// The message of the simloop::InvalidArgument that `f` throws ("" if none).
+template <class F>
+std::string error_of(F&& f) {
+  try {
+    f();
+  } catch (const simloop::InvalidArgument& e) {
+    return e.what();
+  }
+  return "";
+}
 
 inline std::string read_text(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);

@@ -1,0 +1,157 @@
+// How a run starts ([reset] in a scenario file, or one episode's reset):
+// the state, noise on it and scene parameters, drawn from the run's seed
+// after the disturbances, the same in a run, a batch and an episode.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "simloop/episode.hpp"
+#include "simloop/errors.hpp"
+#include "test_util.hpp"
+#include "simloop/scenario_run.hpp"
+#include "simloop/scene_params.hpp"
+
+namespace {
+
+using simloop::InvalidArgument;
+using simloop::Scenario;
+
+// PushT with a drawn disturbance and, after it, `reset` (a [reset] table's body).
+Scenario pusht(const std::string& reset = "") {
+  return Scenario::from_toml_string("name = \"pusht-reset\"\nscene = \"pusht.xml\"\nsteps = 300\n"
+                                    "[[control]]\nactuator = \"push_x\"\nvalue = 0.8\n"
+                                    "[[disturbance]]\nbody = \"tblock\"\nnewtons = [0.5, 1.5]\n"
+                                    "direction = [0, 1, 0]\nrandom_sign = true\nstart_step = 100\nsteps = 50\n"
+                                    "[record]\nbodies = [\"tblock\"]\njoints = [\"slide_x\"]\n"
+                                    "actuators = [\"push_x\", \"push_y\"]\n" +
+                                        (reset.empty() ? "" : "[reset]\n" + reset),
+                                    "pusht-reset", SIMLOOP_TEST_SCENES);
+}
+
+const simloop::Model& scene() {
+  static const simloop::Model model = simloop::load_scene(pusht());
+  return model;
+}
+
+simloop::RunRecord run(const Scenario& s, std::uint64_t seed, const simloop::Model& model = scene()) {
+  simloop::ScenarioConfig config;
+  config.seed = seed;
+  return simloop::run_scenario(model, s, config);
+}
+
+double at(const simloop::RunRecord& r, std::int64_t row, const std::string& column) {
+  for (std::size_t c = 0; c < r.columns.size(); ++c) {
+    if (r.columns[c].name == column) return r.trajectory.at(row, static_cast<std::int64_t>(c));
+  }
+  ADD_FAILURE() << "no column " << column;
+  return NAN;
+}
+
+bool same_bits(const simloop::RunRecord& a, const simloop::RunRecord& b) {
+  const simloop::Trajectory& x = a.trajectory;
+  const simloop::Trajectory& y = b.trajectory;
+  return x.rows() == y.rows() && x.columns() == y.columns() &&
+         std::memcmp(x.data(), y.data(), sizeof(double) * static_cast<size_t>(x.rows() * x.columns())) == 0;
+}
+
+using test::error_of;
+
+TEST(ScenarioReset, AGivenStateIsWhereTheRunStarts) {
+  // PushT: tblock's free joint (7), then slide_x and slide_y.
+  const simloop::RunRecord r =
+      run(pusht("qpos = [0.3, 0.1, 0.02, 0, 0, 0, 2, -0.05, 0.0]\nqvel = [0, 0.5, 0, 0, 0, 0, 0, 0]\n"), 0);
+  EXPECT_EQ(at(r, 0, "tblock_x"), 0.3);
+  EXPECT_EQ(at(r, 0, "tblock_y"), 0.1);
+  EXPECT_EQ(at(r, 0, "tblock_vy"), 0.5);
+  EXPECT_EQ(at(r, 0, "tblock_qw"), 0.0);  // renormalised: (0, 0, 0, 2) is (0, 0, 0, 1)
+  EXPECT_EQ(at(r, 0, "tblock_qz"), 1.0);
+  EXPECT_EQ(at(r, 0, "slide_x_pos"), -0.05);
+}
+
+TEST(ScenarioReset, NoiseIsDrawnFromTheSeedAfterTheDisturbances) {
+  const Scenario noisy = pusht("qpos_noise = 0.01\nqvel_noise = 0.1\n");
+  const simloop::RunRecord plain = run(pusht(), 7), a = run(noisy, 7), b = run(noisy, 7), c = run(noisy, 8);
+  EXPECT_TRUE(same_bits(a, b));  // the seed decides
+  EXPECT_NE(at(a, 0, "tblock_x"), at(c, 0, "tblock_x"));
+  EXPECT_NE(at(a, 0, "tblock_x"), at(plain, 0, "tblock_x"));
+  EXPECT_LE(std::abs(at(a, 0, "tblock_x") - 0.2), 0.01);
+  // The disturbance is drawn first: the noise changes none of its draws.
+  ASSERT_EQ(a.schedule.forces.size(), 1u);
+  EXPECT_EQ(a.schedule.forces[0].wrench, plain.schedule.forces[0].wrench);
+  const double qw = at(a, 0, "tblock_qw"), qx = at(a, 0, "tblock_qx"), qy = at(a, 0, "tblock_qy"),
+               qz = at(a, 0, "tblock_qz");
+  EXPECT_NEAR(qw * qw + qx * qx + qy * qy + qz * qz, 1.0, 1e-15);
+}
+
+TEST(ScenarioReset, ParamsAreTheRunsOwnSceneCopy) {
+  // A [reset] param's value runs the very bits of a model with that
+  // parameter (every geom's friction: MuJoCo takes the larger of two).
+  const simloop::RunRecord drawn = run(pusht("[[reset.param]]\nkind = \"friction\"\nvalue = 0.3\n"), 3);
+  const simloop::Model low_friction = simloop::with_scene_params(scene(), {{simloop::SceneParam::Kind::kFriction, "", 0.3}});
+  EXPECT_TRUE(same_bits(drawn, run(pusht(), 3, low_friction)));
+  EXPECT_FALSE(same_bits(drawn, run(pusht(), 3)));
+  EXPECT_EQ(scene().get()->geom_friction[0], 1.0);  // the shared scene is untouched
+  // Drawn per run, from the seed: uniform in [low, high].
+  const Scenario ranged = pusht("[[reset.param]]\nkind = \"gravity\"\nuniform = [4.0, 12.0]\n");
+  const simloop::RunRecord g1 = run(ranged, 1), g2 = run(ranged, 2);
+  ASSERT_EQ(g1.schedule.start.params.size(), 1u);
+  const double v1 = g1.schedule.start.params[0].value, v2 = g2.schedule.start.params[0].value;
+  EXPECT_TRUE(v1 >= 4.0 && v1 < 12.0 && v2 >= 4.0 && v2 < 12.0 && v1 != v2);
+}
+
+TEST(ScenarioReset, ABatchAndAnEpisodeStartAsARunDoes) {
+  const Scenario s = pusht("qpos_noise = 0.02\n[[reset.param]]\nkind = \"mass\"\nname = \"tblock\"\nuniform = [0.2, 0.6]\n");
+  std::vector<simloop::ScenarioConfig> configs(4);
+  for (std::size_t i = 0; i < configs.size(); ++i) configs[i].seed = 10 + i;
+  for (const int threads : {1, 2}) {
+    const std::vector<simloop::RunRecord> batch = simloop::run_scenario_batch(scene(), s, configs, threads);
+    for (std::size_t i = 0; i < configs.size(); ++i) EXPECT_TRUE(same_bits(batch[i], run(s, 10 + i))) << i << " " << threads;
+  }
+  // An episode's first observation is the run's row 0 (after step and time).
+  simloop::Episodes episodes(scene(), pusht(), simloop::ScenarioConfig{}, 1);
+  std::vector<double> obs(static_cast<std::size_t>(episodes.width()));
+  episodes.reset(0, 12, obs.data(), &s.reset);
+  const simloop::RunRecord r = run(s, 12);
+  for (std::size_t c = 2; c < obs.size(); ++c) {
+    if (r.columns[c].name.find("ctrl") != std::string::npos || r.columns[c].name.find("force") != std::string::npos) {
+      continue;  // the actions' inputs, not the scenario's
+    }
+    EXPECT_EQ(obs[c], r.trajectory.at(0, static_cast<std::int64_t>(c))) << r.columns[c].name;
+  }
+  EXPECT_NE(episodes.model(0).get(), scene().get());  // its own copy, with the drawn mass
+  EXPECT_EQ(episodes.model(0).get()->body_mass[1], r.schedule.start.params[0].value);
+}
+
+TEST(ScenarioReset, BadResetsNameTheKey) {
+  const auto file_error = [](const std::string& reset) { return error_of([&] { (void)pusht(reset); }); };
+  EXPECT_EQ(file_error("qpos_nosie = 1\n"),
+            "pusht-reset: reset.qpos_nosie: unknown key (did you mean 'qpos_noise'?); known keys: qpos, qvel, "
+            "qpos_noise, qvel_noise, param");
+  EXPECT_EQ(file_error("qvel_noise = -1\n"),
+            "pusht-reset: reset.qvel_noise: must not be negative (the half-width of a uniform noise), got -1.0");
+  EXPECT_EQ(file_error("[[reset.param]]\nkind = \"stiffness\"\nvalue = 1\n"),
+            "pusht-reset: reset.param[0].kind: scene parameter kind must be one of 'friction', 'mass', 'damping', "
+            "'gravity', got 'stiffness'");
+  EXPECT_EQ(file_error("[[reset.param]]\nkind = \"friction\"\nvalue = 1\nuniform = [0, 1]\n"),
+            "pusht-reset: reset.param[0]: give value (fixed) or uniform = [low, high] (drawn per run)");
+  const auto run_error = [](const std::string& reset) { return error_of([&] { (void)run(pusht(reset), 0); }); };
+  EXPECT_EQ(run_error("qpos = [1, 2, 3]\n"), "reset.qpos must hold the scene's nq = 9 values, got 3");
+  EXPECT_EQ(run_error("[[reset.param]]\nkind = \"friction\"\nname = \"flor\"\nvalue = 0.5\n"),
+            "reset.param[0]: friction of 'flor' = 0.5: no geom named 'flor' (did you mean 'floor'?); geoms: floor, "
+            "goal, t_bar, t_stem, tip");
+  EXPECT_EQ(run_error("[[reset.param]]\nkind = \"gravity\"\nname = \"floor\"\nvalue = 9\n"),
+            "reset.param[0]: gravity of 'floor' = 9.0: gravity is the whole scene's: give no name");
+  // An episode's own reset: refused before it changes anything.
+  simloop::Episodes episodes(scene(), pusht(), simloop::ScenarioConfig{}, 1);
+  std::vector<double> obs(static_cast<std::size_t>(episodes.width())), again(obs.size());
+  episodes.reset(0, 1, obs.data());
+  simloop::ResetSpec bad;
+  bad.qvel = {1.0};
+  EXPECT_EQ(error_of([&] { episodes.reset(0, 2, again.data(), &bad); }), "reset.qvel must hold the scene's nv = 8 values, got 1");
+  EXPECT_EQ(episodes.steps_taken(0), 0);
+}
+
+}  // namespace
