@@ -72,7 +72,22 @@ from .scenario import RESET_KEYS, Scenario, ScenarioLike, _scenario_and_scene, r
 
 PUSHT_SCENARIO = os.path.join(os.path.dirname(os.path.abspath(__file__)), "scenes", "pusht.toml")
 
-Reward = Callable[[np.ndarray, np.ndarray, np.ndarray], float]
+Reward = Callable[[np.ndarray, np.ndarray, np.ndarray], Any]
+Terminate = Union[Callable[[np.ndarray], Any], Sequence[Tuple[str, str, float]]]
+_COMPARISONS = {"<": np.less, "<=": np.less_equal, ">": np.greater, ">=": np.greater_equal}
+
+
+def batched(function: Callable[..., Any]) -> Callable[..., Any]:
+    """Marks a reward or terminate function as taking a batch: arrays with a
+    leading axis of episodes (obs and next_obs (n, width), actions (n, nu))
+    and returning n values. The vector env then calls it once a step rather
+    than once per env (the single env calls it with n = 1)."""
+    setattr(function, "simloop_batched", True)
+    return function
+
+
+def _is_batched(function: object) -> bool:
+    return bool(getattr(function, "simloop_batched", False))
 
 # Episodes that end this way are terminated, not truncated (episode.hpp).
 _TERMINATING = ("simloop_DIVERGED", "mjWARN_BADQPOS", "mjWARN_BADQVEL", "mjWARN_BADQACC")
@@ -87,8 +102,9 @@ class _Setup:
     """What the single and the vector environment share: the episodes, the
     spaces, the checks of actions."""
 
-    def __init__(self, scenario: ScenarioLike, count: int, control_every: int, reward: Optional[Reward], rng: str,
-                 timestep: Optional[float], steps: Optional[int], perturb: bool, model: Optional[_core.Model]) -> None:
+    def __init__(self, scenario: ScenarioLike, count: int, control_every: int, reward: Optional[Reward],
+                 terminate: Optional[Terminate], rng: str, timestep: Optional[float], steps: Optional[int],
+                 perturb: bool, model: Optional[_core.Model]) -> None:
         scenario, scene = _scenario_and_scene(scenario, model)
         if reward is not None and not callable(reward):
             raise TypeError(f"reward must be None or a callable reward(obs, action, next_obs) -> float, "
@@ -104,6 +120,38 @@ class _Setup:
         low, high = self.episodes.ctrl_range
         self.action_space = spaces.Box(low, high, (self.nu,), np.float64)
         self.observation_space = spaces.Box(-_FINITE, _FINITE, (len(self.names),), np.float64)
+        self.terminate: Optional[Callable[[np.ndarray], Any]] = None
+        self.conditions: List[Tuple[int, Any, float]] = []
+        if callable(terminate):
+            self.terminate = terminate
+        elif terminate is not None:
+            self.conditions = [self._condition(c) for c in _sequence_of("terminate", terminate)]
+
+    def _condition(self, condition: object) -> Tuple[int, Any, float]:
+        """(column, op, value): the episode ends when the observation's column compares so."""
+        if not (isinstance(condition, (tuple, list)) and len(condition) == 3 and isinstance(condition[0], str)
+                and condition[1] in _COMPARISONS):
+            raise TypeError(f"each terminate condition must be (column, op, value) with op one of "
+                            f"{', '.join(_COMPARISONS)}, got {_describe(condition)}")
+        column, op, value = condition
+        if column not in self.names:
+            raise ValueError(f"terminate: no observed column named {column!r}; columns: {', '.join(self.names)}")
+        threshold = float(value)
+        if not np.isfinite(threshold):
+            raise ValueError(f"terminate: {column} {op} {value!r}: the value must be finite")
+        return self.names.index(column), _COMPARISONS[op], threshold
+
+    def terminations(self, after: np.ndarray) -> np.ndarray:
+        """Which of these next observations end their episode by the terminate hook."""
+        hit = np.zeros(len(after), dtype=bool)
+        for index, op, value in self.conditions:
+            hit |= op(after[:, index], value)
+        if self.terminate is not None:
+            if _is_batched(self.terminate):
+                hit |= _batch_of("terminate", self.terminate(after), len(after)).astype(bool)
+            else:
+                hit |= np.array([bool(self.terminate(o)) for o in after], dtype=bool)
+        return hit
 
     def actions(self, action: object, shape: Tuple[int, ...]) -> np.ndarray:
         try:
@@ -121,6 +169,8 @@ class _Setup:
     def rewards(self, before: np.ndarray, actions: np.ndarray, after: np.ndarray) -> np.ndarray:
         if self.reward is None:
             return np.zeros(len(after))
+        if _is_batched(self.reward):
+            return _batch_of("reward", self.reward(before, actions, after), len(after)).astype(np.float64)
         return np.array([float(self.reward(b, a, o)) for b, a, o in zip(before, actions, after)])
 
     def info(self, i: int, ended_by: Optional[str] = None) -> Dict[str, Any]:
@@ -133,11 +183,29 @@ class _Setup:
         return out
 
 
-def _ended_by(terminated: bool, truncated: bool, decisions: int, max_episode_steps: Optional[int]) -> Optional[str]:
-    """Why an episode ended on this step, or None: its own end first (the C++
-    episode's), then the caller's step limit."""
+def _sequence_of(name: str, value: object) -> List[Any]:
+    if isinstance(value, (str, bytes)) or not isinstance(value, Sequence):
+        raise TypeError(f"{name} must be a callable or a list of (column, op, value) conditions, got "
+                        f"{_describe(value)}")
+    return list(value)
+
+
+def _batch_of(name: str, values: object, n: int) -> np.ndarray:
+    """A batched function's result: n values."""
+    out = np.asarray(values)
+    if out.shape != (n,):
+        raise ValueError(f"a batched {name} must return {n} values (one per episode), got shape {out.shape}")
+    return out
+
+
+def _ended_by(terminated: bool, truncated: bool, decisions: int, max_episode_steps: Optional[int],
+              hooked: bool = False) -> Optional[str]:
+    """Why an episode ended on this step, or None: a warning first, then the
+    terminate hook, then the scenario's length, then the caller's step limit."""
     if terminated:
         return "warning"
+    if hooked:
+        return "termination"
     if truncated:
         return "length"
     if max_episode_steps is not None and decisions >= max_episode_steps:
@@ -179,21 +247,26 @@ class ScenarioEnv(gymnasium.Env):
     scenario file's path); see the module's documentation.
 
     control_every: physics steps per env.step (the frame skip). reward:
-    reward(obs, action, next_obs) -> float, default 0.0. max_episode_steps:
-    truncate after this many env.step calls (None: the scenario's length
-    only). rng, timestep, steps, perturb, model: as for run_scenario (steps
-    is the episode's length in physics steps). No rendering (render_mode None).
+    reward(obs, action, next_obs) -> float, default 0.0 (or a @batched one).
+    terminate: ends an episode (terminated, info["ended_by"] ==
+    "termination") when its next observation meets it: a callable
+    terminate(next_obs) -> bool (or a @batched one), or conditions on the
+    observed columns, any of which ends it: [("tblock_x", ">", 0.35)] (ops
+    <, <=, >, >=). max_episode_steps: truncate after this many env.step
+    calls (None: the scenario's length only). rng, timestep, steps, perturb,
+    model: as for run_scenario (steps is the episode's length in physics
+    steps). No rendering (render_mode None).
     """
 
     metadata = {"render_modes": []}
 
     def __init__(self, scenario: ScenarioLike, *, control_every: int = 1, reward: Optional[Reward] = None,
-                 max_episode_steps: Optional[int] = None, rng: str = "mt19937_64", timestep: Optional[float] = None,
-                 steps: Optional[int] = None, perturb: bool = True, model: Optional[_core.Model] = None,
-                 render_mode: Optional[str] = None) -> None:
+                 terminate: Optional[Terminate] = None, max_episode_steps: Optional[int] = None,
+                 rng: str = "mt19937_64", timestep: Optional[float] = None, steps: Optional[int] = None,
+                 perturb: bool = True, model: Optional[_core.Model] = None, render_mode: Optional[str] = None) -> None:
         if render_mode is not None:
             raise ValueError(f"render_mode must be None (simloop environments do not render), got {render_mode!r}")
-        self._setup = _Setup(scenario, 1, control_every, reward, rng, timestep, steps, perturb, model)
+        self._setup = _Setup(scenario, 1, control_every, reward, terminate, rng, timestep, steps, perturb, model)
         self.action_space = self._setup.action_space
         self.observation_space = self._setup.observation_space
         self.observation_names = self._setup.names
@@ -221,14 +294,16 @@ class ScenarioEnv(gymnasium.Env):
             raise ValueError("the episode has ended: reset() it first")
         actions = self._setup.actions(action, (self._setup.nu,))
         rows, terminated, truncated = self._setup.episodes.step(actions.reshape(1, -1), self.control_every)
-        obs = rows[0, 2:]
-        reward = float(self._setup.rewards(self._obs[None], actions[None], obs[None])[0])
-        self._obs = obs
+        obs, before = rows[0, 2:], self._obs
+        self._obs = obs  # stepped: a hook that raises below leaves the env where the episode is
         self._decisions += 1
-        ended_by = _ended_by(bool(terminated[0]), bool(truncated[0]), self._decisions, self.max_episode_steps)
+        self._ended = bool(terminated[0] or truncated[0])
+        reward = float(self._setup.rewards(before[None], actions[None], obs[None])[0])
+        hooked = not terminated[0] and bool(self._setup.terminations(obs[None])[0])
+        ended_by = _ended_by(bool(terminated[0]), bool(truncated[0]), self._decisions, self.max_episode_steps, hooked)
         self._ended = ended_by is not None
-        return (obs.copy(), reward, ended_by == "warning", self._ended and ended_by != "warning",
-                self._setup.info(0, ended_by))
+        terminal = ended_by in ("warning", "termination")
+        return obs.copy(), reward, terminal, self._ended and not terminal, self._setup.info(0, ended_by)
 
 
 class ScenarioVectorEnv(VectorEnv):
@@ -253,7 +328,8 @@ class ScenarioVectorEnv(VectorEnv):
     metadata = {"render_modes": [], "autoreset_mode": AutoresetMode.NEXT_STEP}
 
     def __init__(self, scenario: ScenarioLike, num_envs: int = 1, *, control_every: int = 1,
-                 reward: Optional[Reward] = None, max_episode_steps: Optional[int] = None,
+                 reward: Optional[Reward] = None, terminate: Optional[Terminate] = None,
+                 max_episode_steps: Optional[int] = None,
                  autoreset_mode: Union[AutoresetMode, str] = AutoresetMode.NEXT_STEP, threads: Optional[int] = None,
                  rng: str = "mt19937_64", timestep: Optional[float] = None, steps: Optional[int] = None,
                  perturb: bool = True, model: Optional[_core.Model] = None, render_mode: Optional[str] = None) -> None:
@@ -268,7 +344,8 @@ class ScenarioVectorEnv(VectorEnv):
         self.autoreset_mode = mode
         self.num_envs = _check_int("num_envs", num_envs, 1, 1 << 20)
         self._threads = _check_threads(threads)
-        self._setup = _Setup(scenario, self.num_envs, control_every, reward, rng, timestep, steps, perturb, model)
+        self._setup = _Setup(scenario, self.num_envs, control_every, reward, terminate, rng, timestep, steps,
+                             perturb, model)
         self.single_action_space = self._setup.action_space
         self.single_observation_space = self._setup.observation_space
         self.action_space = batch_space(self.single_action_space, self.num_envs)
@@ -345,25 +422,29 @@ class ScenarioVectorEnv(VectorEnv):
                                                                 self._threads)
         obs = rows[:, 2:]
         obs[resetting] = self._obs[resetting]
-        rewards = np.zeros(self.num_envs)
-        if active.any():
-            rewards[active] = self._setup.rewards(self._obs[active], values[active], obs[active])
+        before, self._obs = self._obs, obs  # stepped: a hook that raises below leaves the envs where they are
         self._decisions[active] += 1
         terminated = terminated.astype(bool) & active
         truncated = truncated.astype(bool) & active
+        self._ended |= terminated | truncated
+        rewards = np.zeros(self.num_envs)
+        hooked = np.zeros(self.num_envs, dtype=bool)
+        if active.any():
+            rewards[active] = self._setup.rewards(before[active], values[active], obs[active])
+            hooked[active] = self._setup.terminations(obs[active])
         for i in np.flatnonzero(active):
             ended_by = _ended_by(bool(terminated[i]), bool(truncated[i]), int(self._decisions[i]),
-                                 self.max_episode_steps)
+                                 self.max_episode_steps, bool(hooked[i]))
             info = self._setup.info(int(i), ended_by)
             if ended_by is not None:
-                truncated[i] = ended_by != "warning"
+                terminated[i] = ended_by in ("warning", "termination")
+                truncated[i] = not terminated[i]
                 self._ended[i] = True
                 if self.autoreset_mode == AutoresetMode.SAME_STEP:
                     self._add_info(infos, {"final_obs": obs[i].copy(), "final_info": info}, int(i))
                     obs[i] = self._reset_one(int(i), None, infos)
                     continue
             self._add_info(infos, info, int(i))
-        self._obs = obs
         return obs.copy(), rewards, terminated, truncated, infos
 
 
