@@ -56,6 +56,7 @@ through the vector class.
 
 from __future__ import annotations
 
+import copy
 import os
 from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union, cast
 
@@ -279,9 +280,14 @@ class ScenarioEnv(gymnasium.Env):
     def reset(self, *, seed: Optional[int] = None,
               options: Optional[Dict[str, Any]] = None) -> Tuple[np.ndarray, Dict[str, Any]]:
         start = _start(_check_options(options, RESET_KEYS))
+        previous = copy.deepcopy(self._np_random), self._np_random_seed
         super().reset(seed=seed)
         episode_seed = _episode_seed(self.np_random, seed)
-        self._obs = self._setup.episodes.reset(0, episode_seed, start)[2:]
+        try:
+            self._obs = self._setup.episodes.reset(0, episode_seed, start)[2:]
+        except BaseException:  # a start the scene refuses: the env is as it was, its generator too
+            self._np_random, self._np_random_seed = previous
+            raise
         self._decisions, self._ended = 0, False
         info = self._setup.info(0)
         info["seed"] = np.uint64(episode_seed)
@@ -362,9 +368,11 @@ class ScenarioVectorEnv(VectorEnv):
         rng = self._rngs[i]
         if seed is not None or rng is None:
             rng, _ = seeding.np_random(seed)  # as gymnasium.Env.reset seeds np_random
-            self._rngs[i] = rng
+        else:
+            rng = copy.deepcopy(rng)  # kept only if the reset succeeds
         episode_seed = _episode_seed(rng, seed)
         obs = self._setup.episodes.reset(i, episode_seed, start)[2:]
+        self._rngs[i] = rng
         self._decisions[i], self._ended[i] = 0, False
         info = self._setup.info(i)
         info["seed"] = np.uint64(episode_seed)

@@ -93,8 +93,11 @@ def test_bad_options_are_named_and_the_env_stays_usable(options, error, message)
     env = ScenarioEnv(PUSHT_SCENARIO)
     before, _ = env.reset(seed=0)
     with pytest.raises(error) as caught:
-        env.reset(seed=1, options=options)
+        env.reset(options=options)  # (without a seed: its generator is left as it was)
     assert message in str(caught.value) and "\n" not in str(caught.value)
+    twin = ScenarioEnv(PUSHT_SCENARIO)
+    twin.reset(seed=0)
+    assert np.array_equal(env.np_random.integers(0, 2**62, 4), twin.np_random.integers(0, 2**62, 4))
     stepped = env.step([0.0, 0.0])[0]  # the episode it had goes on
     fresh = ScenarioEnv(PUSHT_SCENARIO)
     fresh.reset(seed=0)
