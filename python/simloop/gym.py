@@ -328,7 +328,10 @@ class ScenarioVectorEnv(VectorEnv):
     infos["final_info"]. DISABLED: the caller resets ended envs with
     reset(options={"reset_mask": mask}); stepping one first is an error. An
     autoreset draws the new episode's seed from that env's own np_random, as
-    ScenarioEnv.reset() without a seed does. Other arguments: as for ScenarioEnv.
+    ScenarioEnv.reset() without a seed does, and starts as the scenario's
+    own [reset] says (Gymnasium's autoreset passes no options: randomisation
+    every episode needs belongs in the scenario). Other arguments: as for
+    ScenarioEnv.
     """
 
     metadata = {"render_modes": [], "autoreset_mode": AutoresetMode.NEXT_STEP}
