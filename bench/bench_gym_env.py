@@ -36,12 +36,12 @@ COST = 0.01  # the reward's weight on the action's size
 class PushTMujocoEnv(MujocoEnv):
     """The same scene as a Gymnasium MujocoEnv: observation qpos and qvel."""
 
-    metadata = {"render_modes": ["human", "rgb_array", "depth_array"], "render_fps": 50}
-
     def __init__(self, frame_skip: int) -> None:
+        # MujocoEnv checks that render_fps is 1 / (timestep x frame_skip).
+        fps = int(round(1.0 / (simloop.Model.from_file(SCENE).timestep * frame_skip)))
+        self.metadata = {"render_modes": ["human", "rgb_array", "depth_array"], "render_fps": fps}
         observation = spaces.Box(-np.inf, np.inf, (17,), np.float64)  # PushT: nq 9 + nv 8
         super().__init__(SCENE, frame_skip, observation_space=observation)
-        self.metadata["render_fps"] = int(round(1.0 / self.dt))
 
     def step(self, action):
         x_before = self.data.qpos[0]
@@ -71,7 +71,7 @@ def main() -> int:
     parser.add_argument("--calls", type=int, default=2000)
     parser.add_argument("--every", default="1,10")
     args = parser.parse_args()
-    print(f"MuJoCo {simloop.MUJOCO_VERSION}, simloop {simloop.__version__}; PushT, {args.calls} env.step calls a "
+    print(f"{simloop.MUJOCO_VERSION}, simloop {simloop.__version__}; PushT, {args.calls} env.step calls a "
           f"round, {args.rounds} rounds; CPU time per env.step (wall beside it), medians")
     for every in (int(e) for e in args.every.split(",")):
         index = ScenarioEnv(PUSHT_SCENARIO).observation_names.index("tblock_x")
