@@ -95,6 +95,18 @@ struct LoopResult {
   double sim_time = 0.0;
 };
 
+// Writes the schedule's start (qpos, qvel; either may be empty: the reset's)
+// into `d`, which mj_resetData has just reset, its quaternions made
+// rotations again (noise or a caller's qpos may leave them off unit
+// length). The caller then runs mj_forward.
+inline void set_start(const mjModel* m, mjData* d, const Schedule::Start& start) {
+  if (!start.qpos.empty()) {
+    std::copy_n(start.qpos.data(), m->nq, d->qpos);
+    mj_normalizeQuat(m, d->qpos);
+  }
+  if (!start.qvel.empty()) std::copy_n(start.qvel.data(), m->nv, d->qvel);
+}
+
 // Runs `schedule` on m and d (reset first, or set to inputs.initial_state),
 // recording every `record_every`-th row with `recorder` into `rows`. The
 // caller has checked the arguments (check_schedule_run, check_inputs). A
@@ -102,13 +114,6 @@ struct LoopResult {
 // the steps it happened in; the control's stop throws Interrupted.
 // `d_is_reset`: d is already as mj_resetData leaves it for m (a fresh Data,
 // Data::fresh_for), which the loop then does not do again.
-// Writes the schedule's start (qpos, qvel; either may be empty: the reset's)
-// into `d`, which mj_resetData has just reset. The caller then runs mj_forward.
-inline void set_start(const mjModel* m, mjData* d, const Schedule::Start& start) noexcept {
-  if (!start.qpos.empty()) std::copy_n(start.qpos.data(), m->nq, d->qpos);
-  if (!start.qvel.empty()) std::copy_n(start.qvel.data(), m->nv, d->qvel);
-}
-
 [[nodiscard]] LoopResult run_loop(const mjModel* m, mjData* d, const Schedule& schedule,
                                   const RowRecorder& recorder, std::int64_t record_every, RowSink& rows,
                                   RunControl* control, const RunInputs& inputs,

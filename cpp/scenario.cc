@@ -102,15 +102,6 @@ Schedule build_schedule(const ResolvedScenario& scenario, const Scenario& spec, 
     if (reset.qpos_noise > 0.0) {
       for (double& q : s.start.qpos) q += draws.uniform(-reset.qpos_noise, reset.qpos_noise);
     }
-    for (const int adr : scenario.quaternions) {  // a rotation again, as mj_normalizeQuat makes it
-      double* q = s.start.qpos.data() + adr;
-      const double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-      if (norm > 0.0) {
-        for (int k = 0; k < 4; ++k) q[k] /= norm;
-      } else {
-        q[0] = 1.0, q[1] = q[2] = q[3] = 0.0;
-      }
-    }
   }
   if (!reset.qvel.empty() || reset.qvel_noise > 0.0) {
     s.start.qvel = reset.qvel.empty() ? std::vector<double>(static_cast<std::size_t>(scenario.nv), 0.0) : reset.qvel;

@@ -161,10 +161,6 @@ ResolvedScenario resolve(const Scenario& scenario, const mjModel* m) {
   r.contacts = rec.contacts;
   r.qpos0.assign(m->qpos0, m->qpos0 + m->nq);
   r.nv = detail::compat::as_int(m->nv);
-  for (int j = 0; j < m->njnt; ++j) {
-    if (m->jnt_type[j] == mjJNT_FREE) r.quaternions.push_back(m->jnt_qposadr[j] + 3);
-    if (m->jnt_type[j] == mjJNT_BALL) r.quaternions.push_back(m->jnt_qposadr[j]);
-  }
   check_reset(r, scenario.reset, m);
   return r;
 }

@@ -95,7 +95,7 @@ struct RecordSpec {
 struct ResetSpec {
   std::vector<double> qpos;  // the scene's nq values, or empty: its qpos0
   std::vector<double> qvel;  // nv values, or empty: at rest
-  double qpos_noise = 0.0;   // each qpos coordinate plus uniform(-noise, +noise); quaternions renormalised
+  double qpos_noise = 0.0;   // each qpos coordinate plus uniform(-noise, +noise) (quaternions renormalised when set)
   double qvel_noise = 0.0;   // the same for qvel
   // A scene parameter (scene_params.hpp) for this run only, uniform in [low, high].
   struct Param {
@@ -104,10 +104,6 @@ struct ResetSpec {
     double low = 0.0, high = 0.0;
   };
   std::vector<Param> params;
-
-  [[nodiscard]] bool empty() const noexcept {
-    return qpos.empty() && qvel.empty() && qpos_noise == 0.0 && qvel_noise == 0.0 && params.empty();
-  }
 };
 
 struct Scenario {
@@ -145,11 +141,9 @@ struct ResolvedScenario {
   std::vector<Disturbance> disturbances;
   std::vector<int> bodies, joints, actuators, sensors;  // to record
   bool contacts = true;
-  // What the start draws against: the scene's qpos0, its nv, and where its
-  // quaternions sit in qpos (free and ball joints), to renormalise them.
+  // What the start draws against: the scene's qpos0 and its nv.
   std::vector<double> qpos0;
   int nv = 0;
-  std::vector<int> quaternions;
 };
 
 // Resolves every name in `scenario` against `model`, and checks its reset
@@ -176,7 +170,8 @@ struct Schedule {
   };
   std::vector<Force> forces;
   // How the run starts (the scenario's ResetSpec, drawn): qpos and qvel to
-  // set after the reset (empty: the scene's own), and the scene parameters
+  // set after the reset (empty: the scene's own; its quaternions are made
+  // unit when set, mj_normalizeQuat), and the scene parameters
   // of this run's own copy of the model (empty: the shared model).
   struct Start {
     std::vector<double> qpos, qvel;

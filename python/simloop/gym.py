@@ -92,6 +92,8 @@ def _is_batched(function: object) -> bool:
 
 # Episodes that end this way are terminated, not truncated (episode.hpp).
 _TERMINATING = ("simloop_DIVERGED", "mjWARN_BADQPOS", "mjWARN_BADQVEL", "mjWARN_BADQACC")
+# The ends (_ended_by) that are terminations; the others are truncations.
+_TERMINAL_ENDS = ("warning", "termination")
 # An observation's bounds: finite, so Gymnasium's checkers find nothing to
 # remark on, and float32's, so a float32 observation (DtypeObservation, a
 # torch policy's) is in its space too. No state gets near them: MuJoCo resets
@@ -308,7 +310,7 @@ class ScenarioEnv(gymnasium.Env):
         hooked = not terminated[0] and bool(self._setup.terminations(obs[None])[0])
         ended_by = _ended_by(bool(terminated[0]), bool(truncated[0]), self._decisions, self.max_episode_steps, hooked)
         self._ended = ended_by is not None
-        terminal = ended_by in ("warning", "termination")
+        terminal = ended_by in _TERMINAL_ENDS
         return obs.copy(), reward, terminal, self._ended and not terminal, self._setup.info(0, ended_by)
 
 
@@ -448,7 +450,7 @@ class ScenarioVectorEnv(VectorEnv):
                                  self.max_episode_steps, bool(hooked[i]))
             info = self._setup.info(int(i), ended_by)
             if ended_by is not None:
-                terminated[i] = ended_by in ("warning", "termination")
+                terminated[i] = ended_by in _TERMINAL_ENDS
                 truncated[i] = not terminated[i]
                 self._ended[i] = True
                 if self.autoreset_mode == AutoresetMode.SAME_STEP:
