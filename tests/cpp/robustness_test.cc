@@ -19,6 +19,7 @@
 #include "run_detail.hpp"
 #include "simloop/batch.hpp"
 #include "simloop/errors.hpp"
+#include "test_util.hpp"
 #include "simloop/output.hpp"
 #include "simloop/run.hpp"
 #include "simloop/sweep.hpp"
@@ -29,16 +30,6 @@ using simloop::ChapterColumns;
 using simloop::Trajectory;
 using test::config_with;
 using test::scene;
-
-template <class F>
-std::string invalid_argument(F&& f) {
-  try {
-    f();
-  } catch (const simloop::InvalidArgument& e) {
-    return e.what();
-  }
-  return "accepted";
-}
 
 constexpr std::int64_t kInt64Max = std::numeric_limits<std::int64_t>::max();
 
@@ -58,16 +49,16 @@ TEST(Robustness, ValidateEnforcesTheDocumentedRanges) {
   EXPECT_EQ(simloop::kMaxSteps, (std::int64_t{1} << 62) - 1);
   EXPECT_EQ(simloop::kMaxRecordEvery, simloop::kMaxSteps);
   EXPECT_NO_THROW(simloop::validate(config_with(simloop::kMaxSteps, simloop::kMaxRecordEvery)));
-  EXPECT_EQ(invalid_argument([] { simloop::validate(config_with(simloop::kMaxSteps + 1)); }),
+  EXPECT_EQ(test::error_of([] { simloop::validate(config_with(simloop::kMaxSteps + 1)); }),
             "steps must be at most 4611686018427387903, got 4611686018427387904");
-  EXPECT_EQ(invalid_argument([] { simloop::validate(config_with(10, kInt64Max)); }),
+  EXPECT_EQ(test::error_of([] { simloop::validate(config_with(10, kInt64Max)); }),
             "record_every must be at most 4611686018427387903, got 9223372036854775807");
 }
 
 // ---- Item 9: a kept trajectory that cannot fit is refused up front ----
 
 TEST(Robustness, AKeptTrajectoryTooLargeIsRefusedSayingHowMuchAndWhatToChange) {
-  const std::string message = invalid_argument([] { (void)simloop::run(scene(), config_with(10'000'000'000)); });
+  const std::string message = test::error_of([] { (void)simloop::run(scene(), config_with(10'000'000'000)); });
   EXPECT_EQ(message.rfind("steps 10000000000 with record_every 1 would keep 1.6 TiB of trajectory (22 columns) in memory", 0), 0u)
       << message;
   EXPECT_NE(message.find("raise record_every"), std::string::npos) << message;
@@ -88,7 +79,7 @@ TEST(Robustness, TheBudgetIsExactAndBatchesSumTheirRuns) {
   EXPECT_THROW(simloop::check_kept_rows({kept}, bytes - 1), simloop::InvalidArgument);
   // Two runs each fit alone, not together.
   EXPECT_NO_THROW(simloop::check_kept_rows({kept}, bytes * 3 / 2));
-  const std::string message = invalid_argument([&] { simloop::check_kept_rows({kept, kept}, bytes * 3 / 2); });
+  const std::string message = test::error_of([&] { simloop::check_kept_rows({kept, kept}, bytes * 3 / 2); });
   EXPECT_NE(message.find("(run 0, the largest of 2 runs) and the others would keep"), std::string::npos) << message;
   // Saturates instead of wrapping.
   EXPECT_EQ(simloop::kept_rows(config_with(simloop::kMaxSteps)).bytes(), std::numeric_limits<std::uint64_t>::max());
@@ -116,7 +107,7 @@ TEST(Robustness, TheBudgetFollowsTheProcessLimit) {
 
 TEST(Robustness, BatchesRefuseTheirSumUpFrontButNotWhenRowsGoToSinks) {
   const std::vector<simloop::RunConfig> huge(3, config_with(4'000'000'000'000));
-  const std::string message = invalid_argument([&] { (void)simloop::run_batch(scene(), huge, 1); });
+  const std::string message = test::error_of([&] { (void)simloop::run_batch(scene(), huge, 1); });
   EXPECT_NE(message.find("of 3 runs"), std::string::npos) << message;
   // With sinks nothing is kept: the batch starts (and stops when asked).
   struct Discard final : simloop::RowSink {
@@ -157,13 +148,13 @@ TEST(Robustness, MujocoErrorsSayWhatWasBeingDoneOnOneLine) {
 
 TEST(Robustness, XmlSizesOutsideWhatMujocoTakesAreNamed) {
   using simloop::detail::check_xml_size;
-  EXPECT_EQ(invalid_argument([] { check_xml_size(0, "<string>"); }), "<string>: the XML is empty (0 bytes)");
-  EXPECT_EQ(invalid_argument([] { (void)simloop::Model::from_xml_string(""); }),
+  EXPECT_EQ(test::error_of([] { check_xml_size(0, "<string>"); }), "<string>: the XML is empty (0 bytes)");
+  EXPECT_EQ(test::error_of([] { (void)simloop::Model::from_xml_string(""); }),
             "<string>: the XML is empty (0 bytes)");
-  EXPECT_EQ(invalid_argument([] { check_xml_size(std::size_t{1} << 31, "big"); }),
+  EXPECT_EQ(test::error_of([] { check_xml_size(std::size_t{1} << 31, "big"); }),
             "big: the XML is 2147483648 bytes; MuJoCo's in-memory loader takes at most 2147483647 (write it to a "
             "file and load that)");
-  EXPECT_NE(invalid_argument([] { check_xml_size(std::size_t{1} << 32, "big"); }), "accepted");
+  EXPECT_NE(test::error_of([] { check_xml_size(std::size_t{1} << 32, "big"); }), test::kNoInvalidArgument);
   EXPECT_NO_THROW(check_xml_size(std::size_t{1} << 20, "fine"));
   EXPECT_NO_THROW(check_xml_size(2147483647, "fine"));
 }
@@ -173,15 +164,15 @@ TEST(Robustness, XmlSizesOutsideWhatMujocoTakesAreNamed) {
 TEST(Robustness, SweepPointsNeedAFewStepsAndNoMoreThanTheRange) {
   EXPECT_EQ(simloop::sweep_steps(4.0, 0.002), 2000);
   EXPECT_EQ(simloop::sweep_steps(4.0, 1.0), 4);  // the default grid's coarsest point
-  EXPECT_EQ(invalid_argument([] { (void)simloop::sweep_steps(1e300, 0.01); }),
+  EXPECT_EQ(test::error_of([] { (void)simloop::sweep_steps(1e300, 0.01); }),
             "duration 1e+300 s at timestep 0.01 s is 1e+302 steps; a sweep point needs 4 to 4611686018427387903 "
             "steps (duration / timestep, rounded)");
-  EXPECT_NE(invalid_argument([] { (void)simloop::sweep_steps(4.0, 1e-300); }).find("4e+300 steps"), std::string::npos);
-  EXPECT_NE(invalid_argument([] { (void)simloop::sweep_steps(9e18, 0.0005); }), "accepted");
-  EXPECT_NE(invalid_argument([] { (void)simloop::sweep_steps(0.001, 0.01); }).find("0.1 steps"), std::string::npos);
-  EXPECT_NE(invalid_argument([] { (void)simloop::sweep_steps(4.0, 1.2); }), "accepted");  // 3.33 -> 3 steps
+  EXPECT_NE(test::error_of([] { (void)simloop::sweep_steps(4.0, 1e-300); }).find("4e+300 steps"), std::string::npos);
+  EXPECT_NE(test::error_of([] { (void)simloop::sweep_steps(9e18, 0.0005); }), test::kNoInvalidArgument);
+  EXPECT_NE(test::error_of([] { (void)simloop::sweep_steps(0.001, 0.01); }).find("0.1 steps"), std::string::npos);
+  EXPECT_NE(test::error_of([] { (void)simloop::sweep_steps(4.0, 1.2); }), test::kNoInvalidArgument);  // 3.33 -> 3 steps
   // The library's sweep refuses before running anything.
-  EXPECT_NE(invalid_argument([] { (void)simloop::sweep(scene(), {1e-300, 0.002}); }), "accepted");
+  EXPECT_NE(test::error_of([] { (void)simloop::sweep(scene(), {1e-300, 0.002}); }), test::kNoInvalidArgument);
 }
 
 // ---- Item 10: blow-ups are reported, not passed in silence ----

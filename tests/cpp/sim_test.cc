@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "simloop/errors.hpp"
+#include "test_util.hpp"
 #include "simloop/model.hpp"
 #include "simloop/run.hpp"
 #include "simloop/sim.hpp"
@@ -29,16 +30,6 @@ const simloop::Model& scene() {
 }
 
 Model scene(const std::string& file) { return Model::from_file(std::string(SIMLOOP_TEST_SCENES) + "/" + file); }
-
-template <class F>
-std::string message_of(F&& f) {
-  try {
-    f();
-  } catch (const simloop::InvalidArgument& e) {
-    return e.what();
-  }
-  return "(no InvalidArgument)";
-}
 
 bool same_bits(const std::vector<double>& a, const std::vector<double>& b) {
   return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0;
@@ -143,22 +134,22 @@ TEST(SimAny, NamedArraysAreMjDatasOwnAndReadsStayInside) {
   EXPECT_EQ(xquat.rows, m->nbody);
   EXPECT_EQ(xquat.width, 4);
   EXPECT_FALSE(xquat.writable);
-  EXPECT_EQ(message_of([&] { (void)sim.array("qacc"); }), "no Sim array named 'qacc'");
+  EXPECT_EQ(test::error_of([&] { (void)sim.array("qacc"); }), "no Sim array named 'qacc'");
   EXPECT_EQ(sim.read("xquat", 4, 4), std::vector<double>(sim.data()->xquat + 4, sim.data()->xquat + 8));
   EXPECT_EQ(sim.read("qvel", m->nv, 0), std::vector<double>());
-  EXPECT_EQ(message_of([&] { (void)sim.read("qvel", m->nv - 1, 2); }),
+  EXPECT_EQ(test::error_of([&] { (void)sim.read("qvel", m->nv - 1, 2); }),
             "qvel has " + std::to_string(m->nv) + " values: cannot read 2 from index " + std::to_string(m->nv - 1));
-  EXPECT_NE(message_of([&] { (void)sim.read("qvel", -1, 1); }), "(no InvalidArgument)");
+  EXPECT_NE(test::error_of([&] { (void)sim.read("qvel", -1, 1); }), test::kNoInvalidArgument);
 }
 
 TEST(SimAny, UnknownNamesListWhatTheSceneHasWithALikelyFix) {
   Sim sim(scene("walker.xml"));
   EXPECT_EQ(sim.id(mjOBJ_BODY, "torso"), 1);
-  EXPECT_EQ(message_of([&] { (void)sim.id(mjOBJ_BODY, "torsoo"); }),
+  EXPECT_EQ(test::error_of([&] { (void)sim.id(mjOBJ_BODY, "torsoo"); }),
             "no body named 'torsoo' (did you mean 'torso'?); the scene's bodies: world, torso, thigh_left, "
             "shin_left, thigh_right, shin_right");
-  EXPECT_EQ(message_of([&] { (void)sim.id(mjOBJ_KEY, "stand"); }), "no keyframe named 'stand'; the scene has no keyframes");
-  EXPECT_NE(message_of([&] { (void)sim.checked_index(mjOBJ_ACTUATOR, 4); })
+  EXPECT_EQ(test::error_of([&] { (void)sim.id(mjOBJ_KEY, "stand"); }), "no keyframe named 'stand'; the scene has no keyframes");
+  EXPECT_NE(test::error_of([&] { (void)sim.checked_index(mjOBJ_ACTUATOR, 4); })
                 .find("actuator index 4 is out of range: the scene has 4 actuators"),
             std::string::npos);
 }
@@ -166,10 +157,10 @@ TEST(SimAny, UnknownNamesListWhatTheSceneHasWithALikelyFix) {
 TEST(SimAny, CtrlVectorNeedsOneFiniteValuePerActuator) {
   Sim sim(scene("pusht.xml"));
   const std::array<double, 3> three{0.1, 0.2, 0.3};
-  EXPECT_EQ(message_of([&] { sim.set_ctrl(three.data(), 3); }),
+  EXPECT_EQ(test::error_of([&] { sim.set_ctrl(three.data(), 3); }),
             "ctrl must have nu = 2 values (one per actuator), got 3");
   const std::array<double, 2> bad{0.1, std::nan("")};
-  EXPECT_EQ(message_of([&] { sim.set_ctrl(bad.data(), 2); }), "ctrl[1] must be finite, got nan");
+  EXPECT_EQ(test::error_of([&] { sim.set_ctrl(bad.data(), 2); }), "ctrl[1] must be finite, got nan");
   EXPECT_EQ(sim.data()->ctrl[0], 0.0);  // nothing written
 }
 
@@ -185,8 +176,8 @@ TEST(SimAny, AWrenchOnAnyBodyPersistsUntilCleared) {
   const double turned = sim.data()->qvel[5];  // the free joint's angular z
   EXPECT_GT(turned, 0.0);
   const std::array<double, 3> nan_force{std::nan(""), 0.0, 0.0};
-  EXPECT_NE(message_of([&] { sim.apply_wrench(block, &nan_force, nullptr); }), "(no InvalidArgument)");
-  EXPECT_NE(message_of([&] { sim.apply_wrench(99, &nan_force, nullptr); }).find("body index 99 is out of range"),
+  EXPECT_NE(test::error_of([&] { sim.apply_wrench(block, &nan_force, nullptr); }), test::kNoInvalidArgument);
+  EXPECT_NE(test::error_of([&] { sim.apply_wrench(99, &nan_force, nullptr); }).find("body index 99 is out of range"),
             std::string::npos);
   sim.clear_forces();
   for (int i = 0; i < 6 * sim.model().get()->nbody; ++i) EXPECT_EQ(sim.data()->xfrc_applied[i], 0.0);
@@ -203,7 +194,7 @@ TEST(SimAny, AStateRestoredIntoAnotherSimGoesOnBitForBit) {
     b.set_state(saved.data(), saved.size());
     drive(b, 200);
     EXPECT_TRUE(same_bits(a.state(), b.state())) << file;
-    EXPECT_NE(message_of([&] { b.set_state(saved.data(), saved.size() - 1); })
+    EXPECT_NE(test::error_of([&] { b.set_state(saved.data(), saved.size() - 1); })
                   .find("state must have " + std::to_string(saved.size()) + " values"),
               std::string::npos);
   }
@@ -232,7 +223,7 @@ TEST(SimAny, ResetsToAKeyframe) {
   EXPECT_EQ(sim.data()->qpos[2], 3.0);
   EXPECT_EQ(sim.time(), 0.0);
   EXPECT_EQ(sim.steps_taken(), 0);
-  EXPECT_NE(message_of([&] { sim.reset_to_keyframe(1); }).find("keyframe index 1 is out of range: the scene has 1 keyframe; the scene's keyframes: high"),
+  EXPECT_NE(test::error_of([&] { sim.reset_to_keyframe(1); }).find("keyframe index 1 is out of range: the scene has 1 keyframe; the scene's keyframes: high"),
             std::string::npos);
 }
 

@@ -33,7 +33,10 @@ class TempDir {
   std::filesystem::path path_;
 };
 
-// The message of the simloop::InvalidArgument that `f` throws ("" if none).
+// What error_of gives when `f` throws nothing.
+inline constexpr const char* kNoInvalidArgument = "(no InvalidArgument)";
+
+// The message of the simloop::InvalidArgument that `f` throws (kNoInvalidArgument if none).
 template <class F>
 std::string error_of(F&& f) {
   try {
@@ -41,7 +44,7 @@ std::string error_of(F&& f) {
   } catch (const simloop::InvalidArgument& e) {
     return e.what();
   }
-  return "";
+  return kNoInvalidArgument;
 }
 
 inline std::string read_text(const std::filesystem::path& path) {
