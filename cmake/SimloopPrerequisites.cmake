@@ -66,6 +66,13 @@ endif()
 find_path(SIMLOOP_QHULL_INCLUDE_DIR libqhull_r/libqhull_r.h)
 find_path(SIMLOOP_GTEST_INCLUDE_DIR gtest/gtest.h)
 mark_as_advanced(SIMLOOP_QHULL_INCLUDE_DIR SIMLOOP_GTEST_INCLUDE_DIR)
+# Pictures: the EGL headers (libEGL itself is opened at run time, by the first
+# render; cpp/offscreen_gl.cc).
+find_path(SIMLOOP_EGL_INCLUDE_DIR EGL/eglext.h)
+mark_as_advanced(SIMLOOP_EGL_INCLUDE_DIR)
+if(NOT SIMLOOP_EGL_INCLUDE_DIR)
+  _simloop_lacks("the EGL headers, for offscreen rendering (libegl-dev)" libegl-dev)
+endif()
 if(NOT SIMLOOP_QHULL_INCLUDE_DIR AND SIMLOOP_MUJOCO STREQUAL "system")
   _simloop_lacks("the qhull headers that MuJoCo's headers include (libqhull-dev)" libqhull-dev)
 endif()

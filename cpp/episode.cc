@@ -124,6 +124,11 @@ const Model& Episodes::model(std::size_t i) const {
   return impl_->episodes[i].model;
 }
 
+const mjData* Episodes::data(std::size_t i) const {
+  check_index(i, impl_->episodes.size());
+  return impl_->episodes[i].data.get();
+}
+
 void Episodes::step(const double* actions, std::size_t action_count, std::int64_t every, const std::uint8_t* active,
                     std::size_t active_count, double* observations, std::uint8_t* terminated, std::uint8_t* truncated,
                     int threads, RunControl* control) {

@@ -73,6 +73,7 @@ PYBIND11_MODULE(_core, m) {
   simloop_py::bind_chapter(m);
   simloop_py::bind_scenario(m);
   simloop_py::bind_sim(m);
+  simloop_py::bind_render(m);
   simloop_py::bind_command(m);
   simloop_py::bind_outputs(m);
 }

@@ -319,6 +319,7 @@ void bind_record(py::module_& m);
 void bind_chapter(py::module_& m);
 void bind_scenario(py::module_& m);
 void bind_sim(py::module_& m);
+void bind_render(py::module_& m);
 void bind_command(py::module_& m);
 void bind_outputs(py::module_& m);
 

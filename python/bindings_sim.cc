@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "bindings_common.hpp"
+#include "bindings_sim.hpp"
 #include "simloop/episode.hpp"
 #include "simloop/model.hpp"
 #include "simloop/number_format.hpp"
@@ -29,54 +30,6 @@ namespace simloop_py {
 namespace {
 
 using namespace pybind11::literals;
-
-// A Sim that any Python thread may call. Every call holds the Sim's lock for
-// its whole length, GIL released or not, so no call sees another half done
-// (a step while set_timestep swaps the model, say). The lock is waited for
-// without the GIL, so a thread waiting for it never blocks the thread that
-// holds it from getting the GIL back; and in slices, between which the waiter
-// runs Python's signal handlers, so Ctrl-C reaches a thread waiting for a Sim
-// that another thread is stepping for a long time.
-struct PySim {
-  explicit PySim(const simloop::Model& model) : sim(model) {}
-  explicit PySim(const simloop::Sim& other) : sim(other) {}
-  simloop::Sim sim;
-  std::timed_mutex mutex;
-  // The thread holding `mutex`, if any. Only the holder writes it, and a
-  // thread only asks whether it is itself the holder, so relaxed order does.
-  std::atomic<std::thread::id> holder{};
-};
-
-class SimLock {
- public:
-  explicit SimLock(PySim& s) : s_(s) {
-    // A signal handler or a progress callback, run from inside this Sim's own
-    // step, calling it again: refuse rather than deadlock.
-    if (s.holder.load(std::memory_order_relaxed) == std::this_thread::get_id()) {
-      throw py::value_error("this Sim is in the middle of a call on this thread (a signal handler or "
-                            "progress callback called it); call it after that call returns");
-    }
-    while (!s.mutex.try_lock()) {
-      bool locked = false;
-      {
-        py::gil_scoped_release release;
-        locked = s.mutex.try_lock_for(simloop::RunControl::kPollInterval);
-      }
-      if (locked) break;
-      if (PyErr_CheckSignals() != 0) throw py::error_already_set();
-    }
-    s.holder.store(std::this_thread::get_id(), std::memory_order_relaxed);
-  }
-  ~SimLock() {
-    s_.holder.store(std::thread::id(), std::memory_order_relaxed);
-    s_.mutex.unlock();
-  }
-  SimLock(const SimLock&) = delete;
-  SimLock& operator=(const SimLock&) = delete;
-
- private:
-  PySim& s_;
-};
 
 using Doubles = py::array_t<double, py::array::c_style | py::array::forcecast>;
 using Part3 = std::optional<std::array<double, 3>>;  // a force or torque, or None
@@ -102,18 +55,6 @@ py::array owned_view(const py::object& owner, const simloop::ArrayView& array) {
                              : py::array(py::dtype::of<double>(), {rows}, {item}, at, owner);
   return array.writable ? view : read_only(view);
 }
-
-// Observations live in one (count, width) buffer the Python side reads
-// after each call (copied out: a returned array never changes later).
-struct PyEpisodes {
-  PyEpisodes(const simloop::Model& scene, const simloop::Scenario& scenario, const simloop::ScenarioConfig& config,
-             std::size_t count)
-      : episodes(scene, scenario, config, count),
-        observations(static_cast<std::size_t>(episodes.width()) * count, 0.0) {}
-  simloop::Episodes episodes;
-  std::vector<double> observations;
-  std::mutex mutex;  // one call at a time (the GIL is released while stepping)
-};
 
 }  // namespace
 

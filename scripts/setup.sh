@@ -28,7 +28,9 @@ case $mujoco in
   *) echo "setup: SIMLOOP_MUJOCO must be system or pypi, got '$mujoco'" >&2; exit 2 ;;
 esac
 
-apt_packages=(libtomlplusplus-dev)
+# libegl-dev: the EGL headers offscreen rendering builds with; libgl1-mesa-dri:
+# Mesa's software rasteriser, which draws where there is no GPU.
+apt_packages=(libtomlplusplus-dev libegl-dev libgl1-mesa-dri)
 if ((with_tree)); then apt_packages+=(libgtest-dev); fi  # the C++ tests
 if [[ $mujoco == system ]]; then
   # libmujoco-dev's CMake config asks for OpenGL (find_dependency) and its

@@ -47,6 +47,9 @@ class Episodes {
   // episode started with scene parameters steps its own copy (model(i)).
   [[nodiscard]] const Model& model() const noexcept;
   [[nodiscard]] const Model& model(std::size_t i) const;
+  // Episode i's state, as its last reset or step left it (positions and what
+  // MuJoCo derives from them current: what a Renderer draws).
+  [[nodiscard]] const mjData* data(std::size_t i) const;
 
   // Starts episode i afresh (t = 0, the model's initial state, ctrl 0) with
   // its disturbances drawn from `seed`, then its start (the scenario's

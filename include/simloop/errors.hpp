@@ -51,6 +51,13 @@ class IoError : public Error {
   using Error::Error;
 };
 
+// A picture cannot be made on this machine: no EGL, no display it can
+// render on, no OpenGL context. The message says what to install.
+class RenderError : public Error {
+ public:
+  using Error::Error;
+};
+
 // The work was stopped on request (RunControl::request_stop: Ctrl-C in the
 // commands, KeyboardInterrupt in Python) before it finished.
 class Interrupted : public Error {

@@ -24,6 +24,7 @@ except ImportError as _error:
 from ._checks import load_model
 from ._gym_registry import register_when_gymnasium_loads
 from .policy import Observation
+from .render import MAX_PICTURE_SIZE, Renderer
 from .runs import draw_shove, run, run_batch
 from .scenario import Scenario, ScenarioResult
 from .scenario_runs import run_scenario, run_scenario_batch
@@ -51,6 +52,7 @@ __all__ = [
     "COLUMN_NAMES",
     "ENERGY_COLUMN_NAMES",
     "MAX_RECORD_EVERY",
+    "MAX_PICTURE_SIZE",
     "MAX_STEPS",
     "MUJOCO_VERSION",
     "Contact",
@@ -58,6 +60,7 @@ __all__ = [
     "MujocoError",
     "MujocoWarning",
     "Observation",
+    "Renderer",
     "RunResult",
     "Scenario",
     "ScenarioResult",

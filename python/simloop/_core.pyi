@@ -33,6 +33,7 @@ BOX_REST_Z: Final[float]
 # Every warning a run counts: MuJoCo's mjWARN_* and simloop_DIVERGED.
 WARNING_NAMES: Final[tuple[str, ...]]
 SCENARIO_SWEEP_TOLERANCE: Final[float]
+MAX_PICTURE_SIZE: Final[int]
 # What the bindings read as a float64 array (copied or converted).
 _ArrayLike = ArrayLike
 # A policy: decide(observations) -> controls, called at the control rate.
@@ -427,6 +428,45 @@ class Sim(metaclass=_Pybind11Type):
     def clear_forces(self) -> None: ...
     def __getstate__(self) -> Any: ...
     def __setstate__(self, state: Any, /) -> None: ...
+
+def check_camera_view(
+    model: Model,
+    camera: Optional[str],
+    track: Optional[str],
+    distance: Optional[float],
+    azimuth: Optional[float],
+    elevation: Optional[float],
+) -> None: ...
+
+# Offscreen pictures (simloop.Renderer): (height, width, 3) uint8, or with
+# depth (height, width) float32 metres.
+class Renderer(metaclass=_Pybind11Type):
+    def __init__(self, model: Model, width: int, height: int) -> None: ...
+    @property
+    def width(self) -> int: ...
+    @property
+    def height(self) -> int: ...
+    def render_sim(
+        self,
+        sim: Sim,
+        camera: Optional[str],
+        track: Optional[str],
+        distance: Optional[float],
+        azimuth: Optional[float],
+        elevation: Optional[float],
+        depth: bool,
+    ) -> NDArray[Any]: ...
+    def render_episode(
+        self,
+        episodes: Episodes,
+        i: int,
+        camera: Optional[str],
+        track: Optional[str],
+        distance: Optional[float],
+        azimuth: Optional[float],
+        elevation: Optional[float],
+        depth: bool,
+    ) -> NDArray[Any]: ...
 
 # (rest position, axis, q0) of the pusher's joint.
 def pusher_track(model: Model, /) -> tuple[_Float64Array, _Float64Array, float]: ...

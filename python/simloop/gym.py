@@ -58,192 +58,26 @@ from __future__ import annotations
 
 import copy
 import os
-from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union, cast
+from typing import Any, Dict, List, Optional, Sequence, Tuple, Union, cast
 
 import gymnasium
 import numpy as np
-from gymnasium import spaces
 from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from . import _core, _gym_registry
-from ._checks import _check_int, _check_keys, _check_seed, _check_threads, _describe
-from .scenario import RESET_KEYS, Scenario, ScenarioLike, _scenario_and_scene, reset_toml, scenario_config
+from ._checks import _check_int, _check_threads, _describe
+from ._gym_setup import (_TERMINAL_ENDS, Rendering, Reward, Terminate, _check_max_episode_steps, _check_options, _ended_by,
+                         _episode_seed, _Setup, _start, batched)
+from .render import RENDER_MODES
+from .scenario import RESET_KEYS, Scenario, ScenarioLike
 
+__all__ = ["PUSHT_SCENARIO", "ScenarioEnv", "ScenarioVectorEnv", "batched", "chapter_env", "chapter_vector_env", "pusht_env",
+           "pusht_vector_env", "register_envs"]
+
+_CHAPTER_VIEW = {"track": "box", "distance": 1.5}
 PUSHT_SCENARIO = os.path.join(os.path.dirname(os.path.abspath(__file__)), "scenes", "pusht.toml")
-
-Reward = Callable[[np.ndarray, np.ndarray, np.ndarray], Any]
-Terminate = Union[Callable[[np.ndarray], Any], Sequence[Tuple[str, str, float]]]
-_COMPARISONS = {"<": np.less, "<=": np.less_equal, ">": np.greater, ">=": np.greater_equal}
-
-
-def batched(function: Callable[..., Any]) -> Callable[..., Any]:
-    """Marks a reward or terminate function as taking a batch: arrays with a
-    leading axis of episodes (obs and next_obs (n, width), actions (n, nu))
-    and returning n values. The vector env then calls it once a step rather
-    than once per env (the single env calls it with n = 1)."""
-    setattr(function, "simloop_batched", True)
-    return function
-
-
-def _is_batched(function: object) -> bool:
-    return bool(getattr(function, "simloop_batched", False))
-
-# Episodes that end this way are terminated, not truncated (episode.hpp).
-_TERMINATING = ("simloop_DIVERGED", "mjWARN_BADQPOS", "mjWARN_BADQVEL", "mjWARN_BADQACC")
-# The ends (_ended_by) that are terminations; the others are truncations.
-_TERMINAL_ENDS = ("warning", "termination")
-# An observation's bounds: finite, so Gymnasium's checkers find nothing to
-# remark on, and float32's, so a float32 observation (DtypeObservation, a
-# torch policy's) is in its space too. No state gets near them: MuJoCo resets
-# a state past 1e10 (mjWARN_BADQPOS, ...), which terminates the episode.
-_FINITE = float(np.finfo(np.float32).max)
-
-
-class _Setup:
-    """What the single and the vector environment share: the episodes, the
-    spaces, the checks of actions."""
-
-    def __init__(self, scenario: ScenarioLike, count: int, control_every: int, reward: Optional[Reward],
-                 terminate: Optional[Terminate], rng: str, timestep: Optional[float], steps: Optional[int],
-                 perturb: bool, model: Optional[_core.Model]) -> None:
-        scenario, scene = _scenario_and_scene(scenario, model)
-        if reward is not None and not callable(reward):
-            raise TypeError(f"reward must be None or a callable reward(obs, action, next_obs) -> float, "
-                            f"got {_describe(reward)}")
-        # (checked here, at construction: the C++ episodes check it only as they step)
-        self.control_every = _check_int("control_every", control_every, 1, _core.MAX_STEPS)
-        config = scenario_config(0, rng, timestep, steps, perturb, 1)
-        self.scenario = scenario
-        self.reward = reward
-        self.episodes = _core.Episodes(scene, scenario._core, config, count)
-        self.nu = self.episodes.nu
-        self.names: Tuple[str, ...] = self.episodes.column_names[2:]
-        low, high = self.episodes.ctrl_range
-        self.action_space = spaces.Box(low, high, (self.nu,), np.float64)
-        self.observation_space = spaces.Box(-_FINITE, _FINITE, (len(self.names),), np.float64)
-        self.terminate: Optional[Callable[[np.ndarray], Any]] = None
-        self.conditions: List[Tuple[int, Any, float]] = []
-        if callable(terminate):
-            self.terminate = terminate
-        elif terminate is not None:
-            self.conditions = [self._condition(c) for c in _sequence_of("terminate", terminate)]
-
-    def _condition(self, condition: object) -> Tuple[int, Any, float]:
-        """(column, op, value): the episode ends when the observation's column compares so."""
-        if not (isinstance(condition, (tuple, list)) and len(condition) == 3 and isinstance(condition[0], str)
-                and condition[1] in _COMPARISONS):
-            raise TypeError(f"each terminate condition must be (column, op, value) with op one of "
-                            f"{', '.join(_COMPARISONS)}, got {_describe(condition)}")
-        column, op, value = condition
-        if column not in self.names:
-            raise ValueError(f"terminate: no observed column named {column!r}; columns: {', '.join(self.names)}")
-        threshold = float(value)
-        if not np.isfinite(threshold):
-            raise ValueError(f"terminate: {column} {op} {value!r}: the value must be finite")
-        return self.names.index(column), _COMPARISONS[op], threshold
-
-    def terminations(self, after: np.ndarray) -> np.ndarray:
-        """Which of these next observations end their episode by the terminate hook."""
-        hit = np.zeros(len(after), dtype=bool)
-        for index, op, value in self.conditions:
-            hit |= op(after[:, index], value)
-        if self.terminate is not None:
-            if _is_batched(self.terminate):
-                hit |= _batch_of("terminate", self.terminate(after), len(after)).astype(bool)
-            else:
-                hit |= np.array([bool(self.terminate(o)) for o in after], dtype=bool)
-        return hit
-
-    def actions(self, action: object, shape: Tuple[int, ...]) -> np.ndarray:
-        try:
-            values = np.asarray(action, dtype=np.float64)
-        except (TypeError, ValueError):
-            raise TypeError(f"action must be {shape} numbers, got {_describe(action)}") from None
-        if shape == (1,) and values.ndim == 0:
-            values = values.reshape(1)
-        if values.shape != shape:
-            raise ValueError(f"action must have shape {shape}, got {values.shape}")
-        if not np.isfinite(values).all():
-            raise ValueError(f"action must be finite, got {action!r}")
-        return np.ascontiguousarray(values)
-
-    def rewards(self, before: np.ndarray, actions: np.ndarray, after: np.ndarray) -> np.ndarray:
-        if self.reward is None:
-            return np.zeros(len(after))
-        if _is_batched(self.reward):
-            return _batch_of("reward", self.reward(before, actions, after), len(after)).astype(np.float64)
-        return np.array([float(self.reward(b, a, o)) for b, a, o in zip(before, actions, after)])
-
-    def info(self, i: int, ended_by: Optional[str] = None) -> Dict[str, Any]:
-        out: Dict[str, Any] = {"step": self.episodes.steps_taken(i), "time": self.episodes.time(i)}
-        ended = [w.name for w in self.episodes.warnings(i) if w.name in _TERMINATING]
-        if ended:
-            out["warnings"] = ended
-        if ended_by is not None:
-            out["ended_by"] = ended_by
-        return out
-
-
-def _sequence_of(name: str, value: object) -> List[Any]:
-    if isinstance(value, (str, bytes)) or not isinstance(value, Sequence):
-        raise TypeError(f"{name} must be a callable or a list of (column, op, value) conditions, got "
-                        f"{_describe(value)}")
-    return list(value)
-
-
-def _batch_of(name: str, values: object, n: int) -> np.ndarray:
-    """A batched function's result: n values."""
-    out = np.asarray(values)
-    if out.shape != (n,):
-        raise ValueError(f"a batched {name} must return {n} values (one per episode), got shape {out.shape}")
-    return out
-
-
-def _ended_by(terminated: bool, truncated: bool, decisions: int, max_episode_steps: Optional[int],
-              hooked: bool = False) -> Optional[str]:
-    """Why an episode ended on this step, or None: a warning first, then the
-    terminate hook, then the scenario's length, then the caller's step limit."""
-    if terminated:
-        return "warning"
-    if hooked:
-        return "termination"
-    if truncated:
-        return "length"
-    if max_episode_steps is not None and decisions >= max_episode_steps:
-        return "max_episode_steps"
-    return None
-
-
-def _check_options(options: object, known: Sequence[str]) -> Dict[str, Any]:
-    """reset's options: None or a dict of known keys (never silently ignored)."""
-    if options is None:
-        return {}
-    if not isinstance(options, dict):
-        raise TypeError(f"options must be a dict or None, got {_describe(options)}")
-    _check_keys("options", options, known)
-    return options
-
-
-def _start(options: Dict[str, Any]) -> Optional[str]:
-    """The episode's start from reset's options, as a [reset] table (None:
-    the scenario's own). Given, it replaces the scenario's [reset] for that
-    episode."""
-    reset = {k: v for k, v in options.items() if k in RESET_KEYS}
-    return reset_toml(reset) if reset else None
-
-
-def _check_max_episode_steps(value: object) -> Optional[int]:
-    return None if value is None else _check_int("max_episode_steps", value, 1, _core.MAX_STEPS)
-
-
-def _episode_seed(np_random: np.random.Generator, seed: Optional[int]) -> int:
-    """The scenario's seed for an episode: reset's, else drawn from np_random."""
-    if seed is not None:
-        return _check_seed("seed", seed)
-    return int(np_random.integers(0, 2**64, dtype=np.uint64))
-
 
 class ScenarioEnv(gymnasium.Env):
     """A Gymnasium environment over a scenario (a simloop.Scenario or a
@@ -258,18 +92,24 @@ class ScenarioEnv(gymnasium.Env):
     <, <=, >, >=). max_episode_steps: truncate after this many env.step
     calls (None: the scenario's length only). rng, timestep, steps, perturb,
     model: as for run_scenario (steps is the episode's length in physics
-    steps). No rendering (render_mode None).
+    steps). render_mode: None, "rgb_array" (render() gives the state as a
+    (height, width, 3) uint8 picture) or "depth_array" ((height, width)
+    float32 metres), drawn offscreen by simloop.Renderer from `view` (a dict:
+    camera, track, distance, azimuth, elevation; None: the scene's default
+    free camera); width and height in pixels.
     """
 
-    metadata = {"render_modes": []}
+    metadata = {"render_modes": list(RENDER_MODES)}
 
     def __init__(self, scenario: ScenarioLike, *, control_every: int = 1, reward: Optional[Reward] = None,
                  terminate: Optional[Terminate] = None, max_episode_steps: Optional[int] = None,
                  rng: str = "mt19937_64", timestep: Optional[float] = None, steps: Optional[int] = None,
-                 perturb: bool = True, model: Optional[_core.Model] = None, render_mode: Optional[str] = None) -> None:
-        if render_mode is not None:
-            raise ValueError(f"render_mode must be None (simloop environments do not render), got {render_mode!r}")
-        self._setup = _Setup(scenario, 1, control_every, reward, terminate, rng, timestep, steps, perturb, model)
+                 perturb: bool = True, model: Optional[_core.Model] = None, render_mode: Optional[str] = None,
+                 width: int = 480, height: int = 480, view: Optional[Dict[str, Any]] = None) -> None:
+        self._setup = _Setup(scenario, 1, control_every, reward, terminate, rng, timestep, steps, perturb, model,
+                             Rendering(render_mode, width, height, view))
+        self.render_mode = render_mode
+        self.metadata = {**type(self).metadata, "render_fps": self._setup.render_fps}
         self.action_space = self._setup.action_space
         self.observation_space = self._setup.observation_space
         self.observation_names = self._setup.names
@@ -313,6 +153,20 @@ class ScenarioEnv(gymnasium.Env):
         terminal = ended_by in _TERMINAL_ENDS
         return obs.copy(), reward, terminal, self._ended and not terminal, self._setup.info(0, ended_by)
 
+    def render(self) -> Optional[np.ndarray]:
+        """The episode's current state as a picture (render_mode "rgb_array"
+        or "depth_array"), or None without a render_mode."""
+        if self._setup.pictures is None:
+            return None
+        if self._obs is None:
+            raise ValueError("reset() the environment before render()")
+        return self._setup.pictures.picture(self._setup.episodes, 0)
+
+    def close(self) -> None:
+        if self._setup.pictures is not None:
+            self._setup.pictures.close()
+        super().close()
+
 
 class ScenarioVectorEnv(VectorEnv):
     """num_envs episodes of a scenario over one compiled model, one MuJoCo
@@ -336,16 +190,15 @@ class ScenarioVectorEnv(VectorEnv):
     ScenarioEnv.
     """
 
-    metadata = {"render_modes": [], "autoreset_mode": AutoresetMode.NEXT_STEP}
+    metadata = {"render_modes": list(RENDER_MODES), "autoreset_mode": AutoresetMode.NEXT_STEP}
 
     def __init__(self, scenario: ScenarioLike, num_envs: int = 1, *, control_every: int = 1,
                  reward: Optional[Reward] = None, terminate: Optional[Terminate] = None,
                  max_episode_steps: Optional[int] = None,
                  autoreset_mode: Union[AutoresetMode, str] = AutoresetMode.NEXT_STEP, threads: Optional[int] = None,
                  rng: str = "mt19937_64", timestep: Optional[float] = None, steps: Optional[int] = None,
-                 perturb: bool = True, model: Optional[_core.Model] = None, render_mode: Optional[str] = None) -> None:
-        if render_mode is not None:
-            raise ValueError(f"render_mode must be None (simloop environments do not render), got {render_mode!r}")
+                 perturb: bool = True, model: Optional[_core.Model] = None, render_mode: Optional[str] = None,
+                 width: int = 480, height: int = 480, view: Optional[Dict[str, Any]] = None) -> None:
         try:
             mode = AutoresetMode(autoreset_mode)
         except ValueError:
@@ -356,7 +209,9 @@ class ScenarioVectorEnv(VectorEnv):
         self.num_envs = _check_int("num_envs", num_envs, 1, 1 << 20)
         self._threads = _check_threads(threads)
         self._setup = _Setup(scenario, self.num_envs, control_every, reward, terminate, rng, timestep, steps,
-                             perturb, model)
+                             perturb, model, Rendering(render_mode, width, height, view))
+        self.render_mode = render_mode
+        self.metadata["render_fps"] = self._setup.render_fps
         self.single_action_space = self._setup.action_space
         self.single_observation_space = self._setup.observation_space
         self.action_space = batch_space(self.single_action_space, self.num_envs)
@@ -460,15 +315,32 @@ class ScenarioVectorEnv(VectorEnv):
             self._add_info(infos, info, int(i))
         return obs.copy(), rewards, terminated, truncated, infos
 
+    def render(self) -> Optional[Tuple[np.ndarray, ...]]:
+        """Every env's current state as a picture, one per env (as
+        SyncVectorEnv gives them), or None without a render_mode."""
+        if self._setup.pictures is None:
+            return None
+        if self._obs is None:
+            raise ValueError("reset() the environment before render()")
+        pictures = self._setup.pictures
+        return tuple(pictures.picture(self._setup.episodes, i) for i in range(self.num_envs))
+
+    def close_extras(self, **kwargs: Any) -> None:
+        if self._setup.pictures is not None:
+            self._setup.pictures.close()
+
 
 def chapter_env(**kwargs: Any) -> ScenarioEnv:
-    """simloop/Chapter-v0: the chapter's run, a decision every 50 steps."""
+    """simloop/Chapter-v0: the chapter's run, a decision every 50 steps, its
+    pictures looking at the box (which travels metres)."""
     kwargs.setdefault("control_every", 50)
+    kwargs.setdefault("view", _CHAPTER_VIEW)
     return ScenarioEnv(Scenario.chapter(), **kwargs)
 
 
 def chapter_vector_env(num_envs: int = 1, **kwargs: Any) -> ScenarioVectorEnv:
     kwargs.setdefault("control_every", 50)
+    kwargs.setdefault("view", _CHAPTER_VIEW)
     return ScenarioVectorEnv(Scenario.chapter(), num_envs, **kwargs)
 
 

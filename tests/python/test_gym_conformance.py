@@ -208,8 +208,9 @@ def _vector_wrappers():
 # float64 environment, and Gymnasium says so: its remark, not ours.
 CAST = "ignore:.*precision lowered by casting to float32"
 
-# Not run: wrappers for images or rendering (the environments do not render
-# yet), for Dict observations, and RescaleObservation / DiscretizeObservation,
+# Not run here: the rendering wrappers (test_render.py runs
+# AddRenderObservation and RenderCollection), wrappers for Dict or image
+# observations, and RescaleObservation / DiscretizeObservation,
 # which need a bounded observation space (a simloop observation is any finite value).
 
 

@@ -1,0 +1,191 @@
+#include "simloop/render.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <mutex>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include "mujoco_guard.hpp"
+#include "offscreen_gl.hpp"
+#include "simloop/errors.hpp"
+#include "simloop/number_format.hpp"
+#include "simloop/object_names.hpp"
+
+namespace simloop {
+namespace {
+
+// The scene's geoms and MuJoCo's decorations (contact points, frames) drawn
+// at once: MuJoCo's own Renderer allows as many.
+constexpr int kMaxGeoms = 10000;
+
+void check_size(const char* what, int pixels) {
+  if (pixels < 1 || pixels > Renderer::kMaxSize) {
+    throw InvalidArgument(std::string("the picture's ") + what + " must be from 1 to " +
+                          std::to_string(Renderer::kMaxSize) + " pixels, got " + std::to_string(pixels));
+  }
+}
+
+bool same_structure(const mjModel* a, const mjModel* b) {
+  return a->nq == b->nq && a->nv == b->nv && a->nbody == b->nbody && a->ngeom == b->ngeom &&
+         a->ncam == b->ncam && a->nlight == b->nlight && a->nsite == b->nsite && a->nmesh == b->nmesh;
+}
+
+// The view as MuJoCo's camera, its names looked up and its settings checked;
+// with `d`, a tracked body's centre from that state.
+mjvCamera camera_for(const mjModel* m, const mjData* d, const CameraView& view) {
+  mjvCamera camera;
+  mjv_defaultCamera(&camera);
+  const bool free_settings = view.distance || view.azimuth || view.elevation;
+  if (!view.camera.empty()) {
+    if (!view.track.empty()) {
+      throw InvalidArgument("a picture is taken from a scene's camera ('" + view.camera +
+                            "') or a free camera looking at a body ('" + view.track + "'), not both");
+    }
+    if (free_settings) {
+      throw InvalidArgument("camera '" + view.camera +
+                            "' is the scene's own: distance, azimuth and elevation are for a free camera");
+    }
+    camera.type = mjCAMERA_FIXED;
+    camera.fixedcamid = object_id(m, mjOBJ_CAMERA, view.camera);
+    return camera;
+  }
+  mjv_defaultFreeCamera(m, &camera);
+  if (!view.track.empty()) {
+    // A free camera looking at the body's subtree centre of mass. (MuJoCo's
+    // mjCAMERA_TRACKING moves its lookat a fifth of the way there per
+    // picture, smoothing a viewer's motion; a picture here stands alone.)
+    const int body = object_id(m, mjOBJ_BODY, view.track);
+    if (d != nullptr) std::copy_n(d->subtree_com + 3 * body, 3, camera.lookat);
+  }
+  if (view.distance) {
+    if (!(*view.distance > 0.0) || !std::isfinite(*view.distance)) {
+      throw InvalidArgument("the camera's distance must be a positive, finite number of metres, got " +
+                            python_float_repr(*view.distance));
+    }
+    camera.distance = *view.distance;
+  }
+  for (auto [setting, name, into] : {std::tuple{view.azimuth, "azimuth", &camera.azimuth},
+                                     std::tuple{view.elevation, "elevation", &camera.elevation}}) {
+    if (!setting) continue;
+    if (!std::isfinite(*setting)) {
+      throw InvalidArgument(std::string("the camera's ") + name + " must be a finite number of degrees, got " +
+                            python_float_repr(*setting));
+    }
+    *into = *setting;
+  }
+  return camera;
+}
+
+}  // namespace
+
+void check_camera_view(const Model& model, const CameraView& view) { (void)camera_for(model.get(), nullptr, view); }
+
+struct Renderer::Impl {
+  Model model;
+  int width;
+  int height;
+  detail::OffscreenGl gl;
+  mjvScene scene;
+  mjvOption option;
+  mjrContext context;
+  std::vector<std::uint8_t> rgb;  // as OpenGL reads them: rows from the bottom
+  std::vector<float> depth;
+  std::mutex mutex;
+
+  Impl(const Model& m, int w, int h) : model(m), width(w), height(h) {
+    mjv_defaultScene(&scene);
+    mjv_defaultOption(&option);
+    mjr_defaultContext(&context);
+  }
+};
+
+Renderer::Renderer(const Model& model, int width, int height) {
+  check_size("width", width);
+  check_size("height", height);
+  detail::install_mujoco_handlers();
+  impl_ = std::make_unique<Impl>(model, width, height);
+  Impl& r = *impl_;
+  const mjModel* m = model.get();
+  // MuJoCo sizes its offscreen framebuffer by the model's <visual><global
+  // offwidth offheight> (640 x 480 unless the scene says): a shallow copy of
+  // the model's struct, only ever read, asks for at least the picture's size.
+  mjModel sized = *m;
+  sized.vis.global.offwidth = std::max(m->vis.global.offwidth, width);
+  sized.vis.global.offheight = std::max(m->vis.global.offheight, height);
+  r.gl.make_current();
+  try {
+    detail::mujoco_call([&] {
+      mjv_makeScene(m, &r.scene, kMaxGeoms);
+      mjr_makeContext(&sized, &r.context, mjFONTSCALE_100);
+      mjr_setBuffer(mjFB_OFFSCREEN, &r.context);
+    });
+  } catch (const MujocoError& e) {
+    mjv_freeScene(&r.scene);
+    mjr_freeContext(&r.context);
+    r.gl.release();
+    throw RenderError(std::string("MuJoCo cannot render with this machine's OpenGL: ") + e.what());
+  }
+  r.gl.release();
+  r.rgb.resize(static_cast<std::size_t>(width) * height * 3);
+  r.depth.resize(static_cast<std::size_t>(width) * height);
+}
+
+Renderer::~Renderer() {
+  Impl& r = *impl_;
+  try {
+    r.gl.make_current();
+    mjr_freeContext(&r.context);  // its textures and buffers live in the context
+    r.gl.release();
+  } catch (const RenderError&) {
+    // The context is gone with the display; nothing of ours to free in it.
+  }
+  mjv_freeScene(&r.scene);
+}
+
+int Renderer::width() const noexcept { return impl_->width; }
+int Renderer::height() const noexcept { return impl_->height; }
+
+void Renderer::render(const Model& model, const mjData* d, const CameraView& view, std::uint8_t* rgb, float* depth) {
+  Impl& r = *impl_;
+  const mjModel* m = model.get();
+  if (!same_structure(m, r.model.get())) {
+    throw InvalidArgument("the state to draw is of another scene (" + model.source() + ") than the renderer's (" +
+                          r.model.source() + ")");
+  }
+  mjvCamera camera = camera_for(m, d, view);
+  const mjrRect viewport{0, 0, r.width, r.height};
+  std::lock_guard<std::mutex> lock(r.mutex);
+  r.gl.make_current();
+  try {
+    // mjv_updateScene takes mjData* but only reads the state (positions,
+    // contacts, the lights' and cameras' frames), in every MuJoCo we build on.
+    detail::mujoco_call([&] {
+      mjv_updateScene(m, const_cast<mjData*>(d), &r.option, nullptr, &camera, mjCAT_ALL, &r.scene);
+      mjr_setBuffer(mjFB_OFFSCREEN, &r.context);
+      mjr_render(viewport, &r.scene, &r.context);
+      mjr_readPixels(rgb ? r.rgb.data() : nullptr, depth ? r.depth.data() : nullptr, viewport, &r.context);
+    });
+  } catch (...) {
+    r.gl.release();
+    throw;
+  }
+  r.gl.release();
+  const std::size_t w = static_cast<std::size_t>(r.width), h = static_cast<std::size_t>(r.height);
+  for (std::size_t row = 0; row < h; ++row) {
+    const std::size_t from = h - 1 - row;
+    if (rgb) std::copy_n(r.rgb.data() + from * w * 3, w * 3, rgb + row * w * 3);
+    if (depth) {
+      // OpenGL's depth buffer holds 0..1, non-linear in distance: back to
+      // metres with the near and far planes MuJoCo drew with.
+      const mjModel* own = r.model.get();
+      const double near = own->vis.map.znear * own->stat.extent, far = own->vis.map.zfar * own->stat.extent;
+      const float* in = r.depth.data() + from * w;
+      float* out = depth + row * w;
+      for (std::size_t x = 0; x < w; ++x) out[x] = static_cast<float>(near / (1.0 - in[x] * (1.0 - near / far)));
+    }
+  }
+}
+
+}  // namespace simloop

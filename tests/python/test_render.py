@@ -1,0 +1,170 @@
+"""Pictures: simloop.Renderer on a Sim, and the Gymnasium envs' render modes
+(the single and the vector env, Gymnasium's checkers and its rendering
+wrappers), with the bad arguments each refuses."""
+
+import warnings
+
+import numpy as np
+import pytest
+
+import simloop
+from simloop.gym import PUSHT_SCENARIO, ScenarioEnv, ScenarioVectorEnv
+
+SIZE = dict(width=96, height=64)
+
+
+def red(picture):
+    """Where the chapter's box is: its red (0.85, 0.3, 0.25), lit or shaded, keeps its ratios."""
+    r, g, b = (picture[..., c].astype(int) for c in range(3))
+    return (r > 2 * g) & (r > 2 * b)
+
+
+def mean_column(mask):
+    return np.nonzero(mask)[1].mean()
+
+
+def test_the_chapters_scene_at_rest_has_the_boxs_red_where_the_box_is():
+    sim = simloop.Sim()
+    renderer = simloop.Renderer(sim, **SIZE)
+    picture = renderer.render(sim, track="box")
+    assert picture.shape == (64, 96, 3) and picture.dtype == np.uint8
+    assert red(picture)[32, 48]
+    # From the default free camera the box (x = 0.4) stands right of the pusher (x = 0).
+    whole = renderer.render(sim)
+    blue = (whole[..., 2].astype(int) > 2 * whole[..., 0]) & (whole[..., 2] > whole[..., 1])
+    assert mean_column(red(whole)) > mean_column(blue) + 10
+    depth = renderer.render(sim, track="box", distance=1.0, elevation=-90, depth=True)
+    assert depth.shape == (64, 96) and depth.dtype == np.float32
+    assert depth[32, 48] == pytest.approx(0.95, abs=0.01)  # 1 m above the box's centre, 5 cm above its top
+
+
+def test_a_picture_shows_the_state_the_sim_has_reached():
+    sim = simloop.Sim()
+    renderer = simloop.Renderer(sim, **SIZE)
+    before = renderer.render(sim, track="pusher", distance=2.0)
+    sim.step(500, ctrl=1.0)
+    sim.forward()
+    after = renderer.render(sim, track="pusher", distance=2.0)
+    assert mean_column(red(after)) < mean_column(red(before))  # the box is nearer the pusher once pushed...
+    assert red(after).any()
+    assert not np.array_equal(before, after)
+    assert np.array_equal(after, renderer.render(sim, track="pusher", distance=2.0))  # ...and a picture is repeatable
+
+
+def test_renderer_arguments_are_checked_with_one_line_each():
+    sim = simloop.Sim()
+    with pytest.raises(TypeError, match=r"^width must be an int, got '96' \(str\)$"):
+        simloop.Renderer(sim, width="96")
+    with pytest.raises(ValueError, match=r"^height must be an integer from 1 to 8192, got 0$"):
+        simloop.Renderer(sim, height=0)
+    renderer = simloop.Renderer(sim, **SIZE)
+    with pytest.raises(ValueError, match=r"^no camera named 'top'; the scene has no cameras$"):
+        renderer.render(sim, camera="top")
+    with pytest.raises(ValueError, match=r"did you mean 'box'\?"):
+        renderer.render(sim, track="boxx")
+    with pytest.raises(TypeError, match=r"^track must be a str, got 3 \(int\)$"):
+        renderer.render(sim, track=3)
+    with pytest.raises(ValueError, match=r"^the camera's azimuth must be a finite number of degrees, got nan$"):
+        renderer.render(sim, azimuth=float("nan"))
+    with pytest.raises(TypeError, match=r"^sim must be a simloop.Sim"):
+        renderer.render(object())
+    with pytest.raises(ValueError, match=r"another scene"):
+        renderer.render(simloop.Sim("tests/scenes/walker.xml"))
+    assert renderer.render(sim).shape == (64, 96, 3)  # still usable after each refusal
+    with renderer:
+        pass
+    with pytest.raises(ValueError, match="closed"):
+        renderer.render(sim)
+
+
+def test_a_scenes_own_camera_is_drawn_from():
+    xml = """<mujoco><worldbody>
+      <camera name="above" pos="0 0 2" xyaxes="1 0 0 0 1 0"/>
+      <geom type="plane" size="1 1 0.1" rgba="0.5 0.5 0.5 1"/>
+      <body pos="0.3 0 0.1"><freejoint/><geom type="box" size="0.1 0.1 0.1" rgba="0.9 0.1 0.1 1"/></body>
+    </worldbody></mujoco>"""
+    sim = simloop.Sim(simloop.Model.from_xml_string(xml))
+    picture = simloop.Renderer(sim, width=101, height=101).render(sim, camera="above")
+    # Looking straight down, x to the right: the box is right of the centre, on the middle row.
+    assert red(picture)[50].any() and not red(picture)[50, :50].any()
+    assert mean_column(red(picture)) > 55
+
+
+@pytest.fixture
+def gymnasium():
+    return pytest.importorskip("gymnasium")
+
+
+def test_each_env_renders_its_state_as_rgb_or_depth(gymnasium):
+    env = gymnasium.make("simloop/Chapter-v0", render_mode="rgb_array", **SIZE)
+    assert env.metadata["render_fps"] == pytest.approx(10.0)  # a decision every 50 steps of 2 ms
+    env.reset(seed=0)
+    picture = env.render()
+    assert picture.shape == (64, 96, 3) and red(picture)[32, 48]  # Chapter-v0 looks at the box
+    depth_env = gymnasium.make("simloop/PushT-v0", render_mode="depth_array", **SIZE)
+    depth_env.reset(seed=0)
+    depth = depth_env.render()
+    assert depth.shape == (64, 96) and depth.dtype == np.float32 and np.isfinite(depth).all() and depth.min() > 0
+    assert gymnasium.make("simloop/PushT-v0").unwrapped.render() is None  # no render_mode, no picture
+
+
+def test_the_vector_envs_pictures_are_the_single_envs(gymnasium):
+    seeds = [3, 4]
+    envs = ScenarioVectorEnv(PUSHT_SCENARIO, 2, control_every=10, render_mode="rgb_array", view={"track": "tblock"},
+                             **SIZE)
+    singles = [ScenarioEnv(PUSHT_SCENARIO, control_every=10, render_mode="rgb_array", view={"track": "tblock"}, **SIZE)
+               for _ in seeds]
+    envs.reset(seed=seeds)
+    for env, seed in zip(singles, seeds):
+        env.reset(seed=seed)
+    actions = np.random.default_rng(0).uniform(-1, 1, (5, 2, 2))
+    for step in actions:
+        envs.step(step)
+        for env, action in zip(singles, step):
+            env.step(action)
+    pictures = envs.render()
+    assert len(pictures) == 2
+    for picture, env in zip(pictures, singles):
+        assert np.array_equal(picture, env.render())
+    assert not np.array_equal(pictures[0], pictures[1])  # two episodes, two pictures
+
+
+def test_render_arguments_are_checked_when_the_env_is_made(gymnasium):
+    with pytest.raises(ValueError, match=r"^render_mode must be None or one of 'rgb_array', 'depth_array', "
+                                         r"got 'human' \(str\)$"):
+        ScenarioEnv(PUSHT_SCENARIO, render_mode="human")
+    with pytest.raises(ValueError, match=r"^view: unknown key 'fov' \(known: 'camera', 'track'"):
+        ScenarioEnv(PUSHT_SCENARIO, render_mode="rgb_array", view={"fov": 45})
+    with pytest.raises(ValueError, match=r"^no camera named 'top'; the scene has no cameras$"):
+        ScenarioVectorEnv(PUSHT_SCENARIO, 2, render_mode="rgb_array", view={"camera": "top"})
+    with pytest.raises(ValueError, match=r"^no body named 'tblok' \(did you mean 'tblock'\?\)"):
+        ScenarioEnv(PUSHT_SCENARIO, render_mode="rgb_array", view={"track": "tblok"})
+    with pytest.raises(ValueError, match=r"^width must be an integer from 1 to 8192, got 0$"):
+        ScenarioEnv(PUSHT_SCENARIO, render_mode="rgb_array", width=0)
+    env = ScenarioEnv(PUSHT_SCENARIO, render_mode="rgb_array", **SIZE)
+    with pytest.raises(ValueError, match=r"^reset\(\) the environment before render\(\)$"):
+        env.render()
+    env.reset(seed=0)
+    env.step(env.action_space.sample())
+    assert env.render().shape == (64, 96, 3)
+
+
+def test_checkers_and_rendering_wrappers_take_the_render_modes(gymnasium):
+    from gymnasium.utils.env_checker import check_env
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # any remark fails
+        for mode in ("rgb_array", "depth_array"):
+            check_env(gymnasium.make("simloop/PushT-v0", render_mode=mode, steps=30, **SIZE).unwrapped)
+        env = gymnasium.make("simloop/PushT-v0", render_mode="rgb_array", steps=30, **SIZE)  # the passive checker
+        env.reset(seed=0)
+        assert env.render().shape == (64, 96, 3)
+    pixels = gymnasium.wrappers.AddRenderObservation(
+        gymnasium.make("simloop/PushT-v0", render_mode="rgb_array", **SIZE), render_only=False)
+    obs, _ = pixels.reset(seed=0)
+    assert obs["pixels"].shape == (64, 96, 3) and pixels.observation_space.contains(obs)
+    frames = gymnasium.wrappers.RenderCollection(gymnasium.make("simloop/Chapter-v0", render_mode="rgb_array", **SIZE))
+    frames.reset(seed=0)
+    for _ in range(3):
+        frames.step(frames.action_space.sample())
+    assert len(frames.render()) == 4  # the reset's and each step's
