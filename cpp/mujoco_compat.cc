@@ -10,6 +10,9 @@
 #include <iterator>
 #include <mutex>
 #include <system_error>
+#include <type_traits>
+
+#include <mujoco/mjxmacro.h>
 
 #include "mujoco_guard.hpp"
 #include "simloop/errors.hpp"
@@ -296,5 +299,104 @@ OneFileVfs::OneFileVfs(const char* name, std::string_view contents, std::string_
 }
 
 OneFileVfs::~OneFileVfs() { mj_deleteVFS(vfs_.get()); }
+
+namespace {
+
+template <class T>
+constexpr bool kNumeric = std::is_arithmetic_v<T>;
+
+template <class T>
+constexpr Element element_of() {
+  if constexpr (std::is_same_v<T, double>) return Element::kFloat64;
+  if constexpr (std::is_same_v<T, float>) return Element::kFloat32;
+  if constexpr (std::is_same_v<T, char>) return Element::kInt8;
+  if constexpr (std::is_same_v<T, unsigned char>) return Element::kUInt8;
+  if constexpr (std::is_integral_v<T> && sizeof(T) == 4) return Element::kInt32;
+  if constexpr (std::is_integral_v<T> && std::is_signed_v<T> && sizeof(T) == 8) return Element::kInt64;
+  return Element::kUInt64;  // uintptr_t, size_t
+}
+
+// "MJ_D(nefc)" and "MJ_M(ntendon)" as the size's own name.
+std::string_view size_name(std::string_view written) {
+  if (written.size() > 6 && (written.substr(0, 5) == "MJ_D(" || written.substr(0, 5) == "MJ_M(")) {
+    return written.substr(5, written.size() - 6);
+  }
+  return written;
+}
+
+template <class T>
+bool visit_array(const std::function<bool(const RawArray&)>& visit, const char* name, const char* rows_count,
+                 T* data, long long rows, long long cols) {
+  if constexpr (kNumeric<T>) {
+    return visit(RawArray{name, size_name(rows_count), const_cast<std::remove_const_t<T>*>(data),
+                          element_of<std::remove_const_t<T>>(), rows, cols});
+  } else {
+    return false;  // the contact structs, the solver's statistics
+  }
+}
+
+}  // namespace
+
+// The sizes the X macros name (nbody, nuser_body, ...) as locals, then one
+// visit per array.
+#if mjVERSION_HEADER >= 300
+#define SIMLOOP_MODEL_SIZES MJMODEL_SIZES
+#else
+#define SIMLOOP_MODEL_SIZES MJMODEL_INTS
+#endif
+#define SIMLOOP_SIZE_LOCAL(n) [[maybe_unused]] const long long n = static_cast<long long>(m->n);
+
+bool each_model_array(const mjModel* m, const std::function<bool(const RawArray&)>& visit) {
+#define X SIMLOOP_SIZE_LOCAL
+  SIMLOOP_MODEL_SIZES
+#undef X
+#define X(type, name, rows, cols) \
+  if (visit_array(visit, #name, #rows, m->name, static_cast<long long>(rows), static_cast<long long>(cols))) return true;
+#define XNV X
+  MJMODEL_POINTERS
+#undef XNV
+#undef X
+  return false;
+}
+
+bool each_data_array(const mjModel* m, const mjData* d, const std::function<bool(const RawArray&)>& visit) {
+#define X SIMLOOP_SIZE_LOCAL
+  SIMLOOP_MODEL_SIZES
+#undef X
+#if mjVERSION_HEADER >= 300
+#undef MJ_D
+#define MJ_D(n) d->n
+#define X(type, name, rows, cols) \
+  if (visit_array(visit, #name, #rows, d->name, static_cast<long long>(rows), static_cast<long long>(cols))) return true;
+#define XNV X
+  MJDATA_POINTERS
+  MJDATA_ARENA_POINTERS
+#undef XNV
+#undef X
+#undef MJ_D
+#define MJ_D(n) n
+#else
+  // 2.2 sizes the constraints' arrays njmax and the contacts' nconmax; the
+  // rows in use are nefc and ncon.
+  const auto in_use = [&](std::string_view count, long long rows) -> long long {
+    if (count == "njmax") return d->nefc;
+    if (count == "nconmax") return d->ncon;
+    return rows;
+  };
+  const auto counted_by = [](std::string_view count) -> const char* {
+    return count == "njmax" ? "nefc" : count == "nconmax" ? "ncon" : nullptr;
+  };
+#define X(type, name, rows, cols)                                                                           \
+  if (visit_array(visit, #name, counted_by(#rows) ? counted_by(#rows) : #rows, d->name,                   \
+                  in_use(#rows, static_cast<long long>(rows)), static_cast<long long>(cols)))               \
+    return true;
+  MJDATA_POINTERS
+#undef X
+#endif
+  return false;
+}
+
+#undef SIMLOOP_SIZE_LOCAL
+#undef SIMLOOP_MODEL_SIZES
 
 }  // namespace simloop::detail::compat

@@ -12,9 +12,13 @@
 //   state              our own layout (MuJoCo has none)   mj_getState(mjSTATE_INTEGRATION), then
 //                                                         the trees' sleep counters (3.4)
 //   plugins            none                               libraries in the package's plugin/ folder
+//   arrays             mjxmacro.h: sizes MJMODEL_INTS,     MJMODEL_SIZES; contacts and constraints
+//                      contacts and constraints njmax-    in d->arena, nefc/ncon rows (MJ_D)
+//                      and nconmax-sized, nefc/ncon used
 #pragma once
 
 #include <cstddef>
+#include <functional>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -22,6 +26,8 @@
 #include <vector>
 
 #include <mujoco/mujoco.h>
+
+#include "simloop/fields.hpp"
 
 namespace simloop::detail::compat {
 
@@ -85,6 +91,22 @@ void put_state(const mjModel* m, mjData* d, const double* state) noexcept;
 // put_state with every kinematic tree awake (no sleep on 2.2: the same), so
 // that an mj_forward after it derives every body's pose, sleeping or not.
 void put_state_awake(const mjModel* m, mjData* d, const double* state) noexcept;
+
+// One of mjModel's or mjData's arrays as mjxmacro.h lists it: its rows (in
+// use now, for the contacts' and constraints') and the size that counts
+// them ("nbody", "nefc").
+struct RawArray {
+  std::string_view name;
+  std::string_view rows_count;
+  void* data;
+  Element element;
+  long long rows;
+  long long cols;
+};
+// Calls visit(array) for each numeric array of m (of d), in MuJoCo's order,
+// until visit returns true; true if it did.
+bool each_model_array(const mjModel* m, const std::function<bool(const RawArray&)>& visit);
+bool each_data_array(const mjModel* m, const mjData* d, const std::function<bool(const RawArray&)>& visit);
 
 // Loads the plugin libraries that ship beside libmujoco (its plugin/
 // folder), once per process, so scenes that use MuJoCo's first-party

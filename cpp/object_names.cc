@@ -1,6 +1,7 @@
 #include "simloop/object_names.hpp"
 
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "mujoco_compat.hpp"
@@ -11,37 +12,51 @@ namespace simloop {
 namespace {
 
 struct Kind {
+  mjtObj type;
   const char* one;
   const char* many;
+  int (*count)(const mjModel*);
 };
 
-Kind kind_of(mjtObj type) {
-  switch (type) {
-    case mjOBJ_BODY: return {"body", "bodies"};
-    case mjOBJ_JOINT: return {"joint", "joints"};
-    case mjOBJ_ACTUATOR: return {"actuator", "actuators"};
-    case mjOBJ_SENSOR: return {"sensor", "sensors"};
-    case mjOBJ_KEY: return {"keyframe", "keyframes"};
-    case mjOBJ_GEOM: return {"geom", "geoms"};
-    case mjOBJ_SITE: return {"site", "sites"};
-    case mjOBJ_CAMERA: return {"camera", "cameras"};
-    default: return {"object", "objects"};
+#define SIMLOOP_KIND(type, one, many, size) \
+  Kind { type, one, many, [](const mjModel* m) { return detail::compat::as_int(m->size); } }
+// The kinds of object a scene names, as Python spells them ("body", "geom").
+const std::vector<Kind>& kinds() {
+  static const std::vector<Kind> all{
+      SIMLOOP_KIND(mjOBJ_BODY, "body", "bodies", nbody),
+      SIMLOOP_KIND(mjOBJ_JOINT, "joint", "joints", njnt),
+      SIMLOOP_KIND(mjOBJ_GEOM, "geom", "geoms", ngeom),
+      SIMLOOP_KIND(mjOBJ_SITE, "site", "sites", nsite),
+      SIMLOOP_KIND(mjOBJ_CAMERA, "camera", "cameras", ncam),
+      SIMLOOP_KIND(mjOBJ_LIGHT, "light", "lights", nlight),
+      SIMLOOP_KIND(mjOBJ_MESH, "mesh", "meshes", nmesh),
+      SIMLOOP_KIND(mjOBJ_SKIN, "skin", "skins", nskin),
+      SIMLOOP_KIND(mjOBJ_HFIELD, "hfield", "hfields", nhfield),
+      SIMLOOP_KIND(mjOBJ_TEXTURE, "texture", "textures", ntex),
+      SIMLOOP_KIND(mjOBJ_MATERIAL, "material", "materials", nmat),
+      SIMLOOP_KIND(mjOBJ_PAIR, "pair", "pairs", npair),
+      SIMLOOP_KIND(mjOBJ_EXCLUDE, "exclude", "excludes", nexclude),
+      SIMLOOP_KIND(mjOBJ_EQUALITY, "equality", "equalities", neq),
+      SIMLOOP_KIND(mjOBJ_TENDON, "tendon", "tendons", ntendon),
+      SIMLOOP_KIND(mjOBJ_ACTUATOR, "actuator", "actuators", nu),
+      SIMLOOP_KIND(mjOBJ_SENSOR, "sensor", "sensors", nsensor),
+      SIMLOOP_KIND(mjOBJ_NUMERIC, "numeric", "numerics", nnumeric),
+      SIMLOOP_KIND(mjOBJ_TEXT, "text", "texts", ntext),
+      SIMLOOP_KIND(mjOBJ_TUPLE, "tuple", "tuples", ntuple),
+      SIMLOOP_KIND(mjOBJ_KEY, "keyframe", "keyframes", nkey),
+  };
+  return all;
+}
+#undef SIMLOOP_KIND
+
+const Kind& kind_of(mjtObj type) {
+  for (const Kind& k : kinds()) {
+    if (k.type == type) return k;
   }
+  throw InvalidArgument("objects of MuJoCo type " + std::to_string(type) + " are not looked up by name");
 }
 
-int count_of(const mjModel* m, mjtObj type) {
-  switch (type) {
-    case mjOBJ_BODY: return detail::compat::as_int(m->nbody);
-    case mjOBJ_JOINT: return detail::compat::as_int(m->njnt);
-    case mjOBJ_ACTUATOR: return detail::compat::as_int(m->nu);
-    case mjOBJ_SENSOR: return detail::compat::as_int(m->nsensor);
-    case mjOBJ_KEY: return detail::compat::as_int(m->nkey);
-    case mjOBJ_GEOM: return detail::compat::as_int(m->ngeom);
-    case mjOBJ_SITE: return detail::compat::as_int(m->nsite);
-    case mjOBJ_CAMERA: return detail::compat::as_int(m->ncam);
-    default: throw InvalidArgument("objects of MuJoCo type " + std::to_string(type) + " are not looked up by name");
-  }
-}
+int count_of(const mjModel* m, mjtObj type) { return kind_of(type).count(m); }
 
 // "the scene's joints: hip, knee (and 2 unnamed)": what a lookup could have named.
 std::string listing(const mjModel* m, mjtObj type, std::vector<std::string>& names) {
@@ -65,6 +80,26 @@ std::string listing(const mjModel* m, mjtObj type, std::vector<std::string>& nam
 }
 
 }  // namespace
+
+mjtObj object_type_named(std::string_view kind) noexcept {
+  for (const Kind& k : kinds()) {
+    if (kind == k.one) return k.type;
+  }
+  return mjOBJ_UNKNOWN;
+}
+
+const std::vector<std::string>& object_kinds() {
+  static const std::vector<std::string> words = [] {
+    std::vector<std::string> out;
+    for (const Kind& k : kinds()) out.emplace_back(k.one);
+    return out;
+  }();
+  return words;
+}
+
+const char* object_kind(mjtObj type) { return kind_of(type).one; }
+
+int object_count(const mjModel* m, mjtObj type) { return count_of(m, type); }
 
 int object_id(const mjModel* m, mjtObj type, const std::string& name) {
   (void)count_of(m, type);  // a type we look up

@@ -51,7 +51,8 @@ ArrayView array_of(const mjModel* m, const mjData* d, std::string_view name) {
 Sim::Sim(const Model& model) : model_(model), data_(model) { reset(); }
 
 Sim::Sim(const Sim& other)
-    : model_(other.model_), data_(other.model_), steps_(other.steps_),
+    : model_(other.owns_model_ ? other.model_.with_timestep(other.model_.timestep()) : other.model_),
+      owns_model_(other.owns_model_), data_(other.model_), steps_(other.steps_),
       counter_(std::make_shared<Counter>(*other.counter_)) {
   const mjModel* m = model_.get();
   mjData* d = data_.get();
@@ -86,7 +87,20 @@ int Sim::id(mjtObj type, const std::string& name) const { return object_id(model
 
 int Sim::checked_index(mjtObj type, long long index) const { return checked_object_index(model_.get(), type, index); }
 
-void Sim::set_timestep(double timestep) { model_ = model_.with_timestep(timestep); }
+void Sim::set_timestep(double timestep) {
+  check_positive_seconds("timestep", timestep);
+  own_model()->opt.timestep = timestep;
+}
+
+mjModel* Sim::own_model() {
+  if (!owns_model_) {
+    model_ = model_.with_timestep(model_.timestep());  // mj_copyModel
+    owns_model_ = true;
+  }
+  // The copy is this Sim's alone: nothing else was given it before now, and
+  // what is given it from now on (model(), views) reads what the Sim writes.
+  return const_cast<mjModel*>(model_.get());
+}
 
 void Sim::set_ctrl(double value) {
   require_finite(value, "ctrl");
@@ -194,12 +208,32 @@ std::vector<Contact> Sim::contacts() const {
     const mjContact& c = d->contact[i];
     const char* g1 = mj_id2name(m, mjOBJ_GEOM, c.geom1);
     const char* g2 = mj_id2name(m, mjOBJ_GEOM, c.geom2);
-    out.push_back({g1 ? g1 : "", g2 ? g2 : "", c.dist, {c.pos[0], c.pos[1], c.pos[2]}});
+    Contact contact{g1 ? g1 : "", g2 ? g2 : "", c.dist, {c.pos[0], c.pos[1], c.pos[2]}, {}, {}};
+    std::copy_n(c.frame, 9, contact.frame.data());
+    double* force = contact.force.data();
+    detail::mujoco_call([&] { mj_contactForce(m, d, i, force); });
+    out.push_back(std::move(contact));
   }
   return out;
 }
 
 ArrayView Sim::array(std::string_view name) { return array_of(model_.get(), data_.get(), name); }
+
+FieldView Sim::data_field(std::string_view name) const { return simloop::data_field(model_.get(), data_.get(), name); }
+
+FieldView Sim::model_field(std::string_view name) const { return simloop::model_field(model_.get(), name); }
+
+FieldView Sim::writable_model_field(std::string_view name) {
+  const FieldView view = simloop::model_field(model_.get(), name);  // an unknown name: refused before any copy
+  if (!model_field_writable(name)) {
+    throw InvalidArgument("mjModel's " + std::string(name) +
+                          " is read-only here: a Sim lets you write the parameters a trainer randomises "
+                          "(masses, inertias, friction, contact softness, damping, armature, stiffness, "
+                          "actuator gains, biases, gears and ranges, colours)");
+  }
+  (void)view;
+  return simloop::model_field(own_model(), name);
+}
 
 std::vector<double> Sim::read(std::string_view name, long long start, long long count) const {
   const ArrayView view = array_of(model_.get(), data_.get(), name);

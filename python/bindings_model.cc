@@ -13,7 +13,9 @@
 
 #include "bindings_common.hpp"
 #include "simloop/chapter_scene.hpp"
+#include "simloop/fields.hpp"
 #include "simloop/model.hpp"
+#include "simloop/object_names.hpp"
 #include "simloop/number_format.hpp"
 #include "simloop/scenario_run.hpp"
 #include "simloop/scene_geometry.hpp"
@@ -28,11 +30,7 @@ using namespace pybind11::literals;
 py::list model_names(const simloop::Model& model, const std::string& kind) {
   const mjtObj type = object_type(kind);
   const mjModel* raw = model.get();
-  const int count = type == mjOBJ_BODY       ? raw->nbody
-                    : type == mjOBJ_JOINT    ? raw->njnt
-                    : type == mjOBJ_ACTUATOR ? raw->nu
-                    : type == mjOBJ_SENSOR   ? raw->nsensor
-                                             : raw->nkey;
+  const int count = simloop::object_count(raw, type);
   py::list names;
   for (int i = 0; i < count; ++i) {
     const char* name = mj_id2name(raw, type, i);
@@ -44,12 +42,11 @@ py::list model_names(const simloop::Model& model, const std::string& kind) {
 }  // namespace
 
 mjtObj object_type(const std::string& kind) {
-  if (kind == "body") return mjOBJ_BODY;
-  if (kind == "joint") return mjOBJ_JOINT;
-  if (kind == "actuator") return mjOBJ_ACTUATOR;
-  if (kind == "sensor") return mjOBJ_SENSOR;
-  if (kind == "keyframe") return mjOBJ_KEY;
-  throw py::value_error("kind must be 'body', 'joint', 'actuator', 'sensor' or 'keyframe', got '" + kind + "'");
+  const mjtObj type = simloop::object_type_named(kind);
+  if (type != mjOBJ_UNKNOWN) return type;
+  std::string kinds;
+  for (const std::string& k : simloop::object_kinds()) kinds += (kinds.empty() ? "'" : ", '") + k + "'";
+  throw py::value_error("kind must be one of " + kinds + ", got '" + kind + "'");
 }
 
 void bind_model(py::module_& m) {
@@ -186,6 +183,14 @@ void bind_model(py::module_& m) {
       },
       "model"_a, "params"_a, "A copy of model with (kind, name, value) scene parameters applied.");
   m.def("moving_bodies", &simloop::moving_bodies, "scene"_a);
+  m.attr("MODEL_FIELD_NAMES") = py::tuple(py::cast(simloop::model_field_names()));
+  m.attr("DATA_FIELD_NAMES") = py::tuple(py::cast(simloop::data_field_names()));
+  m.attr("OBJECT_KINDS") = py::tuple(py::cast(simloop::object_kinds()));
+  py::list writable;
+  for (const std::string& name : simloop::model_field_names()) {
+    if (simloop::model_field_writable(name)) writable.append(name);
+  }
+  m.attr("WRITABLE_MODEL_FIELDS") = py::tuple(writable);
 }
 
 }  // namespace simloop_py

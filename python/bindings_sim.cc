@@ -21,6 +21,8 @@
 #include "bindings_common.hpp"
 #include "bindings_sim.hpp"
 #include "simloop/episode.hpp"
+#include "simloop/fields.hpp"
+#include "simloop/object_names.hpp"
 #include "simloop/model.hpp"
 #include "simloop/number_format.hpp"
 #include "simloop/recorder.hpp"
@@ -56,6 +58,39 @@ py::array owned_view(const py::object& owner, const simloop::ArrayView& array) {
   return array.writable ? view : read_only(view);
 }
 
+// A numpy view of one of MuJoCo's arrays, of its element type, (rows, cols)
+// or (rows,) when cols is 1, kept alive by `owner`; read-only unless `writable`.
+py::array field_view(const simloop::FieldView& f, const py::object& owner, bool writable) {
+  py::dtype dtype;
+  switch (f.element) {
+    case simloop::Element::kFloat64: dtype = py::dtype::of<double>(); break;
+    case simloop::Element::kFloat32: dtype = py::dtype::of<float>(); break;
+    case simloop::Element::kInt32: dtype = py::dtype::of<std::int32_t>(); break;
+    case simloop::Element::kInt64: dtype = py::dtype::of<std::int64_t>(); break;
+    case simloop::Element::kUInt64: dtype = py::dtype::of<std::uint64_t>(); break;
+    case simloop::Element::kUInt8: dtype = py::dtype::of<std::uint8_t>(); break;
+    case simloop::Element::kInt8: dtype = py::dtype::of<std::int8_t>(); break;
+  }
+  static double empty = 0.0;  // a size-0 view still needs a pointer
+  void* at = f.data != nullptr && f.rows > 0 && f.cols > 0 ? f.data : &empty;
+  const auto rows = static_cast<py::ssize_t>(f.rows), cols = static_cast<py::ssize_t>(f.cols);
+  const py::ssize_t item = dtype.itemsize();
+  py::array view = cols == 1 ? py::array(dtype, {rows}, {item}, at, owner)
+                             : py::array(dtype, {rows, cols}, {item * cols, item}, at, owner);
+  return writable ? view : read_only(view);
+}
+
+// What keeps a model's arrays alive: the model itself (a Sim may take a
+// model of its own later; views of the one before stay valid).
+py::object model_owner(const simloop::Model& model) {
+  return py::capsule(new simloop::Model(model), [](void* p) { delete static_cast<simloop::Model*>(p); });
+}
+
+// (name, rows_count, rows_are) of a field: what named indexing reads.
+py::tuple field_rows(const simloop::FieldView& f) {
+  return py::make_tuple(f.rows_count, f.rows_are == mjOBJ_UNKNOWN ? std::string() : simloop::object_kind(f.rows_are));
+}
+
 }  // namespace
 
 void bind_sim(py::module_& m) {
@@ -64,6 +99,12 @@ void bind_sim(py::module_& m) {
       .def_readonly("geom2", &simloop::Contact::geom2)
       .def_readonly("dist", &simloop::Contact::dist)
       .def_property_readonly("pos", [](const simloop::Contact& c) { return vec(c.pos.data(), 3); })
+      .def_property_readonly("frame",
+                             [](const simloop::Contact& c) {
+                               py::array out = vec(c.frame.data(), 9);
+                               return out.attr("reshape")(3, 3);
+                             })
+      .def_property_readonly("force", [](const simloop::Contact& c) { return vec(c.force.data(), 6); })
       .def("__repr__", [](const simloop::Contact& c) {
         return "Contact(" + c.geom1 + ", " + c.geom2 + ", dist=" + simloop::python_float_repr(c.dist) + ")";
       });
@@ -116,6 +157,31 @@ void bind_sim(py::module_& m) {
             return owned_view(self, s.sim.array(name));
           },
           "name"_a, "A numpy view into this Sim's mjData (keeps the Sim alive).")
+      .def(
+          "data_field",
+          [](const py::object& self, const std::string& name) {
+            PySim& s = self.cast<PySim&>();
+            SimLock lock(s);
+            return field_view(s.sim.data_field(name), self, false);
+          },
+          "name"_a, "A read-only numpy view of any of mjData's arrays (keeps the Sim alive).")
+      .def(
+          "model_field",
+          [](PySim& s, const std::string& name, bool writable) {
+            SimLock lock(s);
+            const simloop::FieldView f = writable ? s.sim.writable_model_field(name) : s.sim.model_field(name);
+            return field_view(f, model_owner(s.sim.model()), writable);
+          },
+          "name"_a, "writable"_a,
+          "A numpy view of any of mjModel's arrays: read-only, or writable (the parameters a trainer randomises; "
+          "the Sim then has a model of its own).")
+      .def(
+          "field_rows",
+          [](PySim& s, const std::string& owner, const std::string& name) {
+            SimLock lock(s);
+            return field_rows(owner == "model" ? s.sim.model_field(name) : s.sim.data_field(name));
+          },
+          "owner"_a, "name"_a, "(rows_count, kind of object a row is or '') of a model or data array.")
       .def("read", locked<const std::string&, long long, long long>([](auto& sim, const auto& name, auto start,
                                                                          auto count) {
              return vector_array(sim.read(name, start, count));

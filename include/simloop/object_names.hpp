@@ -3,6 +3,8 @@
 #pragma once
 
 #include <string>
+#include <string_view>
+#include <vector>
 
 #include <mujoco/mujoco.h>
 
@@ -11,9 +13,16 @@ namespace simloop {
 // The id of the model's object of `type` named `name`. Throws
 // InvalidArgument naming what the scene has, with a likely typo's fix:
 // "no body named 'torsoo' (did you mean 'torso'?); the scene's bodies: ...".
-// Types looked up: bodies, joints, actuators, sensors, keyframes, geoms,
-// sites and cameras (InvalidArgument for others).
+// Types looked up: those object_kinds() names (InvalidArgument for others).
 [[nodiscard]] int object_id(const mjModel* m, mjtObj type, const std::string& name);
+
+// The object type a kind's word names ("body", "geom", "site", "camera",
+// "tendon", "keyframe", ...), mjOBJ_UNKNOWN for another word; the words, in
+// MuJoCo's order of types; a type's word; how many the scene has.
+[[nodiscard]] mjtObj object_type_named(std::string_view kind) noexcept;
+[[nodiscard]] const std::vector<std::string>& object_kinds();
+[[nodiscard]] const char* object_kind(mjtObj type);
+[[nodiscard]] int object_count(const mjModel* m, mjtObj type);
 
 // The same for an index: throws InvalidArgument unless 0 <= index < count.
 [[nodiscard]] int checked_object_index(const mjModel* m, mjtObj type, long long index);

@@ -12,6 +12,7 @@
 #include <utility>
 #include <vector>
 
+#include "simloop/fields.hpp"
 #include "simloop/model.hpp"
 #include "simloop/control.hpp"
 #include "simloop/rows.hpp"
@@ -23,6 +24,12 @@ struct Contact {
   std::string geom2;
   double dist = 0.0;  // signed distance; negative is penetration, m
   std::array<double, 3> pos{};  // contact point, world frame, m
+  // The contact's frame (rows: the normal, from geom1 to geom2, then two
+  // tangents; world) and the force and torque geom2 feels in it
+  // (mj_contactForce: normal, two frictional, then torsional and rolling
+  // torques; N and N m; zero for what the contact's condim does not model).
+  std::array<double, 9> frame{};
+  std::array<double, 6> force{};
 };
 
 // One of mjData's arrays, as Sim::array names it: `rows` values, or rows x
@@ -128,13 +135,28 @@ class Sim {
   // (nbody x 6) writable; sensordata, actuator_force, xpos (nbody x 3), xquat
   // (nbody x 4) not. Throws InvalidArgument for another name.
   [[nodiscard]] ArrayView array(std::string_view name);
+  // Any of mjData's arrays (fields.hpp's data_field), read-only: valid
+  // until the next step for the contacts' and constraints' (their rows
+  // change), for as long as the Sim lives for the others.
+  [[nodiscard]] FieldView data_field(std::string_view name) const;
+  // Any of mjModel's arrays, read-only; writable() for those a trainer
+  // randomises (model_field_writable): the first such call gives this Sim a
+  // model of its own (a copy; other Sims and runs keep the one they share),
+  // which the Sim keeps from then on, so views of it stay valid.
+  [[nodiscard]] FieldView model_field(std::string_view name) const;
+  [[nodiscard]] FieldView writable_model_field(std::string_view name);
   // A copy of values start .. start+count-1 of array(name), row after row
   // (a joint's slice of qpos, say). Throws InvalidArgument unless they lie
   // inside it.
   [[nodiscard]] std::vector<double> read(std::string_view name, long long start, long long count) const;
 
  private:
+  // The first write to the model (a parameter, the timestep) copies it;
+  // after that this Sim writes its own in place.
+  mjModel* own_model();
+
   Model model_;
+  bool owns_model_ = false;
   Data data_;
   std::int64_t steps_ = 0;
   struct Counter;

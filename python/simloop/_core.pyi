@@ -34,6 +34,12 @@ BOX_REST_Z: Final[float]
 WARNING_NAMES: Final[tuple[str, ...]]
 SCENARIO_SWEEP_TOLERANCE: Final[float]
 MAX_PICTURE_SIZE: Final[int]
+# Every array of mjModel and mjData this MuJoCo has; the kinds of object;
+# the model arrays a Sim lets a caller write.
+MODEL_FIELD_NAMES: Final[tuple[str, ...]]
+DATA_FIELD_NAMES: Final[tuple[str, ...]]
+OBJECT_KINDS: Final[tuple[str, ...]]
+WRITABLE_MODEL_FIELDS: Final[tuple[str, ...]]
 # What the bindings read as a float64 array (copied or converted).
 _ArrayLike = ArrayLike
 # A policy: decide(observations) -> controls, called at the control rate.
@@ -381,6 +387,12 @@ class Contact(metaclass=_Pybind11Type):
     def dist(self) -> float: ...
     @property
     def pos(self) -> _Float64Array: ...
+    # 3 x 3, rows: the normal (geom1 to geom2), then two tangents; world.
+    @property
+    def frame(self) -> _Float64Array: ...
+    # mj_contactForce in the contact's frame: normal, two frictional, three torques.
+    @property
+    def force(self) -> _Float64Array: ...
 
 class Sim(metaclass=_Pybind11Type):
     def __init__(self, model: Model) -> None: ...
@@ -420,6 +432,11 @@ class Sim(metaclass=_Pybind11Type):
     def array(self, name: str) -> _Float64Array: ...
     # A copy of values start .. start+count-1 of array(name), flattened (under the Sim's lock).
     def read(self, name: str, start: int, count: int) -> _Float64Array: ...
+    # Any of mjData's arrays, read-only; any of mjModel's, writable for WRITABLE_MODEL_FIELDS.
+    def data_field(self, name: str) -> NDArray[Any]: ...
+    def model_field(self, name: str, writable: bool) -> NDArray[Any]: ...
+    # (rows_count, kind of object a row is, or '') of a "model" or "data" array.
+    def field_rows(self, owner: str, name: str) -> tuple[str, str]: ...
     def body_velocity(self, body: int) -> _Float64Array: ...
     # force and/or torque (3 each) on a body until cleared.
     def apply_wrench(

@@ -17,6 +17,7 @@ from ._checks import (ModelLike, Progress, _check_int, _check_progress, _check_r
                       _describe, _finite_vector, _float_array, _sequence, _show, load_model)
 from ._core import Model
 from ._views import ActuatorView, BodyView, JointView, SensorView
+from .named import Named
 from .scenario import Scenario
 
 
@@ -92,6 +93,7 @@ class Sim:
 
     def _make_views(self) -> None:
         self._views = {name: self._sim.array(name) for name in _ARRAYS}
+        self._named: Optional[Named] = None
         self._layout: Optional[Dict[str, int]] = None  # the chapter's, found at its first use
 
     @classmethod
@@ -165,6 +167,15 @@ class Sim:
                                               "last step.")
 
     # --- Named access.
+
+    @property
+    def named(self) -> Named:
+        """Every array of MuJoCo's mjModel and mjData, rows by name:
+        sim.named.data.xpos["box"], sim.named.model.geom_friction["floor"]
+        (see simloop.named)."""
+        if self._named is None:
+            self._named = Named(self._sim, self._views)
+        return self._named
 
     def _lookup(self, kind: str, key: object) -> "tuple[int, str]":
         if isinstance(key, str):

@@ -1,0 +1,113 @@
+#include "simloop/fields.hpp"
+
+#include <algorithm>
+#include <array>
+#include <string>
+
+#include "mujoco_compat.hpp"
+#include "simloop/errors.hpp"
+#include "simloop/object_names.hpp"
+#include "simloop/scenario.hpp"  // did_you_mean
+
+namespace simloop {
+namespace {
+
+using detail::compat::RawArray;
+
+// The sizes that count objects, and which objects ("nu" rows are actuators).
+mjtObj rows_are(std::string_view count) {
+  static constexpr std::array<std::pair<std::string_view, mjtObj>, 21> kCounts{{
+      {"nbody", mjOBJ_BODY},       {"njnt", mjOBJ_JOINT},      {"ngeom", mjOBJ_GEOM},
+      {"nsite", mjOBJ_SITE},       {"ncam", mjOBJ_CAMERA},     {"nlight", mjOBJ_LIGHT},
+      {"nmesh", mjOBJ_MESH},       {"nskin", mjOBJ_SKIN},      {"nhfield", mjOBJ_HFIELD},
+      {"ntex", mjOBJ_TEXTURE},     {"nmat", mjOBJ_MATERIAL},   {"npair", mjOBJ_PAIR},
+      {"nexclude", mjOBJ_EXCLUDE}, {"neq", mjOBJ_EQUALITY},    {"ntendon", mjOBJ_TENDON},
+      {"nu", mjOBJ_ACTUATOR},      {"nsensor", mjOBJ_SENSOR},  {"nnumeric", mjOBJ_NUMERIC},
+      {"ntext", mjOBJ_TEXT},       {"ntuple", mjOBJ_TUPLE},    {"nkey", mjOBJ_KEY},
+  }};
+  for (const auto& [name, type] : kCounts) {
+    if (name == count) return type;
+  }
+  return mjOBJ_UNKNOWN;
+}
+
+FieldView view_of(const RawArray& a) {
+  return FieldView{a.data, a.element, a.rows, a.cols, rows_are(a.rows_count), std::string(a.rows_count)};
+}
+
+std::vector<std::string> names_of(bool (*each)(const std::function<bool(const RawArray&)>&)) {
+  std::vector<std::string> names;
+  each([&](const RawArray& a) {
+    names.emplace_back(a.name);
+    return false;
+  });
+  return names;
+}
+
+[[noreturn]] void no_such(const char* owner, std::string_view name, const std::vector<std::string>& names) {
+  const std::string hint = did_you_mean(std::string(name), names);
+  throw InvalidArgument(std::string("no ") + owner + " array named '" + std::string(name) + "'" +
+                        (hint.empty() ? "" : " (did you mean '" + hint + "'?)"));
+}
+
+// A scene to list the names from: the arrays are the same for every scene.
+const mjModel* any_model() {
+  static mjModel empty{};
+  return &empty;
+}
+
+}  // namespace
+
+const std::vector<std::string>& model_field_names() {
+  static const std::vector<std::string> names = names_of([](const std::function<bool(const RawArray&)>& visit) {
+    return detail::compat::each_model_array(any_model(), visit);
+  });
+  return names;
+}
+
+const std::vector<std::string>& data_field_names() {
+  static const std::vector<std::string> names = names_of([](const std::function<bool(const RawArray&)>& visit) {
+    static mjData empty{};
+    return detail::compat::each_data_array(any_model(), &empty, visit);
+  });
+  return names;
+}
+
+FieldView model_field(const mjModel* m, std::string_view name) {
+  FieldView found;
+  if (detail::compat::each_model_array(m, [&](const RawArray& a) {
+        if (a.name != name) return false;
+        found = view_of(a);
+        return true;
+      })) {
+    return found;
+  }
+  no_such("mjModel", name, model_field_names());
+}
+
+FieldView data_field(const mjModel* m, const mjData* d, std::string_view name) {
+  FieldView found;
+  if (detail::compat::each_data_array(m, d, [&](const RawArray& a) {
+        if (a.name != name) return false;
+        found = view_of(a);
+        return true;
+      })) {
+    return found;
+  }
+  if (name == "contact") {
+    throw InvalidArgument("mjData's contact array holds structs, not numbers: read a Sim's contacts (with their "
+                          "forces) instead");
+  }
+  no_such("mjData", name, data_field_names());
+}
+
+bool model_field_writable(std::string_view name) noexcept {
+  static constexpr std::array<std::string_view, 19> kWritable{
+      "body_mass",      "body_inertia",     "body_gravcomp",      "geom_friction",   "geom_solref",
+      "geom_solimp",    "geom_margin",      "geom_rgba",          "dof_damping",     "dof_armature",
+      "dof_frictionloss", "jnt_stiffness",  "actuator_gear",      "actuator_gainprm", "actuator_biasprm",
+      "actuator_ctrlrange", "actuator_forcerange", "tendon_stiffness", "tendon_damping"};
+  return std::find(kWritable.begin(), kWritable.end(), name) != kWritable.end();
+}
+
+}  // namespace simloop

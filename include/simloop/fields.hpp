@@ -1,0 +1,50 @@
+// Every array of MuJoCo's mjModel and mjData by its name ("geom_friction",
+// "xpos", "efc_force"), as MuJoCo's own mjxmacro.h lists them for the
+// version we are built on: where it is, its element type, its rows and
+// columns, and which kind of object a row is (so that rows can be named,
+// as dm_control's physics.named does).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <mujoco/mujoco.h>
+
+namespace simloop {
+
+enum class Element { kFloat64, kFloat32, kInt32, kInt64, kUInt64, kUInt8, kInt8 };
+
+struct FieldView {
+  void* data = nullptr;
+  Element element = Element::kFloat64;
+  long long rows = 0;
+  long long cols = 0;
+  // What a row is: the object type (mjOBJ_BODY for "nbody" rows, ...),
+  // mjOBJ_UNKNOWN when rows are not objects (nq, nv, nefc, ...).
+  mjtObj rows_are = mjOBJ_UNKNOWN;
+  std::string rows_count;  // the size that counts the rows: "nbody", "nv", "nefc", ...
+};
+
+// The arrays this MuJoCo's mjModel and mjData have, by name.
+[[nodiscard]] const std::vector<std::string>& model_field_names();
+[[nodiscard]] const std::vector<std::string>& data_field_names();
+
+// mjModel's array `name` of `m`. Throws InvalidArgument naming a likely
+// typo's fix ("no mjModel array named 'geom_fricton' (did you mean
+// 'geom_friction'?)").
+[[nodiscard]] FieldView model_field(const mjModel* m, std::string_view name);
+// mjData's array `name` of `d`: the contacts' and constraints' arrays with
+// the rows in use now (ncon, nefc), valid until the next step. Throws
+// InvalidArgument as model_field does, and for the contact structs
+// ("contact": see Sim::contacts).
+[[nodiscard]] FieldView data_field(const mjModel* m, const mjData* d, std::string_view name);
+
+// The model parameters a trainer randomises, which a Sim lets a caller
+// write (in its own copy of the model): masses and inertias, friction,
+// contact softness, damping, armature, joint stiffness, actuator gains,
+// biases, gears and ranges, colours.
+[[nodiscard]] bool model_field_writable(std::string_view name) noexcept;
+
+}  // namespace simloop

@@ -1,0 +1,180 @@
+"""Sim.named: every array of MuJoCo's mjModel and mjData, its rows by name,
+as dm_control's physics.named does.
+
+    sim.named.data.xpos["box"]                  # a body's position (a view)
+    sim.named.data.qpos["pusher_slide"]         # a joint's slice of qpos
+    sim.named.data.efc_force                    # the constraint forces, this step's rows
+    sim.named.model.geom_friction["floor"]      # read-only...
+    sim.named.model.geom_friction["floor"] = [0.5, 0.005, 0.0001]  # ...but randomisable: written
+
+A NamedArray is a numpy view (np.asarray(it), or .array) whose first index
+also takes names: of the objects its rows are ("nbody" rows: bodies, "ngeom":
+geoms, ...), or of joints for the nq rows (a joint's positions) and the nv
+rows (its velocities). Names are resolved once per array, so a named read
+costs about what a numpy one does.
+
+What can be written: mjData's inputs and state (qpos, qvel, ctrl, act,
+qfrc_applied, xfrc_applied); of mjModel, the parameters a trainer randomises
+(masses, inertias, friction, contact softness, margins, damping, armature,
+stiffness, actuator gears, gains, biases and ranges, colours): the first
+write gives the Sim a model of its own (other Sims and runs keep theirs).
+The rest is read-only (MuJoCo derives it, or changing it would leave the
+model inconsistent). The contacts' and constraints' arrays (efc_*) hold
+this step's rows: take them again after stepping.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
+
+from . import _core
+from ._checks import _describe
+
+if TYPE_CHECKING:
+    import numpy as np
+    from numpy.typing import NDArray
+
+# mjData's arrays a Sim lets a caller write (its views, Sim.qpos and the like).
+_WRITABLE_DATA = ("qpos", "qvel", "ctrl", "act", "qfrc_applied", "xfrc_applied")
+Key = Union[str, int, slice, Sequence[Union[str, int]], Tuple[Any, ...]]
+
+
+class NamedArray:
+    """One of MuJoCo's arrays with its rows by name; see the module's documentation."""
+
+    __slots__ = ("name", "_view", "_rows", "_write")
+
+    def __init__(self, name: str, view: "NDArray[Any]", rows: Mapping[str, Union[int, slice]],
+                 write: Optional[Any] = None) -> None:
+        self.name = name
+        self._view = view
+        self._rows = rows  # a row's name -> its index (or its slice of nq / nv rows)
+        self._write = write  # for a randomisable model array: gets the writable view
+
+    @property
+    def array(self) -> "NDArray[Any]":
+        """The whole array: a numpy view."""
+        return self._view
+
+    @property
+    def names(self) -> Tuple[str, ...]:
+        """The names its rows may be indexed by."""
+        return tuple(self._rows)
+
+    def __array__(self, dtype: Any = None, copy: Optional[bool] = None) -> "NDArray[Any]":
+        import numpy as np
+
+        return np.asarray(self._view, dtype=dtype) if copy is None else np.array(self._view, dtype=dtype, copy=copy)
+
+    def __len__(self) -> int:
+        return len(self._view)
+
+    @property
+    def shape(self) -> Tuple[int, ...]:
+        return tuple(self._view.shape)
+
+    def _index(self, key: Any) -> Any:
+        if isinstance(key, tuple):
+            return (self._index(key[0]),) + key[1:] if key else key
+        if isinstance(key, str):
+            try:
+                return self._rows[key]
+            except KeyError:
+                raise KeyError(self._unknown(key)) from None
+        if isinstance(key, (list, tuple)) and any(isinstance(k, str) for k in key):
+            return [self._one_row(k) for k in key]
+        return key
+
+    def _one_row(self, key: Union[str, int]) -> int:
+        row = self._index(key)
+        if isinstance(row, slice):
+            raise KeyError(f"{self.name}: {key!r} names several rows (a joint's slice): index it alone")
+        return int(row)
+
+    def _unknown(self, key: str) -> str:
+        if not self._rows:
+            return f"{self.name}'s rows have no names: index them by number (0 to {len(self._view) - 1})"
+        import difflib
+
+        close = difflib.get_close_matches(key, list(self._rows), n=1)
+        hint = f" (did you mean {close[0]!r}?)" if close else ""
+        shown = ", ".join(list(self._rows)[:20]) + (", ..." if len(self._rows) > 20 else "")
+        return f"{self.name} has no row named {key!r}{hint}; its rows: {shown}"
+
+    def __getitem__(self, key: Key) -> Any:
+        return self._view[self._index(key)]
+
+    def __setitem__(self, key: Key, value: object) -> None:
+        import numpy as np
+
+        if self._write is None:
+            raise ValueError(f"{self.name} is read-only here (see simloop.named: what can be written)")
+        view = self._write()
+        index = self._index(key)
+        values = np.asarray(value, dtype=view.dtype)
+        if values.dtype.kind == "f" and not np.isfinite(values).all():
+            raise ValueError(f"{self.name}[{key!r}] must be finite, got {_describe(value)}")
+        view[index] = values
+        self._view = view
+
+    def __repr__(self) -> str:
+        return f"<NamedArray {self.name} {self._view.dtype}{list(self._view.shape)}>"
+
+
+def _rows_by_name(model: _core.Model, rows_count: str, kind: str) -> Dict[str, Union[int, slice]]:
+    """Each named row: the objects of `kind`, or a joint's slice of the nq / nv rows."""
+    if kind:
+        return {name: i for i, name in enumerate(model.names(kind)) if name}
+    if rows_count in ("nq", "nv"):
+        rows: Dict[str, Union[int, slice]] = {}
+        for j, name in enumerate(model.names("joint")):
+            if not name:
+                continue
+            info = model.object_info("joint", j)
+            start, count = (info["qposadr"], info["nq"]) if rows_count == "nq" else (info["dofadr"], info["nv"])
+            rows[name] = slice(start, start + count)
+        return rows
+    return {}
+
+
+class _Owner:
+    """sim.named.model or sim.named.data: its arrays as attributes."""
+
+    def __init__(self, sim: "_core.Sim", views: Mapping[str, "NDArray[Any]"], owner: str,
+                 names: Sequence[str]) -> None:
+        self._sim = sim
+        self._views = views
+        self._owner = owner
+        self._names = names
+        self._rows: Dict[str, Dict[str, Union[int, slice]]] = {}  # resolved once per array
+
+    def __dir__(self) -> List[str]:
+        return list(self._names)
+
+    def __getattr__(self, name: str) -> NamedArray:
+        if name.startswith("_") or name not in self._names:
+            import difflib
+
+            close = difflib.get_close_matches(name, list(self._names), n=1)
+            hint = f" (did you mean {close[0]!r}?)" if close else ""
+            raise AttributeError(f"mj{self._owner.capitalize()} has no array named {name!r}{hint}")
+        sim = self._sim
+        if name not in self._rows:
+            rows_count, kind = sim.field_rows(self._owner, name)
+            self._rows[name] = _rows_by_name(sim.model, rows_count, kind)
+        rows = self._rows[name]
+        if self._owner == "data":
+            if name in _WRITABLE_DATA:
+                return NamedArray(name, self._views[name], rows, lambda: self._views[name])
+            return NamedArray(name, sim.data_field(name), rows)
+        writable = name in _core.WRITABLE_MODEL_FIELDS
+        return NamedArray(name, sim.model_field(name, False), rows,
+                          (lambda: sim.model_field(name, True)) if writable else None)
+
+
+class Named:
+    """sim.named: .model and .data, MuJoCo's arrays with rows by name."""
+
+    def __init__(self, sim: "_core.Sim", views: Mapping[str, "NDArray[Any]"]) -> None:
+        self.model = _Owner(sim, views, "model", _core.MODEL_FIELD_NAMES)
+        self.data = _Owner(sim, views, "data", _core.DATA_FIELD_NAMES)
