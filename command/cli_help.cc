@@ -30,6 +30,10 @@ options:
                     y and z, contacts; the shove shaded; for a scenario, each
                     recorded body's x, y, z and speed, contacts, disturbances
                     shaded), with matplotlib through the Python package
+  --video FILE      also make a video of the run from MuJoCo's own renderer,
+                    offscreen, 25 frames per simulated second: FILE.mp4 with
+                    ffmpeg on PATH, else an animated PNG beside it
+                    (FILE.png); python -m simloop only
   --energy-audit    account for every joule: energy and work columns in
                     trajectory.csv, totals in the summary
   --record-every K  write every K-th step to trajectory.csv (default 1; the

@@ -231,6 +231,11 @@ Options parse(int argc, const char* const* argv) {
       const std::string_view v = value();
       if (v.empty()) throw UsageError("--out must name a directory, got ''");
       opts.out = std::string(v);
+    } else if (arg == "--video") {
+      run_only();
+      const std::string_view v = value();
+      if (v.empty()) throw UsageError("--video must name a file (.mp4 or .png), got ''");
+      opts.video = std::string(v);
     } else if (arg == "--model") {
       const std::string_view v = value();
       if (v.empty()) throw UsageError("--model must name an MJCF file, got ''");

@@ -40,6 +40,7 @@ struct Options {
   bool rng_given = false;       // --rng was given
   bool chapter = false;         // --chapter: the book's run as closely as this build allows
   bool rerun = true;       // accepted for the chapter's command lines; sim_loop records nothing
+  std::filesystem::path video;  // --video FILE: pictures of the run (python -m simloop only)
   bool help = false;
   bool version = false;
 

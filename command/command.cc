@@ -64,7 +64,7 @@ int sweep_into(Host& host, const Options& opts, Sweep&& sweep) {
 template <class Run>
 int run_into(Host& host, const Options& opts, const Model& model, const Scenario* scenario, Run&& run) {
   std::unique_ptr<Recording> recording;
-  if (opts.rerun) recording = host.recording(opts, model, scenario);  // begun before anything is written
+  if (opts.rerun || !opts.video.empty()) recording = host.recording(opts, model, scenario);  // begun before anything is written
   std::optional<decltype(run(recording.get(), nullptr))> done;
   host.work("running", [&](RunControl* control) { done.emplace(run(recording.get(), control)); });
   host.outputs_written();
@@ -74,9 +74,10 @@ int run_into(Host& host, const Options& opts, const Model& model, const Scenario
   host.print(line("trajectory", files.trajectory,
                   " (" + std::to_string(result.rows) + " rows" +
                       (scenario ? ", " + std::to_string(result.columns.size()) + " columns" : std::string()) + ")"));
-  if (opts.rerun) {
-    host.print(recording ? recording->line() + "\n"
-                         : std::string("recording: none (sim_loop writes no .rrd; python -m simloop records one)\n"));
+  if (recording) {
+    host.print(recording->line() + "\n");
+  } else if (opts.rerun) {
+    host.print("recording: none (sim_loop writes no .rrd; python -m simloop records one)\n");
   }
   if (opts.plot) host.print(line("plot", host.plot(opts.out, "trajectory")));
   return 0;

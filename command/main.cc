@@ -51,6 +51,14 @@ class ProcessHost final : public simloop::cli::Host {
   std::filesystem::path plot(const std::filesystem::path& out, const char* what) override {
     return plot_with_python(out, what);
   }
+  std::unique_ptr<simloop::cli::Recording> recording(const simloop::cli::Options& opts, const simloop::Model&,
+                                                     const simloop::Scenario*) override {
+    if (!opts.video.empty()) {
+      throw simloop::cli::Failure(kExitUsage, "--video: sim_loop draws no pictures; python -m simloop --video " +
+                                                  opts.video.string() + " does (nothing was written)");
+    }
+    return nullptr;
+  }
   int interrupted() override { return sim_loop::interrupted(); }
   int stop_code() override { return g_control.stop_requested() ? sim_loop::interrupted() : 0; }
 };

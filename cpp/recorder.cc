@@ -45,6 +45,12 @@ const char* joint_unit(int type, bool velocity) {
 
 }  // namespace
 
+std::vector<std::string> joint_position_columns(const mjModel* m, int joint) {
+  const int type = m->jnt_type[joint];
+  return numbered(name_of(m, mjOBJ_JOINT, joint, "joint"), "_pos",
+                  type == mjJNT_FREE ? 7 : type == mjJNT_BALL ? 4 : 1);
+}
+
 CtrlRange ctrl_range(const mjModel* m) {
   CtrlRange r{std::vector<double>(static_cast<size_t>(m->nu), -std::numeric_limits<double>::infinity()),
               std::vector<double>(static_cast<size_t>(m->nu), std::numeric_limits<double>::infinity())};
@@ -96,7 +102,7 @@ Recorder::Recorder(const mjModel* m, const ResolvedScenario& scenario, const Sch
     const int type = m->jnt_type[j];
     const int nq = type == mjJNT_FREE ? 7 : type == mjJNT_BALL ? 4 : 1;
     const int nv = type == mjJNT_FREE ? 6 : type == mjJNT_BALL ? 3 : 1;
-    add(Source::kQpos, m->jnt_qposadr[j], nq, numbered(base, "_pos", nq), joint_unit(type, false));
+    add(Source::kQpos, m->jnt_qposadr[j], nq, joint_position_columns(m, j), joint_unit(type, false));
     add(Source::kQvel, m->jnt_dofadr[j], nv, numbered(base, "_vel", nv), joint_unit(type, true));
   }
   for (int a : scenario.actuators) {

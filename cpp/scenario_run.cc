@@ -183,13 +183,16 @@ std::vector<std::string> moving_bodies(const Model& scene) {
 
 namespace {
 
-// Splits the rows of a run that records the moving bodies too: the
-// trajectory's own columns go to `sink`; those followed by each moving
-// body's pose go to `drawing`.
+// Splits the rows of a run that records the moving bodies and every joint
+// too: the trajectory's own columns go to `sink`; those followed by each
+// moving body's pose and then the positions of every joint (qpos, in
+// order: what a picture of the row's state needs) go to `drawing`.
 class DrawingSplit final : public RowSink {
  public:
-  DrawingSplit(std::vector<Column> columns, std::vector<std::string> bodies, RowSink& sink, RowSink& drawing)
-      : columns_(std::move(columns)), bodies_(std::move(bodies)), sink_(sink), drawing_(drawing) {}
+  DrawingSplit(std::vector<Column> columns, std::vector<std::string> bodies, std::vector<std::string> positions,
+               RowSink& sink, RowSink& drawing)
+      : columns_(std::move(columns)), bodies_(std::move(bodies)), positions_(std::move(positions)), sink_(sink),
+        drawing_(drawing) {}
   void describe(const std::vector<Column>& wide) override {
     std::map<std::string, std::size_t> index;
     for (std::size_t c = 0; c < wide.size(); ++c) index[wide[c].name] = c;
@@ -201,6 +204,10 @@ class DrawingSplit final : public RowSink {
         pose_picks_.push_back(poses.at(body) + static_cast<std::size_t>(k));
         drawn.push_back(wide[poses.at(body) + static_cast<std::size_t>(k)]);
       }
+    }
+    for (const std::string& position : positions_) {
+      pose_picks_.push_back(index.at(position));
+      drawn.push_back(wide[index.at(position)]);
     }
     sink_.describe(columns_);
     drawing_.describe(drawn);
@@ -234,6 +241,7 @@ class DrawingSplit final : public RowSink {
  private:
   std::vector<Column> columns_;
   std::vector<std::string> bodies_;
+  std::vector<std::string> positions_;
   RowSink& sink_;
   RowSink& drawing_;
   std::vector<std::size_t> picks_, pose_picks_;
@@ -252,8 +260,13 @@ RunRecord run_scenario_drawn(const Model& scene, const Scenario& scenario, const
   for (int id : moving_body_ids(m)) {
     if (std::find(wide.bodies.begin(), wide.bodies.end(), id) == wide.bodies.end()) wide.bodies.push_back(id);
   }
+  std::vector<std::string> positions;
+  for (int j = 0; j < m->njnt; ++j) {
+    if (std::find(wide.joints.begin(), wide.joints.end(), j) == wide.joints.end()) wide.joints.push_back(j);
+    for (std::string& column : joint_position_columns(m, j)) positions.push_back(std::move(column));
+  }
   const std::vector<std::string> bodies = moving_bodies(model);
-  DrawingSplit split(run.recorder->columns(), bodies, sink, drawing);
+  DrawingSplit split(run.recorder->columns(), bodies, positions, sink, drawing);
   Data workspace(model);
   RunRecord result =
       run_schedule(m, workspace.get(), wide, run.schedule, config.record_every, &split, control);

@@ -170,6 +170,8 @@ void bind_command(py::module_& m) {
   py::class_<cli::Options>(m, "CommandLine")
       .def_readonly("sweep_timesteps", &cli::Options::sweep_timesteps)
       .def_readonly("run", &cli::Options::run)
+      .def_readonly("rerun", &cli::Options::rerun)
+      .def_property_readonly("video", [](const cli::Options& o) { return fs_str(o.video.native()); })
       // Paths as Python spells file names: undecodable bytes as surrogates.
       .def_property_readonly("out", [](const cli::Options& o) { return fs_str(o.out.native()); })
       .def_property_readonly("model_path", [](const cli::Options& o) { return fs_str(o.model_path); })

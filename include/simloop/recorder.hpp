@@ -24,6 +24,10 @@ struct CtrlRange {
 };
 [[nodiscard]] CtrlRange ctrl_range(const mjModel* m);
 
+// The columns of a recorded joint's position: "<joint>_pos", or _pos0 ..
+// for the 4 or 7 numbers of a ball or free joint.
+[[nodiscard]] std::vector<std::string> joint_position_columns(const mjModel* m, int joint);
+
 // What a run's rows hold: their columns, and how to fill one. The loop calls
 // before_step when it records a row, after_step once that step is taken.
 class RowRecorder {

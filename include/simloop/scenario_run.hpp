@@ -103,8 +103,10 @@ void check_scenario(const Model& scene, const Scenario& scenario, const Scenario
 // gives (the same columns: a recording changes nothing in trajectory.csv),
 // and, at the same rows, the same values followed by the pose of every body
 // in moving_bodies() (x y z, then qw qx qy qz: its frame in the world, read
-// where the recorded bodies' poses are) going to `drawing`. It is one run:
-// the recorder reads the extra bodies too, and the rows are split. The
+// where the recorded bodies' poses are), then every joint's position in
+// joint order (nq values: the row's qpos, from which a picture is drawn),
+// going to `drawing`. It is one run: the recorder reads the extra bodies
+// and joints too, and the rows are split. The
 // result is labelled as run_scenario's, with the trajectory's columns.
 [[nodiscard]] RunRecord run_scenario_drawn(const Model& scene, const Scenario& scenario,
                                                    const ScenarioConfig& config, RowSink& sink, RowSink& drawing,

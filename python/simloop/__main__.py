@@ -229,6 +229,33 @@ def _main(argv: Optional[List[str]]) -> int:
     return _core.run_command(args, _Host(args))
 
 
+class _Drawings:
+    """Several drawings of one run (the recording and the video), fed alike."""
+
+    def __init__(self, drawings: List[Any]) -> None:
+        self.drawings = drawings
+
+    def columns(self, names: Any) -> None:
+        for d in self.drawings:
+            d.columns(names)
+
+    def rows(self, block: Any) -> None:
+        for d in self.drawings:
+            d.rows(block)
+
+    def finish(self, result: Any) -> None:
+        for d in self.drawings:
+            d.finish(result)
+
+    @property
+    def files(self) -> List[Any]:
+        return [f for d in self.drawings for f in d.files]
+
+    def close(self) -> None:
+        for d in self.drawings:
+            d.close()
+
+
 class _HostFailure(Exception):
     """A failure of this process's part, as the command's one line."""
 
@@ -272,21 +299,40 @@ class _Host:
 
     def recording(self, opts: "_core.CommandLine", model: "_core.Model",
                   scenario: "Optional[_core.Scenario]") -> "Tuple[Any, str]":
-        """The run's recording (rerun imported, and its file begun, before
-        anything is written) and the report's line for it."""
-        rrd = Path(opts.out) / "sim_loop.rrd"
+        """What draws the run (the rerun recording, --video's pictures, or
+        both: each begun before anything is written) and the report's lines
+        for them."""
+        drawings: List[Any] = []
+        lines: List[str] = []
         try:
-            from .chapter_recording import ChapterRecording
-            from .recording import Recording, scenario_recording_id
+            if opts.rerun:
+                rrd = Path(opts.out) / "sim_loop.rrd"
+                try:
+                    from .chapter_recording import ChapterRecording
+                    from .recording import Recording, scenario_recording_id
 
-            recording: Any
-            if scenario is None:
-                recording = ChapterRecording(opts.run, opts.model_path or None, model, rrd)
-            else:
-                recording = Recording(model, rrd, scenario_recording_id(_run_key(self.args, opts)))
-        except ImportError as e:
-            raise _HostFailure(EXIT_RUN_FAILED, f"{e} (nothing was written; --no-rerun runs without the recording)")
-        return recording, f"recording: {rrd} -- open it with: {_viewer()} {rrd}"
+                    if scenario is None:
+                        drawings.append(ChapterRecording(opts.run, opts.model_path or None, model, rrd))
+                    else:
+                        drawings.append(Recording(model, rrd, scenario_recording_id(_run_key(self.args, opts))))
+                except ImportError as e:
+                    raise _HostFailure(EXIT_RUN_FAILED, f"{e} (nothing was written; --no-rerun runs without the "
+                                                        "recording)")
+                lines.append(f"recording: {rrd} -- open it with: {_viewer()} {rrd}")
+            if opts.video:
+                from .video import VideoRecording
+
+                try:
+                    video = VideoRecording(model, opts.video, chapter=scenario is None)
+                except RuntimeError as e:  # no EGL, no OpenGL
+                    raise _HostFailure(EXIT_RUN_FAILED, f"--video: {e} (nothing was written)") from None
+                drawings.append(video)
+                lines.append(video.line)
+        except BaseException:
+            for drawing in drawings:
+                drawing.close()
+            raise
+        return (drawings[0] if len(drawings) == 1 else _Drawings(drawings)), "\n".join(lines)
 
     def plot(self, out: str, what: str) -> str:
         """--plot: out/<what>.png drawn here, from the CSV just written."""

@@ -273,6 +273,7 @@ class Recording:
 
         self._rr = rr
         self.moving_bodies: List[str] = list(_core.moving_bodies(model))
+        self._nq = model.nq  # a scenario's drawn rows end with qpos (for pictures)
         self._names: List[str] = []  # the trajectory's columns
         self._series: List[str] = []  # those plotted
         self._pending: list = []
@@ -308,8 +309,8 @@ class Recording:
 
     # The drawing sink's three calls.
     def columns(self, names: Sequence[str]) -> None:
-        """The trajectory's columns, then x y z qw qx qy qz per moving body."""
-        self._names = list(names[:len(names) - len(POSE) * len(self.moving_bodies)])
+        """The trajectory's columns, then x y z qw qx qy qz per moving body, then qpos."""
+        self._names = list(names[:len(names) - len(POSE) * len(self.moving_bodies) - self._nq])
         self._plot([name for name in self._names if name not in ("step", "time")])
 
     def rows(self, block: Any) -> None:

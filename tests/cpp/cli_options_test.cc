@@ -56,6 +56,14 @@ TEST(CliOptions, ChapterDrawsTheShoveAsTheChapterDoes) {
   EXPECT_EQ(usage_error({"sweep", "--chapter"}), "--chapter is not a sweep option (see sweep --help)");
 }
 
+TEST(CliOptions, VideoNamesAFileForARun) {
+  EXPECT_TRUE(parse({}).video.empty());
+  EXPECT_EQ(parse({"--video", "run.mp4"}).video, "run.mp4");
+  EXPECT_EQ(parse({"--video=clips/run.png", "--no-rerun"}).video, "clips/run.png");
+  EXPECT_EQ(usage_error({"--video="}), "--video must name a file (.mp4 or .png), got ''");
+  EXPECT_EQ(usage_error({"sweep", "--video", "x.mp4"}), "--video is not a sweep option (see sweep --help)");
+}
+
 TEST(CliOptions, ParsesEveryFlagInBothSpellings) {
   const auto o = parse({"--seed", "18446744073709551615", "--steps=10", "--timestep", "0.05", "--smoke",
                         "--out=o", "--no-perturb", "--no-rerun", "--record-every", "5", "--model", "m.xml"});

@@ -193,7 +193,7 @@ class Collect final : public simloop::RowSink {
   std::vector<double> values;
 };
 
-TEST(ScenarioDrawn, TheTrajectoryIsUnchangedAndEveryMovingBodyHasItsPose) {
+TEST(ScenarioDrawn, TheTrajectoryIsUnchangedAndEveryMovingBodyHasItsPoseAndEveryRowItsQpos) {
   const simloop::Scenario scenario = scene_file("walker.toml");
   const simloop::Model scene = simloop::load_scene(scenario);
   const std::vector<std::string> moving = simloop::moving_bodies(scene);
@@ -212,9 +212,11 @@ TEST(ScenarioDrawn, TheTrajectoryIsUnchangedAndEveryMovingBodyHasItsPose) {
   for (size_t c = 0; c < kept.columns.size(); ++c) EXPECT_EQ(drawn.columns[c].name, kept.columns[c].name);
   EXPECT_EQ(std::memcmp(drawn.final_row.data(), kept.final_row.data(), kept.final_row.size() * sizeof(double)), 0);
   EXPECT_EQ(simloop::metrics_json(drawn), simloop::metrics_json(kept));
-  // The drawing: the same values, then x y z qw qx qy qz per moving body.
+  // The drawing: the same values, then x y z qw qx qy qz per moving body,
+  // then qpos (every joint's position, in order).
   const int width = kept.trajectory.columns();
-  ASSERT_EQ(drawing.width, width + 7 * static_cast<int>(moving.size()));
+  const int nq = scene.get()->nq;
+  ASSERT_EQ(drawing.width, width + 7 * static_cast<int>(moving.size()) + nq);
   ASSERT_EQ(drawing.names.size(), static_cast<size_t>(drawing.width));
   EXPECT_EQ(drawing.names[static_cast<size_t>(width)].name, moving[0] + "_x");
   const std::size_t torso = simloop::recorded_bodies(kept).at("torso");
@@ -229,6 +231,14 @@ TEST(ScenarioDrawn, TheTrajectoryIsUnchangedAndEveryMovingBodyHasItsPose) {
       const double* q = row + width + 7 * b + 3;
       EXPECT_NEAR(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3], 1.0, 1e-9);
     }
+  }
+  const double* first = drawing.values.data();
+  const double* last = drawing.values.data() + (kept.trajectory.rows() - 1) * drawing.width;
+  const int qpos = width + 7 * static_cast<int>(moving.size());
+  EXPECT_EQ(drawing.names[static_cast<size_t>(qpos)].name, simloop::joint_position_columns(scene.get(), 0)[0]);
+  for (int i = 0; i < nq; ++i) {
+    EXPECT_EQ(first[qpos + i], scene.get()->qpos0[i]) << i;        // the start...
+    EXPECT_EQ(last[qpos + i], drawn.final_state[1 + static_cast<size_t>(i)]) << i;  // ...and the end (after time)
   }
   // A leg moves relative to the torso over the run (its hinge turns).
   const int leg = mj_name2id(m, mjOBJ_BODY, moving.back().c_str());

@@ -1,0 +1,106 @@
+"""python -m simloop --video FILE: the run's pictures, 25 a simulated second,
+as an animated PNG (or an MP4 with ffmpeg), the same bytes every run, put in
+place with the run's outputs or not at all; sim_loop refuses it."""
+
+import os
+import shutil
+import struct
+import zlib
+
+import numpy as np
+import pytest
+
+from conftest import ROOT, run_command
+
+# Every check draws; a machine without EGL says so in the run's one line instead.
+
+
+def apng_frames(path):
+    """(frame count from acTL, [delay of each frame in s], first frame as (h, w, 3) uint8) of an APNG we wrote."""
+    data = path.read_bytes()
+    assert data[:8] == b"\x89PNG\r\n\x1a\n"
+    at, frames, delays, width, height, first = 8, None, [], 0, 0, b""
+    while at < len(data):
+        size, kind = struct.unpack(">I4s", data[at:at + 8])
+        body = data[at + 8:at + 8 + size]
+        assert struct.unpack(">I", data[at + 8 + size:at + 12 + size])[0] == zlib.crc32(kind + body) & 0xFFFFFFFF
+        if kind == b"IHDR":
+            width, height = struct.unpack(">II", body[:8])
+        elif kind == b"acTL":
+            frames = struct.unpack(">I", body[:4])[0]
+        elif kind == b"fcTL":
+            numerator, denominator = struct.unpack(">HH", body[20:24])
+            delays.append(numerator / denominator)
+        elif kind == b"IDAT":
+            first += body
+        at += 12 + size
+    rows = np.frombuffer(zlib.decompress(first), np.uint8).reshape(height, 1 + 3 * width)
+    assert (rows[:, 0] == 2).all()  # each row filtered "Up"
+    picture = np.cumsum(rows[:, 1:], axis=0, dtype=np.uint8).reshape(height, width, 3)  # undo it (mod 256)
+    return frames, delays, picture
+
+
+def test_the_chapters_video_is_an_animated_png_of_every_25th_of_a_second(tmp_path):
+    run = run_command(["--seed", "0", "--no-rerun", "--video", "run.png", "--out", "out"], tmp_path)
+    assert run.returncode == 0, run.stderr
+    assert f"video: run.png\n" in run.stdout
+    frames, delays, first = apng_frames(tmp_path / "run.png")
+    assert frames == len(delays) == 101  # 4 s of simulated time, a frame each 0.04 s, the first at t = 0
+    assert delays == [0.04] * 101
+    r, g, b = first[240, 320].astype(int)  # the chapter's video looks at the box: red in the middle
+    assert r > 2 * g and r > 2 * b
+    again = run_command(["--seed", "0", "--no-rerun", "--video", "again.png", "--out", "out2"], tmp_path)
+    assert again.returncode == 0, again.stderr
+    assert (tmp_path / "again.png").read_bytes() == (tmp_path / "run.png").read_bytes()  # the same bytes
+    assert (tmp_path / "out2" / "metrics.json").read_bytes() == (tmp_path / "out" / "metrics.json").read_bytes()
+
+
+def test_break_its_frames_are_its_rows(tmp_path):
+    run = run_command(["--timestep", "0.05", "--no-perturb", "--steps", "40", "--no-rerun", "--video", "b.png",
+                       "--out", "out"], tmp_path)
+    assert run.returncode == 0, run.stderr
+    frames, delays, _ = apng_frames(tmp_path / "b.png")
+    assert frames == 41 and set(delays) == {0.05}  # rows sparser than 1/25 s: each one a frame, played in real time
+
+
+def test_a_scenarios_video_draws_its_qpos_with_the_recording_beside(tmp_path):
+    run = run_command(["--scenario", str(ROOT / "tests/scenes/pusht.toml"), "--steps", "200", "--video", "pusht.png",
+                       "--out", "out"], tmp_path)
+    assert run.returncode == 0, run.stderr
+    frames, delays, first = apng_frames(tmp_path / "pusht.png")
+    times = np.loadtxt(tmp_path / "out" / "trajectory.csv", delimiter=",", skiprows=1, usecols=1)
+    assert frames == int(times[-1] / 0.04 + 1e-9) + 1 and set(delays) == {0.04}
+    assert (tmp_path / "out" / "sim_loop.rrd").stat().st_size > 0  # the recording still made
+    assert first.std() > 10  # a picture, not a blank
+
+
+def test_without_ffmpeg_an_mp4_becomes_an_animated_png_and_says_so(tmp_path, monkeypatch):
+    monkeypatch.setenv("PATH", "/nonexistent")
+    run = run_command(["--smoke", "--no-rerun", "--video", "clip.mp4", "--out", "out"], tmp_path)
+    assert run.returncode == 0, run.stderr
+    assert "video: clip.png (an animated PNG: ffmpeg, which .mp4 needs, is not on PATH)\n" in run.stdout
+    assert not (tmp_path / "clip.mp4").exists()
+    assert apng_frames(tmp_path / "clip.png")[0] == 16  # 300 steps of 2 ms: 0.6 s, a frame each 0.04 s
+
+
+@pytest.mark.skipif(shutil.which("ffmpeg") is None, reason="ffmpeg is not on PATH")
+def test_with_ffmpeg_an_mp4_is_written(tmp_path):
+    run = run_command(["--smoke", "--no-rerun", "--video", "clip.mp4", "--out", "out"], tmp_path)
+    assert run.returncode == 0, run.stderr
+    assert "video: clip.mp4\n" in run.stdout
+    data = (tmp_path / "clip.mp4").read_bytes()
+    assert data[4:8] == b"ftyp" and b"moof" in data  # a fragmented MP4: written front to back into its pipe
+
+
+def test_a_video_that_cannot_be_made_leaves_nothing(tmp_path):
+    run = run_command(["--smoke", "--no-rerun", "--video", "missing/dir/clip.png", "--out", "out"], tmp_path)
+    assert run.returncode == 1
+    assert len(run.stderr.splitlines()) == 1 and "missing/dir" in run.stderr
+    assert not (tmp_path / "out" / "metrics.json").exists()
+    assert not (tmp_path / "missing").exists()
+    refused = run_command(["--smoke", "--video", "clip.png", "--out", "out"], tmp_path, python=False)
+    assert refused.returncode == 2
+    assert refused.stderr == ("sim_loop: --video: sim_loop draws no pictures; python -m simloop --video clip.png "
+                              "does (nothing was written)\n")
+    assert not (tmp_path / "clip.png").exists() and not (tmp_path / "out" / "metrics.json").exists()
+    assert [p for p in os.listdir(tmp_path) if p.startswith(".")] == []  # no temporary file left
