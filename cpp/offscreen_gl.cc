@@ -4,6 +4,7 @@
 #include <EGL/egl.h>
 #include <EGL/eglext.h>
 #include <dlfcn.h>
+#include <unistd.h>
 
 #include <cstdio>
 #include <mutex>
@@ -43,6 +44,7 @@ struct Egl {
   EGLDisplay display = EGL_NO_DISPLAY;
   EGLConfig config = nullptr;
   std::string failure;  // why there is no display, when there is none
+  pid_t pid = 0;        // the process that made the display
 };
 
 template <class F>
@@ -81,6 +83,7 @@ bool try_display(Egl& egl, EGLDisplay display, const std::string& what, std::vec
 
 Egl load_egl() {
   Egl egl;
+  egl.pid = getpid();
   void* library = dlopen("libEGL.so.1", RTLD_NOW | RTLD_GLOBAL);
   if (library == nullptr) {
     egl.failure = std::string("cannot load libEGL.so.1: ") + kInstall;
@@ -139,8 +142,24 @@ struct OffscreenGl::Impl {
   EGLContext context = EGL_NO_CONTEXT;
 };
 
+namespace {
+
+// EGL's display and Mesa's threads do not survive fork(): a child of a
+// process that rendered would wait forever on them. Said instead.
+void check_not_forked(const Egl& egl) {
+  if (egl.pid != getpid()) {
+    throw RenderError(
+        "cannot render in a process forked from one that had already rendered (EGL and its driver's threads do "
+        "not survive fork): start worker processes with 'spawn' or 'forkserver' (for Gymnasium's AsyncVectorEnv: "
+        "context='spawn')");
+  }
+}
+
+}  // namespace
+
 OffscreenGl::OffscreenGl() : impl_(new Impl{egl_once()}) {
   Egl& egl = impl_->egl;
+  check_not_forked(egl);
   if (egl.display == EGL_NO_DISPLAY) throw RenderError(egl.failure);
   if (egl.BindAPI(EGL_OPENGL_API) != EGL_TRUE) {
     throw RenderError("EGL cannot bind desktop OpenGL (" + hex(egl.GetError()) + "): " + kInstall);
@@ -154,11 +173,15 @@ OffscreenGl::OffscreenGl() : impl_(new Impl{egl_once()}) {
 }
 
 OffscreenGl::~OffscreenGl() {
-  if (impl_->context != EGL_NO_CONTEXT) impl_->egl.DestroyContext(impl_->egl.display, impl_->context);
+  // (in a forked child the context is the parent's: nothing of ours to free)
+  if (impl_->context != EGL_NO_CONTEXT && impl_->egl.pid == getpid()) {
+    impl_->egl.DestroyContext(impl_->egl.display, impl_->context);
+  }
 }
 
 void OffscreenGl::make_current() {
   Egl& egl = impl_->egl;
+  check_not_forked(egl);
   // Without a surface (EGL_KHR_surfaceless_context): MuJoCo draws into its
   // own offscreen framebuffer.
   if (egl.MakeCurrent(egl.display, EGL_NO_SURFACE, EGL_NO_SURFACE, impl_->context) != EGL_TRUE) {
@@ -168,6 +191,7 @@ void OffscreenGl::make_current() {
 
 void OffscreenGl::release() noexcept {
   Egl& egl = impl_->egl;
+  if (egl.pid != getpid()) return;  // the parent's context: never touched here
   egl.MakeCurrent(egl.display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
 }
 

@@ -44,7 +44,8 @@ class Renderer {
   // same structure) `width` x `height` pixels. Throws InvalidArgument unless
   // both are from 1 to kMaxSize, RenderError when this machine cannot render
   // (no libEGL, no display, an OpenGL MuJoCo cannot use; the message says
-  // what to install).
+  // what to install; or in a process forked from one that had already
+  // rendered, which EGL does not survive).
   Renderer(const Model& model, int width, int height);
   ~Renderer();
   Renderer(const Renderer&) = delete;

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 import simloop
+from conftest import run_python
 from simloop.gym import PUSHT_SCENARIO, ScenarioEnv, ScenarioVectorEnv
 
 SIZE = dict(width=96, height=64)
@@ -168,3 +169,46 @@ def test_checkers_and_rendering_wrappers_take_the_render_modes(gymnasium):
     for _ in range(3):
         frames.step(frames.action_space.sample())
     assert len(frames.render()) == 4  # the reset's and each step's
+
+
+def test_gymnasiums_own_vectorizations_render_the_same_pictures(gymnasium):
+    """SyncVectorEnv and AsyncVectorEnv (each env in a process of its own, with its own OpenGL context) over the
+    single env, and the vector env, draw the same bytes."""
+    pictures = {}
+    for mode in ("sync", "async", "vector_entry_point"):
+        # (this process has rendered: its forked children could not; spawned ones can)
+        extra = {"vector_kwargs": {"context": "spawn"}} if mode == "async" else {}
+        envs = gymnasium.make_vec("simloop/PushT-v0", num_envs=2, vectorization_mode=mode, render_mode="rgb_array",
+                                  **SIZE, **extra)
+        try:
+            envs.reset(seed=5)
+            envs.step(np.full((2, 2), 0.5))
+            pictures[mode] = envs.render()
+        finally:
+            envs.close()
+    for mode in ("async", "vector_entry_point"):
+        assert all(np.array_equal(a, b) for a, b in zip(pictures[mode], pictures["sync"])), mode
+
+
+def test_a_forked_child_of_a_process_that_rendered_is_told_not_left_waiting():
+    done = run_python("""
+        import os, simloop
+        sim = simloop.Sim()
+        simloop.Renderer(sim, 8, 8).render(sim)
+        pid = os.fork()
+        if pid == 0:
+            try:
+                simloop.Renderer(sim, 8, 8)
+            except RuntimeError as e:
+                print(e, flush=True)
+                os._exit(0)
+            os._exit(1)
+        _, status = os.waitpid(pid, 0)
+        print("child", os.waitstatus_to_exitcode(status))
+        print(simloop.Renderer(sim, 8, 8).render(sim).shape)  # the parent renders on
+    """, timeout=60)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.splitlines() == [
+        "cannot render in a process forked from one that had already rendered (EGL and its driver's threads do not "
+        "survive fork): start worker processes with 'spawn' or 'forkserver' (for Gymnasium's AsyncVectorEnv: "
+        "context='spawn')", "child 0", "(8, 8, 3)"]
