@@ -324,11 +324,24 @@ std::string_view size_name(std::string_view written) {
   return written;
 }
 
+// Newer MuJoCos size the actuators' outputs by nout (actuator_gear, ...):
+// the actuators themselves when each has one output, as every 2.2 actuator does.
+template <class M>
+auto outputs_are_actuators(const M* m, int) -> decltype(m->nout, bool()) {
+  return m->nout == m->nu;
+}
+template <class M>
+bool outputs_are_actuators(const M*, long) {
+  return false;
+}
+
 template <class T>
-bool visit_array(const std::function<bool(const RawArray&)>& visit, const char* name, const char* rows_count,
-                 T* data, long long rows, long long cols) {
+bool visit_array(const std::function<bool(const RawArray&)>& visit, const mjModel* m, const char* name,
+                 const char* rows_count, T* data, long long rows, long long cols) {
   if constexpr (kNumeric<T>) {
-    return visit(RawArray{name, size_name(rows_count), const_cast<std::remove_const_t<T>*>(data),
+    std::string_view count = size_name(rows_count);
+    if (count == "nout" && outputs_are_actuators(m, 0)) count = "nu";
+    return visit(RawArray{name, count, const_cast<std::remove_const_t<T>*>(data),
                           element_of<std::remove_const_t<T>>(), rows, cols});
   } else {
     return false;  // the contact structs, the solver's statistics
@@ -351,7 +364,7 @@ bool each_model_array(const mjModel* m, const std::function<bool(const RawArray&
   SIMLOOP_MODEL_SIZES
 #undef X
 #define X(type, name, rows, cols) \
-  if (visit_array(visit, #name, #rows, m->name, static_cast<long long>(rows), static_cast<long long>(cols))) return true;
+  if (visit_array(visit, m, #name, #rows, m->name, static_cast<long long>(rows), static_cast<long long>(cols))) return true;
 #define XNV X
   MJMODEL_POINTERS
 #undef XNV
@@ -367,7 +380,7 @@ bool each_data_array(const mjModel* m, const mjData* d, const std::function<bool
 #undef MJ_D
 #define MJ_D(n) d->n
 #define X(type, name, rows, cols) \
-  if (visit_array(visit, #name, #rows, d->name, static_cast<long long>(rows), static_cast<long long>(cols))) return true;
+  if (visit_array(visit, m, #name, #rows, d->name, static_cast<long long>(rows), static_cast<long long>(cols))) return true;
 #define XNV X
   MJDATA_POINTERS
   MJDATA_ARENA_POINTERS
@@ -387,7 +400,7 @@ bool each_data_array(const mjModel* m, const mjData* d, const std::function<bool
     return count == "njmax" ? "nefc" : count == "nconmax" ? "ncon" : nullptr;
   };
 #define X(type, name, rows, cols)                                                                           \
-  if (visit_array(visit, #name, counted_by(#rows) ? counted_by(#rows) : #rows, d->name,                   \
+  if (visit_array(visit, m, #name, counted_by(#rows) ? counted_by(#rows) : #rows, d->name,                   \
                   in_use(#rows, static_cast<long long>(rows)), static_cast<long long>(cols)))               \
     return true;
   MJDATA_POINTERS

@@ -14,7 +14,7 @@
 //   plugins            none                               libraries in the package's plugin/ folder
 //   arrays             mjxmacro.h: sizes MJMODEL_INTS,     MJMODEL_SIZES; contacts and constraints
 //                      contacts and constraints njmax-    in d->arena, nefc/ncon rows (MJ_D)
-//                      and nconmax-sized, nefc/ncon used
+//                      and nconmax-sized, nefc/ncon used  actuator outputs nout (= nu: actuator rows)
 #pragma once
 
 #include <cstddef>
