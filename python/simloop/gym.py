@@ -37,6 +37,10 @@ Episodes, include/simloop/episode.hpp):
   "name": ..., "value": v or "uniform": [low, high]}]): the scenario's
   [reset] table, for this episode (given, they replace the scenario's).
   Unknown keys, wrong sizes and names are errors; the env stays usable.
+- render_mode "rgb_array" or "depth_array": render() draws the episode's
+  state offscreen (simloop.Renderer), width x height pixels, from `view`
+  (camera, track, distance, azimuth, elevation); metadata["render_fps"] is
+  the decisions per simulated second.
 - info: "step" (physics steps since reset) and "time" (s) always; "seed"
   (the episode's, a numpy uint64) from reset; "ended_by" on the step that
   ends an episode: "warning", "length" or "max_episode_steps".
