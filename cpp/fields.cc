@@ -14,25 +14,8 @@ namespace {
 
 using detail::compat::RawArray;
 
-// The sizes that count objects, and which objects ("nu" rows are actuators).
-mjtObj rows_are(std::string_view count) {
-  static constexpr std::array<std::pair<std::string_view, mjtObj>, 21> kCounts{{
-      {"nbody", mjOBJ_BODY},       {"njnt", mjOBJ_JOINT},      {"ngeom", mjOBJ_GEOM},
-      {"nsite", mjOBJ_SITE},       {"ncam", mjOBJ_CAMERA},     {"nlight", mjOBJ_LIGHT},
-      {"nmesh", mjOBJ_MESH},       {"nskin", mjOBJ_SKIN},      {"nhfield", mjOBJ_HFIELD},
-      {"ntex", mjOBJ_TEXTURE},     {"nmat", mjOBJ_MATERIAL},   {"npair", mjOBJ_PAIR},
-      {"nexclude", mjOBJ_EXCLUDE}, {"neq", mjOBJ_EQUALITY},    {"ntendon", mjOBJ_TENDON},
-      {"nu", mjOBJ_ACTUATOR},      {"nsensor", mjOBJ_SENSOR},  {"nnumeric", mjOBJ_NUMERIC},
-      {"ntext", mjOBJ_TEXT},       {"ntuple", mjOBJ_TUPLE},    {"nkey", mjOBJ_KEY},
-  }};
-  for (const auto& [name, type] : kCounts) {
-    if (name == count) return type;
-  }
-  return mjOBJ_UNKNOWN;
-}
-
 FieldView view_of(const RawArray& a) {
-  return FieldView{a.data, a.element, a.rows, a.cols, rows_are(a.rows_count), std::string(a.rows_count)};
+  return FieldView{a.data, a.element, a.rows, a.cols, object_type_counted_by(a.rows_count), std::string(a.rows_count)};
 }
 
 std::vector<std::string> names_of(bool (*each)(const std::function<bool(const RawArray&)>&)) {

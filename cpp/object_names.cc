@@ -15,11 +15,12 @@ struct Kind {
   mjtObj type;
   const char* one;
   const char* many;
+  const char* size;  // the mjModel size that counts them ("ngeom")
   int (*count)(const mjModel*);
 };
 
 #define SIMLOOP_KIND(type, one, many, size) \
-  Kind { type, one, many, [](const mjModel* m) { return detail::compat::as_int(m->size); } }
+  Kind { type, one, many, #size, [](const mjModel* m) { return detail::compat::as_int(m->size); } }
 // The kinds of object a scene names, as Python spells them ("body", "geom").
 const std::vector<Kind>& kinds() {
   static const std::vector<Kind> all{
@@ -98,6 +99,13 @@ const std::vector<std::string>& object_kinds() {
 }
 
 const char* object_kind(mjtObj type) { return kind_of(type).one; }
+
+mjtObj object_type_counted_by(std::string_view size) noexcept {
+  for (const Kind& k : kinds()) {
+    if (size == k.size) return k.type;
+  }
+  return mjOBJ_UNKNOWN;
+}
 
 int object_count(const mjModel* m, mjtObj type) { return count_of(m, type); }
 

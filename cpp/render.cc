@@ -173,14 +173,14 @@ void Renderer::render(const Model& model, const mjData* d, const CameraView& vie
   }
   r.gl.release();
   const std::size_t w = static_cast<std::size_t>(r.width), h = static_cast<std::size_t>(r.height);
+  // OpenGL's depth buffer holds 0..1, non-linear in distance: back to metres
+  // with the near and far planes MuJoCo drew with.
+  const mjModel* own = r.model.get();
+  const double near = own->vis.map.znear * own->stat.extent, far = own->vis.map.zfar * own->stat.extent;
   for (std::size_t row = 0; row < h; ++row) {
     const std::size_t from = h - 1 - row;
     if (rgb) std::copy_n(r.rgb.data() + from * w * 3, w * 3, rgb + row * w * 3);
     if (depth) {
-      // OpenGL's depth buffer holds 0..1, non-linear in distance: back to
-      // metres with the near and far planes MuJoCo drew with.
-      const mjModel* own = r.model.get();
-      const double near = own->vis.map.znear * own->stat.extent, far = own->vis.map.zfar * own->stat.extent;
       const float* in = r.depth.data() + from * w;
       float* out = depth + row * w;
       for (std::size_t x = 0; x < w; ++x) out[x] = static_cast<float>(near / (1.0 - in[x] * (1.0 - near / far)));

@@ -224,14 +224,13 @@ FieldView Sim::data_field(std::string_view name) const { return simloop::data_fi
 FieldView Sim::model_field(std::string_view name) const { return simloop::model_field(model_.get(), name); }
 
 FieldView Sim::writable_model_field(std::string_view name) {
-  const FieldView view = simloop::model_field(model_.get(), name);  // an unknown name: refused before any copy
+  (void)simloop::model_field(model_.get(), name);  // an unknown name: refused first, and before any copy
   if (!model_field_writable(name)) {
     throw InvalidArgument("mjModel's " + std::string(name) +
                           " is read-only here: a Sim lets you write the parameters a trainer randomises "
                           "(masses, inertias, friction, contact softness, damping, armature, stiffness, "
                           "actuator gains, biases, gears and ranges, colours)");
   }
-  (void)view;
   return simloop::model_field(own_model(), name);
 }
 

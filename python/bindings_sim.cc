@@ -46,20 +46,10 @@ auto locked(Fn fn) {
   };
 }
 
-// A numpy view of a Sim's array, owned by `owner` (the Sim's Python object),
-// which the view keeps alive through its base: safe because a Sim's mjData
-// never moves.
-py::array owned_view(const py::object& owner, const simloop::ArrayView& array) {
-  static double empty = 0.0;  // a size-0 view still needs a pointer to own nothing
-  double* at = array.rows > 0 ? array.data : &empty;
-  const py::ssize_t rows = array.rows, width = array.width, item = sizeof(double);
-  py::array view = width > 0 ? py::array(py::dtype::of<double>(), {rows, width}, {item * width, item}, at, owner)
-                             : py::array(py::dtype::of<double>(), {rows}, {item}, at, owner);
-  return array.writable ? view : read_only(view);
-}
-
 // A numpy view of one of MuJoCo's arrays, of its element type, (rows, cols)
-// or (rows,) when cols is 1, kept alive by `owner`; read-only unless `writable`.
+// or (rows,) when cols is 1, kept alive by `owner` through its base (safe:
+// a Sim's mjData never moves, nor does a model the owner holds); read-only
+// unless `writable`.
 py::array field_view(const simloop::FieldView& f, const py::object& owner, bool writable) {
   py::dtype dtype;
   switch (f.element) {
@@ -154,7 +144,8 @@ void bind_sim(py::module_& m) {
           [](const py::object& self, const std::string& name) {
             PySim& s = self.cast<PySim&>();
             SimLock lock(s);  // for the model's sizes; the view itself outlives the lock, as documented
-            return owned_view(self, s.sim.array(name));
+            const simloop::ArrayView a = s.sim.array(name);
+            return field_view({a.data, simloop::Element::kFloat64, a.rows, std::max(a.width, 1)}, self, a.writable);
           },
           "name"_a, "A numpy view into this Sim's mjData (keeps the Sim alive).")
       .def(

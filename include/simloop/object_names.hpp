@@ -23,6 +23,9 @@ namespace simloop {
 [[nodiscard]] const std::vector<std::string>& object_kinds();
 [[nodiscard]] const char* object_kind(mjtObj type);
 [[nodiscard]] int object_count(const mjModel* m, mjtObj type);
+// The kind an mjModel size counts ("ngeom": geoms, "nu": actuators),
+// mjOBJ_UNKNOWN for a size that counts no kind of object (nq, nv, nefc, ...).
+[[nodiscard]] mjtObj object_type_counted_by(std::string_view size) noexcept;
 
 // The same for an index: throws InvalidArgument unless 0 <= index < count.
 [[nodiscard]] int checked_object_index(const mjModel* m, mjtObj type, long long index);
