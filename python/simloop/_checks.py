@@ -59,6 +59,14 @@ def _check_int(name: str, value: object, minimum: int = I64_MIN, maximum: int = 
     return number
 
 
+def _did_you_mean(name: str, names: "Iterable[str]") -> str:
+    """" (did you mean 'x'?)" for the closest of names to a mistyped name, or ""."""
+    import difflib
+
+    close = difflib.get_close_matches(name, list(names), n=1)
+    return f" (did you mean {close[0]!r}?)" if close else ""
+
+
 def _check_keys(name: str, mapping: "Mapping[Any, Any]", known: Sequence[str]) -> None:
     """A dict's keys, all known: never silently ignored."""
     unknown = sorted(str(k) for k in mapping if k not in known)

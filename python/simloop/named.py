@@ -28,7 +28,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
 from . import _core
-from ._checks import _describe
+from ._checks import _describe, _did_you_mean
 
 if TYPE_CHECKING:
     import numpy as np
@@ -94,12 +94,8 @@ class NamedArray:
     def _unknown(self, key: str) -> str:
         if not self._rows:
             return f"{self.name}'s rows have no names: index them by number (0 to {len(self._view) - 1})"
-        import difflib
-
-        close = difflib.get_close_matches(key, list(self._rows), n=1)
-        hint = f" (did you mean {close[0]!r}?)" if close else ""
         shown = ", ".join(list(self._rows)[:20]) + (", ..." if len(self._rows) > 20 else "")
-        return f"{self.name} has no row named {key!r}{hint}; its rows: {shown}"
+        return f"{self.name} has no row named {key!r}{_did_you_mean(key, self._rows)}; its rows: {shown}"
 
     def __getitem__(self, key: Key) -> Any:
         return self._view[self._index(key)]
@@ -153,11 +149,8 @@ class _Owner:
 
     def __getattr__(self, name: str) -> NamedArray:
         if name.startswith("_") or name not in self._names:
-            import difflib
-
-            close = difflib.get_close_matches(name, list(self._names), n=1)
-            hint = f" (did you mean {close[0]!r}?)" if close else ""
-            raise AttributeError(f"mj{self._owner.capitalize()} has no array named {name!r}{hint}")
+            raise AttributeError(f"mj{self._owner.capitalize()} has no array named {name!r}"
+                                 f"{_did_you_mean(name, self._names)}")
         sim = self._sim
         if name not in self._rows:
             rows_count, kind = sim.field_rows(self._owner, name)

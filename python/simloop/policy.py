@@ -8,7 +8,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any, Callable, Mapping, Tuple
 
 from . import _core
-from ._checks import _check_int, _describe, _show
+from ._checks import _check_int, _describe, _did_you_mean, _show
 from .scenario import Scenario
 
 if TYPE_CHECKING:  # numpy loads when a policy runs: `import simloop` stays quick
@@ -43,12 +43,8 @@ class Observation:
 
     def __getitem__(self, name: str) -> float:
         if name not in self._index:
-            import difflib
-
-            close = difflib.get_close_matches(str(name), list(self._index), n=1)
-            hint = f" (did you mean {close[0]!r}?)" if close else ""
-            raise KeyError(f"no observed quantity named {name!r}{hint}; the observation has: "
-                           + ", ".join(self._index))
+            raise KeyError(f"no observed quantity named {name!r}{_did_you_mean(str(name), self._index)}; "
+                           f"the observation has: {', '.join(self._index)}")
         return float(self.values[self._index[name]])
 
     def __repr__(self) -> str:
