@@ -3,18 +3,28 @@
 
 The PushT scene (python/simloop/scenes/pusht.xml), a decision every --every
 physics steps (1 and 10 by default), random actions drawn up front, and the
-same reward in both: the T-block's progress in x minus an action cost
-(simloop's as a @batched function of its observation arrays; MujocoEnv's
-from data.qpos). simloop.gym.ScenarioEnv against a minimal
-gymnasium.envs.mujoco.MujocoEnv subclass (observation qpos and qvel, no
-rendering), on the same MuJoCo: run it in the PyPI build's venv (the
-MujocoEnv needs the mujoco package). Rounds alternate which goes first;
-each round is --calls env.step calls (episodes long enough not to end).
-Process CPU time (and wall-clock beside it) per env.step, medians, and the
-median of the per-round CPU ratios. Targets (issue 18): <= 1.15 x
-MujocoEnv at one physics step per action, <= 1.05 x at ten.
+same reward in each: the T-block's progress in x minus an action cost.
+Three pairs, each timed side by side on the same MuJoCo (run it in the PyPI
+build's venv: the MujocoEnv needs the mujoco package):
 
-    .venv-pypi/bin/python bench/bench_gym_env.py [--rounds 21] [--calls 2000] [--every 1,10]
+- single env, a vectorised reward: simloop.gym.ScenarioEnv with the reward
+  as a @batched function of its (1, n) observation arrays (numpy over a
+  batch of one), against a minimal gymnasium MujocoEnv subclass
+  (observation qpos and qvel, no rendering) whose step computes the reward
+  from data.qpos with Python floats;
+- single env, a per-step reward: the same, simloop's reward a plain
+  function of one step's arrays (Python floats, as MujocoEnv's);
+- --envs episodes, a vectorised reward: ScenarioVectorEnv (one thread) with
+  the @batched reward over all of them, against as many MujocoEnvs stepped
+  in a Python loop; time per episode step.
+
+Rounds alternate which goes first; each round is --calls env.step calls
+(episodes long enough not to end). Process CPU time (and wall-clock beside
+it) per episode step, medians, and the median of the per-round CPU ratios.
+Targets (issue 18), for the vectorised reward: <= 1.15 x MujocoEnv at one
+physics step per action, <= 1.05 x at ten.
+
+    .venv-pypi/bin/python bench/bench_gym_env.py [--rounds 21] [--calls 2000] [--every 1,10] [--envs 8]
 """
 
 import argparse
@@ -27,7 +37,7 @@ from gymnasium import spaces
 from gymnasium.envs.mujoco import MujocoEnv
 
 import simloop
-from simloop.gym import PUSHT_SCENARIO, ScenarioEnv, batched
+from simloop.gym import PUSHT_SCENARIO, ScenarioEnv, ScenarioVectorEnv, batched
 
 SCENE = str(Path(PUSHT_SCENARIO).with_name("pusht.xml"))
 COST = 0.01  # the reward's weight on the action's size
@@ -65,35 +75,77 @@ def timed(env, actions, seed):
     return time.perf_counter() - wall, time.process_time() - cpu
 
 
+class MujocoEnvs:
+    """n MujocoEnvs stepped one after another: the baseline for a vector env."""
+
+    def __init__(self, n: int, frame_skip: int) -> None:
+        self.envs = [PushTMujocoEnv(frame_skip) for _ in range(n)]
+
+    def reset(self, seed):
+        for i, env in enumerate(self.envs):
+            env.reset(seed=seed + i)
+
+    def step(self, actions):
+        for env, a in zip(self.envs, actions):
+            env.step(a)
+
+    def close(self):
+        for env in self.envs:
+            env.close()
+
+
+def compare(label, ours, theirs, actions, rounds, per_call, target):
+    """Times ours and theirs over the same actions, alternating which goes first."""
+    timed(ours, actions, 0), timed(theirs, actions, 0)  # warm up
+    times = {"simloop": [], "MujocoEnv": []}
+    for r in range(rounds):
+        pair = (("simloop", ours), ("MujocoEnv", theirs))
+        for name, env in (pair if r % 2 else pair[::-1]):
+            times[name].append(timed(env, actions, r))
+    steps = len(actions) * per_call
+    print(f"    {label}:")
+    for name, t in times.items():
+        cpu = statistics.median(x[1] for x in t) / steps * 1e6
+        wall = statistics.median(x[0] for x in t) / steps * 1e6
+        print(f"      {name:9s}: {cpu:7.2f} us CPU, {wall:7.2f} us wall per episode step")
+    ratio = statistics.median(a[1] / b[1] for a, b in zip(times["simloop"], times["MujocoEnv"]))
+    print(f"      simloop / MujocoEnv: {ratio:.3f} x the CPU time (median of per-round ratios"
+          f"{'; target <= ' + str(target) if target else ''})")
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--rounds", type=int, default=21)
     parser.add_argument("--calls", type=int, default=2000)
     parser.add_argument("--every", default="1,10")
+    parser.add_argument("--envs", type=int, default=8)
     args = parser.parse_args()
     print(f"{simloop.MUJOCO_VERSION}, simloop {simloop.__version__}; PushT, {args.calls} env.step calls a "
-          f"round, {args.rounds} rounds; CPU time per env.step (wall beside it), medians")
+          f"round, {args.rounds} rounds; CPU time per episode step (wall beside it), medians")
+    index = ScenarioEnv(PUSHT_SCENARIO).observation_names.index("tblock_x")
+    vectorised = batched(lambda o, a, p: p[:, index] - o[:, index] - COST * np.einsum("ij,ij->i", a, a))
+
+    def per_step(o, a, p):
+        return float(p[index] - o[index]) - COST * float(a @ a)
+
+    rng = np.random.default_rng(0)
     for every in (int(e) for e in args.every.split(",")):
-        index = ScenarioEnv(PUSHT_SCENARIO).observation_names.index("tblock_x")
-        reward = batched(lambda o, a, p: p[:, index] - o[:, index] - COST * np.einsum("ij,ij->i", a, a))
-        ours = ScenarioEnv(PUSHT_SCENARIO, control_every=every, steps=every * (args.calls + 1), reward=reward)
-        theirs = PushTMujocoEnv(every)
-        actions = np.random.default_rng(0).uniform(-1, 1, size=(args.calls, 2))
-        timed(ours, actions, 0), timed(theirs, actions, 0)  # warm up
-        rounds = {"simloop": [], "MujocoEnv": []}
-        for r in range(args.rounds):
-            pair = (("simloop", ours), ("MujocoEnv", theirs))
-            for name, env in (pair if r % 2 else pair[::-1]):
-                rounds[name].append(timed(env, actions, r))
-        print(f"  {every} physics step{'s' if every > 1 else ''} per action:")
-        for name, times in rounds.items():
-            cpu = statistics.median(t[1] for t in times) / args.calls * 1e6
-            wall = statistics.median(t[0] for t in times) / args.calls * 1e6
-            print(f"    {name:9s}: {cpu:7.2f} us CPU, {wall:7.2f} us wall per env.step")
-        ratio = statistics.median(a[1] / b[1] for a, b in zip(rounds["simloop"], rounds["MujocoEnv"]))
+        length = every * (args.calls + 1)
         target = 1.15 if every == 1 else 1.05
-        print(f"    simloop / MujocoEnv: {ratio:.3f} x the CPU time (median of per-round ratios; target <= {target})")
+        print(f"  {every} physics step{'s' if every > 1 else ''} per action:")
+        actions = rng.uniform(-1, 1, size=(args.calls, 2))
+        theirs = PushTMujocoEnv(every)
+        for label, reward, goal in (("one env, a vectorised (@batched) reward", vectorised, target),
+                                    ("one env, a per-step reward", per_step, None)):
+            ours = ScenarioEnv(PUSHT_SCENARIO, control_every=every, steps=length, reward=reward)
+            compare(label, ours, theirs, actions, args.rounds, 1, goal)
         theirs.close()
+        many = MujocoEnvs(args.envs, every)
+        vector = ScenarioVectorEnv(PUSHT_SCENARIO, args.envs, control_every=every, steps=length, reward=vectorised,
+                                   threads=1)
+        batch = rng.uniform(-1, 1, size=(max(args.calls // args.envs, 1), args.envs, 2))
+        compare(f"{args.envs} envs, a vectorised reward", vector, many, batch, args.rounds, args.envs, target)
+        many.close()
     return 0
 
 

@@ -27,6 +27,7 @@ struct Episode {
   std::optional<ScheduledInputs> inputs;  // empty until the first reset
   std::int64_t step = 0;
   detail::StepHealth health;
+  std::optional<detail::DecisionStep> decision;  // from the first reset
 };
 
 }  // namespace
@@ -47,7 +48,7 @@ struct Episodes::Impl {
     mjData* d = e.data.get();
     detail::mujoco_call([&] {
       if (e.step < e.schedule.steps) e.inputs->write(e.step, d);
-      forward_keeping_state(m, d);
+      e.decision->observe(m, d);
     });
     recorder->before_step(observation, e.step, m, d, true);
     recorder->after_step(observation, m, d);
@@ -110,6 +111,7 @@ void Episodes::reset(std::size_t i, std::uint64_t seed, double* observation, con
   e.step = 0;
   const mjModel* m = e.model.get();
   e.health = detail::StepHealth(m);
+  e.decision.emplace(m, *s.recorder);
   mjData* d = e.data.get();
   detail::guarded_steps(m, 0, 0, [&] {
     mj_resetData(m, d);
@@ -149,14 +151,14 @@ void Episodes::step(const double* actions, std::size_t action_count, std::int64_
   for (std::size_t i = 0; i < count; ++i) {
     if (active && !active[i]) continue;
     const Episode& e = s.episodes[i];
-    const std::string which = "episode " + std::to_string(i);
-    if (!e.inputs) throw InvalidArgument(which + " has not started: reset it first");
+    const auto refuse = [i](const std::string& why) { throw InvalidArgument("episode " + std::to_string(i) + why); };
+    if (!e.inputs) refuse(" has not started: reset it first");
     if (s.terminated(e) || e.step >= e.schedule.steps) {
-      throw InvalidArgument(which + " has ended (at step " + std::to_string(e.step) + "): reset it first");
+      refuse(" has ended (at step " + std::to_string(e.step) + "): reset it first");
     }
     for (int a = 0; a < nu; ++a) {
       if (!std::isfinite(actions[i * static_cast<std::size_t>(nu) + static_cast<std::size_t>(a)])) {
-        throw InvalidArgument(which + ": action " + std::to_string(a) + " is not finite");
+        refuse(": action " + std::to_string(a) + " is not finite");
       }
     }
     steps[i] = std::min(every, e.schedule.steps - e.step);
@@ -176,7 +178,7 @@ void Episodes::step(const double* actions, std::size_t action_count, std::int64_
       detail::guarded_steps(m, chunk_start, chunk_end - 1, [&] {
         for (; e.step < chunk_end; ++e.step) {
           e.inputs->write(e.step, d);
-          mj_step(m, d);
+          e.decision->step(m, d);  // mj_step (its second half after the observation)
           e.health.after_step(d, e.step);
           if (s.terminated(e)) {
             ++e.step;

@@ -1,6 +1,7 @@
 #include "loop.hpp"
 
 #include <algorithm>
+#include <cstring>
 #include <sstream>
 
 #include "mujoco_compat.hpp"
@@ -16,6 +17,41 @@ MujocoError stepping_error(const mjModel* m, std::int64_t from, std::int64_t to,
   msg << "running the model at timestep " << python_float_repr(m->opt.timestep) << " s, in steps " << from << " to "
       << to << ": " << e.what();
   return MujocoError(msg.str());
+}
+
+DecisionStep::DecisionStep(const mjModel* m, const RowRecorder& recorder)
+    : nq_(compat::as_int(m->nq)),
+      nv_(compat::as_int(m->nv)),
+      whole_forward_(recorder.reads_acceleration_stage() || m->opt.integrator == mjINT_RK4),
+      entering_(static_cast<std::size_t>(nq_ + nv_)),
+      stepped_(entering_.size()) {}
+
+void DecisionStep::take_state(std::vector<double>& into, const mjData* d) const {
+  std::copy_n(d->qpos, nq_, into.begin());
+  std::copy_n(d->qvel, nv_, into.begin() + nq_);
+}
+
+void DecisionStep::put_state(const std::vector<double>& from, mjData* d) const {
+  std::copy_n(from.begin(), nq_, d->qpos);
+  std::copy_n(from.begin() + nq_, nv_, d->qvel);
+}
+
+void DecisionStep::observe(const mjModel* m, mjData* d) {
+  begun_ = false;
+  take_state(entering_, d);
+  const bool callbacks = mjcb_control || mjcb_passive || mjcb_sensor || mjcb_act_dyn || mjcb_act_gain ||
+                         mjcb_act_bias;
+  const bool bad = std::any_of(entering_.begin(), entering_.end(), [](double x) { return mju_isBad(x) != 0; });
+  if (whole_forward_ || callbacks || bad) {
+    forward_keeping_state(m, d);
+    return;
+  }
+  mj_step1(m, d);
+  mj_fwdActuation(m, d);  // (mj_step2 computes them again with the decided ctrl)
+  take_state(stepped_, d);
+  held_ = std::memcmp(stepped_.data(), entering_.data(), entering_.size() * sizeof(double)) != 0;  // bitwise
+  if (held_) put_state(entering_, d);
+  begun_ = true;
 }
 
 LoopResult run_loop(const mjModel* m, mjData* d, const Schedule& schedule, const RowRecorder& recorder,
@@ -39,6 +75,7 @@ LoopResult run_loop(const mjModel* m, mjData* d, const Schedule& schedule, const
   // Decision steps: 0, K, 2K, ... with a policy; none (the run's end) without.
   std::int64_t next_decision = policy ? 0 : steps;
   std::vector<double> observation(policy ? static_cast<std::size_t>(width) : 0);
+  DecisionStep decision(m, recorder);
 
   // mj_forward fills in the derived state (poses, contacts) without
   // advancing time, so row 0 is the true state at t = 0.
@@ -57,7 +94,7 @@ LoopResult run_loop(const mjModel* m, mjData* d, const Schedule& schedule, const
       // Outside MuJoCo's guard: the policy may throw (a Python exception).
       guarded_steps(m, step, step, [&] {
         scheduled.write(step, d);
-        forward_keeping_state(m, d);
+        decision.observe(m, d);
       });
       recorder.before_step(observation.data(), step, m, d, true);
       recorder.after_step(observation.data(), m, d);
@@ -79,7 +116,7 @@ LoopResult run_loop(const mjModel* m, mjData* d, const Schedule& schedule, const
           until_record = record_every - 1;
         }
         for (StepObserver* o : observers) o->before_step(step, m, d);
-        mj_step(m, d);
+        decision.step(m, d);  // mj_step (its second half after a decision's observation)
         health.after_step(d, step);
         if (row) recorder.after_step(row, m, d);
         for (StepObserver* o : observers) o->after_step(step, m, d, row);

@@ -85,6 +85,54 @@ class StepObserver {
   virtual void at_end(const mjModel* /*m*/, const mjData* /*d*/, double* /*row*/) noexcept {}
 };
 
+// The observation before a decision, and the physics step after it.
+//
+// mj_step is mj_step1 (positions, velocities, their sensors) then mj_step2
+// (actuation, constraints, integration), with the same bits, for every
+// integrator but RK4. So the observation can be the first half of the next
+// step: mj_step1 derives the state's poses, velocities and contacts,
+// mj_fwdActuation the actuator forces of the ctrl in force, and the step
+// after the decision is mj_step2 alone; one forward pass a decision less
+// than forward_keeping_state then mj_step, and the same observation and run.
+// mj_step1 may rewrite qpos and qvel in place (2.2 normalises quaternions
+// there): what it wrote is held aside until mj_step2, so a row still reads
+// the state as it entered the step. A whole forward pass remains for what
+// the first half cannot give or would change: acceleration-stage sensors,
+// RK4, a callback (it would see the ctrl before the decision), a bad qpos
+// or qvel (mj_step1 would reset it where mj_step does).
+class DecisionStep {
+ public:
+  DecisionStep(const mjModel* m, const RowRecorder& recorder);
+  // Derives d's quantities for the observation; the step's inputs are
+  // written. Inside MuJoCo's error guard.
+  void observe(const mjModel* m, mjData* d);
+  // The next physics step: the second half of the one observe() began, or
+  // mj_step.
+  void step(const mjModel* m, mjData* d) {
+    if (!begun_) {
+      mj_step(m, d);
+      return;
+    }
+    begun_ = false;
+    if (held_) put_state(stepped_, d);
+    mj_step2(m, d);
+  }
+  // The state was replaced (a reset): nothing begun continues.
+  void forget() noexcept { begun_ = false; }
+  // Whether the last observe() began the next step (mj_step1).
+  [[nodiscard]] bool begun() const noexcept { return begun_; }
+
+ private:
+  void take_state(std::vector<double>& into, const mjData* d) const;
+  void put_state(const std::vector<double>& from, mjData* d) const;
+  int nq_, nv_;
+  bool whole_forward_;            // the recorder reads the acceleration stage, or RK4
+  bool begun_ = false;            // mj_step1 has run on the state entering the next step
+  bool held_ = false;             // mj_step1 rewrote qpos or qvel: stepped_ holds what it wrote
+  std::vector<double> entering_;  // qpos and qvel as they entered the step
+  std::vector<double> stepped_;   // and as mj_step1 left them
+};
+
 // What the loop leaves besides the rows it gave the sink.
 struct LoopResult {
   std::int64_t rows = 0;            // rows recorded, kept or streamed

@@ -111,6 +111,7 @@ Recorder::Recorder(const mjModel* m, const ResolvedScenario& scenario, const Sch
   for (int s : scenario.sensors) {
     add(Source::kSensor, m->sensor_adr[s], m->sensor_dim[s], numbered(name_of(m, mjOBJ_SENSOR, s, "sensor"), "", m->sensor_dim[s]),
         "");
+    reads_acceleration_stage_ = reads_acceleration_stage_ || m->sensor_needstage[s] == mjSTAGE_ACC;
   }
   if (scenario.contacts) add(Source::kContacts, 0, 1, {"ncon"}, "", true);
 

@@ -35,6 +35,7 @@ using namespace pybind11::literals;
 
 using Doubles = py::array_t<double, py::array::c_style | py::array::forcecast>;
 using Part3 = std::optional<std::array<double, 3>>;  // a force or torque, or None
+constexpr std::size_t kRowLabels = 2;  // a recorder row's step and time, ahead of what it observes
 
 // fn(sim, args...) -- a Sim method or a function of a Sim -- as a Python
 // method that holds the Sim's lock. Args: the Python arguments' types.
@@ -243,6 +244,8 @@ void bind_sim(py::module_& m) {
                                const simloop::CtrlRange r = simloop::ctrl_range(e.episodes.model().get());
                                return py::make_tuple(vec(r.low.data(), r.low.size()), vec(r.high.data(), r.high.size()));
                              })
+      // reset and step return observations: the recorder's rows without their
+      // step and time (the columns after them in column_names).
       .def(
           "reset",
           [](PyEpisodes& e, std::size_t i, std::uint64_t seed, const std::optional<std::string>& reset) {
@@ -255,8 +258,9 @@ void bind_sim(py::module_& m) {
             // This episode's start, as a scenario file's [reset] table says it.
             std::optional<simloop::ResetSpec> spec;
             if (reset) spec = simloop::Scenario::from_toml_string(*reset, "reset options").reset;
-            e.episodes.reset(i, seed, e.observations.data() + i * width, spec ? &*spec : nullptr);
-            return vec(e.observations.data() + i * width, width);
+            double* row = e.observations.data() + i * width;
+            e.episodes.reset(i, seed, row, spec ? &*spec : nullptr);
+            return vec(row + kRowLabels, width - kRowLabels);
           },
           "i"_a, "seed"_a, "reset"_a = py::none())
       .def(
@@ -266,14 +270,19 @@ void bind_sim(py::module_& m) {
              int threads) {
             std::lock_guard<std::mutex> lock(e.mutex);
             const std::size_t n = e.episodes.count();
-            const auto width = static_cast<py::ssize_t>(e.episodes.width());
-            std::vector<std::uint8_t> terminated(n, 0), truncated(n, 0);
+            const auto width = static_cast<std::size_t>(e.episodes.width());
+            py::array_t<bool> terminated(static_cast<py::ssize_t>(n)), truncated(static_cast<py::ssize_t>(n));
+            static_assert(sizeof(bool) == sizeof(std::uint8_t), "numpy's bools are bytes");
+            auto* term = reinterpret_cast<std::uint8_t*>(terminated.mutable_data());
+            auto* trunc = reinterpret_cast<std::uint8_t*>(truncated.mutable_data());
+            std::fill_n(term, n, 0);
+            std::fill_n(trunc, n, 0);
             const std::uint8_t* mask = active ? active->data() : nullptr;
             const auto work_steps = every > 0 ? static_cast<double>(every) * static_cast<double>(n) : 0.0;
             const auto stepping = [&](simloop::RunControl* control) {
               e.episodes.step(actions.data(), static_cast<std::size_t>(actions.size()), every, mask,
-                              active ? static_cast<std::size_t>(active->size()) : 0, e.observations.data(),
-                              terminated.data(), truncated.data(), threads, control);
+                              active ? static_cast<std::size_t>(active->size()) : 0, e.observations.data(), term,
+                              trunc, threads, control);
             };
             if (work_steps <= static_cast<double>(simloop::RunControl::kChunkSteps)) {
               py::gil_scoped_release release;  // nothing long to interrupt
@@ -282,14 +291,27 @@ void bind_sim(py::module_& m) {
               Interruptible work{py::none()};
               work.run(stepping);
             }
-            py::array_t<double> observations({static_cast<py::ssize_t>(n), width});
-            std::copy(e.observations.begin(), e.observations.end(), observations.mutable_data());
-            py::array_t<bool> term(static_cast<py::ssize_t>(n)), trunc(static_cast<py::ssize_t>(n));
-            std::copy(terminated.begin(), terminated.end(), term.mutable_data());
-            std::copy(truncated.begin(), truncated.end(), trunc.mutable_data());
-            return py::make_tuple(observations, term, trunc);
+            py::array_t<double> observations({static_cast<py::ssize_t>(n), static_cast<py::ssize_t>(width - kRowLabels)});
+            double* out = observations.mutable_data();
+            for (std::size_t i = 0; i < n; ++i) {
+              const double* row = e.observations.data() + i * width;
+              out = std::copy(row + kRowLabels, row + width, out);
+            }
+            return py::make_tuple(observations, terminated, truncated);
           },
           "actions"_a, "every"_a, "active"_a = py::none(), "threads"_a = 1)
+      .def("progress",
+           [](PyEpisodes& e) {
+             std::lock_guard<std::mutex> lock(e.mutex);
+             const std::size_t n = e.episodes.count();
+             py::array_t<std::int64_t> steps(static_cast<py::ssize_t>(n));
+             py::array_t<double> times(static_cast<py::ssize_t>(n));
+             for (std::size_t i = 0; i < n; ++i) {
+               steps.mutable_data()[i] = e.episodes.steps_taken(i);
+               times.mutable_data()[i] = e.episodes.time(i);
+             }
+             return py::make_tuple(steps, times);
+           })
       .def("steps_taken", [](PyEpisodes& e, std::size_t i) { return e.episodes.steps_taken(i); }, "i"_a)
       .def("time", [](PyEpisodes& e, std::size_t i) { return e.episodes.time(i); }, "i"_a)
       .def("warnings", [](PyEpisodes& e, std::size_t i) { return e.episodes.warnings(i); }, "i"_a);

@@ -8,7 +8,8 @@
 // into ctrl and takes `every` physics steps. An episode stepped with the
 // actions a Policy would have returned follows the bits of run_schedule with
 // that policy: the same inputs, the same observations (the recorder's row
-// for the state entering the next decision, from forward_keeping_state).
+// for the state entering the next decision, derived as the first half of
+// the next step: loop.hpp's DecisionStep).
 #pragma once
 
 #include <cstddef>
@@ -47,8 +48,9 @@ class Episodes {
   // episode started with scene parameters steps its own copy (model(i)).
   [[nodiscard]] const Model& model() const noexcept;
   [[nodiscard]] const Model& model(std::size_t i) const;
-  // Episode i's state, as its last reset or step left it (positions and what
-  // MuJoCo derives from them current: what a Renderer draws).
+  // Episode i's state, as its last reset or step left it: what MuJoCo derives
+  // from its positions and velocities is current (what a Renderer draws);
+  // the acceleration stage may be the last physics step's.
   [[nodiscard]] const mjData* data(std::size_t i) const;
 
   // Starts episode i afresh (t = 0, the model's initial state, ctrl 0) with

@@ -42,6 +42,10 @@ class RowRecorder {
   // After mj_step (the final row: after mj_forward): what MuJoCo derived
   // from the row's state.
   virtual void after_step(double* row, const mjModel* m, const mjData* d) const noexcept = 0;
+  // Whether after_step reads anything of MuJoCo's acceleration stage but
+  // the actuator forces (an acceleration-stage sensor, say): a decision's
+  // observation then takes a whole forward pass (loop.hpp's DecisionStep).
+  [[nodiscard]] virtual bool reads_acceleration_stage() const noexcept { return true; }
 };
 
 // The columns of a resolved scenario, laid out once, and how to fill a row.
@@ -71,6 +75,7 @@ class Recorder final : public RowRecorder {
   void before_step(double* row, std::int64_t step, const mjModel* m, const mjData* d,
                    bool inputs) const noexcept override;
   void after_step(double* row, const mjModel* m, const mjData* d) const noexcept override;
+  [[nodiscard]] bool reads_acceleration_stage() const noexcept override { return reads_acceleration_stage_; }
 
  private:
   struct Source {
@@ -84,6 +89,7 @@ class Recorder final : public RowRecorder {
   std::vector<Column> columns_;
   std::vector<Source> before_, after_;
   CtrlRange ctrl_range_;
+  bool reads_acceleration_stage_ = false;  // an acceleration-stage sensor is recorded
 };
 
 
@@ -125,14 +131,12 @@ class ScheduledInputs {
 //
 // The observation is the recorder's row for the state entering the decision
 // step (Recorder's columns, step and time first), computed before the
-// decision: its derived quantities come from forward_keeping_state
-// (state.hpp), so deciding leaves the run's bits as they would be with the
-// same ctrl written open-loop; its ctrl columns hold the ctrl in force until
-// now (the previous decision's; 0 before the first), and so do what follows
-// from ctrl (actuator forces, acceleration sensors); its force columns hold
-// the disturbances scheduled for this step. (mj_step1/mj_step2 around the
-// decision would save the extra mj_forward, but give no actuator forces or
-// acceleration-stage sensors to observe, and step RK4 scenes with Euler.)
+// decision: deciding leaves the run's bits as they would be with the same
+// ctrl written open-loop (loop.hpp's DecisionStep derives it as the first
+// half of the next mj_step, or by forward_keeping_state); its ctrl columns
+// hold the ctrl in force until now (the previous decision's; 0 before the
+// first), and so do what follows from ctrl (actuator forces, acceleration
+// sensors); its force columns hold the disturbances scheduled for this step.
 //
 // Who wins: with a policy, ctrl is the policy's, on every actuator, from
 // step 0 on; the scenario's controls are not written. Its disturbances

@@ -85,6 +85,7 @@ class _Setup:
             self.terminate = terminate
         elif terminate is not None:
             self.conditions = [self._condition(c) for c in _sequence_of("terminate", terminate)]
+        self.terminates = self.terminate is not None or bool(self.conditions)  # (a hook or a condition)
 
     def _condition(self, condition: object) -> Tuple[int, Any, float]:
         """(column, op, value): the episode ends when the observation's column compares so."""
@@ -113,6 +114,10 @@ class _Setup:
         return hit
 
     def actions(self, action: object, shape: Tuple[int, ...]) -> np.ndarray:
+        """The action as the episodes take it: float64 numbers of this shape
+        (their finiteness is the episodes' check)."""
+        if type(action) is np.ndarray and action.dtype == np.float64 and action.shape == shape:
+            return action  # what a policy usually hands over: nothing to convert
         try:
             values = np.asarray(action, dtype=np.float64)
         except (TypeError, ValueError):
@@ -121,22 +126,29 @@ class _Setup:
             values = values.reshape(1)
         if values.shape != shape:
             raise ValueError(f"action must have shape {shape}, got {values.shape}")
-        if not np.isfinite(values).all():
-            raise ValueError(f"action must be finite, got {action!r}")
-        return np.ascontiguousarray(values)
+        return values
 
     def rewards(self, before: np.ndarray, actions: np.ndarray, after: np.ndarray) -> np.ndarray:
+        """The rewards of a batch of steps: before, after (n, width), actions (n, nu)."""
         if self.reward is None:
             return np.zeros(len(after))
         if _is_batched(self.reward):
-            return _batch_of("reward", self.reward(before, actions, after), len(after)).astype(np.float64)
+            return _batch_of("reward", self.reward(before, actions, after), len(after), np.float64)
         return np.array([float(self.reward(b, a, o)) for b, a, o in zip(before, actions, after)])
 
-    def info(self, i: int, ended_by: Optional[str] = None) -> Dict[str, Any]:
+    def reward_of_one(self, before: np.ndarray, action: np.ndarray, after: np.ndarray) -> float:
+        """One step's reward (the single env's): before and after (1, width), action (nu,)."""
+        if self.reward is None:
+            return 0.0
+        if _is_batched(self.reward):
+            return float(_batch_of("reward", self.reward(before, action[None], after), 1)[0])
+        return float(self.reward(before[0], action, after[0]))
+
+    def info(self, i: int, ended_by: Optional[str] = None, warned: bool = False) -> Dict[str, Any]:
+        """Episode i's info; `warned`: it ended on a warning, which the info names."""
         out: Dict[str, Any] = {"step": self.episodes.steps_taken(i), "time": self.episodes.time(i)}
-        ended = [w.name for w in self.episodes.warnings(i) if w.name in _TERMINATING]
-        if ended:
-            out["warnings"] = ended
+        if warned:
+            out["warnings"] = [w.name for w in self.episodes.warnings(i) if w.name in _TERMINATING]
         if ended_by is not None:
             out["ended_by"] = ended_by
         return out
@@ -149,9 +161,11 @@ def _sequence_of(name: str, value: object) -> List[Any]:
     return list(value)
 
 
-def _batch_of(name: str, values: object, n: int) -> np.ndarray:
+def _batch_of(name: str, values: object, n: int, dtype: Optional[type] = None) -> np.ndarray:
     """A batched function's result: n values."""
-    out = np.asarray(values)
+    if type(values) is np.ndarray and values.shape == (n,) and (dtype is None or values.dtype == dtype):
+        return values  # (as a vectorised function returns them)
+    out = np.asarray(values, dtype=dtype)
     if out.shape != (n,):
         raise ValueError(f"a batched {name} must return {n} values (one per episode), got shape {out.shape}")
     return out

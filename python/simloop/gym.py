@@ -119,9 +119,10 @@ class ScenarioEnv(gymnasium.Env):
         self.observation_names = self._setup.names
         self.control_every = self._setup.control_every
         self.max_episode_steps = _check_max_episode_steps(max_episode_steps)
-        self._obs: Optional[np.ndarray] = None
+        self._action_shape = (self._setup.nu,)
+        self._obs: Optional[np.ndarray] = None  # (1, n): the episode's observation, a batch of one
         self._decisions = 0
-        self._ended = False
+        self._ended = True  # no episode yet
 
     def reset(self, *, seed: Optional[int] = None,
               options: Optional[Dict[str, Any]] = None) -> Tuple[np.ndarray, Dict[str, Any]]:
@@ -130,32 +131,33 @@ class ScenarioEnv(gymnasium.Env):
         super().reset(seed=seed)
         episode_seed = _episode_seed(self.np_random, seed)
         try:
-            self._obs = self._setup.episodes.reset(0, episode_seed, start)[2:]
+            self._obs = self._setup.episodes.reset(0, episode_seed, start)[None]
         except BaseException:  # a start the scene refuses: the env is as it was, its generator too
             self._np_random, self._np_random_seed = previous
             raise
         self._decisions, self._ended = 0, False
         info = self._setup.info(0)
         info["seed"] = np.uint64(episode_seed)
-        return self._obs.copy(), info
+        return self._obs[0].copy(), info
 
     def step(self, action: object) -> Tuple[np.ndarray, float, bool, bool, Dict[str, Any]]:
-        if self._obs is None:
-            raise ValueError("reset() the environment before step()")
         if self._ended:
-            raise ValueError("the episode has ended: reset() it first")
-        actions = self._setup.actions(action, (self._setup.nu,))
-        rows, terminated, truncated = self._setup.episodes.step(actions.reshape(1, -1), self.control_every)
-        obs, before = rows[0, 2:], self._obs
+            raise ValueError("reset() the environment before step()" if self._obs is None else
+                             "the episode has ended: reset() it first")
+        setup = self._setup
+        action = setup.actions(action, self._action_shape)
+        obs, terminated, truncated = setup.episodes.step(action, self.control_every)
+        before = cast(np.ndarray, self._obs)  # (set once an episode has started)
         self._obs = obs  # stepped: a hook that raises below leaves the env where the episode is
         self._decisions += 1
-        self._ended = bool(terminated[0] or truncated[0])
-        reward = float(self._setup.rewards(before[None], actions[None], obs[None])[0])
-        hooked = not terminated[0] and bool(self._setup.terminations(obs[None])[0])
-        ended_by = _ended_by(bool(terminated[0]), bool(truncated[0]), self._decisions, self.max_episode_steps, hooked)
+        warned, at_length = bool(terminated[0]), bool(truncated[0])
+        self._ended = warned or at_length
+        reward = setup.reward_of_one(before, action, obs)
+        hooked = setup.terminates and not warned and bool(setup.terminations(obs)[0])
+        ended_by = _ended_by(warned, at_length, self._decisions, self.max_episode_steps, hooked)
         self._ended = ended_by is not None
         terminal = ended_by in _TERMINAL_ENDS
-        return obs.copy(), reward, terminal, self._ended and not terminal, self._setup.info(0, ended_by)
+        return obs[0].copy(), reward, terminal, self._ended and not terminal, setup.info(0, ended_by, warned)
 
     def render(self) -> Optional[np.ndarray]:
         """The episode's current state as a picture (render_mode "rgb_array"
@@ -235,7 +237,7 @@ class ScenarioVectorEnv(VectorEnv):
         else:
             rng = copy.deepcopy(rng)  # kept only if the reset succeeds
         episode_seed = _episode_seed(rng, seed)
-        obs = self._setup.episodes.reset(i, episode_seed, start)[2:]
+        obs = self._setup.episodes.reset(i, episode_seed, start)
         self._rngs[i] = rng
         self._decisions[i], self._ended[i] = 0, False
         info = self._setup.info(i)
@@ -290,33 +292,45 @@ class ScenarioVectorEnv(VectorEnv):
         for i in np.flatnonzero(resetting):
             self._obs[i] = self._reset_one(int(i), None, infos)
         active = ~resetting
-        rows, terminated, truncated = self._setup.episodes.step(values, self.control_every, active.astype(np.uint8),
-                                                                self._threads)
-        obs = rows[:, 2:]
+        mask = None if not resetting.any() else active.astype(np.uint8)
+        obs, terminated, truncated = self._setup.episodes.step(values, self.control_every, mask, self._threads)
         obs[resetting] = self._obs[resetting]
         before, self._obs = self._obs, obs  # stepped: a hook that raises below leaves the envs where they are
         self._decisions[active] += 1
-        terminated = terminated.astype(bool) & active
-        truncated = truncated.astype(bool) & active
+        terminated &= active
+        truncated &= active
         self._ended |= terminated | truncated
+        setup = self._setup
         rewards = np.zeros(self.num_envs)
         hooked = np.zeros(self.num_envs, dtype=bool)
-        if active.any():
-            rewards[active] = self._setup.rewards(before[active], values[active], obs[active])
-            hooked[active] = self._setup.terminations(obs[active])
-        for i in np.flatnonzero(active):
+        if active.all():
+            rewards = setup.rewards(before, values, obs)
+            if setup.terminates:
+                hooked = setup.terminations(obs)
+        elif active.any():
+            rewards[active] = setup.rewards(before[active], values[active], obs[active])
+            if setup.terminates:
+                hooked[active] = setup.terminations(obs[active])
+        ending = terminated | truncated | hooked
+        if self.max_episode_steps is not None:
+            ending |= active & (self._decisions >= self.max_episode_steps)
+        for i in np.flatnonzero(ending):  # each ended episode's info says why
             ended_by = _ended_by(bool(terminated[i]), bool(truncated[i]), int(self._decisions[i]),
                                  self.max_episode_steps, bool(hooked[i]))
-            info = self._setup.info(int(i), ended_by)
-            if ended_by is not None:
-                terminated[i] = ended_by in _TERMINAL_ENDS
-                truncated[i] = not terminated[i]
-                self._ended[i] = True
-                if self.autoreset_mode == AutoresetMode.SAME_STEP:
-                    self._add_info(infos, {"final_obs": obs[i].copy(), "final_info": info}, int(i))
-                    obs[i] = self._reset_one(int(i), None, infos)
-                    continue
-            self._add_info(infos, info, int(i))
+            info = setup.info(int(i), ended_by, bool(terminated[i]))
+            terminated[i] = ended_by in _TERMINAL_ENDS
+            truncated[i] = not terminated[i]
+            self._ended[i] = True
+            if self.autoreset_mode == AutoresetMode.SAME_STEP:
+                self._add_info(infos, {"final_obs": obs[i].copy(), "final_info": info}, int(i))
+                obs[i] = self._reset_one(int(i), None, infos)
+            else:
+                self._add_info(infos, info, int(i))
+        # Every env stepped or was reset: each has its step and time (as
+        # _add_info would lay them out, env by env).
+        steps, times = setup.episodes.progress()
+        everyone = np.ones(self.num_envs, dtype=bool)
+        infos.update({"step": steps, "_step": everyone, "time": times, "_time": everyone.copy()})
         return obs.copy(), rewards, terminated, truncated, infos
 
     def render(self) -> Optional[Tuple[np.ndarray, ...]]:
