@@ -12,8 +12,11 @@
 #include <system_error>
 #include <thread>
 
+#include <unistd.h>
+
 #include "chapter_detail.hpp"
 #include "run_detail.hpp"
+#include "worker_pool.hpp"
 #include "simloop/errors.hpp"
 
 namespace simloop {
@@ -33,6 +36,100 @@ std::thread start_thread(const std::function<void()>& work) {
 }  // namespace
 
 void detail::limit_thread_starts_for_testing(int threads) noexcept { g_thread_starts_left.store(threads); }
+
+namespace {
+// How long a pool's thread watches for the next round, and the calling
+// thread for the round's end, before sleeping: about what a vector env's
+// step of a few episodes takes.
+constexpr std::chrono::microseconds kWatch{200};
+
+// Watches `ready` for up to kWatch; true once it holds.
+template <class Ready>
+bool watch(Ready&& ready) {
+  const auto until = std::chrono::steady_clock::now() + kWatch;
+  while (!ready()) {
+    if (std::chrono::steady_clock::now() >= until) return false;
+#if defined(__x86_64__) || defined(__i386__)
+    __builtin_ia32_pause();
+#endif
+  }
+  return true;
+}
+}  // namespace
+
+detail::WorkerPool::~WorkerPool() {
+  State& s = *state_;
+  if (s.threads.empty()) return;
+  if (s.process != getpid()) {  // a forked child: the threads are the parent's (see start_round)
+    static_cast<void>(state_.release());
+    return;
+  }
+  {
+    const std::lock_guard<std::mutex> lock(s.mutex);
+    s.stopping.store(true);
+  }
+  s.wake.notify_all();
+  for (std::thread& t : s.threads) t.join();
+}
+
+void detail::WorkerPool::serve(State& s, int worker) {
+  std::uint64_t seen = 0;
+  for (;;) {
+    const auto next = [&] { return s.stopping.load() || s.round.load(std::memory_order_acquire) != seen; };
+    if (!watch(next)) {
+      std::unique_lock<std::mutex> lock(s.mutex);
+      s.wake.wait(lock, next);
+    }
+    if (s.stopping.load()) return;
+    seen = s.round.load(std::memory_order_acquire);
+    if (worker > s.helpers) continue;
+    (*s.task)(worker);
+    if (s.running.fetch_sub(1, std::memory_order_acq_rel) == 1) {
+      const std::lock_guard<std::mutex> lock(s.mutex);
+      s.done.notify_all();
+    }
+  }
+}
+
+int detail::WorkerPool::start_round(int helpers, const std::function<void(int worker)>& task) {
+  if (state_->process != getpid() && !state_->threads.empty()) {
+    // Forked: the threads are the parent's. Their bookkeeping (its mutex
+    // perhaps held at the fork) is left as it is, never used again.
+    static_cast<void>(state_.release());
+    state_ = std::make_unique<State>();
+  }
+  State& s = *state_;
+  s.process = getpid();
+  while (static_cast<int>(s.threads.size()) < helpers) {
+    const int worker = static_cast<int>(s.threads.size()) + 1;
+    try {
+      s.threads.push_back(start_thread([&s, worker] { serve(s, worker); }));
+    } catch (const std::system_error&) {
+      break;  // as many as could be had
+    }
+  }
+  s.task = &task;
+  s.helpers = std::min(helpers, static_cast<int>(s.threads.size()));
+  s.running.store(s.helpers);
+  {
+    const std::lock_guard<std::mutex> lock(s.mutex);  // (a thread going to sleep sees it)
+    s.round.fetch_add(1, std::memory_order_release);
+  }
+  s.wake.notify_all();
+  return s.helpers;
+}
+
+void detail::WorkerPool::wait_round(const std::function<void()>& poll) {
+  State& s = *state_;
+  const auto finished = [&] { return s.running.load(std::memory_order_acquire) == 0; };
+  if (watch(finished)) return;
+  std::unique_lock<std::mutex> lock(s.mutex);
+  while (!s.done.wait_for(lock, std::chrono::milliseconds(5), finished)) {
+    lock.unlock();
+    poll();
+    lock.lock();
+  }
+}
 
 void detail::check_threads(int threads) {
   if (threads < 0) {
@@ -58,7 +155,8 @@ void detail::run_jobs(const Model& model, std::size_t jobs, int threads, const s
 }
 
 void detail::run_jobs(std::size_t jobs, int threads, const std::vector<std::int64_t>& steps, RunControl* control,
-                      const std::function<void(std::size_t job, int worker, RunControl& control)>& job) {
+                      const std::function<void(std::size_t job, int worker, RunControl& control)>& job,
+                      WorkerPool* kept) {
   const int workers = batch_workers(threads, jobs);
   RunControl own_control;
   RunControl& ctl = control ? *control : own_control;
@@ -93,33 +191,43 @@ void detail::run_jobs(std::size_t jobs, int threads, const std::vector<std::int6
       finished.notify_all();
     }
   };
-  std::vector<std::thread> pool;
-  pool.reserve(static_cast<std::size_t>(std::max(workers - 1, 0)));
-  running.store(1);
-  for (int w = 1; w < workers; ++w) {
-    running.fetch_add(1);
-    try {
-      pool.push_back(start_thread([&work, w] { work(w); }));
-    } catch (const std::system_error&) {
-      // No more threads to be had (a process limit): the ones running share
-      // the work, which gives the same results with fewer workers.
-      running.fetch_sub(1);
-      break;
-    }
-  }
-  work(0);  // the calling thread is worker 0
-  // Worker 0 is the control's thread: while the others finish, it keeps
-  // polling, so a stop still takes effect promptly.
-  while (running.load() > 0) {
+  // Worker 0 is the calling thread and the control's: while the others
+  // finish, it keeps polling, so a stop still takes effect promptly.
+  const auto poll = [&ctl] {
     try {
       ctl.check();
     } catch (const Interrupted&) {
       // Every worker sees the stop at its next chunk; wait for them.
     }
-    std::unique_lock<std::mutex> lock(finished_mutex);
-    finished.wait_for(lock, std::chrono::milliseconds(5), [&] { return running.load() == 0; });
+  };
+  if (kept != nullptr && workers > 1) {
+    const std::function<void(int)> helper = [&work](int w) { work(w); };
+    running.store(1 + kept->start_round(workers - 1, helper));
+    work(0);
+    kept->wait_round(poll);
+  } else {
+    std::vector<std::thread> pool;
+    pool.reserve(static_cast<std::size_t>(std::max(workers - 1, 0)));
+    running.store(1);
+    for (int w = 1; w < workers; ++w) {
+      running.fetch_add(1);
+      try {
+        pool.push_back(start_thread([&work, w] { work(w); }));
+      } catch (const std::system_error&) {
+        // No more threads to be had (a process limit): the ones running share
+        // the work, which gives the same results with fewer workers.
+        running.fetch_sub(1);
+        break;
+      }
+    }
+    work(0);
+    while (running.load() > 0) {
+      poll();
+      std::unique_lock<std::mutex> lock(finished_mutex);
+      finished.wait_for(lock, std::chrono::milliseconds(5), [&] { return running.load() == 0; });
+    }
+    for (std::thread& t : pool) t.join();
   }
-  for (std::thread& t : pool) t.join();
   ctl.abandon_batch(false);
   if (ctl.stop_requested()) throw Interrupted("interrupted");
   for (const std::exception_ptr& e : errors) {

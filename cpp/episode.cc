@@ -9,6 +9,7 @@
 #include "loop.hpp"
 #include "mujoco_guard.hpp"
 #include "run_detail.hpp"
+#include "worker_pool.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/scene_params.hpp"
 #include "simloop/shove.hpp"
@@ -40,6 +41,7 @@ struct Episodes::Impl {
   std::optional<Recorder> recorder;
   std::int64_t length = 0;  // an episode's physics steps
   std::vector<Episode> episodes;
+  std::unique_ptr<detail::WorkerPool> workers = std::make_unique<detail::WorkerPool>();  // kept from step to step
 
   // The row for the state entering the episode's next step: the inputs
   // scheduled for it written, then what MuJoCo derives from the state.
@@ -164,8 +166,9 @@ void Episodes::step(const double* actions, std::size_t action_count, std::int64_
     steps[i] = std::min(every, e.schedule.steps - e.step);
   }
   // Each episode has its own Data: the pool's per-worker Data (about 1 ms to
-  // make for PushT, longer than a decision's steps) is not wanted here.
-  detail::run_jobs(count, threads, steps, control, [&](std::size_t i, int, RunControl& ctl) {
+  // make for PushT, longer than a decision's steps) is not wanted here; its
+  // threads are kept from call to call.
+  const auto job = [&](std::size_t i, int, RunControl& ctl) {
     if (steps[i] == 0) return;
     Episode& e = s.episodes[i];
     const mjModel* m = e.model.get();
@@ -191,7 +194,8 @@ void Episodes::step(const double* actions, std::size_t action_count, std::int64_
     s.observe(e, observations + i * static_cast<std::size_t>(width));
     terminated[i] = s.terminated(e);
     truncated[i] = !terminated[i] && e.step >= e.schedule.steps;
-  });
+  };
+  detail::run_jobs(count, threads, steps, control, job, s.workers.get());
 }
 
 std::int64_t Episodes::steps_taken(std::size_t i) const {

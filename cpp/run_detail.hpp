@@ -93,10 +93,14 @@ void run_jobs(const Model& model, std::size_t jobs, int threads, const std::vect
               RunControl* control,
               const std::function<void(std::size_t job, Data& data, RunControl& control)>& job);
 
-// The same pool for jobs that bring their own Data (Episodes): job(i,
-// worker, control), worker in [0, batch_workers(threads, jobs)).
+// The same for jobs that bring their own Data (Episodes): job(i, worker,
+// control), worker in [0, batch_workers(threads, jobs)); on the threads of
+// `kept` (worker_pool.hpp) when given, kept for the next call, else on
+// threads started for this call.
+class WorkerPool;
 void run_jobs(std::size_t jobs, int threads, const std::vector<std::int64_t>& steps, RunControl* control,
-              const std::function<void(std::size_t job, int worker, RunControl& control)>& job);
+              const std::function<void(std::size_t job, int worker, RunControl& control)>& job,
+              WorkerPool* kept = nullptr);
 
 // Tests only: from now on run_batch can start at most `threads` more threads
 // (as under a process limit, RLIMIT_NPROC); a negative count lifts the limit.

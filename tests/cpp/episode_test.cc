@@ -5,16 +5,22 @@
 
 #include <algorithm>
 #include <cmath>
+#include <csignal>
 #include <cstring>
 #include <limits>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
+
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include "simloop/episode.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/scenario_run.hpp"
 #include "simloop/state.hpp"
+#include "run_detail.hpp"
 
 namespace {
 
@@ -253,6 +259,58 @@ TEST(Episodes, ManyAtOnceEqualEachAloneWhateverTheThreadCount) {
       EXPECT_TRUE(same_bits(obs.data() + i * width, alone_obs[i].data(), width)) << i << ", " << threads << " threads";
     }
   }
+}
+
+TEST(Episodes, KeepTheirThreadsFromCallToCallThroughAForkAndAThreadLimit) {
+  const simloop::Scenario scenario = constant_pusht("steps = 400");
+  const simloop::Model scene = simloop::load_scene(scenario);
+  const std::size_t n = 4;
+  // Six calls at the given thread counts, then the observations.
+  const auto stepped = [&](simloop::Episodes& e, const std::vector<int>& threads) {
+    const auto width = static_cast<std::size_t>(e.width());
+    std::vector<double> obs(n * width);
+    std::vector<std::uint8_t> term(n), trunc(n);
+    for (std::size_t call = 0; call < threads.size(); ++call) {
+      std::vector<double> actions;
+      for (std::size_t i = 0; i < 2 * n; ++i) actions.push_back(std::sin(0.3 * static_cast<double>(call * 7 + i)));
+      e.step(actions.data(), actions.size(), 11, nullptr, 0, obs.data(), term.data(), trunc.data(), threads[call]);
+    }
+    return obs;
+  };
+  const auto started = [&] {
+    auto e = std::make_unique<simloop::Episodes>(scene, scenario, simloop::ScenarioConfig{}, n);
+    std::vector<double> obs(n * static_cast<std::size_t>(e->width()));
+    for (std::size_t i = 0; i < n; ++i) e->reset(i, 40 + i, obs.data() + i * static_cast<std::size_t>(e->width()));
+    return e;
+  };
+  const std::vector<double> alone = stepped(*started(), {1, 1, 1, 1, 1, 1});
+  // The kept threads grow and shrink with the count asked for.
+  auto kept = started();
+  const auto same = [](const std::vector<double>& a, const std::vector<double>& b) {
+    return a.size() == b.size() && same_bits(a.data(), b.data(), a.size());
+  };
+  EXPECT_TRUE(same(stepped(*kept, {2, 4, 1, 2, 3, 4}), alone));
+  // A forked child has none of the parent's threads: its own start.
+  const pid_t child = fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    auto again = started();
+    _exit(same(stepped(*again, {2, 2, 4, 1, 2, 2}), alone) && stepped(*kept, {2}).size() == alone.size() ? 0 : 1);
+  }
+  int status = -1;
+  for (int waited = 0; waited < 1000 && waitpid(child, &status, WNOHANG) == 0; ++waited) usleep(10000);
+  if (status == -1) {
+    kill(child, SIGKILL);
+    waitpid(child, &status, 0);
+  }
+  ASSERT_TRUE(WIFEXITED(status)) << "the forked child hung or crashed";
+  EXPECT_EQ(WEXITSTATUS(status), 0);
+  // Without threads to be had, the calling thread does it all.
+  simloop::detail::limit_thread_starts_for_testing(0);
+  auto limited = started();
+  const std::vector<double> alone_again = stepped(*limited, {2, 2, 2, 2, 2, 2});
+  simloop::detail::limit_thread_starts_for_testing(-1);
+  EXPECT_TRUE(same(alone_again, alone));
 }
 
 TEST(Episodes, InactiveOnesStayWhereTheyAre) {
