@@ -72,17 +72,16 @@ detail::WorkerPool::~WorkerPool() {
   for (std::thread& t : s.threads) t.join();
 }
 
-void detail::WorkerPool::serve(State& s, int worker) {
-  std::uint64_t seen = 0;
+void detail::WorkerPool::serve(State& s, int worker, std::uint64_t seen) {
   for (;;) {
-    const auto next = [&] { return s.stopping.load() || s.round.load(std::memory_order_acquire) != seen; };
+    const auto next = [&] { return s.stopping.load() || s.ticket.load(std::memory_order_acquire) != seen; };
     if (!watch(next)) {
       std::unique_lock<std::mutex> lock(s.mutex);
       s.wake.wait(lock, next);
     }
     if (s.stopping.load()) return;
-    seen = s.round.load(std::memory_order_acquire);
-    if (worker > s.helpers) continue;
+    seen = s.ticket.load(std::memory_order_acquire);
+    if (worker > static_cast<int>(seen & 0xffffffffu)) continue;  // not in this round
     (*s.task)(worker);
     if (s.running.fetch_sub(1, std::memory_order_acq_rel) == 1) {
       const std::lock_guard<std::mutex> lock(s.mutex);
@@ -100,23 +99,25 @@ int detail::WorkerPool::start_round(int helpers, const std::function<void(int wo
   }
   State& s = *state_;
   s.process = getpid();
+  const std::uint64_t last = s.ticket.load();
+  s.threads.reserve(static_cast<std::size_t>(std::max(helpers, 0)));
   while (static_cast<int>(s.threads.size()) < helpers) {
     const int worker = static_cast<int>(s.threads.size()) + 1;
     try {
-      s.threads.push_back(start_thread([&s, worker] { serve(s, worker); }));
+      s.threads.push_back(start_thread([&s, worker, last] { serve(s, worker, last); }));
     } catch (const std::system_error&) {
       break;  // as many as could be had
     }
   }
+  const int taking_part = std::min(helpers, static_cast<int>(s.threads.size()));
   s.task = &task;
-  s.helpers = std::min(helpers, static_cast<int>(s.threads.size()));
-  s.running.store(s.helpers);
+  s.running.store(taking_part);
   {
     const std::lock_guard<std::mutex> lock(s.mutex);  // (a thread going to sleep sees it)
-    s.round.fetch_add(1, std::memory_order_release);
+    s.ticket.store(((last >> 32) + 1) << 32 | static_cast<std::uint32_t>(taking_part), std::memory_order_release);
   }
   s.wake.notify_all();
-  return s.helpers;
+  return taking_part;
 }
 
 void detail::WorkerPool::wait_round(const std::function<void()>& poll) {

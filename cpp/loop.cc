@@ -22,7 +22,8 @@ MujocoError stepping_error(const mjModel* m, std::int64_t from, std::int64_t to,
 DecisionStep::DecisionStep(const mjModel* m, const RowRecorder& recorder)
     : nq_(compat::as_int(m->nq)),
       nv_(compat::as_int(m->nv)),
-      whole_forward_(recorder.reads_acceleration_stage() || m->opt.integrator == mjINT_RK4),
+      whole_forward_(recorder.reads_acceleration_stage() || m->opt.integrator == mjINT_RK4 ||
+                     compat::has_plugins(m)),
       entering_(static_cast<std::size_t>(nq_ + nv_)),
       stepped_(entering_.size()) {}
 
@@ -40,7 +41,7 @@ void DecisionStep::observe(const mjModel* m, mjData* d) {
   begun_ = false;
   take_state(entering_, d);
   const bool callbacks = mjcb_control || mjcb_passive || mjcb_sensor || mjcb_act_dyn || mjcb_act_gain ||
-                         mjcb_act_bias;
+                         mjcb_act_bias || mjcb_contactfilter;
   const bool bad = std::any_of(entering_.begin(), entering_.end(), [](double x) { return mju_isBad(x) != 0; });
   if (whole_forward_ || callbacks || bad) {
     forward_keeping_state(m, d);

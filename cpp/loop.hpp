@@ -98,8 +98,9 @@ class StepObserver {
 // there): what it wrote is held aside until mj_step2, so a row still reads
 // the state as it entered the step. A whole forward pass remains for what
 // the first half cannot give or would change: acceleration-stage sensors,
-// RK4, a callback (it would see the ctrl before the decision), a bad qpos
-// or qvel (mj_step1 would reset it where mj_step does).
+// RK4, a callback (it would see the ctrl before the decision), plugins (an
+// actuator plugin's state would advance twice), a bad qpos or qvel (mj_step1
+// would reset it where mj_step does).
 class DecisionStep {
  public:
   DecisionStep(const mjModel* m, const RowRecorder& recorder);
@@ -126,7 +127,7 @@ class DecisionStep {
   void take_state(std::vector<double>& into, const mjData* d) const;
   void put_state(const std::vector<double>& from, mjData* d) const;
   int nq_, nv_;
-  bool whole_forward_;            // the recorder reads the acceleration stage, or RK4
+  bool whole_forward_;            // the recorder reads the acceleration stage, RK4, plugins
   bool begun_ = false;            // mj_step1 has run on the state entering the next step
   bool held_ = false;             // mj_step1 rewrote qpos or qvel: stepped_ holds what it wrote
   std::vector<double> entering_;  // qpos and qvel as they entered the step

@@ -112,5 +112,15 @@ bool each_data_array(const mjModel* m, const mjData* d, const std::function<bool
 // folder), once per process, so scenes that use MuJoCo's first-party
 // plugins (elasticity, sdf, actuator, sensor) load. Nothing on 2.2.
 void load_plugins_once();
+// Whether the model has plugin instances (their state may change at each
+// call of theirs). None on 2.2.
+[[nodiscard]] inline bool has_plugins(const mjModel* m) noexcept {
+#if mjVERSION_HEADER >= 300
+  return m->nplugin > 0;
+#else
+  (void)m;
+  return false;
+#endif
+}
 
 }  // namespace simloop::detail::compat

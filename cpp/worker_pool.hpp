@@ -41,17 +41,18 @@ class WorkerPool {
 
  private:
   struct State {
-    std::mutex mutex;  // to sleep on wake and done; round only grows under it
+    std::mutex mutex;  // to sleep on wake and done; the ticket changes under it
     std::condition_variable wake, done;
     std::vector<std::thread> threads;  // thread t is worker t + 1
-    const std::function<void(int)>* task = nullptr;  // set before round grows
-    int helpers = 0;  // workers 1 .. helpers take part in this round
-    std::atomic<std::uint64_t> round{0};
+    const std::function<void(int)>* task = nullptr;  // set before the ticket changes
+    // The round (high 32 bits) and its helpers (low: workers 1 .. helpers
+    // take part), published together.
+    std::atomic<std::uint64_t> ticket{0};
     std::atomic<int> running{0};
     std::atomic<bool> stopping{false};
     pid_t process = 0;  // where the threads run
   };
-  static void serve(State& state, int worker);
+  static void serve(State& state, int worker, std::uint64_t seen);
   std::unique_ptr<State> state_ = std::make_unique<State>();
 };
 

@@ -132,8 +132,8 @@ class _Setup:
         """The rewards of a batch of steps: before, after (n, width), actions (n, nu)."""
         if self.reward is None:
             return np.zeros(len(after))
-        if _is_batched(self.reward):
-            return _batch_of("reward", self.reward(before, actions, after), len(after), np.float64)
+        if _is_batched(self.reward):  # (a copy: the function may return a view of its arguments)
+            return np.array(_batch_of("reward", self.reward(before, actions, after), len(after)), dtype=np.float64)
         return np.array([float(self.reward(b, a, o)) for b, a, o in zip(before, actions, after)])
 
     def reward_of_one(self, before: np.ndarray, action: np.ndarray, after: np.ndarray) -> float:
@@ -161,11 +161,9 @@ def _sequence_of(name: str, value: object) -> List[Any]:
     return list(value)
 
 
-def _batch_of(name: str, values: object, n: int, dtype: Optional[type] = None) -> np.ndarray:
-    """A batched function's result: n values."""
-    if type(values) is np.ndarray and values.shape == (n,) and (dtype is None or values.dtype == dtype):
-        return values  # (as a vectorised function returns them)
-    out = np.asarray(values, dtype=dtype)
+def _batch_of(name: str, values: object, n: int) -> np.ndarray:
+    """A batched function's result: n values (not copied)."""
+    out = np.asarray(values)
     if out.shape != (n,):
         raise ValueError(f"a batched {name} must return {n} values (one per episode), got shape {out.shape}")
     return out

@@ -284,6 +284,9 @@ class ScenarioVectorEnv(VectorEnv):
         if self._obs is None:
             raise ValueError("reset() the environment before step()")
         values = self._setup.actions(actions, (self.num_envs, self._setup.nu))
+        if not np.isfinite(values).all():  # (before any autoreset: a refused step changes nothing)
+            env, index = np.argwhere(~np.isfinite(values))[0]
+            raise ValueError(f"env {env}: action {index} is not finite, got {values[env, index]!r}")
         infos: Dict[str, Any] = {}
         if self.autoreset_mode == AutoresetMode.DISABLED and self._ended.any():
             raise ValueError(f"env {int(np.flatnonzero(self._ended)[0])} has ended: reset it first "

@@ -167,6 +167,18 @@ TEST(DecisionStep, LeavesABadStateAndACallbackToTheWholeStep) {
   EXPECT_FALSE(decision.begun());
 }
 
+#if mjVERSION_HEADER >= 300
+TEST(DecisionStep, TakesAWholeForwardPassWithPlugins) {
+  // An actuator plugin computes in mj_fwdActuation: the observation's extra
+  // call must not be the one that counts.
+  std::string xml = scene_text("plugin_pid.xml");
+  xml.replace(xml.find("<config key=\"kd\""), 0, "<config key=\"ki\" value=\"10\"/>\n        ");
+  xml.replace(xml.find("joint=\"hinge\"/>"), 0, "actdim=\"1\" ");  // (its integral is an activation)
+  expect_the_same_run(simloop::Model::from_xml_string(xml), "[record]\njoints = [\"hinge\"]\nactuators = [\"hold\"]\n",
+                      false, 200, 5);
+}
+#endif
+
 #if mjVERSION_HEADER >= 340
 TEST(DecisionStep, FollowsTreesThatFallAsleep) {
   const simloop::Model scene = simloop::Model::from_file(std::string(SIMLOOP_TEST_SCENES) + "/sleeping_boxes.xml");

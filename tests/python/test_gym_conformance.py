@@ -111,6 +111,35 @@ def test_stepping_an_ended_env_without_autoreset_is_refused():
     venv.step(np.zeros((2, 2)))
 
 
+def test_a_refused_step_changes_nothing_even_with_an_autoreset_due():
+    def run(refuse_first):
+        venv = ScenarioVectorEnv(PUSHT_SCENARIO, 2, max_episode_steps=1)
+        venv.reset(seed=3)
+        venv.step(np.zeros((2, 2)))  # both end: the next step resets them
+        if refuse_first:
+            with pytest.raises(ValueError, match=r"env 1: action 0 is not finite"):
+                venv.step(np.array([[0.0, 0.0], [np.nan, 0.0]]))
+        return venv.step(np.full((2, 2), 0.5))
+
+    refused, clean = run(True), run(False)
+    np.testing.assert_array_equal(refused[0], clean[0])
+    assert refused[4]["seed"].tolist() == clean[4]["seed"].tolist()
+
+
+@pytest.mark.parametrize("mode", ["NextStep", "SameStep"])
+def test_rewards_handed_out_stay_as_they_were(mode):
+    # A batched reward may return a view of its arguments (here the next
+    # observations, which the env keeps and writes into on later steps).
+    first_column = simloop.gym.batched(lambda obs, action, next_obs: next_obs[:, 0])
+    venv = ScenarioVectorEnv(PUSHT_SCENARIO, 2, reward=first_column, max_episode_steps=2, autoreset_mode=mode)
+    venv.reset(seed=1)
+    handed_out = [venv.step(np.full((2, 2), 0.3))[1] for _ in range(5)]
+    kept = [r.copy() for r in handed_out]
+    venv.step(np.full((2, 2), 0.3))
+    for before, now in zip(kept, handed_out):
+        np.testing.assert_array_equal(now, before)
+
+
 def test_make_vec_takes_the_keywords_gymnasium_passes():
     envs = gymnasium.make_vec("simloop/PushT-v0", num_envs=2, max_episode_steps=3)
     envs.reset(seed=0)
