@@ -100,7 +100,9 @@ class StepObserver {
 // the first half cannot give or would change: acceleration-stage sensors,
 // RK4, a callback (it would see the ctrl before the decision), plugins (an
 // actuator plugin's state would advance twice), a bad qpos or qvel (mj_step1
-// would reset it where mj_step does).
+// would reset it where mj_step does). (A warning MuJoCo raises deriving the
+// state, a full contact buffer say, counts once a step on the first way, as
+// in an open-loop run; the whole forward pass raises it once more.)
 class DecisionStep {
  public:
   DecisionStep(const mjModel* m, const RowRecorder& recorder);
@@ -118,8 +120,6 @@ class DecisionStep {
     if (held_) put_state(stepped_, d);
     mj_step2(m, d);
   }
-  // The state was replaced (a reset): nothing begun continues.
-  void forget() noexcept { begun_ = false; }
   // Whether the last observe() began the next step (mj_step1).
   [[nodiscard]] bool begun() const noexcept { return begun_; }
 
