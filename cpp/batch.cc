@@ -165,12 +165,7 @@ void detail::run_jobs(std::size_t jobs, int threads, const std::vector<std::int6
   std::vector<std::exception_ptr> errors(jobs);
   // Workers stop taking jobs once any job failed or a stop was requested.
   std::atomic<std::size_t> next{0};
-  std::atomic<int> running{0};
-  // The last worker to finish wakes worker 0 at once: a short call (a vector
-  // environment's step, a few ms) would otherwise wait out a poll interval.
-  std::mutex finished_mutex;
-  std::condition_variable finished;
-  const auto work = [&](int worker) noexcept {
+  const std::function<void(int)> work = [&](int worker) noexcept {
     for (std::size_t i; (i = next.fetch_add(1)) < jobs;) {
       try {
         job(i, worker, ctl);
@@ -187,48 +182,23 @@ void detail::run_jobs(std::size_t jobs, int threads, const std::vector<std::int6
         ctl.abandon_batch(true);
       }
     }
-    if (running.fetch_sub(1) == 1) {
-      const std::lock_guard<std::mutex> lock(finished_mutex);
-      finished.notify_all();
-    }
   };
-  // Worker 0 is the calling thread and the control's: while the others
-  // finish, it keeps polling, so a stop still takes effect promptly.
-  const auto poll = [&ctl] {
+  // The caller's kept threads, or threads for this call only (joined on
+  // return). If fewer can be started than asked (a process limit), the ones
+  // running share the work, which gives the same results.
+  WorkerPool for_this_call;
+  WorkerPool& pool = kept != nullptr ? *kept : for_this_call;
+  if (workers > 1) pool.start_round(workers - 1, work);
+  work(0);  // the calling thread is worker 0
+  // Worker 0 is the control's thread: while the others finish, it keeps
+  // polling, so a stop still takes effect promptly.
+  pool.wait_round([&ctl] {
     try {
       ctl.check();
     } catch (const Interrupted&) {
       // Every worker sees the stop at its next chunk; wait for them.
     }
-  };
-  if (kept != nullptr && workers > 1) {
-    const std::function<void(int)> helper = [&work](int w) { work(w); };
-    running.store(1 + kept->start_round(workers - 1, helper));
-    work(0);
-    kept->wait_round(poll);
-  } else {
-    std::vector<std::thread> pool;
-    pool.reserve(static_cast<std::size_t>(std::max(workers - 1, 0)));
-    running.store(1);
-    for (int w = 1; w < workers; ++w) {
-      running.fetch_add(1);
-      try {
-        pool.push_back(start_thread([&work, w] { work(w); }));
-      } catch (const std::system_error&) {
-        // No more threads to be had (a process limit): the ones running share
-        // the work, which gives the same results with fewer workers.
-        running.fetch_sub(1);
-        break;
-      }
-    }
-    work(0);
-    while (running.load() > 0) {
-      poll();
-      std::unique_lock<std::mutex> lock(finished_mutex);
-      finished.wait_for(lock, std::chrono::milliseconds(5), [&] { return running.load() == 0; });
-    }
-    for (std::thread& t : pool) t.join();
-  }
+  });
   ctl.abandon_batch(false);
   if (ctl.stop_requested()) throw Interrupted("interrupted");
   for (const std::exception_ptr& e : errors) {

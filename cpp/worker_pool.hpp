@@ -2,13 +2,13 @@
 //
 // A vector environment steps its episodes a few hundred microseconds at a
 // time; starting and joining a thread for each call costs tens of
-// microseconds, a good part of that. Episodes keep a pool instead: between
-// rounds its threads watch for the next one a little while (waking a thread
-// that sleeps, on an idle CPU, costs tens of microseconds again), then sleep
-// on a condition variable. One round at a time
-// (the owner's calls are serialised). A process forked from one whose pool
-// had threads has none of them: the pool then leaves their bookkeeping
-// behind, untouched, and starts afresh.
+// microseconds, a good part of that. Episodes keep a pool instead (a batch
+// makes one for its call): between rounds its threads watch for the next
+// one a little while (waking a thread that sleeps, on an idle CPU, costs
+// tens of microseconds again), then sleep on a condition variable. One round
+// at a time (the owner's calls are serialised). A process forked from one
+// whose pool had threads has none of them: the pool then leaves their
+// bookkeeping behind, untouched, and starts afresh.
 #pragma once
 
 #include <atomic>
