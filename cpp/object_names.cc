@@ -57,11 +57,9 @@ const Kind& kind_of(mjtObj type) {
   throw InvalidArgument("objects of MuJoCo type " + std::to_string(type) + " are not looked up by name");
 }
 
-int count_of(const mjModel* m, mjtObj type) { return kind_of(type).count(m); }
-
 // "the scene's joints: hip, knee (and 2 unnamed)": what a lookup could have named.
 std::string listing(const mjModel* m, mjtObj type, std::vector<std::string>& names) {
-  const int count = count_of(m, type);
+  const int count = object_count(m, type);
   int unnamed = 0;
   for (int i = 0; i < count; ++i) {
     const char* name = mj_id2name(m, type, i);
@@ -107,10 +105,10 @@ mjtObj object_type_counted_by(std::string_view size) noexcept {
   return mjOBJ_UNKNOWN;
 }
 
-int object_count(const mjModel* m, mjtObj type) { return count_of(m, type); }
+int object_count(const mjModel* m, mjtObj type) { return kind_of(type).count(m); }
 
 int object_id(const mjModel* m, mjtObj type, const std::string& name) {
-  (void)count_of(m, type);  // a type we look up
+  (void)object_count(m, type);  // a type we look up
   const int found = mj_name2id(m, type, name.c_str());
   if (found >= 0) return found;
   std::vector<std::string> names;
@@ -121,7 +119,7 @@ int object_id(const mjModel* m, mjtObj type, const std::string& name) {
 }
 
 int checked_object_index(const mjModel* m, mjtObj type, long long index) {
-  const int count = count_of(m, type);
+  const int count = object_count(m, type);
   if (index >= 0 && index < count) return static_cast<int>(index);
   std::vector<std::string> names;
   throw InvalidArgument(std::string(kind_of(type).one) + " index " + std::to_string(index) +

@@ -230,7 +230,7 @@ def _main(argv: Optional[List[str]]) -> int:
 
 
 class _Drawings:
-    """Several drawings of one run (the recording and the video), fed alike."""
+    """The drawings of one run (the recording, the video, or both), fed alike."""
 
     def __init__(self, drawings: List[Any]) -> None:
         self.drawings = drawings
@@ -332,7 +332,7 @@ class _Host:
             for drawing in drawings:
                 drawing.close()
             raise
-        return (drawings[0] if len(drawings) == 1 else _Drawings(drawings)), "\n".join(lines)
+        return _Drawings(drawings), "\n".join(lines)
 
     def plot(self, out: str, what: str) -> str:
         """--plot: out/<what>.png drawn here, from the CSV just written."""
