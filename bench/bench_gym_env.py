@@ -4,14 +4,16 @@
 The PushT scene (python/simloop/scenes/pusht.xml), a decision every --every
 physics steps (1 and 10 by default), random actions drawn up front, and the
 same reward in each: the T-block's progress in x minus an action cost.
-Three pairs, each timed side by side on the same MuJoCo (run it in the PyPI
+Four pairs, each timed side by side on the same MuJoCo (run it in the PyPI
 build's venv: the MujocoEnv needs the mujoco package):
 
 - single env, a vectorised reward: simloop.gym.ScenarioEnv with the reward
   as a @batched function of its (1, n) observation arrays (numpy over a
   batch of one), against a minimal gymnasium MujocoEnv subclass
   (observation qpos and qvel, no rendering) whose step computes the reward
-  from data.qpos with Python floats;
+  from data.qpos with Python floats, and against the same MujocoEnv calling
+  the same numpy reward on one-row arrays of its qpos (what the vectorised
+  reward costs in itself, apart from the layer);
 - single env, a per-step reward: the same, simloop's reward a plain
   function of one step's arrays (Python floats, as MujocoEnv's);
 - --envs episodes, a vectorised reward: ScenarioVectorEnv (one thread) with
@@ -46,7 +48,8 @@ COST = 0.01  # the reward's weight on the action's size
 class PushTMujocoEnv(MujocoEnv):
     """The same scene as a Gymnasium MujocoEnv: observation qpos and qvel."""
 
-    def __init__(self, frame_skip: int) -> None:
+    def __init__(self, frame_skip: int, batched_reward=None) -> None:
+        self.batched_reward = batched_reward  # the same numpy reward, over one-row arrays of qpos
         # MujocoEnv checks that render_fps is 1 / (timestep x frame_skip).
         fps = int(round(1.0 / (simloop.Model.from_file(SCENE).timestep * frame_skip)))
         self.metadata = {"render_modes": ["human", "rgb_array", "depth_array"], "render_fps": fps}
@@ -54,6 +57,11 @@ class PushTMujocoEnv(MujocoEnv):
         super().__init__(SCENE, frame_skip, observation_space=observation)
 
     def step(self, action):
+        if self.batched_reward is not None:
+            before = self.data.qpos[None].copy()
+            self.do_simulation(action, self.frame_skip)
+            reward = float(self.batched_reward(before, action[None], self.data.qpos[None])[0])
+            return self._get_obs(), reward, False, False, {}
         x_before = self.data.qpos[0]
         self.do_simulation(action, self.frame_skip)
         reward = float(self.data.qpos[0] - x_before) - COST * float(action @ action)
@@ -134,12 +142,16 @@ def main() -> int:
         target = 1.15 if every == 1 else 1.05
         print(f"  {every} physics step{'s' if every > 1 else ''} per action:")
         actions = rng.uniform(-1, 1, size=(args.calls, 2))
-        theirs = PushTMujocoEnv(every)
-        for label, reward, goal in (("one env, a vectorised (@batched) reward", vectorised, target),
-                                    ("one env, a per-step reward", per_step, None)):
+        scalar, same_numpy = PushTMujocoEnv(every), PushTMujocoEnv(every, batched(
+            lambda o, a, p: p[:, 0] - o[:, 0] - COST * np.einsum("ij,ij->i", a, a)))  # (qpos[0] is tblock_x)
+        for label, reward, theirs, goal in (
+                ("one env, a vectorised (@batched) reward; MujocoEnv's in Python floats", vectorised, scalar, target),
+                ("one env, a vectorised (@batched) reward; MujocoEnv's the same numpy on one-row arrays",
+                 vectorised, same_numpy, target),
+                ("one env, a per-step reward", per_step, scalar, None)):
             ours = ScenarioEnv(PUSHT_SCENARIO, control_every=every, steps=length, reward=reward)
             compare(label, ours, theirs, actions, args.rounds, 1, goal)
-        theirs.close()
+        scalar.close(), same_numpy.close()
         many = MujocoEnvs(args.envs, every)
         vector = ScenarioVectorEnv(PUSHT_SCENARIO, args.envs, control_every=every, steps=length, reward=vectorised,
                                    threads=1)

@@ -16,6 +16,7 @@ in docs/developing.md's layout exists.
 
 from __future__ import annotations
 
+import importlib.util
 import os
 import re
 import shlex
@@ -37,7 +38,9 @@ RUNNABLE = ("python", "sh", "console")
 NOT_RUN = "not run by tests"
 PYPI_ONLY = "run by tests only on the PyPI build"
 WORKERS_ONLY = "run by tests only where worker processes can start"
-MARKER = re.compile(r"^<!--\s*(" + "|".join(map(re.escape, (NOT_RUN, PYPI_ONLY, WORKERS_ONLY)))
+# stable-baselines3 brings torch (gigabytes): not among the test extras.
+SB3_ONLY = "run by tests only where stable-baselines3 is installed"
+MARKER = re.compile(r"^<!--\s*(" + "|".join(map(re.escape, (NOT_RUN, PYPI_ONLY, WORKERS_ONLY, SB3_ONLY)))
                     + r")\s*:\s*(\S.*?)\s*-->$")
 SHELL_SYNTAX = {"&&", "||", "|", ";", ">", ">>", "<", "2>", "2>&1", "&"}
 TIMEOUT = 120
@@ -160,6 +163,8 @@ def skip_reason(block: Block) -> Optional[str]:
         return f"{block.where}: on the PyPI build only: {reason}"
     if kind == WORKERS_ONLY and NO_WORKER_PROCESSES:
         return f"{block.where}: {NO_WORKER_PROCESSES}"
+    if kind == SB3_ONLY and importlib.util.find_spec("stable_baselines3") is None:
+        return f"{block.where}: stable-baselines3 is not installed ({reason})"
     return None
 
 
