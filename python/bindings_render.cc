@@ -18,18 +18,6 @@ namespace {
 
 using namespace pybind11::literals;
 
-simloop::CameraView view_of(const std::optional<std::string>& camera, const std::optional<std::string>& track,
-                            std::optional<double> distance, std::optional<double> azimuth,
-                            std::optional<double> elevation) {
-  simloop::CameraView view;
-  view.camera = camera.value_or("");
-  view.track = track.value_or("");
-  view.distance = distance;
-  view.azimuth = azimuth;
-  view.elevation = elevation;
-  return view;
-}
-
 // One picture of `d` (a state of `model`): (height, width, 3) uint8, or
 // (height, width) float32 metres with depth. The GIL is released while
 // MuJoCo draws; the caller holds whatever lock keeps `d` still.
@@ -54,14 +42,14 @@ py::array picture(simloop::Renderer& r, const simloop::Model& model, const mjDat
 
 void bind_render(py::module_& m) {
   m.attr("MAX_PICTURE_SIZE") = simloop::Renderer::kMaxSize;
-  m.def(
-      "check_camera_view",
-      [](const simloop::Model& model, const std::optional<std::string>& camera, const std::optional<std::string>& track,
-         std::optional<double> distance, std::optional<double> azimuth, std::optional<double> elevation) {
-        simloop::check_camera_view(model, view_of(camera, track, distance, azimuth, elevation));
-      },
-      "model"_a, "camera"_a, "track"_a, "distance"_a, "azimuth"_a, "elevation"_a,
-      "What a picture checks of its view, without drawing one.");
+  py::class_<simloop::CameraView>(m, "CameraView", "Where a picture is taken from (include/simloop/render.hpp).")
+      .def(py::init([](const std::optional<std::string>& camera, const std::optional<std::string>& track,
+                       std::optional<double> distance, std::optional<double> azimuth, std::optional<double> elevation) {
+             return simloop::CameraView{camera.value_or(""), track.value_or(""), distance, azimuth, elevation};
+           }),
+           "camera"_a, "track"_a, "distance"_a, "azimuth"_a, "elevation"_a);
+  m.def("check_camera_view", &simloop::check_camera_view, "model"_a, "view"_a,
+        "What a picture checks of its view, without drawing one.");
   py::class_<simloop::Renderer>(m, "Renderer", "Offscreen pictures of a scene's states (MuJoCo's renderer on EGL).")
       .def(py::init([](const simloop::Model& model, int width, int height) {
              return naming_failures("Renderer",
@@ -72,24 +60,18 @@ void bind_render(py::module_& m) {
       .def_property_readonly("height", &simloop::Renderer::height)
       .def(
           "render_sim",
-          [](simloop::Renderer& r, PySim& s, const std::optional<std::string>& camera,
-             const std::optional<std::string>& track, std::optional<double> distance, std::optional<double> azimuth,
-             std::optional<double> elevation, bool depth) {
+          [](simloop::Renderer& r, PySim& s, const simloop::CameraView& view, bool depth) {
             SimLock lock(s);  // the state stays still while it is drawn
-            return picture(r, s.sim.model(), s.sim.data(), view_of(camera, track, distance, azimuth, elevation),
-                           depth);
+            return picture(r, s.sim.model(), s.sim.data(), view, depth);
           },
-          "sim"_a, "camera"_a, "track"_a, "distance"_a, "azimuth"_a, "elevation"_a, "depth"_a)
+          "sim"_a, "view"_a, "depth"_a)
       .def(
           "render_episode",
-          [](simloop::Renderer& r, PyEpisodes& e, std::size_t i, const std::optional<std::string>& camera,
-             const std::optional<std::string>& track, std::optional<double> distance, std::optional<double> azimuth,
-             std::optional<double> elevation, bool depth) {
+          [](simloop::Renderer& r, PyEpisodes& e, std::size_t i, const simloop::CameraView& view, bool depth) {
             std::lock_guard<std::mutex> lock(e.mutex);
-            return picture(r, e.episodes.model(i), e.episodes.data(i),
-                           view_of(camera, track, distance, azimuth, elevation), depth);
+            return picture(r, e.episodes.model(i), e.episodes.data(i), view, depth);
           },
-          "episodes"_a, "i"_a, "camera"_a, "track"_a, "distance"_a, "azimuth"_a, "elevation"_a, "depth"_a);
+          "episodes"_a, "i"_a, "view"_a, "depth"_a);
 }
 
 }  // namespace simloop_py

@@ -449,14 +449,18 @@ class Sim(metaclass=_Pybind11Type):
     def __getstate__(self) -> Any: ...
     def __setstate__(self, state: Any, /) -> None: ...
 
-def check_camera_view(
-    model: Model,
-    camera: Optional[str],
-    track: Optional[str],
-    distance: Optional[float],
-    azimuth: Optional[float],
-    elevation: Optional[float],
-) -> None: ...
+# Where a picture is taken from: a scene's camera, or a free camera (render.py's CameraSettings).
+class CameraView(metaclass=_Pybind11Type):
+    def __init__(
+        self,
+        camera: Optional[str],
+        track: Optional[str],
+        distance: Optional[float],
+        azimuth: Optional[float],
+        elevation: Optional[float],
+    ) -> None: ...
+
+def check_camera_view(model: Model, view: CameraView) -> None: ...
 
 # Offscreen pictures (simloop.Renderer): (height, width, 3) uint8, or with
 # depth (height, width) float32 metres.
@@ -466,27 +470,8 @@ class Renderer(metaclass=_Pybind11Type):
     def width(self) -> int: ...
     @property
     def height(self) -> int: ...
-    def render_sim(
-        self,
-        sim: Sim,
-        camera: Optional[str],
-        track: Optional[str],
-        distance: Optional[float],
-        azimuth: Optional[float],
-        elevation: Optional[float],
-        depth: bool,
-    ) -> NDArray[Any]: ...
-    def render_episode(
-        self,
-        episodes: Episodes,
-        i: int,
-        camera: Optional[str],
-        track: Optional[str],
-        distance: Optional[float],
-        azimuth: Optional[float],
-        elevation: Optional[float],
-        depth: bool,
-    ) -> NDArray[Any]: ...
+    def render_sim(self, sim: Sim, view: CameraView, depth: bool) -> NDArray[Any]: ...
+    def render_episode(self, episodes: Episodes, i: int, view: CameraView, depth: bool) -> NDArray[Any]: ...
 
 # (rest position, axis, q0) of the pusher's joint.
 def pusher_track(model: Model, /) -> tuple[_Float64Array, _Float64Array, float]: ...

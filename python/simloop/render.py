@@ -49,6 +49,9 @@ class CameraSettings:
         self.azimuth = None if azimuth is None else _check_real("azimuth", azimuth)
         self.elevation = None if elevation is None else _check_real("elevation", elevation)
 
+    def core(self) -> _core.CameraView:
+        return _core.CameraView(self.camera, self.track, self.distance, self.azimuth, self.elevation)
+
     def __repr__(self) -> str:
         given = {k: v for k, v in vars(self).items() if v is not None}
         return f"CameraSettings({', '.join(f'{k}={v!r}' for k, v in given.items())})"
@@ -79,9 +82,8 @@ class Renderer:
         scene's camera, or a Sim of another scene."""
         if not isinstance(sim, Sim):
             raise TypeError(f"sim must be a simloop.Sim, got {_describe(sim)}")
-        view = CameraSettings(camera, track, distance, azimuth, elevation)
-        return self._core().render_sim(sim._sim, view.camera, view.track, view.distance, view.azimuth,
-                                       view.elevation, _check_bool("depth", depth))
+        view = CameraSettings(camera, track, distance, azimuth, elevation).core()
+        return self._core().render_sim(sim._sim, view, _check_bool("depth", depth))
 
     def _core(self) -> _core.Renderer:
         if self._renderer is None:
@@ -121,8 +123,7 @@ class EpisodePictures:
             raise TypeError(f"view must be a dict of {', '.join(VIEW_KEYS)}, or None, got {_describe(view)}")
         _check_keys("view", view or {}, VIEW_KEYS)
         self.view = CameraSettings(**(view or {}))
-        v = self.view
-        _core.check_camera_view(model, v.camera, v.track, v.distance, v.azimuth, v.elevation)
+        _core.check_camera_view(model, self.view.core())
         self.model = model
         self.depth = render_mode == "depth_array"
         self.width = _check_int("width", width, 1, MAX_PICTURE_SIZE)
@@ -132,9 +133,7 @@ class EpisodePictures:
     def picture(self, episodes: _core.Episodes, i: int) -> "NDArray[np.generic]":
         if self._renderer is None:
             self._renderer = _core.Renderer(self.model, self.width, self.height)
-        v = self.view
-        return self._renderer.render_episode(episodes, i, v.camera, v.track, v.distance, v.azimuth, v.elevation,
-                                             self.depth)
+        return self._renderer.render_episode(episodes, i, self.view.core(), self.depth)
 
     def close(self) -> None:
         self._renderer = None
