@@ -44,7 +44,10 @@ void DecisionStep::observe(const mjModel* m, mjData* d) {
                          mjcb_act_bias || mjcb_contactfilter;
   const bool bad = std::any_of(entering_.begin(), entering_.end(), [](double x) { return mju_isBad(x) != 0; });
   if (whole_forward_ || callbacks || bad) {
+    mjWarningStat counted[mjNWARNING];
+    std::copy_n(d->warning, mjNWARNING, counted);
     forward_keeping_state(m, d);
+    std::copy_n(counted, mjNWARNING, d->warning);
     return;
   }
   mj_step1(m, d);

@@ -100,9 +100,10 @@ class StepObserver {
 // the first half cannot give or would change: acceleration-stage sensors,
 // RK4, a callback (it would see the ctrl before the decision), plugins (an
 // actuator plugin's state would advance twice), a bad qpos or qvel (mj_step1
-// would reset it where mj_step does). (A warning MuJoCo raises deriving the
-// state, a full contact buffer say, counts once a step on the first way, as
-// in an open-loop run; the whole forward pass raises it once more.)
+// would reset it where mj_step does). A warning MuJoCo raises deriving the
+// state (a full contact buffer, say) counts once a step either way, as in an
+// open-loop run: the whole forward pass leaves the warning counters as it
+// found them, since the step derives the same state again.
 class DecisionStep {
  public:
   DecisionStep(const mjModel* m, const RowRecorder& recorder);
