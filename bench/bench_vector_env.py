@@ -9,7 +9,13 @@ ScenarioVectorEnv over the PushT scenario (python/simloop/scenes/pusht.toml):
 CPU time beside it; medians, and the median of the per-round ratios.
 Target: 2 threads >= 1.8 x 1 thread (on 2 cores).
 
-    .venv/bin/python bench/bench_vector_env.py [--rounds 15] [--envs 32] [--every 50] [--calls 20]
+--pause US: the caller sleeps US microseconds between calls, as a trainer's
+own code runs between steps; the time is then that of the step() calls
+alone. After a long pause a short call runs on the calling thread alone
+(waking a thread that slept costs about a short call: cpp/batch.cc), so 2
+threads should never be slower than 1.
+
+    .venv/bin/python bench/bench_vector_env.py [--rounds 15] [--envs 32] [--every 50] [--calls 20] [--pause 0]
 """
 
 import argparse
@@ -27,17 +33,24 @@ def main() -> int:
     parser.add_argument("--envs", type=int, default=32)
     parser.add_argument("--every", type=int, default=50)
     parser.add_argument("--calls", type=int, default=20)
+    parser.add_argument("--pause", type=float, default=0.0, help="microseconds between calls")
     args = parser.parse_args()
     envs = {t: ScenarioVectorEnv(PUSHT_SCENARIO, args.envs, control_every=args.every, threads=t) for t in (1, 2)}
     actions = np.random.default_rng(0).uniform(-1, 1, size=(args.calls, args.envs, 2))
     steps = args.envs * args.every * args.calls
 
+    pause = args.pause * 1e-6
+
     def timed(env):
         env.reset(seed=0)
-        wall, cpu = time.perf_counter(), time.process_time()
+        wall, cpu = 0.0, time.process_time()
         for a in actions:
+            start = time.perf_counter()
             env.step(a)
-        return time.perf_counter() - wall, time.process_time() - cpu
+            wall += time.perf_counter() - start
+            if pause:
+                time.sleep(pause)
+        return wall, time.process_time() - cpu
 
     timed(envs[1]), timed(envs[2])  # warm up
     times = {1: [], 2: []}
@@ -45,7 +58,9 @@ def main() -> int:
         for t in ((1, 2) if r % 2 else (2, 1)):
             times[t].append(timed(envs[t]))
     print(f"ScenarioVectorEnv(PushT): {args.envs} envs x {args.every} steps per call x {args.calls} calls "
-          f"= {steps} physics steps a round, {args.rounds} rounds")
+          f"= {steps} physics steps a round, {args.rounds} rounds"
+          + (f", {args.pause:g} us paused between calls (not timed; CPU time includes any spent meanwhile)"
+             if pause else ""))
     for t in (1, 2):
         wall = statistics.median(x[0] for x in times[t])
         cpu = statistics.median(x[1] for x in times[t])

@@ -5,13 +5,18 @@
 // microseconds, a good part of that. Episodes keep a pool instead (a batch
 // makes one for its call): between rounds its threads watch for the next
 // one a little while (waking a thread that sleeps, on an idle CPU, costs
-// tens of microseconds again), then sleep on a condition variable. One round
-// at a time (the owner's calls are serialised). A process forked from one
+// tens of microseconds again), then sleep on a condition variable. A thread
+// that has slept a millisecond or more can take as long again to get going,
+// so a short round that comes that long after the last (the owner's own code
+// ran in between: a trainer's policy, say) runs on the calling thread alone
+// (kStillWarm and kWorthWaking in batch.cc). One round at a time (the
+// owner's calls are serialised). A process forked from one
 // whose pool had threads has none of them: the pool then leaves their
 // bookkeeping behind, untouched, and starts afresh.
 #pragma once
 
 #include <atomic>
+#include <chrono>
 #include <condition_variable>
 #include <cstdint>
 #include <functional>
@@ -33,7 +38,8 @@ class WorkerPool {
 
   // Starts task(w) for w = 1 .. helpers on the pool's threads (starting any it
   // lacks) and returns how many run: fewer when no more threads can be had
-  // (a process limit). task must not throw.
+  // (a process limit), none when the round is not worth waking them (above).
+  // task must not throw.
   int start_round(int helpers, const std::function<void(int worker)>& task);
   // Returns once every task of the round has returned, calling `poll` at
   // least every 5 ms meanwhile.
@@ -51,7 +57,13 @@ class WorkerPool {
     std::atomic<int> running{0};
     std::atomic<bool> stopping{false};
     pid_t process = 0;  // where the threads run
+    // The last round, as the calling thread saw it: its start, its end, and
+    // how many threads took part (the calling thread too).
+    std::chrono::steady_clock::time_point started, ended;
+    int taking_part = 0;
   };
+  // Whether waking the threads for a round starting `now` pays (above).
+  [[nodiscard]] bool worth_waking(std::chrono::steady_clock::time_point now) const;
   static void serve(State& state, int worker, std::uint64_t seen);
   std::unique_ptr<State> state_ = std::make_unique<State>();
 };

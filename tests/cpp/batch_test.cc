@@ -6,6 +6,7 @@
 #include <cstring>
 
 #include "simloop/chapter_scene.hpp"
+#include "worker_pool.hpp"
 #include "simloop/batch.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/output.hpp"
@@ -70,3 +71,28 @@ TEST(Batch, RefusesBadConfigsBeforeRunningAny) {
 }
 
 }  // namespace
+
+TEST(WorkerPool, WakesItsThreadsForAShortRoundOnlyWhileTheyAreWarm) {
+  // Rounds of no work. Right after a round the threads are still warm (a
+  // second round wakes them); after a pause of 5 ms a round this short runs
+  // on the calling thread alone. (A machine busy enough to stall a round for
+  // milliseconds makes it look long: some tries may wake the threads.)
+  simloop::detail::WorkerPool pool;
+  std::atomic<int> ran{0};
+  const std::function<void(int)> task = [&ran](int) { ran.fetch_add(1); };
+  const auto round = [&] {
+    const int helpers = pool.start_round(1, task);
+    pool.wait_round([] {});
+    return helpers;
+  };
+  EXPECT_EQ(round(), 1) << "the first round starts its thread";
+  int warm = 0, alone = 0;
+  for (int tries = 0; tries < 5; ++tries) {
+    warm += round();
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    alone += round() == 0 ? 1 : 0;
+  }
+  EXPECT_GE(warm, 3);
+  EXPECT_GE(alone, 3);
+  EXPECT_EQ(ran.load(), 1 + warm + (5 - alone));
+}
