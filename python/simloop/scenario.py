@@ -139,7 +139,8 @@ class Scenario:
     chapter's run.
 
     scene: an MJCF file (None: the chapter's scene). timestep: seconds per
-    step (None: the scene's own). steps or duration (seconds): the length.
+    step (None: the scene's own). steps or duration (seconds): the length
+    (neither: 2000 steps).
     controls: {actuator: value} for a constant, {actuator: [(seconds,
     value), ...]} for a piecewise-constant schedule, or {actuator:
     Path("u.csv")} for a value per step from a CSV file's only column
@@ -147,7 +148,8 @@ class Scenario:
     name or index. disturbances: a list of dicts with the scenario file's keys (body,
     force, torque, newtons, direction, random_sign, start, start_step,
     start_fraction, duration, steps). record: a dict with bodies, joints,
-    actuators, sensors (lists of names) and contacts (bool). reset: how
+    actuators, sensors (lists of names) and contacts (bool) (None: every
+    body on a free joint and every actuator). reset: how
     each run starts, a dict with qpos, qvel (the scene's nq / nv values),
     qpos_noise, qvel_noise (half-widths of uniform noise drawn from the run's
     seed) and params (a list of dicts: kind "friction", "mass", "damping" or
@@ -171,31 +173,29 @@ class Scenario:
             text += "\n" + _toml_table("[record]", record)
         if reset is not None:
             text += "\n" + reset_toml(reset)
-        self._base = os.getcwd()  # where its relative paths resolve (sent along to workers)
-        self._core = _core.Scenario.from_toml(text, "Scenario(...)", self._base)
-        self.toml = text
-        self._remake: Tuple[Any, ...] = (_from_toml, (text, os.getcwd()))
+        base = os.getcwd()  # where its relative paths resolve (sent along to workers)
+        self._made(_core.Scenario.from_toml(text, "Scenario(...)", base), base, text, (_from_toml, (text, base)))
+
+    def _made(self, core: _core.Scenario, base: str, toml: str, remake: Tuple[Any, ...]) -> "Scenario":
+        """Every way of making a Scenario ends here: its compiled form, the
+        folder its relative paths resolve against, its TOML ("" for the
+        chapter's), and how a pickle makes it again."""
+        self._core, self._base, self.toml, self._remake = core, base, toml, remake
+        return self
 
     @classmethod
     def from_file(cls, path: Union[str, "os.PathLike[str]"]) -> "Scenario":
         """Reads a scenario file (TOML); a relative scene resolves against its folder."""
-        self = cls.__new__(cls)
-        self._core = _core.Scenario.from_file(os.fspath(path))
-        self._base = os.path.dirname(os.path.abspath(os.fspath(path)))
-        self._remake = (Scenario.from_file, (os.path.abspath(path),))
+        core = _core.Scenario.from_file(os.fspath(path))
         with open(path, encoding="utf-8") as f:
-            self.toml = f.read()
-        return self
+            toml = f.read()
+        path = os.path.abspath(os.fspath(path))
+        return cls.__new__(cls)._made(core, os.path.dirname(path), toml, (Scenario.from_file, (path,)))
 
     @classmethod
     def chapter(cls) -> "Scenario":
         """The chapter's run: its scene, push_motor at 1.0, the shove on the box."""
-        self = cls.__new__(cls)
-        self._core = _core.Scenario.chapter()
-        self._base = ""
-        self.toml = ""
-        self._remake = (Scenario.chapter, ())
-        return self
+        return cls.__new__(cls)._made(_core.Scenario.chapter(), "", "", (Scenario.chapter, ()))
 
     # A Scenario does not change once made: copies are itself, and a pickle
     # makes it again the way it was made (Gymnasium deep-copies and pickles
@@ -232,11 +232,8 @@ class Scenario:
 
 def _from_toml(text: str, base: str) -> Scenario:
     """A keyword Scenario made again (for pickling)."""
-    self = Scenario.__new__(Scenario)
-    self._core = _core.Scenario.from_toml(text, "Scenario(...)", base)
-    self.toml = text
-    self._remake = (_from_toml, (text, base))
-    return self
+    return Scenario.__new__(Scenario)._made(_core.Scenario.from_toml(text, "Scenario(...)", base), base, text,
+                                            (_from_toml, (text, base)))
 
 
 def _scenario_and_scene(scenario: ScenarioLike, model: Optional[_core.Model]) -> Tuple[Scenario, _core.Model]:

@@ -113,3 +113,17 @@ def test_results_come_back_from_worker_processes():
     assert same_trajectory(scenario.trajectory,
                            simloop.run_scenario(SCENES / "pusht.toml", seed=1, steps=200).trajectory)
     assert np.array_equal(sim_back.get_state(), sim.get_state())
+
+
+@pytest.mark.parametrize("made", ["keywords", "file", "chapter"])
+def test_an_unpickled_scenario_is_the_scenario_everywhere_even_on_an_executor(made):
+    scenario = {"keywords": lambda: simloop.Scenario(scene=str(SCENES / "pusht.xml"), steps=60,
+                                                     record={"bodies": ["tblock"]}),
+                "file": lambda: simloop.Scenario.from_file(SCENES / "pusht.toml"),
+                "chapter": simloop.Scenario.chapter}[made]()
+    again = pickle.loads(pickle.dumps(scenario))
+    assert again.toml == scenario.toml and repr(again) == repr(scenario)
+    with concurrent.futures.ThreadPoolExecutor(1) as pool:
+        there = simloop.run_scenario_batch(again, seeds=range(2), steps=40, executor=pool)
+    here = simloop.run_scenario_batch(scenario, seeds=range(2), steps=40)
+    assert there == here  # the same table, bit for bit (an executor's keeps no results to compare)
