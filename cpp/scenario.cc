@@ -1,10 +1,16 @@
 // Scenarios as data and their schedules: When, Scenario::chapter() and
-// build_schedule (every input of a run, drawn up front). Scenario files are
-// read in scenario_toml.cc, names resolved in scenario_resolve.cc.
+// build_schedule (every input of a run, drawn up front), and reading a
+// scenario file (its TOML is parsed in scenario_toml.cc, names resolved in
+// scenario_resolve.cc).
 #include "simloop/scenario.hpp"
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+#include <string>
 
 #include "simloop/errors.hpp"
 #include "simloop/number_format.hpp"
@@ -24,6 +30,26 @@ std::int64_t When::to_steps(double timestep, std::int64_t run_steps) const {
   const double steps = unit == Unit::kSeconds ? std::nearbyint(value / timestep)
                                               : std::floor(value * static_cast<double>(run_steps));
   return static_cast<std::int64_t>(std::clamp(steps, 0.0, kFar));
+}
+
+Scenario Scenario::from_toml_file(const std::filesystem::path& path) {
+  std::error_code error;
+  if (std::filesystem::is_directory(path, error)) {
+    throw IoError(path.string() + ": is a directory, not a scenario file");
+  }
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw IoError(path.string() + ": cannot open (" + std::strerror(errno) + ")");
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) throw IoError(path.string() + ": cannot read (" + std::strerror(errno) + ")");
+  const std::string toml = text.str();
+  if (const size_t first = toml.find_first_not_of(" \t\r\n"); first != std::string::npos && toml[first] == '<') {
+    throw InvalidArgument(path.string() + ": an MJCF scene, not a scenario file (TOML): make it a scenario's scene "
+                          "(scene = \"...\" in a scenario file, or simloop.Scenario(scene=...))");
+  }
+  Scenario s = from_toml_string(toml, path.string(), path.parent_path());
+  if (s.name.empty()) s.name = path.stem().string();
+  return s;
 }
 
 Scenario Scenario::chapter() {

@@ -1,5 +1,6 @@
-// Scenario files (TOML): Scenario::from_toml_file and from_toml_string, with
-// errors that name the file, the key and what is wrong.
+// Scenario files' TOML: Scenario::from_toml_string (from_toml_file, in
+// scenario.cc, reads a file into it), with errors that name the file, the key
+// and what is wrong.
 #include "simloop/scenario.hpp"
 
 #include <algorithm>
@@ -8,7 +9,6 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
-#include <sstream>
 #include <string>
 #include <utility>
 
@@ -368,21 +368,6 @@ ResetSpec read_reset(const TableReader& t, const toml::table& table, std::string
 }
 
 }  // namespace
-
-Scenario Scenario::from_toml_file(const std::filesystem::path& path) {
-  std::error_code error;
-  if (std::filesystem::is_directory(path, error)) {
-    throw IoError(path.string() + ": is a directory, not a scenario file");
-  }
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw IoError(path.string() + ": cannot open (" + std::strerror(errno) + ")");
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) throw IoError(path.string() + ": cannot read (" + std::strerror(errno) + ")");
-  Scenario s = from_toml_string(text.str(), path.string(), path.parent_path());
-  if (s.name.empty()) s.name = path.stem().string();
-  return s;
-}
 
 Scenario Scenario::from_toml_string(std::string_view text, std::string_view source,
                                     const std::filesystem::path& base) {

@@ -236,6 +236,19 @@ TEST(Scenario, ADirectoryIsNotAScenarioFile) {
   EXPECT_THROW((void)Scenario::from_toml_file(std::filesystem::temp_directory_path()), simloop::IoError);
 }
 
+TEST(Scenario, AnMjcfSceneIsNotAScenarioFileAndSaysWhatToDoWithIt) {
+  // toml++ said "Error while parsing root table: expected keys, ..., saw '<'".
+  try {
+    (void)Scenario::from_toml_file(std::string(SIMLOOP_TEST_SCENES) + "/pusht.xml");
+    FAIL() << "an MJCF scene read as a scenario file";
+  } catch (const simloop::InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("pusht.xml: an MJCF scene, not a scenario file (TOML): make it a scenario's "
+                                         "scene"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(DidYouMean, SuggestsOnlyLikelyTypos) {
   EXPECT_EQ(simloop::did_you_mean("tblok", {"tblock", "pusher"}), "tblock");
   EXPECT_EQ(simloop::did_you_mean("PUSHER", {"tblock", "pusher"}), "pusher");
