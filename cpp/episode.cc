@@ -11,6 +11,7 @@
 #include "run_detail.hpp"
 #include "worker_pool.hpp"
 #include "simloop/errors.hpp"
+#include "simloop/number_format.hpp"
 #include "simloop/scene_params.hpp"
 #include "simloop/shove.hpp"
 #include "simloop/state.hpp"
@@ -159,8 +160,10 @@ void Episodes::step(const double* actions, std::size_t action_count, std::int64_
       refuse(" has ended (at step " + std::to_string(e.step) + "): reset it first");
     }
     for (int a = 0; a < nu; ++a) {
-      if (!std::isfinite(actions[i * static_cast<std::size_t>(nu) + static_cast<std::size_t>(a)])) {
-        refuse(": action " + std::to_string(a) + " is not finite");
+      const double value = actions[i * static_cast<std::size_t>(nu) + static_cast<std::size_t>(a)];
+      if (!std::isfinite(value)) {
+        throw InvalidArgument((count == 1 ? std::string() : "episode " + std::to_string(i) + ": ") + "action " +
+                              std::to_string(a) + " is not finite, got " + python_float_repr(value));
       }
     }
     steps[i] = std::min(every, e.schedule.steps - e.step);

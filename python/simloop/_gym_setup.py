@@ -72,8 +72,8 @@ class _Setup:
         self.episodes = _core.Episodes(scene, scenario._core, config, count)
         # (the env's fps: its decisions per simulated second, as MujocoEnv's)
         self.render_fps = 1.0 / (self.episodes.timestep * self.control_every)
-        self.pictures = None if render.mode is None else EpisodePictures(scene, render.mode, render.width,
-                                                                         render.height, render.view)
+        pictures = EpisodePictures(scene, render.mode, render.width, render.height, render.view)
+        self.pictures = None if render.mode is None else pictures
         self.nu = self.episodes.nu
         self.names: Tuple[str, ...] = self.episodes.column_names[2:]
         low, high = self.episodes.ctrl_range
@@ -110,7 +110,7 @@ class _Setup:
             if _is_batched(self.terminate):
                 hit |= _batch_of("terminate", self.terminate(after), len(after)).astype(bool)
             else:
-                hit |= np.array([bool(self.terminate(o)) for o in after], dtype=bool)
+                hit |= np.array([_flag_from(self.terminate(o)) for o in after], dtype=bool)
         return hit
 
     def actions(self, action: object, shape: Tuple[int, ...]) -> np.ndarray:
@@ -134,7 +134,7 @@ class _Setup:
             return np.zeros(len(after))
         if _is_batched(self.reward):  # (a copy: the function may return a view of its arguments)
             return np.array(_batch_of("reward", self.reward(before, actions, after), len(after)), dtype=np.float64)
-        return np.array([float(self.reward(b, a, o)) for b, a, o in zip(before, actions, after)])
+        return np.array([_number_from(self.reward(b, a, o)) for b, a, o in zip(before, actions, after)])
 
     def reward_of_one(self, before: np.ndarray, action: np.ndarray, after: np.ndarray) -> float:
         """One step's reward (the single env's): before and after (1, width), action (nu,)."""
@@ -142,7 +142,7 @@ class _Setup:
             return 0.0
         if _is_batched(self.reward):
             return float(_batch_of("reward", self.reward(before, action[None], after), 1)[0])
-        return float(self.reward(before[0], action, after[0]))
+        return _number_from(self.reward(before[0], action, after[0]))
 
     def info(self, i: int, ended_by: Optional[str] = None, warned: bool = False) -> Dict[str, Any]:
         """Episode i's info; `warned`: it ended on a warning, which the info names."""
@@ -159,6 +159,22 @@ def _sequence_of(name: str, value: object) -> List[Any]:
         raise TypeError(f"{name} must be a callable or a list of (column, op, value) conditions, got "
                         f"{_describe(value)}")
     return list(value)
+
+
+def _number_from(value: object) -> float:
+    """A reward hook's value, or a TypeError saying what it returned."""
+    try:
+        return float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        raise TypeError(f"reward must return a number, got {_describe(value)}") from None
+
+
+def _flag_from(value: object) -> bool:
+    """A terminate hook's value, or a TypeError saying what it returned
+    (None, say: a function that forgot to return)."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise TypeError(f"terminate must return a bool, got {_describe(value)}")
+    return bool(value)
 
 
 def _batch_of(name: str, values: object, n: int) -> np.ndarray:

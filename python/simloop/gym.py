@@ -18,10 +18,12 @@ Episodes, include/simloop/episode.hpp):
   MuJoCo clamps ctrl to each actuator's ctrlrange.
 - action_space: Box(low, high, (nu,), float64) from the actuators' ctrlrange;
   an actuator without one (not ctrllimited) is -inf..inf.
-- observation_space: Box(-inf, inf, (n,), float64) over the scenario's
-  recorded quantities: the trajectory's columns after "step" and "time"
-  (env.observation_names), read as the state entering the next step (see
-  simloop.Observation). step and time are in info.
+- observation_space: Box(-m, m, (n,), float64), m float32's largest value,
+  over the scenario's recorded quantities: the trajectory's columns after
+  "step" and "time" (env.observation_names), read as the state entering the
+  next step (see simloop.Observation). step and time are in info. A
+  scenario without a [record] table records every body on a free joint and
+  every actuator, no joint angles: list the joints a policy needs.
 - reward: a scenario has none, so reward(obs, action, next_obs) -> float is
   an argument (default: 0.0 every step).
 - truncated: the episode reached the scenario's length (its last step may
@@ -43,7 +45,7 @@ Episodes, include/simloop/episode.hpp):
   the decisions per simulated second.
 - info: "step" (physics steps since reset) and "time" (s) always; "seed"
   (the episode's, a numpy uint64) from reset; "ended_by" on the step that
-  ends an episode: "warning", "length" or "max_episode_steps".
+  ends an episode: "warning", "termination", "length" or "max_episode_steps".
 
 ScenarioVectorEnv steps N such episodes over one compiled model, one MuJoCo
 data each, on C++ threads with the GIL released. Its infos are Gymnasium's
@@ -286,7 +288,7 @@ class ScenarioVectorEnv(VectorEnv):
         values = self._setup.actions(actions, (self.num_envs, self._setup.nu))
         if not np.isfinite(values).all():  # (before any autoreset: a refused step changes nothing)
             env, index = np.argwhere(~np.isfinite(values))[0]
-            raise ValueError(f"env {env}: action {index} is not finite, got {values[env, index]!r}")
+            raise ValueError(f"env {env}: action {index} is not finite, got {float(values[env, index])!r}")
         infos: Dict[str, Any] = {}
         if self.autoreset_mode == AutoresetMode.DISABLED and self._ended.any():
             raise ValueError(f"env {int(np.flatnonzero(self._ended)[0])} has ended: reset it first "

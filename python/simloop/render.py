@@ -111,12 +111,14 @@ VIEW_KEYS = ("camera", "track", "distance", "azimuth", "elevation")
 
 class EpisodePictures:
     """The pictures of a Gymnasium env's episodes (gym.py): the render mode,
-    size and view checked when the env is made, the OpenGL context made at
-    the first picture (an env that never renders never loads EGL)."""
+    size and view checked when the env is made (with no render mode too:
+    a view with a typo fails then, not when a render mode is added), the
+    OpenGL context made at the first picture (an env that never renders
+    never loads EGL)."""
 
-    def __init__(self, model: _core.Model, render_mode: str, width: int, height: int,
+    def __init__(self, model: _core.Model, render_mode: Optional[str], width: int, height: int,
                  view: Optional[Mapping[str, Any]]) -> None:
-        if render_mode not in RENDER_MODES:
+        if render_mode is not None and render_mode not in RENDER_MODES:
             raise ValueError(f"render_mode must be None or one of {', '.join(map(repr, RENDER_MODES))}, "
                              f"got {_describe(render_mode)}")
         if view is not None and not isinstance(view, Mapping):

@@ -90,3 +90,17 @@ def test_a_hook_that_raises_leaves_the_env_usable():
     with pytest.raises(ValueError, match="a batched reward must return 2 values"):
         wrong.step(np.zeros((2, 2)))
     assert wrong.reset(seed=0)[0].shape == (2, len(wrong.observation_names))
+
+
+@pytest.mark.parametrize("hooks, message", [
+    ({"reward": lambda o, a, p: None}, r"reward must return a number, got None \(NoneType\)"),
+    ({"reward": lambda o, a, p: np.zeros(2)}, r"reward must return a number, got array\(\[0\., 0\.\]\) \(ndarray\)"),
+    ({"terminate": lambda p: p}, r"terminate must return a bool, got array\(.*\(ndarray\)"),
+    ({"terminate": lambda p: None}, r"terminate must return a bool, got None \(NoneType\)"),
+])
+@pytest.mark.parametrize("vector", [False, True])
+def test_a_hook_that_returns_the_wrong_kind_of_value_is_named(hooks, message, vector):
+    env = ScenarioVectorEnv(PUSHT_SCENARIO, 2, **hooks) if vector else ScenarioEnv(PUSHT_SCENARIO, **hooks)
+    env.reset(seed=0)
+    with pytest.raises(TypeError, match=message):
+        env.step(np.zeros((2, 2)) if vector else PUSH)

@@ -142,6 +142,12 @@ def test_render_arguments_are_checked_when_the_env_is_made(gymnasium):
         ScenarioEnv(PUSHT_SCENARIO, render_mode="rgb_array", view={"track": "tblok"})
     with pytest.raises(ValueError, match=r"^width must be an integer from 1 to 8192, got 0$"):
         ScenarioEnv(PUSHT_SCENARIO, render_mode="rgb_array", width=0)
+    # The same without a render mode: a typo fails now, not when one is added.
+    with pytest.raises(ValueError, match=r"^no camera named 'top'; the scene has no cameras$"):
+        ScenarioEnv(PUSHT_SCENARIO, view={"camera": "top"})
+    with pytest.raises(ValueError, match=r"^view: unknown key 'fov'"):
+        ScenarioVectorEnv(PUSHT_SCENARIO, 2, view={"fov": 45})
+    assert ScenarioEnv(PUSHT_SCENARIO, view={"track": "tblock"}).render() is None
     env = ScenarioEnv(PUSHT_SCENARIO, render_mode="rgb_array", **SIZE)
     with pytest.raises(ValueError, match=r"^reset\(\) the environment before render\(\)$"):
         env.render()
