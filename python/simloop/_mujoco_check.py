@@ -40,6 +40,12 @@ def load_failure_message(error: ImportError) -> str | None:
             f"install it (apt-get install libmujoco-dev) or rebuild simloop ({error})"
         )
     found = installed_mujoco_library()
+    if found == wanted:  # the right library, but not where simloop's RUNPATH looks ($ORIGIN/../mujoco)
+        return (
+            f"simloop was built on MuJoCo {wanted} from the mujoco package, which is installed, but its libmujoco "
+            f"is not beside simloop: install simloop into the same environment (site-packages) as mujoco, "
+            f"or import mujoco before simloop ({error})"
+        )
     where = "this environment has no mujoco package" if found is None else f"this environment's mujoco package ships MuJoCo {found}"
     return (
         f"simloop was built on MuJoCo {wanted} from the mujoco package, but {where}: "

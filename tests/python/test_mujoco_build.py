@@ -51,6 +51,10 @@ def test_a_missing_libmujoco_is_one_line_naming_both_versions(monkeypatch):
     assert "MuJoCo 4.0.0" in message and "MuJoCo 3.17.0" in message and "pip install mujoco==4.0.0" in message
     monkeypatch.setattr(_mujoco_check, "installed_mujoco_library", lambda: None)
     assert "no mujoco package" in (load_failure_message(error) or "")
+    # The same version elsewhere (simloop installed apart from mujoco): not "built on 4.0.0, but ships 4.0.0".
+    monkeypatch.setattr(_mujoco_check, "installed_mujoco_library", lambda: "4.0.0")
+    message = load_failure_message(error)
+    assert message is not None and "is not beside simloop" in message and "pip install mujoco" not in message
     assert load_failure_message(ImportError("No module named 'numpy'")) is None
 
 
