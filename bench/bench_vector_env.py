@@ -11,9 +11,9 @@ Target: 2 threads >= 1.8 x 1 thread (on 2 cores).
 
 --pause US: the caller sleeps US microseconds between calls, as a trainer's
 own code runs between steps; the time is then that of the step() calls
-alone. After a long pause a short call runs on the calling thread alone
-(waking a thread that slept costs about a short call: cpp/batch.cc), so 2
-threads should never be slower than 1.
+alone. The threads then sleep between calls, and waking them costs the
+calling thread (cpp/worker_pool.hpp): on a VM, 2 threads can be slower than
+1 for calls of under a millisecond of work.
 
     .venv/bin/python bench/bench_vector_env.py [--rounds 15] [--envs 32] [--every 50] [--calls 20] [--pause 0]
 """

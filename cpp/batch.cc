@@ -42,18 +42,6 @@ namespace {
 // thread for the round's end, before sleeping: about what a vector env's
 // step of a few episodes takes.
 constexpr std::chrono::microseconds kWatch{200};
-// A kept pool wakes its threads for a round that starts within kStillWarm of
-// the last one's end (a caller stepping in a tight loop: the threads have
-// slept half a millisecond at most, or once woken stay warm), and otherwise
-// only for a round that takes one thread kWorthWaking or more by the last
-// round's measure: a thread that slept longer can take a millisecond to get
-// going on a virtual machine. bench/bench_vector_env.py --pause, 2 threads
-// against 1 on a 2-core VM: 8 PushT episodes x 10 steps a call (0.7 ms on
-// one thread) 1.74 with no pause, 1.57 after 0.5 ms pauses, 1.00 after 1 and
-// 3 ms ones (0.86 and 0.76 when every call woke the threads); 8 x 30 (2 ms)
-// 1.01 after 3 ms (0.92 with kWorthWaking at 2 ms); 8 x 50 (3.3 ms) 1.60.
-constexpr std::chrono::microseconds kStillWarm{800};
-constexpr std::chrono::microseconds kWorthWaking{3000};
 
 // Watches `ready` for up to kWatch; true once it holds.
 template <class Ready>
@@ -84,17 +72,27 @@ detail::WorkerPool::~WorkerPool() {
   for (std::thread& t : s.threads) t.join();
 }
 
-void detail::WorkerPool::serve(State& s, int worker, std::uint64_t seen) {
+namespace {
+constexpr std::uint64_t kSeats = 0xffffffffu;  // the ticket's low half
+}  // namespace
+
+void detail::WorkerPool::serve(State& s, std::uint64_t seen) {
   for (;;) {
-    const auto next = [&] { return s.stopping.load() || s.ticket.load(std::memory_order_acquire) != seen; };
+    const auto next = [&] { return s.stopping.load() || s.ticket.load(std::memory_order_acquire) >> 32 != seen; };
     if (!watch(next)) {
       std::unique_lock<std::mutex> lock(s.mutex);
       s.wake.wait(lock, next);
     }
     if (s.stopping.load()) return;
-    seen = s.ticket.load(std::memory_order_acquire);
-    if (worker > static_cast<int>(seen & 0xffffffffu)) continue;  // not in this round
-    (*s.task)(worker);
+    // A seat in this round, if one is left; its number is this thread's
+    // worker number for the round. None left: the round's work is done.
+    std::uint64_t ticket = s.ticket.load(std::memory_order_acquire);
+    seen = ticket >> 32;
+    while ((ticket & kSeats) != 0 && ticket >> 32 == seen &&
+           !s.ticket.compare_exchange_weak(ticket, ticket - 1, std::memory_order_acq_rel, std::memory_order_acquire)) {
+    }
+    if (ticket >> 32 != seen || (ticket & kSeats) == 0) continue;
+    (*s.task)(static_cast<int>(ticket & kSeats));
     if (s.running.fetch_sub(1, std::memory_order_acq_rel) == 1) {
       const std::lock_guard<std::mutex> lock(s.mutex);
       s.done.notify_all();
@@ -111,35 +109,36 @@ int detail::WorkerPool::start_round(int helpers, const std::function<void(int wo
   }
   State& s = *state_;
   s.process = getpid();
-  const auto now = std::chrono::steady_clock::now();
-  if (!worth_waking(now)) helpers = 0;
-  s.started = now;
-  s.taking_part = 1;
-  if (helpers <= 0) return 0;
-  const std::uint64_t last = s.ticket.load();
+  const std::uint64_t round = s.ticket.load() >> 32;
   s.threads.reserve(static_cast<std::size_t>(std::max(helpers, 0)));
   while (static_cast<int>(s.threads.size()) < helpers) {
-    const int worker = static_cast<int>(s.threads.size()) + 1;
     try {
-      s.threads.push_back(start_thread([&s, worker, last] { serve(s, worker, last); }));
+      s.threads.push_back(start_thread([&s, round] { serve(s, round); }));
     } catch (const std::system_error&) {
       break;  // as many as could be had
     }
   }
-  const int taking_part = std::min(helpers, static_cast<int>(s.threads.size()));
-  s.taking_part += taking_part;
+  const int seats = std::min(helpers, static_cast<int>(s.threads.size()));
   s.task = &task;
-  s.running.store(taking_part);
+  s.running.store(seats);
   {
     const std::lock_guard<std::mutex> lock(s.mutex);  // (a thread going to sleep sees it)
-    s.ticket.store(((last >> 32) + 1) << 32 | static_cast<std::uint32_t>(taking_part), std::memory_order_release);
+    s.ticket.store((round + 1) << 32 | static_cast<std::uint32_t>(seats), std::memory_order_release);
   }
   s.wake.notify_all();
-  return taking_part;
+  return seats;
 }
 
 void detail::WorkerPool::wait_round(const std::function<void()>& poll) {
   State& s = *state_;
+  // The caller's own share is done, and with it every job: the seats no
+  // thread has taken yet (it is still waking) close, and only the threads
+  // at work are waited for.
+  std::uint64_t ticket = s.ticket.load(std::memory_order_acquire);
+  while ((ticket & kSeats) != 0 && !s.ticket.compare_exchange_weak(ticket, ticket & ~kSeats, std::memory_order_acq_rel,
+                                                                    std::memory_order_acquire)) {
+  }
+  if ((ticket & kSeats) != 0) s.running.fetch_sub(static_cast<int>(ticket & kSeats), std::memory_order_acq_rel);
   const auto finished = [&] { return s.running.load(std::memory_order_acquire) == 0; };
   if (!watch(finished)) {
     std::unique_lock<std::mutex> lock(s.mutex);
@@ -149,14 +148,6 @@ void detail::WorkerPool::wait_round(const std::function<void()>& poll) {
       lock.lock();
     }
   }
-  s.ended = std::chrono::steady_clock::now();
-}
-
-bool detail::WorkerPool::worth_waking(std::chrono::steady_clock::time_point now) const {
-  const State& s = *state_;
-  if (s.threads.empty() || s.taking_part == 0) return true;  // no threads to wake yet, or no round to go by
-  if (now - s.ended < kStillWarm) return true;
-  return (s.ended - s.started) * s.taking_part >= kWorthWaking;  // the last round, as one thread takes it
 }
 
 void detail::check_threads(int threads) {

@@ -2,8 +2,14 @@
 // running each alone, whatever the thread count.
 #include <gtest/gtest.h>
 
+#include <array>
+#include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstring>
+#include <functional>
+#include <thread>
+#include <vector>
 
 #include "simloop/chapter_scene.hpp"
 #include "worker_pool.hpp"
@@ -72,27 +78,39 @@ TEST(Batch, RefusesBadConfigsBeforeRunningAny) {
 
 }  // namespace
 
-TEST(WorkerPool, WakesItsThreadsForAShortRoundOnlyWhileTheyAreWarm) {
-  // Rounds of no work. Right after a round the threads are still warm (a
-  // second round wakes them); after a pause of 5 ms a round this short runs
-  // on the calling thread alone. (A machine busy enough to stall a round for
-  // milliseconds makes it look long: some tries may wake the threads.)
+TEST(WorkerPool, EachSeatRunsAtMostOnceAndNoneAfterItsRound) {
+  // The calling thread's share is nothing after a pause (the threads are
+  // asleep: one still waking when wait_round begins loses its seat), and a
+  // wait for one seat taken otherwise. Each seat's task runs at most once,
+  // as worker 1 .. 3, and none after wait_round returns (its std::function
+  // is gone by then: the sanitizers' build would catch a call).
   simloop::detail::WorkerPool pool;
-  std::atomic<int> ran{0};
-  const std::function<void(int)> task = [&ran](int) { ran.fetch_add(1); };
-  const auto round = [&] {
-    const int helpers = pool.start_round(1, task);
+  constexpr int kRounds = 40;
+  std::vector<std::array<std::atomic<int>, 4>> ran(kRounds);  // [0]: a worker number out of range
+  for (int round = 0; round < kRounds; ++round) {
+    for (auto& r : ran[static_cast<std::size_t>(round)]) r.store(0);
+    const std::function<void(int)> task = [&ran, round](int worker) {
+      ran[static_cast<std::size_t>(round)][worker >= 1 && worker <= 3 ? worker : 0].fetch_add(1);
+    };
+    EXPECT_EQ(pool.start_round(3, task), 3);
+    const auto give_up = std::chrono::steady_clock::now() + std::chrono::milliseconds(200);
+    while (round % 2 == 1 && std::chrono::steady_clock::now() < give_up &&
+           ran[static_cast<std::size_t>(round)][1] + ran[static_cast<std::size_t>(round)][2] +
+                   ran[static_cast<std::size_t>(round)][3] ==
+               0) {
+      std::this_thread::yield();
+    }
     pool.wait_round([] {});
-    return helpers;
-  };
-  EXPECT_EQ(round(), 1) << "the first round starts its thread";
-  int warm = 0, alone = 0;
-  for (int tries = 0; tries < 5; ++tries) {
-    warm += round();
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
-    alone += round() == 0 ? 1 : 0;
+    std::this_thread::sleep_for(std::chrono::microseconds(round % 2 == 0 ? 2000 : 0));
   }
-  EXPECT_GE(warm, 3);
-  EXPECT_GE(alone, 3);
-  EXPECT_EQ(ran.load(), 1 + warm + (5 - alone));
+  std::this_thread::sleep_for(std::chrono::milliseconds(5));  // for any task that would run late
+  int taken = 0;
+  for (const auto& r : ran) {
+    EXPECT_EQ(r[0].load(), 0);
+    for (int w = 1; w <= 3; ++w) {
+      EXPECT_LE(r[w].load(), 1);
+      taken += r[w].load();
+    }
+  }
+  EXPECT_GT(taken, 0) << "the threads take seats too";
 }
