@@ -43,7 +43,8 @@ Scenario Scenario::from_toml_file(const std::filesystem::path& path) {
   text << in.rdbuf();
   if (in.bad()) throw IoError(path.string() + ": cannot read (" + std::strerror(errno) + ")");
   const std::string toml = text.str();
-  if (const size_t first = toml.find_first_not_of(" \t\r\n"); first != std::string::npos && toml[first] == '<') {
+  const size_t first = toml.find_first_not_of(" \t\r\n\xEF\xBB\xBF");  // (past a UTF-8 byte order mark too)
+  if (first != std::string::npos && toml[first] == '<') {
     throw InvalidArgument(path.string() + ": an MJCF scene, not a scenario file (TOML): make it a scenario's scene "
                           "(scene = \"...\" in a scenario file, or simloop.Scenario(scene=...))");
   }
