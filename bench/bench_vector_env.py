@@ -38,7 +38,6 @@ def main() -> int:
     envs = {t: ScenarioVectorEnv(PUSHT_SCENARIO, args.envs, control_every=args.every, threads=t) for t in (1, 2)}
     actions = np.random.default_rng(0).uniform(-1, 1, size=(args.calls, args.envs, 2))
     steps = args.envs * args.every * args.calls
-
     pause = args.pause * 1e-6
 
     def timed(env):

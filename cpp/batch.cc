@@ -140,13 +140,12 @@ void detail::WorkerPool::wait_round(const std::function<void()>& poll) {
   }
   if ((ticket & kSeats) != 0) s.running.fetch_sub(static_cast<int>(ticket & kSeats), std::memory_order_acq_rel);
   const auto finished = [&] { return s.running.load(std::memory_order_acquire) == 0; };
-  if (!watch(finished)) {
-    std::unique_lock<std::mutex> lock(s.mutex);
-    while (!s.done.wait_for(lock, std::chrono::milliseconds(5), finished)) {
-      lock.unlock();
-      poll();
-      lock.lock();
-    }
+  if (watch(finished)) return;
+  std::unique_lock<std::mutex> lock(s.mutex);
+  while (!s.done.wait_for(lock, std::chrono::milliseconds(5), finished)) {
+    lock.unlock();
+    poll();
+    lock.lock();
   }
 }
 

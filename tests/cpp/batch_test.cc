@@ -88,16 +88,14 @@ TEST(WorkerPool, EachSeatRunsAtMostOnceAndNoneAfterItsRound) {
   constexpr int kRounds = 40;
   std::vector<std::array<std::atomic<int>, 4>> ran(kRounds);  // [0]: a worker number out of range
   for (int round = 0; round < kRounds; ++round) {
-    for (auto& r : ran[static_cast<std::size_t>(round)]) r.store(0);
-    const std::function<void(int)> task = [&ran, round](int worker) {
-      ran[static_cast<std::size_t>(round)][worker >= 1 && worker <= 3 ? worker : 0].fetch_add(1);
+    auto& counts = ran[static_cast<std::size_t>(round)];
+    for (auto& r : counts) r.store(0);
+    const std::function<void(int)> task = [&counts](int worker) {
+      counts[worker >= 1 && worker <= 3 ? worker : 0].fetch_add(1);
     };
     EXPECT_EQ(pool.start_round(3, task), 3);
     const auto give_up = std::chrono::steady_clock::now() + std::chrono::milliseconds(200);
-    while (round % 2 == 1 && std::chrono::steady_clock::now() < give_up &&
-           ran[static_cast<std::size_t>(round)][1] + ran[static_cast<std::size_t>(round)][2] +
-                   ran[static_cast<std::size_t>(round)][3] ==
-               0) {
+    while (round % 2 == 1 && std::chrono::steady_clock::now() < give_up && counts[1] + counts[2] + counts[3] == 0) {
       std::this_thread::yield();
     }
     pool.wait_round([] {});
