@@ -11,11 +11,14 @@ import sys
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
-VENV_PYTHON = HERE.parent / ".venv" / "bin" / "python"  # the project's, which scripts/test.sh makes
+# The project's Python, which scripts/test.sh makes: .venv, or .venv-pypi
+# where only the PyPI build was made (SIMLOOP_MUJOCO=pypi).
+VENV_PYTHON = next((python for python in (HERE.parent / venv / "bin" / "python" for venv in (".venv", ".venv-pypi"))
+                    if python.exists()), HERE.parent / ".venv" / "bin" / "python")
 
 try:
     import simloop
-except ImportError:  # run as exercises/check.py by the system python3: use the project's .venv
+except ImportError:  # run as exercises/check.py by the system python3: use the project's venv
     if VENV_PYTHON.exists() and Path(sys.prefix).resolve() != VENV_PYTHON.parent.parent.resolve():
         os.execv(VENV_PYTHON, [str(VENV_PYTHON), *sys.argv])
     print("check.py: needs the simloop package: scripts/test.sh installs it into .venv", file=sys.stderr)
@@ -102,7 +105,7 @@ def _shown(path: Path) -> str:
 
 def _python() -> str:
     """How to run this Python from here, as a hint prints it: the project's
-    .venv/bin/python, else this one."""
+    venv's python, else this one."""
     return _shown(VENV_PYTHON if VENV_PYTHON.exists() else Path(sys.executable))
 
 
