@@ -68,7 +68,7 @@ void bind_render(py::module_& m) {
       .def(
           "render_episode",
           [](simloop::Renderer& r, PyEpisodes& e, std::size_t i, const simloop::CameraView& view, bool depth) {
-            std::lock_guard<std::mutex> lock(e.mutex);
+            EpisodesLock lock(e);
             return picture(r, e.episodes.model(i), e.episodes.data(i), view, depth);
           },
           "episodes"_a, "i"_a, "view"_a, "depth"_a);

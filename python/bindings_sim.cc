@@ -11,7 +11,6 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
-#include <mutex>
 #include <optional>
 #include <string>
 #include <thread>
@@ -44,6 +43,15 @@ auto locked(Fn fn) {
   return [fn](PySim& s, Args... args) {
     SimLock lock(s);
     return std::invoke(fn, s.sim, args...);
+  };
+}
+
+// The same for an Episodes method.
+template <class... Args, class Fn>
+auto episodes_locked(Fn fn) {
+  return [fn](PyEpisodes& e, Args... args) {
+    EpisodesLock lock(e);
+    return std::invoke(fn, e.episodes, args...);
   };
 }
 
@@ -229,6 +237,7 @@ void bind_sim(py::module_& m) {
              return naming_failures("Episodes", [&] { return std::make_unique<PyEpisodes>(scene, scenario, config, count); });
            }),
            "scene"_a, "scenario"_a, "config"_a, "count"_a)
+      // Fixed at construction: read without the lock.
       .def_property_readonly("count", [](PyEpisodes& e) { return e.episodes.count(); })
       .def_property_readonly("nu", [](PyEpisodes& e) { return e.episodes.nu(); })
       .def_property_readonly("steps", [](PyEpisodes& e) { return e.episodes.steps(); })
@@ -249,7 +258,7 @@ void bind_sim(py::module_& m) {
       .def(
           "reset",
           [](PyEpisodes& e, std::size_t i, std::uint64_t seed, const std::optional<std::string>& reset) {
-            std::lock_guard<std::mutex> lock(e.mutex);
+            EpisodesLock lock(e);
             const auto width = static_cast<std::size_t>(e.episodes.width());
             if (i >= e.episodes.count()) {
               throw py::index_error("episode " + std::to_string(i) + " does not exist: there are " +
@@ -268,7 +277,7 @@ void bind_sim(py::module_& m) {
           [](PyEpisodes& e, const Doubles& actions, std::int64_t every,
              const std::optional<py::array_t<std::uint8_t, py::array::c_style | py::array::forcecast>>& active,
              int threads) {
-            std::lock_guard<std::mutex> lock(e.mutex);
+            EpisodesLock lock(e);
             const std::size_t n = e.episodes.count();
             const auto width = static_cast<std::size_t>(e.episodes.width());
             py::array_t<bool> terminated(static_cast<py::ssize_t>(n)), truncated(static_cast<py::ssize_t>(n));
@@ -302,7 +311,7 @@ void bind_sim(py::module_& m) {
           "actions"_a, "every"_a, "active"_a = py::none(), "threads"_a = 1)
       .def("progress",
            [](PyEpisodes& e) {
-             std::lock_guard<std::mutex> lock(e.mutex);
+             EpisodesLock lock(e);
              const std::size_t n = e.episodes.count();
              py::array_t<std::int64_t> steps(static_cast<py::ssize_t>(n));
              py::array_t<double> times(static_cast<py::ssize_t>(n));
@@ -312,9 +321,9 @@ void bind_sim(py::module_& m) {
              }
              return py::make_tuple(steps, times);
            })
-      .def("steps_taken", [](PyEpisodes& e, std::size_t i) { return e.episodes.steps_taken(i); }, "i"_a)
-      .def("time", [](PyEpisodes& e, std::size_t i) { return e.episodes.time(i); }, "i"_a)
-      .def("warnings", [](PyEpisodes& e, std::size_t i) { return e.episodes.warnings(i); }, "i"_a);
+      .def("steps_taken", episodes_locked<std::size_t>(&simloop::Episodes::steps_taken), "i"_a)
+      .def("time", episodes_locked<std::size_t>(&simloop::Episodes::time), "i"_a)
+      .def("warnings", episodes_locked<std::size_t>(&simloop::Episodes::warnings), "i"_a);
 }
 
 }  // namespace simloop_py

@@ -88,3 +88,33 @@ def test_a_sim_called_from_inside_its_own_step_refuses_instead_of_deadlocking():
     assert sim.steps_taken == seen[0]
     sim.step(1)
     assert sim.steps_taken == seen[0] + 1
+
+
+def test_a_vector_env_read_from_another_thread_mid_step_waits_instead_of_deadlocking():
+    """Episodes (under the vector env): a second thread's call waits for a long step without the GIL."""
+    proc = run_python("""
+        import threading, time
+        import numpy as np
+        from simloop import _core, Scenario
+
+        scenario = Scenario.chapter()
+        config = _core.ScenarioConfig(0, "mt19937_64", None, 10_000_000, False, 1)
+        episodes = _core.Episodes(scenario.model(), scenario._core, config, 2)
+        for i in range(2):
+            episodes.reset(i, i)
+        started = threading.Event()
+
+        def long_step():
+            started.set()
+            episodes.step(np.zeros((2, 1)), 400_000)
+
+        stepper = threading.Thread(target=long_step)
+        stepper.start()
+        started.wait()
+        time.sleep(0.2)
+        steps, _ = episodes.progress()  # waits for the step to end
+        stepper.join()
+        print("waited", steps.tolist(), episodes.steps_taken(0), episodes.time(1) > 0, episodes.warnings(0))
+    """, timeout=60)
+    assert proc.returncode == 0, f"exit {proc.returncode}: {proc.stderr[-2000:]}"
+    assert proc.stdout.split() == ["waited", "[400000,", "400000]", "400000", "True", "[]"]
