@@ -107,6 +107,31 @@ mjtObj object_type_counted_by(std::string_view size) noexcept {
 
 int object_count(const mjModel* m, mjtObj type) { return kind_of(type).count(m); }
 
+std::vector<std::string> object_names(const mjModel* m, mjtObj type) {
+  std::vector<std::string> names(static_cast<std::size_t>(object_count(m, type)));
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    const char* name = mj_id2name(m, type, static_cast<int>(i));
+    if (name != nullptr) names[i] = name;
+  }
+  return names;
+}
+
+JointSize joint_size(int type) noexcept {
+  if (type == mjJNT_FREE) return {7, 6};
+  if (type == mjJNT_BALL) return {4, 3};
+  return {1, 1};
+}
+
+const char* joint_type_name(int type) noexcept {
+  switch (type) {
+    case mjJNT_FREE: return "free";
+    case mjJNT_BALL: return "ball";
+    case mjJNT_SLIDE: return "slide";
+    case mjJNT_HINGE: return "hinge";
+    default: return "unknown";
+  }
+}
+
 int object_id(const mjModel* m, mjtObj type, const std::string& name) {
   (void)object_count(m, type);  // a type we look up
   const int found = mj_name2id(m, type, name.c_str());

@@ -10,6 +10,7 @@
 #include "loop.hpp"
 #include "run_detail.hpp"
 #include "simloop/errors.hpp"
+#include "simloop/object_names.hpp"
 #include "simloop/state.hpp"
 
 namespace simloop {
@@ -46,9 +47,7 @@ const char* joint_unit(int type, bool velocity) {
 }  // namespace
 
 std::vector<std::string> joint_position_columns(const mjModel* m, int joint) {
-  const int type = m->jnt_type[joint];
-  return numbered(name_of(m, mjOBJ_JOINT, joint, "joint"), "_pos",
-                  type == mjJNT_FREE ? 7 : type == mjJNT_BALL ? 4 : 1);
+  return numbered(name_of(m, mjOBJ_JOINT, joint, "joint"), "_pos", joint_size(m->jnt_type[joint]).nq);
 }
 
 CtrlRange ctrl_range(const mjModel* m) {
@@ -100,8 +99,7 @@ Recorder::Recorder(const mjModel* m, const ResolvedScenario& scenario, const Sch
   for (int j : scenario.joints) {
     const std::string base = name_of(m, mjOBJ_JOINT, j, "joint");
     const int type = m->jnt_type[j];
-    const int nq = type == mjJNT_FREE ? 7 : type == mjJNT_BALL ? 4 : 1;
-    const int nv = type == mjJNT_FREE ? 6 : type == mjJNT_BALL ? 3 : 1;
+    const auto [nq, nv] = joint_size(type);
     add(Source::kQpos, m->jnt_qposadr[j], nq, joint_position_columns(m, j), joint_unit(type, false));
     add(Source::kQvel, m->jnt_dofadr[j], nv, numbered(base, "_vel", nv), joint_unit(type, true));
   }

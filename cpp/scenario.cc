@@ -48,9 +48,7 @@ Scenario Scenario::from_toml_file(const std::filesystem::path& path) {
     throw InvalidArgument(path.string() + ": an MJCF scene, not a scenario file (TOML): make it a scenario's scene "
                           "(scene = \"...\" in a scenario file, or simloop.Scenario(scene=...))");
   }
-  Scenario s = from_toml_string(toml, path.string(), path.parent_path());
-  if (s.name.empty()) s.name = path.stem().string();
-  return s;
+  return from_toml_string(toml, path.string(), path.parent_path(), path.stem().string());
 }
 
 Scenario Scenario::chapter() {

@@ -370,7 +370,7 @@ ResetSpec read_reset(const TableReader& t, const toml::table& table, std::string
 }  // namespace
 
 Scenario Scenario::from_toml_string(std::string_view text, std::string_view source,
-                                    const std::filesystem::path& base) {
+                                    const std::filesystem::path& base, std::string_view default_name) {
   toml::table root;
   try {
     root = toml::parse(text, source);
@@ -383,6 +383,7 @@ Scenario Scenario::from_toml_string(std::string_view text, std::string_view sour
   top.allow_only({"name", "scene", "timestep", "steps", "duration", "control", "disturbance", "record", "reset"});
   Scenario s;
   s.name = top.string("name").value_or("");
+  if (s.name.empty()) s.name = default_name;
   if (const auto scene = top.string("scene")) {
     if (scene->empty()) top.fail("scene", "must name an MJCF file (leave it out for the chapter's scene)");
     const std::filesystem::path p(*scene);

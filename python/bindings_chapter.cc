@@ -83,12 +83,8 @@ void bind_chapter(py::module_& m) {
       .def_readonly("perturb", &simloop::RunConfig::perturb)
       .def_readonly("smoke", &simloop::RunConfig::smoke)
       .def_readonly("record_every", &simloop::RunConfig::record_every)
-      .def("__repr__", [](const simloop::RunConfig& c) {
-        return "RunConfig(seed=" + std::to_string(c.seed) + ", steps=" + std::to_string(c.steps) +
-               ", timestep=" + simloop::python_float_repr(c.timestep) + ", perturb=" + py_bool(c.perturb) +
-               ", smoke=" + py_bool(c.smoke) + ", record_every=" + std::to_string(c.record_every) +
-               ", audit_energy=" + py_bool(c.audit_energy) + ", rng='" + std::string(simloop::rng_name(c.rng)) + "')";
-      });
+      .def("__repr__", fields_repr("RunConfig", {"seed", "steps", "timestep", "perturb", "smoke", "record_every",
+                                                 "audit_energy", "rng"}));
 
   py::class_<simloop::Shove>(m, "Shove", "The sideways shove drawn for a run (applied only if perturb).")
       .def_readonly("newtons", &simloop::Shove::newtons)
@@ -98,11 +94,7 @@ void bind_chapter(py::module_& m) {
       .def_property_readonly("force_y", &simloop::Shove::force_y)
       .def_property_readonly("rng", [](const simloop::Shove& s) { return std::string(simloop::rng_name(s.rng)); },
                              "The generator that drew it: 'mt19937_64' or 'numpy'.")
-      .def("__repr__", [](const simloop::Shove& s) {
-        return "Shove(newtons=" + simloop::python_float_repr(s.newtons) + ", sign=" +
-               simloop::python_float_repr(s.sign) + ", start_step=" + std::to_string(s.start_step) +
-               ", steps=" + std::to_string(s.num_steps) + ", rng='" + std::string(simloop::rng_name(s.rng)) + "')";
-      });
+      .def("__repr__", fields_repr("Shove", {"newtons", "sign", "start_step", "steps", "rng"}));
   m.def(
       "draw_shove",
       [](std::uint64_t seed, std::int64_t steps, const std::string& rng) {
@@ -170,7 +162,6 @@ void bind_chapter(py::module_& m) {
         });
       },
       "model"_a, "configs"_a, "threads"_a, "keep_rows"_a = true, "progress"_a = py::none());
-  m.def("batch_workers", &simloop::batch_workers, "threads"_a, "jobs"_a);
 
   py::class_<simloop::SweepPoint>(m, "SweepPoint", "One timestep of a sweep.")
       .def_readonly("timestep", &simloop::SweepPoint::timestep)
@@ -226,8 +217,6 @@ void bind_chapter(py::module_& m) {
   m.def("log_spaced", &simloop::log_spaced, "start"_a, "stop"_a, "count"_a);
   m.def("default_sweep_timesteps", &simloop::default_sweep_timesteps,
         "The default sweep's 25 round timesteps (1, 2, 3, 4, 5, 6, 8 per decade, 0.0005 s to 1 s).");
-  m.attr("STABLE_HOP") = simloop::kStableHop;
-  m.attr("STABLE_SINK") = simloop::kStableSink;
   m.attr("BOX_REST_Z") = simloop::kBoxRestZ;
 
   // A sweep run in chunks on a cluster's workers (python/simloop/distributed.py).

@@ -201,6 +201,18 @@ inline simloop::ShoveRng shove_rng(const std::string& name) {
   return *rng;
 }
 
+// __repr__ as Name(field=value, ...), each field read back as the object's
+// Python attribute and spelled by repr(): a repr agrees with what it shows.
+inline auto fields_repr(std::string name, std::vector<const char*> fields) {
+  return [name = std::move(name), fields = std::move(fields)](const py::object& self) {
+    std::string out = name + "(";
+    for (const char* f : fields) {
+      out += std::string(f == fields.front() ? "" : ", ") + f + "=" + py::repr(self.attr(f)).cast<std::string>();
+    }
+    return out + ")";
+  };
+}
+
 // A view numpy must not let Python write through (what MuJoCo derives, or
 // a finished run's rows).
 inline py::array read_only(py::array view) {

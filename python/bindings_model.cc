@@ -23,23 +23,8 @@
 #include "simloop/sim.hpp"
 
 namespace simloop_py {
-namespace {
 
 using namespace pybind11::literals;
-
-py::list model_names(const simloop::Model& model, const std::string& kind) {
-  const mjtObj type = object_type(kind);
-  const mjModel* raw = model.get();
-  const int count = simloop::object_count(raw, type);
-  py::list names;
-  for (int i = 0; i < count; ++i) {
-    const char* name = mj_id2name(raw, type, i);
-    names.append(py::str(name ? name : ""));
-  }
-  return names;
-}
-
-}  // namespace
 
 mjtObj object_type(const std::string& kind) {
   const mjtObj type = simloop::object_type_named(kind);
@@ -116,8 +101,9 @@ void bind_model(py::module_& m) {
       .def_property_readonly("nsensordata", [](const simloop::Model& model) { return model.get()->nsensordata; })
       .def_property_readonly("nkey", [](const simloop::Model& model) { return model.get()->nkey; })
       .def(
-          "names",
-          &model_names,
+          "names", [](const simloop::Model& model, const std::string& kind) {
+            return simloop::object_names(model.get(), object_type(kind));
+          },
           "kind"_a, "Every object's name of a kind, by index ('' for an unnamed one).")
       .def(
           "object_info",
@@ -125,15 +111,13 @@ void bind_model(py::module_& m) {
             // The model's fixed facts the named views need, as plain values.
             const mjModel* raw = model.get();
             const mjtObj type = object_type(kind);
-            if (id < 0 || static_cast<size_t>(id) >= py::len(model_names(model, kind))) throw py::value_error(kind + " id out of range");
+            if (id < 0 || id >= simloop::object_count(raw, type)) throw py::value_error(kind + " id out of range");
             if (type == mjOBJ_BODY) return py::dict("mass"_a = raw->body_mass[id]);
             if (type == mjOBJ_JOINT) {
-              static constexpr const char* kTypes[] = {"free", "ball", "slide", "hinge"};
-              const int t = raw->jnt_type[id];
-              const int nq = t == mjJNT_FREE ? 7 : t == mjJNT_BALL ? 4 : 1;
-              const int nv = t == mjJNT_FREE ? 6 : t == mjJNT_BALL ? 3 : 1;
-              return py::dict("type"_a = kTypes[t], "qposadr"_a = raw->jnt_qposadr[id], "nq"_a = nq,
-                              "dofadr"_a = raw->jnt_dofadr[id], "nv"_a = nv, "body"_a = raw->jnt_bodyid[id]);
+              const simloop::JointSize size = simloop::joint_size(raw->jnt_type[id]);
+              return py::dict("type"_a = simloop::joint_type_name(raw->jnt_type[id]), "qposadr"_a = raw->jnt_qposadr[id],
+                              "nq"_a = size.nq, "dofadr"_a = raw->jnt_dofadr[id], "nv"_a = size.nv,
+                              "body"_a = raw->jnt_bodyid[id]);
             }
             if (type == mjOBJ_ACTUATOR) {
               return py::dict("ctrlrange"_a = py::make_tuple(raw->actuator_ctrlrange[2 * id],

@@ -108,10 +108,10 @@ void bind_scenario(py::module_& m) {
           "from_file", [](const std::string& path) { return simloop::Scenario::from_toml_file(path); }, "path"_a)
       .def_static(
           "from_toml",
-          [](const std::string& text, const std::string& source, const std::string& base) {
-            return simloop::Scenario::from_toml_string(text, source, base);
+          [](const std::string& text, const std::string& source, const std::string& base, const std::string& name) {
+            return simloop::Scenario::from_toml_string(text, source, base, name);
           },
-          "text"_a, "source"_a = "<string>", "base"_a = "")
+          "text"_a, "source"_a = "<string>", "base"_a = "", "default_name"_a = "")
       .def_readonly("name", &simloop::Scenario::name)
       .def_property_readonly("scene", [](const simloop::Scenario& s) { return fs_str(s.scene.native()); })
       .def_readonly("timestep", &simloop::Scenario::timestep)
@@ -206,10 +206,7 @@ void bind_scenario(py::module_& m) {
       .def_readonly("offsets", &simloop::ScenarioSweepPoint::offsets)
       .def_readonly("max_offset", &simloop::ScenarioSweepPoint::max_offset)
       .def_readonly("blew_up", &simloop::ScenarioSweepPoint::blew_up)
-      .def("__repr__", [](const simloop::ScenarioSweepPoint& p) {
-        return "ScenarioSweepPoint(timestep=" + simloop::python_float_repr(p.timestep) +
-               ", blew_up=" + (p.blew_up ? "True" : "False") + ")";
-      });
+      .def("__repr__", fields_repr("ScenarioSweepPoint", {"timestep", "blew_up"}));
   py::class_<simloop::ScenarioSweepResult> sweep_result(m, "ScenarioSweepResult", "A timestep sweep of a scenario.");
   bind_sweep_outputs<simloop::ScenarioSweepResult, &simloop::sweep_csv, &simloop::sweep_summary>(
       sweep_result, "The largest timestep before any blew up (None if even the finest did).");

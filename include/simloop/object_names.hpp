@@ -23,11 +23,22 @@ namespace simloop {
 [[nodiscard]] const std::vector<std::string>& object_kinds();
 [[nodiscard]] const char* object_kind(mjtObj type);
 [[nodiscard]] int object_count(const mjModel* m, mjtObj type);
+// Every object's name of a type, by id ("" for an unnamed one).
+[[nodiscard]] std::vector<std::string> object_names(const mjModel* m, mjtObj type);
 // The kind an mjModel size counts ("ngeom": geoms, "nu": actuators),
 // mjOBJ_UNKNOWN for a size that counts no kind of object (nq, nv, nefc, ...).
 [[nodiscard]] mjtObj object_type_counted_by(std::string_view size) noexcept;
 
 // The same for an index: throws InvalidArgument unless 0 <= index < count.
 [[nodiscard]] int checked_object_index(const mjModel* m, mjtObj type, long long index);
+
+// How many qpos and qvel values a joint of MuJoCo's type `type` has: free
+// 7 and 6, ball 4 and 3, slide and hinge 1 and 1; and the type's word.
+struct JointSize {
+  int nq;
+  int nv;
+};
+[[nodiscard]] JointSize joint_size(int type) noexcept;
+[[nodiscard]] const char* joint_type_name(int type) noexcept;
 
 }  // namespace simloop

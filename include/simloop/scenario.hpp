@@ -122,9 +122,11 @@ struct Scenario {
   // file's folder. Throws InvalidArgument naming the file, the key and what
   // is wrong; IoError if it cannot be read.
   [[nodiscard]] static Scenario from_toml_file(const std::filesystem::path& path);
-  // The same from text; `source` names it in errors, `base` resolves `scene`.
+  // The same from text; `source` names it in errors, `base` resolves `scene`,
+  // and a text without `name` gets `default_name` (a file's: its stem).
   [[nodiscard]] static Scenario from_toml_string(std::string_view text, std::string_view source = "<string>",
-                                                 const std::filesystem::path& base = {});
+                                                 const std::filesystem::path& base = {},
+                                                 std::string_view default_name = {});
 };
 
 // A scenario's names turned into the model's indices, checked once.

@@ -27,8 +27,6 @@ SMOKE_STEPS: Final[int]
 SHOVE_STEPS: Final[int]
 MAX_STEPS: Final[int]
 MAX_RECORD_EVERY: Final[int]
-STABLE_HOP: Final[float]
-STABLE_SINK: Final[float]
 BOX_REST_Z: Final[float]
 # Every warning a run counts: MuJoCo's mjWARN_* and simloop_DIVERGED.
 WARNING_NAMES: Final[tuple[str, ...]]
@@ -239,7 +237,6 @@ def run(model: Model, config: RunConfig, progress: _Progress = None) -> RunResul
 def run_batch(
     model: Model, configs: Sequence[RunConfig], threads: int, keep_rows: bool = True, progress: _Progress = None
 ) -> list[RunResult]: ...
-def batch_workers(threads: int, jobs: int) -> int: ...
 
 class Scenario(metaclass=_Pybind11Type):
     @staticmethod
@@ -247,7 +244,7 @@ class Scenario(metaclass=_Pybind11Type):
     @staticmethod
     def from_file(path: str) -> Scenario: ...
     @staticmethod
-    def from_toml(text: str, source: str = "<string>", base: str = "") -> Scenario: ...
+    def from_toml(text: str, source: str = "<string>", base: str = "", default_name: str = "") -> Scenario: ...
     @property
     def name(self) -> str: ...
     @property

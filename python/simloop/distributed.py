@@ -79,11 +79,12 @@ def scene_source(model: object) -> Tuple[str, str]:
                     f"(a compiled simloop.Model does not travel to workers), got {type(model).__name__}")
 
 
-def scenario_source(scenario: Any) -> Tuple[str, str, str]:
-    """How a simloop.Scenario travels: ("chapter", "", "") or ("toml", its text, the folder its paths resolve against)."""
-    if not scenario.toml:
-        return ("chapter", "", "")
-    return ("toml", scenario.toml, scenario._base)
+def scenario_source(scenario: Any) -> Tuple[str, str, str, str]:
+    """How a simloop.Scenario travels: ("chapter", "", "", "") or ("toml", its text, the folder its paths resolve
+    against, its name): a file's scenario is named for the file unless its text names it, and may be empty."""
+    if scenario._remake == (type(scenario).chapter, ()):
+        return ("chapter", "", "", "")
+    return ("toml", scenario.toml, scenario._base, scenario.name)
 
 
 @functools.lru_cache(maxsize=8)
@@ -95,9 +96,10 @@ def _scene(source: Tuple[str, str]) -> "_core.Model":
 
 
 @functools.lru_cache(maxsize=8)
-def _scenario(source: Tuple[str, str, str]) -> Tuple["_core.Scenario", "_core.Model"]:
-    kind, text, base = source
-    scenario = _core.Scenario.chapter() if kind == "chapter" else _core.Scenario.from_toml(text, "scenario", base)
+def _scenario(source: Tuple[str, str, str, str]) -> Tuple["_core.Scenario", "_core.Model"]:
+    kind, text, base, name = source
+    scenario = (_core.Scenario.chapter() if kind == "chapter"
+                else _core.Scenario.from_toml(text, "scenario", base, default_name=name))
     return scenario, _core.load_scene(scenario)
 
 
