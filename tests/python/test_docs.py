@@ -249,6 +249,26 @@ def test_readme_is_short():
     assert lines <= 200, f"README.md has {lines} lines: the rest belongs in docs/"
 
 
+# ---- sizes (docs/developing.md, "Sizes") ----------------------------------------
+
+SOURCE_SUFFIXES = {".c", ".cc", ".h", ".hpp", ".py", ".pyi", ".sh", ".cmake", ".md", ".in", ".toml"}
+LONG_ALLOWED = {"python/simloop/_core.pyi"}  # stubtest checks only a stub's own classes: see "Sizes"
+
+
+def test_no_source_file_is_over_450_lines_and_no_binding_over_350():
+    too_long = []
+    for path in tracked_files("", recursive=True):
+        if Path(path).suffix not in SOURCE_SUFFIXES and Path(path).name != "CMakeLists.txt":
+            continue
+        if path.startswith("tests/golden/") or path in LONG_ALLOWED:
+            continue
+        limit = 350 if path.startswith("python/bindings") else 450
+        lines = (ROOT / path).read_bytes().count(b"\n")
+        if lines > limit:
+            too_long.append(f"{path}: {lines} lines (at most {limit})")
+    assert not too_long, "split these by topic (docs/developing.md, Sizes):\n" + "\n".join(too_long)
+
+
 # ---- the layout ---------------------------------------------------------------
 
 def layout() -> List[Tuple[str, List[str]]]:
@@ -264,17 +284,20 @@ def layout() -> List[Tuple[str, List[str]]]:
     return entries
 
 
-def tracked_files(folder: str) -> List[str]:
-    """The files directly in folder that git tracks (or, outside a clone, that exist)."""
+def tracked_files(folder: str, recursive: bool = False) -> List[str]:
+    """The files directly in folder (or, recursive, anywhere under it, as paths from it) that git tracks (or,
+    outside a clone, that exist)."""
     try:
-        proc = subprocess.run(["git", "ls-files", "--", folder], cwd=ROOT, capture_output=True, text=True)
+        proc = subprocess.run(["git", "ls-files", "--", folder or "."], cwd=ROOT, capture_output=True, text=True)
     except FileNotFoundError:  # no git on this machine (a source tree copied or cloned elsewhere)
         proc = None
     if proc is not None and proc.returncode == 0 and proc.stdout:
         names = [p[len(folder):] for p in proc.stdout.splitlines()]
     else:
-        names = [p.name for p in (ROOT / folder).iterdir() if p.is_file()]
-    return sorted(n for n in names if "/" not in n)
+        found = (ROOT / folder).rglob("*") if recursive else (ROOT / folder).iterdir()
+        names = [p.relative_to(ROOT / folder).as_posix() for p in found if p.is_file()]
+        names = [n for n in names if not n.startswith((".", "build"))]  # no venvs, no build trees
+    return sorted(n for n in names if recursive or "/" not in n)
 
 
 def test_the_layout_names_what_is_there():
