@@ -108,7 +108,10 @@ class _Setup:
             hit |= op(after[:, index], value)
         if self.terminate is not None:
             if _is_batched(self.terminate):
-                hit |= _batch_of("terminate", self.terminate(after), len(after)).astype(bool)
+                flags = _batch_of("terminate", self.terminate(after), len(after))
+                if flags.dtype != np.bool_:  # as a plain hook's: a bool, not a number that might mean one
+                    raise TypeError(f"a batched terminate must return bools, got dtype {flags.dtype}")
+                hit |= flags
             else:
                 hit |= np.array([_flag_from(self.terminate(o)) for o in after], dtype=bool)
         return hit

@@ -97,6 +97,8 @@ def test_a_hook_that_raises_leaves_the_env_usable():
     ({"reward": lambda o, a, p: np.zeros(2)}, r"reward must return a number, got array\(\[0\., 0\.\]\) \(ndarray\)"),
     ({"terminate": lambda p: p}, r"terminate must return a bool, got array\(.*\(ndarray\)"),
     ({"terminate": lambda p: None}, r"terminate must return a bool, got None \(NoneType\)"),
+    ({"terminate": batched(lambda p: p[:, 0])}, r"a batched terminate must return bools, got dtype float64"),
+    ({"terminate": batched(lambda p: [None] * len(p))}, r"a batched terminate must return bools, got dtype object"),
 ])
 @pytest.mark.parametrize("vector", [False, True])
 def test_a_hook_that_returns_the_wrong_kind_of_value_is_named(hooks, message, vector):
