@@ -336,6 +336,7 @@ ResetSpec read_reset(const TableReader& t, const toml::table& table, std::string
   for (const auto& [key, noise] : {std::pair{"qpos_noise", &r.qpos_noise}, std::pair{"qvel_noise", &r.qvel_noise}}) {
     *noise = t.number(key).value_or(0.0);
     if (*noise < 0.0) t.fail(key, "must not be negative (the half-width of a uniform noise), got " + python_float_repr(*noise));
+    if (!std::isfinite(2.0 * *noise)) t.fail(key, "is too large: [-x, x] must be a range a double holds, got " + python_float_repr(*noise));
   }
   if (const toml::node* node = table.get("param")) {
     const auto* array = node->as_array();
@@ -355,6 +356,9 @@ ResetSpec read_reset(const TableReader& t, const toml::table& table, std::string
       const std::optional<double> value = p.number("value");
       const std::optional<std::vector<double>> range = p.numbers("uniform", 2);
       if (value.has_value() == range.has_value()) p.fail("", "give value (fixed) or uniform = [low, high] (drawn per run)");
+      if (range && !std::isfinite((*range)[1] - (*range)[0])) {
+        p.fail("uniform", "is too wide: high - low must be a number a double holds");
+      }
       if (range && (*range)[0] > (*range)[1]) {
         p.fail("uniform", "expected [low, high] with low <= high, got [" + python_float_repr((*range)[0]) + ", " +
                               python_float_repr((*range)[1]) + "]");

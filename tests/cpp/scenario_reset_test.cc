@@ -132,6 +132,11 @@ TEST(ScenarioReset, BadResetsNameTheKey) {
             "qpos_noise, qvel_noise, param");
   EXPECT_EQ(file_error("qvel_noise = -1\n"),
             "pusht-reset: reset.qvel_noise: must not be negative (the half-width of a uniform noise), got -1.0");
+  // A noise or range so wide that its draw would overflow to inf (and the state to nan).
+  EXPECT_EQ(file_error("qpos_noise = 1e308\n"),
+            "pusht-reset: reset.qpos_noise: is too large: [-x, x] must be a range a double holds, got 1e+308");
+  EXPECT_EQ(file_error("[[reset.param]]\nkind = \"mass\"\nname = \"tblock\"\nuniform = [-1e308, 1e308]\n"),
+            "pusht-reset: reset.param[0].uniform: is too wide: high - low must be a number a double holds");
   EXPECT_EQ(file_error("[[reset.param]]\nkind = \"stiffness\"\nvalue = 1\n"),
             "pusht-reset: reset.param[0].kind: scene parameter kind must be one of 'friction', 'mass', 'damping', "
             "'gravity', got 'stiffness'");
