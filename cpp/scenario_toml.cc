@@ -10,6 +10,7 @@
 #include <cstring>
 #include <fstream>
 #include <string>
+#include <tuple>
 #include <utility>
 
 #include <toml++/toml.h>
@@ -124,11 +125,12 @@ class TableReader {
     return out;
   }
 
-  [[nodiscard]] std::vector<std::string> strings(std::string_view key) const {
+  [[nodiscard]] std::vector<std::string> strings(std::string_view key, std::string_view or_else = {}) const {
     const toml::node* node = table_.get(key);
     if (node == nullptr) return {};
     const auto* array = node->as_array();
-    if (array == nullptr) fail(key, "expected an array of names, got " + type_name(*node));
+    if (array == nullptr) fail(key, "expected an array of names" + std::string(or_else.empty() ? "" : " ") +
+                                        std::string(or_else) + ", got " + type_name(*node));
     std::vector<std::string> out;
     for (const toml::node& item : *array) {
       if (const auto* s = item.as_string()) {
@@ -421,10 +423,14 @@ Scenario Scenario::from_toml_string(std::string_view text, std::string_view sour
     if (table == nullptr) top.fail("record", "expected a [record] table");
     const TableReader r(*table, std::string(source), "record");
     r.allow_only({"bodies", "joints", "actuators", "sensors", "contacts"});
-    s.record.bodies = r.strings("bodies");
-    s.record.joints = r.strings("joints");
-    s.record.actuators = r.strings("actuators");
-    s.record.sensors = r.strings("sensors");
+    for (const auto& [key, names, all] : {std::tuple{"bodies", &s.record.bodies, &s.record.all_bodies},
+                                          std::tuple{"joints", &s.record.joints, &s.record.all_joints},
+                                          std::tuple{"actuators", &s.record.actuators, &s.record.all_actuators},
+                                          std::tuple{"sensors", &s.record.sensors, &s.record.all_sensors}}) {
+      const toml::node* given = table->get(key);
+      *all = given != nullptr && given->value<std::string>() == "all";
+      if (!*all) *names = r.strings(key, "or \"all\"");
+    }
     s.record.contacts = r.boolean("contacts").value_or(true);
   }
   if (const toml::node* node = root.get("reset")) {

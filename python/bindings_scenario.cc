@@ -115,7 +115,6 @@ void bind_scenario(py::module_& m) {
       .def_readonly("name", &simloop::Scenario::name)
       .def_property_readonly("scene", [](const simloop::Scenario& s) { return fs_str(s.scene.native()); })
       .def_readonly("timestep", &simloop::Scenario::timestep)
-      .def_property_readonly("body_names", [](const simloop::Scenario& s) { return s.record.bodies; })
       .def("__repr__", [](const simloop::Scenario& s) {
         std::string length;
         switch (s.length.unit) {
@@ -127,11 +126,12 @@ void bind_scenario(py::module_& m) {
         for (const simloop::ControlSpec& c : s.controls) controls += (controls.empty() ? "" : ", ") + py_str_repr(c.actuator);
         std::string recorded;
         for (const std::string& b : s.record.bodies) recorded += (recorded.empty() ? "" : ", ") + py_str_repr(b);
+        recorded = s.record.all_bodies ? "'all'" : "[" + recorded + "]";
         return "Scenario(name=" + py_str_repr(s.name) + ", scene=" +
                (s.scene.empty() ? std::string("None") : py::repr(fs_str(s.scene.native())).cast<std::string>()) +
                ", timestep=" + (s.timestep ? simloop::python_float_repr(*s.timestep) : std::string("None")) + ", " +
                length + ", controls=[" + controls + "], disturbances=" + std::to_string(s.disturbances.size()) +
-               ", bodies=[" + recorded + "])";
+               ", bodies=" + recorded + ")";
       });
 
   m.def("load_scene", &simloop::load_scene, "scenario"_a);

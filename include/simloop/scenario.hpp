@@ -85,6 +85,9 @@ struct RecordSpec {
   std::vector<std::string> actuators;  // ctrl as applied (after ctrlrange clamping), force
   std::vector<std::string> sensors;    // sensordata
   bool contacts = true;                // contact count
+  // "all" in a scenario file instead of a list: every one the scene has, by
+  // index (every body that can move), after any named above.
+  bool all_bodies = false, all_joints = false, all_actuators = false, all_sensors = false;
 };
 
 // How a run starts, beyond the scene's reset pose: a scenario file's

@@ -167,6 +167,22 @@ TEST(Scenario, ResolvesNamesAndIndicesAndDefaultsToFreeBodiesAndActuators) {
   EXPECT_EQ(defaults.actuators, std::vector<int>{0});
 }
 
+TEST(Scenario, AllInARecordListMeansEveryOneTheSceneHas) {
+  const mjModel* m = chapter_model();
+  const Scenario s = Scenario::from_toml_string("[record]\nbodies = \"all\"\njoints = \"all\"\n");
+  EXPECT_TRUE(s.record.all_bodies && s.record.all_joints && !s.record.all_actuators);
+  const simloop::ResolvedScenario r = simloop::resolve(s, m);
+  // Every body that can move (the box on its free joint, the pusher on its slide), every joint, and only those.
+  EXPECT_EQ(r.bodies, (std::vector<int>{mj_name2id(m, mjOBJ_BODY, "box"), mj_name2id(m, mjOBJ_BODY, "pusher")}));
+  EXPECT_EQ(r.joints.size(), static_cast<std::size_t>(m->njnt));
+  EXPECT_TRUE(r.actuators.empty());
+  // A list holding "all" names an object called all; any other string is refused.
+  EXPECT_EQ(error_of([&] { (void)simloop::resolve(Scenario::from_toml_string("[record]\njoints = [\"all\"]\n"), m); }),
+            "record.joints: no joint named 'all'; its joints: pusher_slide; unnamed, by index: 0");
+  EXPECT_EQ(error_of([] { (void)Scenario::from_toml_string("[record]\nsensors = \"every\"\n"); }),
+            "<string>: record.sensors: expected an array of names or \"all\", got a string");
+}
+
 TEST(Schedule, TheChaptersShoveIsOneDisturbanceDrawnAsBefore) {
   const mjModel* m = chapter_model();
   const Scenario s = Scenario::chapter();

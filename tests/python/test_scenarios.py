@@ -85,6 +85,27 @@ def test_keyword_scenarios_read_like_files(tmp_path):
         simloop.Scenario.from_file(_write(tmp_path / "bad.toml", "setps = 3\n"))
 
 
+def test_record_all_takes_every_joint_and_actuator_of_a_robot_of_hinges():
+    """record "all": a hinge robot's angles without listing them, in the run and the Gymnasium env alike."""
+    scene = simloop.load_model(SCENES / "walker.xml")
+    every = simloop.Scenario(scene=SCENES / "walker.xml", steps=20, record={"joints": "all", "actuators": "all"})
+    assert repr(every).endswith("bodies=[])")
+    result = simloop.run_scenario(every)
+    joints = [n for n in scene.names("joint")]
+    assert [c for c in result.column_names if c.endswith("_vel")] == [f"{j}_vel" for j in joints[1:]]  # [0]: free
+    assert [c for c in result.column_names if c.endswith("_force")] == [f"{a}_force" for a in scene.names("actuator")]
+    listed = simloop.Scenario(scene=SCENES / "walker.xml", steps=20,
+                              record={"joints": joints, "actuators": scene.names("actuator")})
+    np.testing.assert_array_equal(simloop.run_scenario(listed).trajectory, result.trajectory)
+    assert repr(simloop.Scenario(scene=SCENES / "walker.xml", record={"bodies": "all"})).endswith("bodies='all')")
+    with pytest.raises(ValueError, match=r'record.joints: expected an array of names or "all", got a string'):
+        simloop.Scenario(scene=SCENES / "walker.xml", record={"joints": "knee_left"})
+    pytest.importorskip("gymnasium")
+    from simloop.gym import ScenarioEnv
+
+    assert list(ScenarioEnv(every).observation_names) == list(result.column_names[2:])
+
+
 def _write(path: Path, text: str) -> Path:
     path.write_text(text)
     return path
