@@ -255,7 +255,8 @@ RunRecord run_scenario_drawn(const Model& scene, const Scenario& scenario, const
                                      RowSink& sink, RowSink& drawing, RunControl* control) {
   const Model model = scene.for_run(run_timestep(scene, scenario, config), false);
   const PreparedRun run = prepare(model, scenario, config);
-  const mjModel* m = model.get();
+  const Model with_params = with_scene_params(model, run.schedule.start.params);  // as run_scenario's
+  const mjModel* m = with_params.get();
   ResolvedScenario wide = run.resolved;
   for (int id : moving_body_ids(m)) {
     if (std::find(wide.bodies.begin(), wide.bodies.end(), id) == wide.bodies.end()) wide.bodies.push_back(id);
@@ -267,7 +268,7 @@ RunRecord run_scenario_drawn(const Model& scene, const Scenario& scenario, const
   }
   const std::vector<std::string> bodies = moving_bodies(model);
   DrawingSplit split(run.recorder->columns(), bodies, positions, sink, drawing);
-  Data workspace(model);
+  Data workspace(with_params);
   RunRecord result =
       run_schedule(m, workspace.get(), wide, run.schedule, config.record_every, &split, control);
   result.columns = run.recorder->columns();

@@ -47,12 +47,14 @@ def forward_kinematics(result):
 
 @pytest.fixture(scope="module")
 def walker_with_joints(tmp_path_factory):
-    """The walker's scenario recording its torso and its four hinges, run with and without a recording."""
+    """The walker's scenario recording its torso and its four hinges, with a torso mass of each run's own, run with
+    and without a recording."""
     tmp = tmp_path_factory.mktemp("walker")
     text = (SCENES / "walker.toml").read_text().replace('scene = "walker.xml"', f'scene = "{SCENES / "walker.xml"}"')
     scenario = tmp / "walker_joints.toml"
     scenario.write_text(text + '\n[record]\nbodies = ["torso"]\n'
-                        'joints = ["hip_left", "knee_left", "hip_right", "knee_right"]\n')
+                        'joints = ["hip_left", "knee_left", "hip_right", "knee_right"]\n'
+                        '[[reset.param]]\nkind = "mass"\nname = "torso"\nuniform = [6.0, 9.0]\n')
     for flags, out in ((["--record-every", "3"], "r"), (["--record-every", "3", "--no-rerun"], "n")):
         proc = run_command(["--scenario", str(scenario), *flags, "--out", out], tmp)
         assert proc.returncode == 0, proc.stderr
