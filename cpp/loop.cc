@@ -37,6 +37,13 @@ void DecisionStep::put_state(const std::vector<double>& from, mjData* d) const {
   std::copy_n(from.begin() + nq_, nv_, d->qvel);
 }
 
+void derive_uncounted(const mjModel* m, mjData* d) {
+  mjWarningStat counted[mjNWARNING];
+  std::copy_n(d->warning, mjNWARNING, counted);
+  forward_keeping_state(m, d);
+  std::copy_n(counted, mjNWARNING, d->warning);
+}
+
 void DecisionStep::observe(const mjModel* m, mjData* d) {
   begun_ = false;
   take_state(entering_, d);
@@ -44,10 +51,7 @@ void DecisionStep::observe(const mjModel* m, mjData* d) {
                          mjcb_act_bias || mjcb_contactfilter;
   const bool bad = std::any_of(entering_.begin(), entering_.end(), [](double x) { return mju_isBad(x) != 0; });
   if (whole_forward_ || callbacks || bad) {
-    mjWarningStat counted[mjNWARNING];
-    std::copy_n(d->warning, mjNWARNING, counted);
-    forward_keeping_state(m, d);
-    std::copy_n(counted, mjNWARNING, d->warning);
+    derive_uncounted(m, d);
     return;
   }
   mj_step1(m, d);
@@ -80,6 +84,10 @@ LoopResult run_loop(const mjModel* m, mjData* d, const Schedule& schedule, const
   std::int64_t next_decision = policy ? 0 : steps;
   std::vector<double> observation(policy ? static_cast<std::size_t>(width) : 0);
   DecisionStep decision(m, recorder);
+  // RK4's later stages leave the poses, contacts and forces of a state the
+  // row does not hold (its last stage's): a recorded row derives them from
+  // its own state before the step instead of reading them after it.
+  const bool derive_before_step = m->opt.integrator == mjINT_RK4;
 
   // mj_forward fills in the derived state (poses, contacts) without
   // advancing time, so row 0 is the true state at t = 0.
@@ -117,12 +125,16 @@ LoopResult run_loop(const mjModel* m, mjData* d, const Schedule& schedule, const
         if (until_record-- == 0) {
           row = block.next();
           recorder.before_step(row, step, m, d, true);
+          if (derive_before_step) {
+            derive_uncounted(m, d);
+            recorder.after_step(row, m, d);
+          }
           until_record = record_every - 1;
         }
         for (StepObserver* o : observers) o->before_step(step, m, d);
         decision.step(m, d);  // mj_step (its second half after a decision's observation)
         health.after_step(d, step);
-        if (row) recorder.after_step(row, m, d);
+        if (row && !derive_before_step) recorder.after_step(row, m, d);
         for (StepObserver* o : observers) o->after_step(step, m, d, row);
       }
     });

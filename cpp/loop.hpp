@@ -104,6 +104,10 @@ class StepObserver {
 // state (a full contact buffer, say) counts once a step either way, as in an
 // open-loop run: the whole forward pass leaves the warning counters as it
 // found them, since the step derives the same state again.
+// forward_keeping_state, leaving MuJoCo's warning counters as it found them
+// (the step that follows derives the same state again and counts them).
+void derive_uncounted(const mjModel* m, mjData* d);
+
 class DecisionStep {
  public:
   DecisionStep(const mjModel* m, const RowRecorder& recorder);

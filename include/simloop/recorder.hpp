@@ -56,7 +56,9 @@ class RowRecorder {
 // derives from that state (body poses and velocities, actuator forces,
 // sensors, contacts) are taken right after it, when mj_step has computed them
 // for exactly that state (read before it, they would lag by one step). The
-// final row gets them from mj_forward.
+// final row gets them from mj_forward. Under RK4, whose later stages leave
+// them for another state, a recorded row derives them before its step (a
+// forward pass more per recorded row, the run's bits unchanged).
 //
 // Columns, in order: step, time; `<actuator>_ctrl` (the ctrl MuJoCo applied,
 // after ctrlrange clamping) for every controlled or recorded actuator;

@@ -4,6 +4,7 @@
 // mj_step, in the observation and in the run.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -18,6 +19,7 @@
 #include "simloop/model.hpp"
 #include "simloop/recorder.hpp"
 #include "simloop/scenario.hpp"
+#include "simloop/scenario_run.hpp"
 #include "simloop/shove.hpp"
 #include "simloop/state.hpp"
 
@@ -191,3 +193,33 @@ TEST(DecisionStep, FollowsTreesThatFallAsleep) {
   EXPECT_GT(asleep, 0);
 }
 #endif
+
+// A row holds one state: under RK4 too, whose later stages would leave the
+// poses of another (its last stage's) for a read after the step.
+TEST(Loop, EveryColumnOfARowIsOfTheRowsStateUnderEveryIntegrator) {
+  const simloop::Scenario scenario = simloop::Scenario::from_toml_string(
+      std::string("name = \"t\"\nscene = \"pusht.xml\"\nsteps = 200\n") + kPushtRecord +
+          "[reset]\nqvel = [0.5, 0.3, 0, 0, 0, 2, 0, 0]\n",
+      "test", SIMLOOP_TEST_SCENES);
+  for (const char* integrator : {"Euler", "implicit", "RK4"}) {
+    const simloop::RunRecord r = simloop::run_scenario(pusht_integrated_by(integrator), scenario, {});
+    const auto column = [&](const std::string& name) {
+      for (std::size_t c = 0; c < r.columns.size(); ++c) {
+        if (r.columns[c].name == name) return static_cast<std::int64_t>(c);
+      }
+      ADD_FAILURE() << "no column " << name;
+      return std::int64_t{0};
+    };
+    double moved = 0.0;
+    for (const auto& [body, joint] : {std::pair{"tblock_x", "tblock_free_pos0"}, std::pair{"tblock_y", "tblock_free_pos1"},
+                                      std::pair{"tblock_z", "tblock_free_pos2"}}) {
+      const std::int64_t b = column(body), j = column(joint);
+      for (std::int64_t row = 0; row < r.trajectory.rows(); ++row) {
+        // A free joint's body sits at its qpos: bit for bit, when both are of one state.
+        ASSERT_EQ(r.trajectory.at(row, b), r.trajectory.at(row, j)) << integrator << " " << body << " row " << row;
+        moved = std::max(moved, std::abs(r.trajectory.at(row, j) - r.trajectory.at(0, j)));
+      }
+    }
+    EXPECT_GT(moved, 1e-3) << integrator << ": the block moves, so a lag would show";
+  }
+}
