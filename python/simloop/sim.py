@@ -52,8 +52,8 @@ class Sim:
     keep it). sensordata is a read-only view. A view keeps its Sim alive, and
     the mjData never moves, so a view never dangles. Derived quantities (a
     body's xpos, xquat, velocity) are copies, as of the last step: MuJoCo
-    computes them before integrating; forward() brings them up to date
-    without changing the run's bits.
+    computes them before integrating (under RK4, at its last stage);
+    forward() brings them up to date without changing the run's bits.
 
     Threads. Each method call (step, reads, get/set_state, apply_force...)
     holds the Sim's lock, so calls from several threads take turns. The
