@@ -86,6 +86,14 @@ bool is_index(const std::string& name) {
          std::all_of(name.begin(), name.end(), [](char c) { return c >= '0' && c <= '9'; });
 }
 
+// An index past the scene's objects of a kind: what it has, by index and name.
+[[noreturn]] void out_of_range(const std::string& context, const char* kind, const std::string& index, int count,
+                               const char* what_listed, const std::string& listed) {
+  throw InvalidArgument(context + ": " + kind + " index " + index + " is out of range; the scene has " +
+                        (count == 0 ? std::string("none") : std::to_string(count) + " (0 to " + std::to_string(count - 1) + ")") +
+                        "; " + what_listed + ": " + listed);
+}
+
 // A name, or (if no object has that name) an index.
 int find(const mjModel* m, mjtObj type, const char* kind, const char* what_listed, int count,
          bool (*listed)(const mjModel*, int), const std::string& name, const std::string& context) {
@@ -94,9 +102,7 @@ int find(const mjModel* m, mjtObj type, const char* kind, const char* what_liste
   if (is_index(name)) {
     const long index = std::stol(name);
     if (index < count) return static_cast<int>(index);
-    throw InvalidArgument(context + ": " + kind + " index " + name + " is out of range; the scene has " +
-                          std::to_string(count) + " (0 to " + std::to_string(count - 1) + "); " + what_listed + ": " +
-                          listing(m, type, count, listed));
+    out_of_range(context, kind, name, count, what_listed, listing(m, type, count, listed));
   }
   const std::vector<std::string> all = names_of(m, type, count, nullptr);
   const std::string hint = did_you_mean(name, all);
@@ -108,9 +114,9 @@ int find(const mjModel* m, mjtObj type, const char* kind, const char* what_liste
 int find_actuator(const mjModel* m, const std::string& name, const std::string& context) {
   if (!name.empty() && std::all_of(name.begin(), name.end(), [](char c) { return c >= '0' && c <= '9'; })) {
     const long index = name.size() > 9 ? -1 : std::stol(name);
-    if (index < 0 || index >= m->nu) {
-      throw InvalidArgument(context + ": actuator index " + name + " is out of range; the scene has " +
-                            std::to_string(m->nu) + " actuators: " + join(names_of(m, mjOBJ_ACTUATOR, detail::compat::as_int(m->nu), nullptr)));
+    const int count = detail::compat::as_int(m->nu);
+    if (index < 0 || index >= count) {
+      out_of_range(context, "actuator", name, count, "its actuators", listing(m, mjOBJ_ACTUATOR, count, nullptr));
     }
     return static_cast<int>(index);
   }

@@ -82,7 +82,7 @@ def scene_source(model: object) -> Tuple[str, str]:
 def scenario_source(scenario: Any) -> Tuple[str, str, str, str]:
     """How a simloop.Scenario travels: ("chapter", "", "", "") or ("toml", its text, the folder its paths resolve
     against, its name): a file's scenario is named for the file unless its text names it, and may be empty."""
-    if scenario._remake == (type(scenario).chapter, ()):
+    if scenario._chapter:
         return ("chapter", "", "", "")
     return ("toml", scenario.toml, scenario._base, scenario.name)
 

@@ -176,11 +176,13 @@ class Scenario:
         base = os.getcwd()  # where its relative paths resolve (sent along to workers)
         self._made(_core.Scenario.from_toml(text, "Scenario(...)", base), base, text, (_from_toml, (text, base)))
 
-    def _made(self, core: _core.Scenario, base: str, toml: str, remake: Tuple[Any, ...]) -> "Scenario":
+    def _made(self, core: _core.Scenario, base: str, toml: str, remake: Tuple[Any, ...],
+              chapter: bool = False) -> "Scenario":
         """Every way of making a Scenario ends here: its compiled form, the
         folder its relative paths resolve against, its TOML ("" for the
-        chapter's), and how a pickle makes it again."""
-        self._core, self._base, self.toml, self._remake = core, base, toml, remake
+        chapter's, and for an empty file's), how a pickle makes it again, and
+        whether it is the chapter's (which travels as itself, not as TOML)."""
+        self._core, self._base, self.toml, self._remake, self._chapter = core, base, toml, remake, chapter
         return self
 
     @classmethod
@@ -195,7 +197,7 @@ class Scenario:
     @classmethod
     def chapter(cls) -> "Scenario":
         """The chapter's run: its scene, push_motor at 1.0, the shove on the box."""
-        return cls.__new__(cls)._made(_core.Scenario.chapter(), "", "", (Scenario.chapter, ()))
+        return cls.__new__(cls)._made(_core.Scenario.chapter(), "", "", (Scenario.chapter, ()), chapter=True)
 
     # A Scenario does not change once made: copies are itself, and a pickle
     # makes it again the way it was made (Gymnasium deep-copies and pickles

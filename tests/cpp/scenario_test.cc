@@ -118,7 +118,7 @@ TEST(Scenario, UnknownNamesListWhatTheSceneHasWithADidYouMean) {
             "control[0]: no actuator named 'motor'; its actuators: push_motor");
   s.controls[0].actuator = "3";
   EXPECT_EQ(error_of([&] { (void)simloop::resolve(s, chapter_model()); }),
-            "control[0]: actuator index 3 is out of range; the scene has 1 actuators: push_motor");
+            "control[0]: actuator index 3 is out of range; the scene has 1 (0 to 0); its actuators: push_motor");
   s = Scenario::chapter();
   s.controls.push_back({"0", {{When::steps(0), 0.5}}});  // push_motor again, by index
   EXPECT_EQ(error_of([&] { (void)simloop::resolve(s, chapter_model()); }),

@@ -148,13 +148,17 @@ def test_concurrent_futures_executors(local):
 
 def test_a_scenario_file_travels_as_itself_named_for_its_file_and_empty_or_not(tmp_path):
     """An executor gets a file's scenario as the local batch reads it: named for its file when its text names
-    nothing (the table's scenario column), and an empty file is an empty scenario, not the chapter's."""
+    nothing (the table's scenario column), and an empty file is an empty scenario, not the chapter's; the
+    chapter's scenario, made from a subclass too, is the chapter's."""
     unnamed = tmp_path / "walk.toml"
     unnamed.write_text(f'scene = "{ROOT / "python/simloop/scenes/pusht.xml"}"\nsteps = 50\n')
     empty = tmp_path / "empty.toml"
     empty.write_text("")
-    for path, name in [(unnamed, "walk"), (empty, "empty")]:
-        scenario = simloop.Scenario.from_file(path)
+    class Mine(simloop.Scenario):
+        pass
+
+    for scenario, name in [(simloop.Scenario.from_file(unnamed), "walk"), (simloop.Scenario.from_file(empty), "empty"),
+                           (Mine.chapter(), "ch0.1-sim-loop")]:
         local = simloop.run_scenario_batch(scenario, seeds=[0, 1], metrics_only=True)
         with ThreadPoolExecutor(2) as pool:
             remote = simloop.run_scenario_batch(scenario, seeds=[0, 1], executor=pool)

@@ -294,9 +294,11 @@ def tracked_files(folder: str, recursive: bool = False) -> List[str]:
     if proc is not None and proc.returncode == 0 and proc.stdout:
         names = [p[len(folder):] for p in proc.stdout.splitlines()]
     else:
-        found = (ROOT / folder).rglob("*") if recursive else (ROOT / folder).iterdir()
-        names = [p.relative_to(ROOT / folder).as_posix() for p in found if p.is_file()]
-        names = [n for n in names if not n.startswith((".", "build"))]  # no venvs, no build trees
+        names = [] if recursive else [p.name for p in (ROOT / folder).iterdir() if p.is_file()]
+        if recursive:
+            for at, dirs, files in os.walk(ROOT / folder):
+                dirs[:] = [d for d in dirs if not d.startswith((".", "build"))]  # no venvs, no build trees
+                names += [(Path(at) / f).relative_to(ROOT / folder).as_posix() for f in files]
     return sorted(n for n in names if recursive or "/" not in n)
 
 

@@ -118,3 +118,30 @@ def test_a_vector_env_read_from_another_thread_mid_step_waits_instead_of_deadloc
     """, timeout=60)
     assert proc.returncode == 0, f"exit {proc.returncode}: {proc.stderr[-2000:]}"
     assert proc.stdout.split() == ["waited", "[400000,", "400000]", "400000", "True", "[]"]
+
+
+def test_episodes_called_from_a_signal_handler_inside_their_own_step_refuse_instead_of_deadlocking():
+    proc = run_python("""
+        import signal
+        import numpy as np
+        from simloop import _core, Scenario
+
+        scenario = Scenario.chapter()
+        config = _core.ScenarioConfig(0, "mt19937_64", None, 10_000_000, False, 1)
+        episodes = _core.Episodes(scenario.model(), scenario._core, config, 1)
+        episodes.reset(0, 0)
+        signal.signal(signal.SIGALRM, lambda *_: episodes.progress())
+        signal.setitimer(signal.ITIMER_REAL, 0.05)
+        try:
+            episodes.step(np.zeros((1, 1)), 5_000_000)
+            print("not refused")
+        except ValueError as e:
+            print(e)
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        steps, _ = episodes.progress()  # usable again
+        print(0 < steps[0] < 5_000_000)
+    """, timeout=60)
+    assert proc.returncode == 0, f"exit {proc.returncode}: {proc.stderr[-2000:]}"
+    assert proc.stdout.splitlines() == [
+        "these episodes are in the middle of a call on this thread (a signal handler or progress callback called "
+        "it); call it after that call returns", "True"]
