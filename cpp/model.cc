@@ -80,8 +80,22 @@ Model Model::from_file(const std::string& path) {
     throw IoError(path + ": cannot open (" + std::strerror(errno) + ")");
   }
   std::vector<std::string> warnings;
-  mjModel* raw = load_xml(path.c_str(), nullptr, path, warnings);
-  return adopt(raw, path, std::move(warnings));
+  try {
+    mjModel* raw = load_xml(path.c_str(), nullptr, path, warnings);
+    return adopt(raw, path, std::move(warnings));
+  } catch (const MujocoError&) {
+    // Text that is not XML at all (a scenario's TOML, a CSV): say so, not
+    // what MuJoCo's XML parser made of its first line.
+    std::string start(64, '\0');
+    probe.read(start.data(), static_cast<std::streamsize>(start.size()));
+    start.resize(static_cast<std::size_t>(probe.gcount()));
+    const std::size_t first = start.find_first_not_of(" \t\r\n\xEF\xBB\xBF");
+    if (first == std::string::npos || start[first] == '<') throw;
+    const char c = start[first];
+    const std::string begins = c >= 0x20 && c < 0x7f ? std::string("begins with '") + c + "', not '<'" : "does not begin with '<'";
+    throw MujocoError(path + ": not an MJCF scene (its text " + begins +
+                      "); a scenario file (TOML) runs as a scenario (--scenario, simloop.Scenario.from_file)");
+  }
 }
 
 Model Model::with_timestep(double timestep) const {

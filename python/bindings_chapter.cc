@@ -190,18 +190,6 @@ void bind_chapter(py::module_& m) {
   sweep_result
       .def_readonly("duration", &simloop::SweepResult::duration)
       .def_readonly("points", &simloop::SweepResult::points)
-      .def("__repr__", [](const simloop::SweepResult& r) {
-        const std::string edge =
-            r.edge_index < 0 ? "None"
-                             : simloop::python_float_repr(r.points[static_cast<std::size_t>(r.edge_index)].timestep);
-        std::string range;
-        if (!r.points.empty()) {
-          range = ", timesteps=" + simloop::python_float_repr(r.points.front().timestep) + ".." +
-                  simloop::python_float_repr(r.points.back().timestep);
-        }
-        return "SweepResult(points=" + std::to_string(r.points.size()) + range + ", duration=" +
-               simloop::python_float_repr(r.duration) + ", edge=" + edge + ")";
-      })
       .def(pickle_as_bytes<simloop::SweepResult, &simloop::sweep_result_from_bytes>());
   m.def(
       "sweep",

@@ -22,6 +22,7 @@
 #include <mujoco/mujoco.h>
 
 #include "simloop/control.hpp"
+#include "simloop/number_format.hpp"
 #include "simloop/output.hpp"
 #include "simloop/record_bytes.hpp"
 #include "simloop/run.hpp"
@@ -297,7 +298,7 @@ auto pickle_as_bytes() {
 }
 
 // What every kind of sweep result offers beside its own figures: its edge,
-// sweep.csv, the table for people, and writing sweep.csv.
+// sweep.csv, the table for people, writing sweep.csv, and its repr.
 template <class Result, std::string (*Csv)(const Result&), std::string (*Summary)(const Result&)>
 void bind_sweep_outputs(py::class_<Result>& result, const char* edge_doc) {
   result
@@ -320,7 +321,19 @@ void bind_sweep_outputs(py::class_<Result>& result, const char* edge_doc) {
             simloop::write_file_atomically(out / "sweep.csv", Csv(r));
             return out / "sweep.csv";
           },
-          py::arg("out"), "Writes sweep.csv into out (atomically); returns its path.");
+          py::arg("out"), "Writes sweep.csv into out (atomically); returns its path.")
+      .def("__repr__", [](const py::object& self) {
+        const Result& r = self.cast<const Result&>();
+        std::string text = py::str(py::type::handle_of(self).attr("__name__")).cast<std::string>() + "(";
+        if (py::hasattr(self, "name")) text += "name=" + py::repr(self.attr("name")).cast<std::string>() + ", ";
+        text += "points=" + std::to_string(r.points.size());
+        if (!r.points.empty()) {
+          text += ", timesteps=" + simloop::python_float_repr(r.points.front().timestep) + ".." +
+                  simloop::python_float_repr(r.points.back().timestep);
+        }
+        return text + ", duration=" + simloop::python_float_repr(r.duration) +
+               ", edge=" + py::repr(self.attr("edge")).cast<std::string>() + ")";
+      });
 }
 
 // The topics' bindings, in the order bindings.cc registers them (a type is

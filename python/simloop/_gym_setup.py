@@ -10,7 +10,7 @@ import numpy as np
 from gymnasium import spaces
 
 from . import _core
-from ._checks import _check_int, _check_keys, _check_seed, _describe
+from ._checks import ModelLike, _check_int, _check_keys, _check_seed, _describe
 from .render import EpisodePictures
 from .scenario import RESET_KEYS, ScenarioLike, _scenario_and_scene, reset_toml, scenario_config
 
@@ -59,7 +59,7 @@ class _Setup:
 
     def __init__(self, scenario: ScenarioLike, count: int, control_every: int, reward: Optional[Reward],
                  terminate: Optional[Terminate], rng: str, timestep: Optional[float], steps: Optional[int],
-                 perturb: bool, model: Optional[_core.Model], render: "Rendering") -> None:
+                 perturb: bool, model: ModelLike, render: "Rendering") -> None:
         scenario, scene = _scenario_and_scene(scenario, model)
         if reward is not None and not callable(reward):
             raise TypeError(f"reward must be None or a callable reward(obs, action, next_obs) -> float, "

@@ -73,7 +73,7 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from . import _core, _gym_registry
-from ._checks import _check_int, _check_threads, _describe
+from ._checks import ModelLike, _check_int, _check_threads, _describe
 from ._gym_setup import (_TERMINAL_ENDS, Rendering, Reward, Terminate, _check_max_episode_steps, _check_options, _ended_by,
                          _episode_seed, _Setup, _start, batched)
 from .render import RENDER_MODES
@@ -110,7 +110,7 @@ class ScenarioEnv(gymnasium.Env):
     def __init__(self, scenario: ScenarioLike, *, control_every: int = 1, reward: Optional[Reward] = None,
                  terminate: Optional[Terminate] = None, max_episode_steps: Optional[int] = None,
                  rng: str = "mt19937_64", timestep: Optional[float] = None, steps: Optional[int] = None,
-                 perturb: bool = True, model: Optional[_core.Model] = None, render_mode: Optional[str] = None,
+                 perturb: bool = True, model: ModelLike = None, render_mode: Optional[str] = None,
                  width: int = 480, height: int = 480, view: Optional[Dict[str, Any]] = None) -> None:
         self._setup = _Setup(scenario, 1, control_every, reward, terminate, rng, timestep, steps, perturb, model,
                              Rendering(render_mode, width, height, view))
@@ -205,7 +205,7 @@ class ScenarioVectorEnv(VectorEnv):
                  max_episode_steps: Optional[int] = None,
                  autoreset_mode: Union[AutoresetMode, str] = AutoresetMode.NEXT_STEP, threads: Optional[int] = None,
                  rng: str = "mt19937_64", timestep: Optional[float] = None, steps: Optional[int] = None,
-                 perturb: bool = True, model: Optional[_core.Model] = None, render_mode: Optional[str] = None,
+                 perturb: bool = True, model: ModelLike = None, render_mode: Optional[str] = None,
                  width: int = 480, height: int = 480, view: Optional[Dict[str, Any]] = None) -> None:
         try:
             mode = AutoresetMode(autoreset_mode)

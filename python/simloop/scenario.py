@@ -23,8 +23,8 @@ import os
 from typing import Any, Dict, Iterable, Mapping, Optional, Sequence, Tuple, Union
 
 from . import _core
-from ._checks import _check_bool, _check_int, _check_keys, _check_real, _check_seed, _check_str, _describe, load_model
-from ._mujoco_check import is_mujoco_model
+from ._checks import (ModelLike, _check_bool, _check_int, _check_keys, _check_real, _check_seed, _check_str, _describe,
+                      load_model)
 
 ScenarioResult = _core.ScenarioResult
 ScenarioLike = Union["Scenario", str, "os.PathLike[str]"]
@@ -238,17 +238,13 @@ def _from_toml(text: str, base: str) -> Scenario:
                                             (_from_toml, (text, base)))
 
 
-def _scenario_and_scene(scenario: ScenarioLike, model: Optional[_core.Model]) -> Tuple[Scenario, _core.Model]:
+def _scenario_and_scene(scenario: ScenarioLike, model: ModelLike) -> Tuple[Scenario, _core.Model]:
     if isinstance(scenario, (str, os.PathLike)):
         scenario = Scenario.from_file(scenario)
     if not isinstance(scenario, Scenario):
         raise TypeError(f"scenario must be a simloop.Scenario or a scenario file's path, got {_describe(scenario)}")
-    scene = scenario.model() if model is None else model
-    if not isinstance(scene, _core.Model):
-        if not is_mujoco_model(scene):
-            raise TypeError(f"model must be a simloop.Model or a mujoco.MjModel, got {_describe(scene)}")
-        scene = load_model(scene)
-    return scenario, scene
+    # model: the scenario's own scene (None), or another (a Model, an MJCF path, a mujoco.MjModel).
+    return scenario, scenario.model() if model is None else load_model(model)
 
 
 def scenario_config(seed: object, rng: object, timestep: object, steps: object, perturb: object,

@@ -8,8 +8,8 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any, Iterable, Optional, Tuple
 
 from . import _core
-from ._checks import (Progress, _check_bool, _check_int, _check_progress, _check_real, _check_seed, _check_str,
-                      _check_threads, _describe, _sequence)
+from ._checks import (ModelLike, Progress, _check_bool, _check_int, _check_progress, _check_real, _check_seed,
+                      _check_str, _check_threads, _describe, _sequence)
 from .policy import Policy, _check_no_control_every, _decider
 from .scenario import ScenarioLike, ScenarioResult, _scenario_and_scene, scenario_config
 
@@ -42,7 +42,7 @@ def _inputs_array(name: str, value: object, shapes: Tuple[int, ...], described: 
 
 def run_scenario(scenario: ScenarioLike, *, seed: int = 0, rng: str = "mt19937_64",
                  timestep: Optional[float] = None, steps: Optional[int] = None, perturb: bool = True,
-                 record_every: int = 1, model: Optional[_core.Model] = None,
+                 record_every: int = 1, model: ModelLike = None,
                  progress: Progress = None, controls: Any = None, initial_state: Any = None,
                  policy: Optional[Policy] = None, control_every: int = 1) -> ScenarioResult:
     """Runs a scenario (a Scenario or a scenario file's path) once.
@@ -50,7 +50,8 @@ def run_scenario(scenario: ScenarioLike, *, seed: int = 0, rng: str = "mt19937_6
     seed draws its random disturbances and nothing else; rng is "mt19937_64"
     or "numpy" as for run(). timestep and steps override the scenario's;
     perturb=False drops its disturbances. model: the scene already compiled
-    (scenario.model()), to compile it once for many runs. Returns a
+    (scenario.model()), to compile it once for many runs, or another scene
+    (a Model, an MJCF file's path, a mujoco.MjModel). Returns a
     ScenarioResult: column_names, trajectory (a read-only numpy view),
     column(name), metrics (a dict), disturbances, warnings, final_row,
     final_state (the full state at the end), summary(), write(out).
@@ -101,7 +102,7 @@ def run_scenario(scenario: ScenarioLike, *, seed: int = 0, rng: str = "mt19937_6
 def run_scenario_batch(scenario: ScenarioLike, seeds: Iterable[int] = (0,),
                        timesteps: Iterable[Optional[float]] = (None,), *, rng: str = "mt19937_64",
                        steps: Optional[int] = None, perturb: bool = True, record_every: int = 1,
-                       model: Optional[_core.Model] = None, threads: Optional[int] = None,
+                       model: ModelLike = None, threads: Optional[int] = None,
                        progress: Progress = None, controls: Any = None, initial_state: Any = None,
                        metrics_only: bool = False, executor: object = None, chunk_size: Optional[int] = None,
                        policy: Optional[Policy] = None, control_every: int = 1) -> BatchTable[ScenarioResult]:

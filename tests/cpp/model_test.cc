@@ -102,6 +102,13 @@ TEST(Model, MissingPiecesAreNamed) {
   EXPECT_EQ(simloop::chapter_layout_missing(simloop::pusher_scene()), "");
 }
 
+TEST(Model, AFileThatIsNotXmlSaysSoNotWhatTheXmlParserMadeOfIt) {
+  const std::string scenario = std::string(SIMLOOP_TEST_SCENES) + "/pusht.toml";
+  EXPECT_EQ(message_of<simloop::MujocoError>([&] { (void)simloop::Model::from_file(scenario); }),
+            scenario + ": not an MJCF scene (its text begins with '#', not '<'); a scenario file (TOML) runs as a "
+                       "scenario (--scenario, simloop.Scenario.from_file)");
+}
+
 TEST(Model, InvalidXmlRaisesMujocosOwnMessageAndWritesNoLog) {
   test::TempDir dir;
   test::in_directory(dir.path(), [] {

@@ -30,6 +30,9 @@ def test_configs():
 def test_sweeps():
     sweep = simloop.sweep(timesteps=[0.002, 0.1], duration=1.0)
     assert repr(sweep) == f"SweepResult(points=2, timesteps=0.002..0.1, duration=1.0, edge={sweep.edge!r})"
+    scenario_sweep = simloop.sweep(scenario=simloop.Scenario.chapter(), timesteps=[0.002, 0.1], duration=1.0)
+    assert repr(scenario_sweep) == (f"ScenarioSweepResult(name='ch0.1-sim-loop', points=2, timesteps=0.002..0.1, "
+                                    f"duration=1.0, edge={scenario_sweep.edge!r})")
     p = sweep.points[1]
     assert repr(p) == (f"SweepPoint(timestep=0.1, steps=10, stable={p.stable!r}, "
                        f"peak_box_z={round(p.peak_box_z, 6)!r}, warnings={p.warnings})")

@@ -75,6 +75,11 @@ def test_keyword_scenarios_read_like_files(tmp_path):
                     sensors=["tblock_pos", "tip_x"]))
     from_file = simloop.run_scenario(SCENES / "pusht.toml", seed=5)
     from_keywords = simloop.run_scenario(built, seed=5)
+    # model= takes the scene as any run does: compiled, or an MJCF file's path.
+    for scene in (built.model(), SCENES / "pusht.xml", str(SCENES / "pusht.xml")):
+        np.testing.assert_array_equal(simloop.run_scenario(built, seed=5, model=scene).trajectory, from_file.trajectory)
+    assert repr(simloop.sweep(scenario=built, model=SCENES / "pusht.xml", timesteps=[0.002], duration=0.1)) == repr(
+        simloop.sweep(scenario=built, timesteps=[0.002], duration=0.1))
     assert from_keywords.column_names == from_file.column_names
     np.testing.assert_array_equal(from_keywords.trajectory, from_file.trajectory)
     with pytest.raises(ValueError, match=r"no body named 'tblok' \(did you mean 'tblock'\?\); "
