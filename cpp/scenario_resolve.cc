@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <limits>
 #include <utility>
 #include <string>
 #include <vector>
@@ -18,15 +19,16 @@ namespace simloop {
 
 std::string did_you_mean(std::string_view name, const std::vector<std::string>& candidates) {
   // Edit distance with transpositions (optimal string alignment),
-  // case-insensitive; a likely typo is at most a third of the name's length
-  // away, and at least one edit for short names.
+  // case-insensitive; a likely typo is at most a third of the longer name's
+  // length away ("bodys" for "bodies"), and at least one edit for short names.
   const auto same = [](char a, char b) {
     return std::tolower(static_cast<unsigned char>(a)) == std::tolower(static_cast<unsigned char>(b));
   };
   std::string best;
-  std::size_t best_distance = std::max<std::size_t>(1, name.size() / 3) + 1;
+  std::size_t best_distance = std::numeric_limits<std::size_t>::max();
   for (const std::string& candidate : candidates) {
     const std::size_t n = name.size(), k = candidate.size();
+    if (std::max(n, k) - std::min(n, k) > std::max<std::size_t>(1, std::max(n, k) / 3)) continue;
     std::vector<std::vector<std::size_t>> dist(n + 1, std::vector<std::size_t>(k + 1));
     for (std::size_t i = 0; i <= n; ++i) dist[i][0] = i;
     for (std::size_t j = 0; j <= k; ++j) dist[0][j] = j;
@@ -39,7 +41,7 @@ std::string did_you_mean(std::string_view name, const std::vector<std::string>& 
         }
       }
     }
-    if (dist[n][k] < best_distance) {
+    if (dist[n][k] <= std::max<std::size_t>(1, std::max(n, k) / 3) && dist[n][k] < best_distance) {
       best_distance = dist[n][k];
       best = candidate;
     }

@@ -4,10 +4,12 @@
 // use these too, so each argument type has one wording.
 #include <pybind11/gil_safe_call_once.h>
 #include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
 
 #include <string>
 
 #include "bindings_common.hpp"
+#include "simloop/scenario.hpp"
 
 namespace simloop_py {
 
@@ -109,6 +111,7 @@ void bind_args(py::module_& m) {
   m.def("_check_path", &check_path, "name"_a, "value"_a, "what"_a);
   m.def("_check_text", &check_text, "name"_a, "value"_a);
   m.def("_check_real", &check_real, "name"_a, "value"_a);
+  m.def("_did_you_mean", &simloop::did_you_mean, "name"_a, "candidates"_a, "The likely typo's fix, or '': one rule.");
 }
 
 }  // namespace simloop_py

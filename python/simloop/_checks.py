@@ -60,11 +60,9 @@ def _check_int(name: str, value: object, minimum: int = I64_MIN, maximum: int = 
 
 
 def _did_you_mean(name: str, names: "Iterable[str]") -> str:
-    """" (did you mean 'x'?)" for the closest of names to a mistyped name, or ""."""
-    import difflib
-
-    close = difflib.get_close_matches(name, list(names), n=1)
-    return f" (did you mean {close[0]!r}?)" if close else ""
+    """" (did you mean 'x'?)" for the closest of names to a mistyped name, or "" (the C++ side's rule)."""
+    close = _core._did_you_mean(name, list(names))
+    return f" (did you mean {close!r}?)" if close else ""
 
 
 def _check_keys(name: str, mapping: "Mapping[Any, Any]", known: Sequence[str]) -> None:

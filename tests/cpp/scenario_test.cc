@@ -269,6 +269,8 @@ TEST(DidYouMean, SuggestsOnlyLikelyTypos) {
   EXPECT_EQ(simloop::did_you_mean("tblok", {"tblock", "pusher"}), "tblock");
   EXPECT_EQ(simloop::did_you_mean("PUSHER", {"tblock", "pusher"}), "pusher");
   EXPECT_EQ(simloop::did_you_mean("floor", {"tblock", "pusher"}), "");
+  EXPECT_EQ(simloop::did_you_mean("bodys", {"bodies", "joints"}), "bodies");  // two edits in six letters
+  EXPECT_EQ(simloop::did_you_mean("box", {"bar", "pusher"}), "");               // not two in three
   EXPECT_EQ(simloop::did_you_mean("x", {}), "");
 }
 
