@@ -176,8 +176,8 @@ std::string summary_text(const RunRecord& r) {
                     static_cast<long long>(acted), acted == 1 ? "" : "s", static_cast<long long>(f.start),
                     static_cast<long long>(asked));
     } else {
-      std::snprintf(window, sizeof window, "%lld steps from step %lld", static_cast<long long>(acted),
-                    static_cast<long long>(f.start));
+      std::snprintf(window, sizeof window, "%lld step%s from step %lld", static_cast<long long>(acted),
+                    acted == 1 ? "" : "s", static_cast<long long>(f.start));
     }
     const double* w = f.wrench.data();
     std::snprintf(line, sizeof line, "disturbance on %s: force [%+.2f, %+.2f, %+.2f] N, torque [%+.2f, %+.2f, %+.2f] N m, %s\n",
