@@ -58,7 +58,7 @@ namespace {
 // flags' scenario has the shove as disturbance[0] (--body) and the --ctrl
 // values as control[0], control[1]...
 std::string scenario_error(const Options& opts, const std::string& what) {
-  if (!opts.scenario_path.empty()) return "--scenario " + opts.scenario_path + ": " + what;
+  if (!opts.scenario_path.empty()) return "--scenario: " + opts.scenario_path + ": " + what;  // as a parse error says it
   const std::string shove = "disturbance[0]: ";
   if (what.rfind(shove, 0) == 0) {
     return "--body" + std::string(opts.body.empty() ? " (default box)" : "") + ": " + what.substr(shove.size());

@@ -209,7 +209,7 @@ def test_a_scenario_the_run_would_refuse_is_bad_input(tmp_path):
             proc = run_command(["--scenario", str(path), "--out", "bad"], tmp_path, python=python)
             assert proc.returncode == 2, (name, proc.stderr)
             program = "sim-loop" if python else "sim_loop"
-            assert proc.stderr.splitlines() == [f"{program}: --scenario {path}: {message}"], proc.stderr
+            assert proc.stderr.splitlines() == [f"{program}: --scenario: {path}: {message}"], proc.stderr
             assert not (tmp_path / "bad").exists()
 
 
