@@ -9,8 +9,8 @@ as dm_control's physics.named does.
 
 A NamedArray is a numpy view (np.asarray(it), or .array) whose first index
 also takes names: of the objects its rows are ("nbody" rows: bodies, "ngeom":
-geoms, ...), or of joints for the nq rows (a joint's positions) and the nv
-rows (its velocities). Names are resolved once per array, so a named read
+geoms, ...), of joints for the nq rows (a joint's positions) and the nv
+rows (its velocities), and of sensors for sensordata (a sensor's values). Names are resolved once per array, so a named read
 costs about what a numpy one does.
 
 What can be written: mjData's inputs and state (qpos, qvel, ctrl, act,
@@ -118,9 +118,12 @@ class NamedArray:
 
 
 def _rows_by_name(model: _core.Model, rows_count: str, kind: str) -> Dict[str, Union[int, slice]]:
-    """Each named row: the objects of `kind`, or a joint's slice of the nq / nv rows."""
+    """Each named row: the objects of `kind`, a joint's slice of the nq / nv rows, or a sensor's of sensordata's."""
     if kind:
         return {name: i for i, name in enumerate(model.names(kind)) if name}
+    if rows_count == "nsensordata":
+        info = [model.object_info("sensor", s) for s in range(model.nsensor)]
+        return {name: slice(i["adr"], i["adr"] + i["dim"]) for name, i in zip(model.names("sensor"), info) if name}
     if rows_count in ("nq", "nv"):
         rows: Dict[str, Union[int, slice]] = {}
         for j, name in enumerate(model.names("joint")):

@@ -4,6 +4,7 @@ model, contact forces, and every kind of object's names."""
 
 import copy
 import pickle
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -23,6 +24,13 @@ def test_rows_are_named_by_the_objects_they_are():
     assert named.data.xpos["box", 2] == 0.05
     assert named.model.body_mass.names == ("world", "box", "pusher")
     assert np.asarray(named.model.body_mass).tolist() == [0.0, 0.5, 1.0]
+    # sensordata by sensor: each sensor's slice of its values, as dm_control's named has it.
+    pusht = simloop.Sim(model=Path(simloop.__file__).parent / "scenes" / "pusht.xml")
+    pusht.step(5)
+    sensors = pusht.named.data.sensordata
+    assert sensors.names == ("tblock_pos", "tip_x")
+    np.testing.assert_array_equal(sensors["tblock_pos"], pusht.sensor("tblock_pos").data)
+    assert sensors["tip_x"].shape == (1,) and sensors["tblock_pos"].shape == (3,)
 
 
 def test_views_are_mujocos_own_memory():
