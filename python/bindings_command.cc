@@ -1,11 +1,13 @@
 // simloop._core's command: python -m simloop runs sim_loop's own
 // orchestration (command/command.cc) with a Python host: its report through
 // sys.stdout, its progress bar, its recording and its plot (simloop.__main__).
+#include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
 #include <filesystem>
+#include <algorithm>
 #include <memory>
 #include <optional>
 #include <string>
@@ -43,6 +45,64 @@ std::vector<std::string> argument_bytes(const std::vector<py::object>& args) {
 std::string fs_bytes(const py::handle& text) {
   return py::module_::import("os").attr("fsencode")(py::str(text)).cast<std::string>();
 }
+
+// The rows of a run handed to Python as they come (for a recording made
+// while the run streams its files): `to.columns(names)` once, then
+// `to.rows(array)` per block, each a (rows, columns) float64 copy, and
+// `to.finish(result)` once the run is done (before its outputs are put in
+// place), called with the GIL. An exception there stops the run and reaches
+// the caller (raise_if_failed, once the run is over).
+class RowsToPython final : public simloop::RowSink {
+ public:
+  struct Failed {};
+  explicit RowsToPython(py::object to) : to_(std::move(to)) {}
+  ~RowsToPython() override {
+    py::gil_scoped_acquire gil;
+    to_ = py::object();
+    error_.reset();
+  }
+  void describe(const std::vector<simloop::Column>& columns) override {
+    call([&] {
+      py::list names;
+      for (const simloop::Column& c : columns) names.append(c.name);
+      to_.attr("columns")(names);
+    });
+  }
+  void start(int columns, std::int64_t /*rows*/) override { columns_ = columns; }
+  void write(const double* rows, std::int64_t count) override {
+    call([&] {
+      py::array_t<double> block({static_cast<py::ssize_t>(count), static_cast<py::ssize_t>(columns_)});
+      std::copy(rows, rows + count * columns_, block.mutable_data());
+      to_.attr("rows")(block);
+    });
+  }
+  template <class Result>
+  void finish(const Result& result) {
+    call([&] { to_.attr("finish")(py::cast(result)); });
+  }
+  void raise_if_failed() {
+    if (!error_) return;
+    py::error_already_set error = std::move(*error_);
+    error_.reset();
+    throw error;
+  }
+
+ private:
+  template <class Call>
+  void call(Call&& c) {
+    py::gil_scoped_acquire gil;
+    try {
+      c();
+    } catch (py::error_already_set& e) {
+      error_.emplace(std::move(e));
+      throw Failed{};
+    }
+  }
+  py::object to_;
+  int columns_ = 0;
+  std::optional<py::error_already_set> error_;
+};
+
 
 // The recording a Python host made: its rows go to recording.columns/rows,
 // finish(result) to recording.finish, its files are recording.files.

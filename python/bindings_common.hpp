@@ -1,6 +1,6 @@
 // What the binding files share: long C++ work that Ctrl-C can stop
-// (Interruptible), rows handed to Python as a run makes them (RowsToPython),
-// and the standard library's resource failures said with what was being done.
+// (Interruptible), the standard library's resource failures said with what
+// was being done, and the conversions several topics use.
 #pragma once
 
 #include <pybind11/numpy.h>
@@ -119,64 +119,6 @@ class Interruptible {
 };
 
 
-// The rows of a run handed to Python as they come (for a recording made
-// while the run streams its files): `to.columns(names)` once, then
-// `to.rows(array)` per block, each a (rows, columns) float64 copy, and
-// `to.finish(result)` once the run is done (before its outputs are put in
-// place), called with the GIL. An exception there stops the run and reaches
-// the caller (raise_if_failed, once the run is over).
-class RowsToPython final : public simloop::RowSink {
- public:
-  struct Failed {};
-  explicit RowsToPython(py::object to) : to_(std::move(to)) {}
-  ~RowsToPython() override {
-    py::gil_scoped_acquire gil;
-    to_ = py::object();
-    error_.reset();
-  }
-  void describe(const std::vector<simloop::Column>& columns) override {
-    call([&] {
-      py::list names;
-      for (const simloop::Column& c : columns) names.append(c.name);
-      to_.attr("columns")(names);
-    });
-  }
-  void start(int columns, std::int64_t /*rows*/) override { columns_ = columns; }
-  void write(const double* rows, std::int64_t count) override {
-    call([&] {
-      py::array_t<double> block({static_cast<py::ssize_t>(count), static_cast<py::ssize_t>(columns_)});
-      std::copy(rows, rows + count * columns_, block.mutable_data());
-      to_.attr("rows")(block);
-    });
-  }
-  template <class Result>
-  void finish(const Result& result) {
-    call([&] { to_.attr("finish")(py::cast(result)); });
-  }
-  void raise_if_failed() {
-    if (!error_) return;
-    py::error_already_set error = std::move(*error_);
-    error_.reset();
-    throw error;
-  }
-
- private:
-  template <class Call>
-  void call(Call&& c) {
-    py::gil_scoped_acquire gil;
-    try {
-      c();
-    } catch (py::error_already_set& e) {
-      error_.emplace(std::move(e));
-      throw Failed{};
-    }
-  }
-  py::object to_;
-  int columns_ = 0;
-  std::optional<py::error_already_set> error_;
-};
-
-
 // Text from the C++ side that may hold a path's raw bytes (not UTF-8): as a
 // str the way Python decodes file names (os.fsdecode, surrogateescape).
 inline py::str fs_str(const std::string& text) {
@@ -219,20 +161,6 @@ inline auto fields_repr(std::string name, std::vector<const char*> fields) {
 inline py::array read_only(py::array view) {
   py::detail::array_proxy(view.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
   return view;
-}
-
-// A run's trajectory as a (rows, columns) read-only view of its own buffer,
-// and one column of it as a strided view. No copy.
-inline py::array trajectory_view(const py::object& owner, const simloop::Trajectory& t) {
-  const auto item = static_cast<py::ssize_t>(sizeof(double));
-  return read_only(py::array(py::dtype::of<double>(),
-                             {static_cast<py::ssize_t>(t.rows()), static_cast<py::ssize_t>(t.columns())},
-                             {item * t.columns(), item}, t.data(), owner));
-}
-inline py::array column_view(const py::object& owner, const simloop::Trajectory& t, int column) {
-  const auto item = static_cast<py::ssize_t>(sizeof(double));
-  return read_only(py::array(py::dtype::of<double>(), {static_cast<py::ssize_t>(t.rows())}, {item * t.columns()},
-                             t.data() + column, owner));
 }
 
 // A kind of MuJoCo object by its word ("body", "joint", "actuator", "sensor",

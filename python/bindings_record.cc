@@ -21,6 +21,20 @@ using simloop::RunRecord;
 
 namespace {
 
+// A run's trajectory as a (rows, columns) read-only view of its own buffer,
+// and one column of it as a strided view. No copy.
+inline py::array trajectory_view(const py::object& owner, const simloop::Trajectory& t) {
+  const auto item = static_cast<py::ssize_t>(sizeof(double));
+  return read_only(py::array(py::dtype::of<double>(),
+                             {static_cast<py::ssize_t>(t.rows()), static_cast<py::ssize_t>(t.columns())},
+                             {item * t.columns(), item}, t.data(), owner));
+}
+inline py::array column_view(const py::object& owner, const simloop::Trajectory& t, int column) {
+  const auto item = static_cast<py::ssize_t>(sizeof(double));
+  return read_only(py::array(py::dtype::of<double>(), {static_cast<py::ssize_t>(t.rows())}, {item * t.columns()},
+                             t.data() + column, owner));
+}
+
 // A column's index by its name, as a str (a name UTF-8 cannot encode is in
 // no result: KeyError too).
 int column_index(const RunRecord& r, const py::handle& name) {

@@ -122,8 +122,8 @@ def _rows_by_name(model: _core.Model, rows_count: str, kind: str) -> Dict[str, U
     if kind:
         return {name: i for i, name in enumerate(model.names(kind)) if name}
     if rows_count == "nsensordata":
-        info = [model.object_info("sensor", s) for s in range(model.nsensor)]
-        return {name: slice(i["adr"], i["adr"] + i["dim"]) for name, i in zip(model.names("sensor"), info) if name}
+        sensors = [model.object_info("sensor", s) for s in range(model.nsensor)]
+        return {name: slice(s["adr"], s["adr"] + s["dim"]) for name, s in zip(model.names("sensor"), sensors) if name}
     if rows_count in ("nq", "nv"):
         rows: Dict[str, Union[int, slice]] = {}
         for j, name in enumerate(model.names("joint")):
