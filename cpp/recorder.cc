@@ -67,7 +67,8 @@ void Recorder::add(Source::Kind kind, int id, int count, const std::vector<std::
   Source source{kind, id, count, width()};
   for (const std::string& n : names) columns_.push_back({n, unit, integer, input, body});
   const bool derived = kind == Source::kBodyPose || kind == Source::kBodyVelocity ||
-                       kind == Source::kActuatorForce || kind == Source::kSensor || kind == Source::kContacts;
+                       kind == Source::kActuatorForce || kind == Source::kSensor || kind == Source::kTendon ||
+                       kind == Source::kContacts;
   (derived ? after_ : before_).push_back(source);
 }
 
@@ -110,6 +111,9 @@ Recorder::Recorder(const mjModel* m, const ResolvedScenario& scenario, const Sch
     add(Source::kSensor, m->sensor_adr[s], m->sensor_dim[s], numbered(name_of(m, mjOBJ_SENSOR, s, "sensor"), "", m->sensor_dim[s]),
         "");
     reads_acceleration_stage_ = reads_acceleration_stage_ || m->sensor_needstage[s] == mjSTAGE_ACC;
+  }
+  for (int t : scenario.tendons) {  // a spatial tendon's metres, a fixed one's sum of its joints' coordinates
+    add(Source::kTendon, t, 2, suffixed(name_of(m, mjOBJ_TENDON, t, "tendon"), {"_length", "_vel"}), "m or rad");
   }
   if (scenario.contacts) add(Source::kContacts, 0, 1, {"ncon"}, "", true);
 
@@ -163,6 +167,10 @@ void Recorder::after_step(double* row, const mjModel* m, const mjData* d) const 
       }
       case Source::kActuatorForce: out[0] = d->actuator_force[s.id]; break;
       case Source::kSensor: std::copy(d->sensordata + s.id, d->sensordata + s.id + s.count, out); break;
+      case Source::kTendon:
+        out[0] = d->ten_length[s.id];
+        out[1] = d->ten_velocity[s.id];
+        break;
       case Source::kContacts: out[0] = d->ncon; break;
       default: break;
     }

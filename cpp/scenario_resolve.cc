@@ -159,6 +159,9 @@ ResolvedScenario resolve(const Scenario& scenario, const mjModel* m) {
   for (const std::string& n : rec.sensors) {
     r.sensors.push_back(find(m, mjOBJ_SENSOR, "sensor", "its sensors", detail::compat::as_int(m->nsensor), nullptr, n, "record.sensors"));
   }
+  for (const std::string& n : rec.tendons) {
+    r.tendons.push_back(find(m, mjOBJ_TENDON, "tendon", "its tendons", detail::compat::as_int(m->ntendon), nullptr, n, "record.tendons"));
+  }
   const auto every = [m](std::vector<int>& out, int first, int count, bool keep(const mjModel*, int)) {
     for (int i = first; i < count; ++i) {
       if (keep(m, i) && std::find(out.begin(), out.end(), i) == out.end()) out.push_back(i);
@@ -169,9 +172,10 @@ ResolvedScenario resolve(const Scenario& scenario, const mjModel* m) {
   if (rec.all_joints) every(r.joints, 0, detail::compat::as_int(m->njnt), any);
   if (rec.all_actuators) every(r.actuators, 0, detail::compat::as_int(m->nu), any);
   if (rec.all_sensors) every(r.sensors, 0, detail::compat::as_int(m->nsensor), any);
+  if (rec.all_tendons) every(r.tendons, 0, detail::compat::as_int(m->ntendon), any);
   // Defaults when nothing is named: every body on a free joint, every actuator.
-  if (rec.bodies.empty() && rec.joints.empty() && rec.actuators.empty() && rec.sensors.empty() && !rec.all_bodies &&
-      !rec.all_joints && !rec.all_actuators && !rec.all_sensors) {
+  if (rec.bodies.empty() && rec.joints.empty() && rec.actuators.empty() && rec.sensors.empty() && rec.tendons.empty() &&
+      !rec.all_bodies && !rec.all_joints && !rec.all_actuators && !rec.all_sensors && !rec.all_tendons) {
     for (int b = 1; b < m->nbody; ++b) {
       if (m->body_jntnum[b] >= 1 && m->jnt_type[m->body_jntadr[b]] == mjJNT_FREE) r.bodies.push_back(b);
     }

@@ -422,11 +422,12 @@ Scenario Scenario::from_toml_string(std::string_view text, std::string_view sour
     const auto* table = node->as_table();
     if (table == nullptr) top.fail("record", "expected a [record] table");
     const TableReader r(*table, std::string(source), "record");
-    r.allow_only({"bodies", "joints", "actuators", "sensors", "contacts"});
+    r.allow_only({"bodies", "joints", "actuators", "sensors", "tendons", "contacts"});
     for (const auto& [key, names, all] : {std::tuple{"bodies", &s.record.bodies, &s.record.all_bodies},
                                           std::tuple{"joints", &s.record.joints, &s.record.all_joints},
                                           std::tuple{"actuators", &s.record.actuators, &s.record.all_actuators},
-                                          std::tuple{"sensors", &s.record.sensors, &s.record.all_sensors}}) {
+                                          std::tuple{"sensors", &s.record.sensors, &s.record.all_sensors},
+                                          std::tuple{"tendons", &s.record.tendons, &s.record.all_tendons}}) {
       const toml::node* given = table->get(key);
       *all = given != nullptr && given->value<std::string>() == "all";
       if (!*all) *names = r.strings(key, "or \"all\"");

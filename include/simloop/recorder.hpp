@@ -68,7 +68,9 @@ class RowRecorder {
 // _wz` (angular velocity, world, rad/s); per recorded joint `_pos` and `_vel`
 // (m and m/s for a slide, rad and rad/s for a hinge; `_pos0..` for the
 // several numbers of ball and free joints); per recorded actuator `_force`
-// (N or N m); per recorded sensor its value(s); `ncon` (contacts).
+// (N or N m); per recorded sensor its value(s); per recorded tendon
+// `_length` and `_vel` (m and m/s, or rad for a fixed tendon of hinges);
+// `ncon` (contacts).
 class Recorder final : public RowRecorder {
  public:
   Recorder(const mjModel* m, const ResolvedScenario& scenario, const Schedule& schedule);
@@ -81,7 +83,7 @@ class Recorder final : public RowRecorder {
 
  private:
   struct Source {
-    enum Kind { kCtrl, kXfrc, kBodyPose, kBodyVelocity, kQpos, kQvel, kActuatorForce, kSensor, kContacts } kind;
+    enum Kind { kCtrl, kXfrc, kBodyPose, kBodyVelocity, kQpos, kQvel, kActuatorForce, kSensor, kTendon, kContacts } kind;
     int id = 0;      // actuator, body, or address into qpos/qvel/sensordata
     int count = 1;   // numbers it fills
     int column = 0;  // its first column

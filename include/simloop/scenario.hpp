@@ -84,10 +84,11 @@ struct RecordSpec {
   std::vector<std::string> joints;     // position, velocity (the joint's qpos/qvel)
   std::vector<std::string> actuators;  // ctrl as applied (after ctrlrange clamping), force
   std::vector<std::string> sensors;    // sensordata
+  std::vector<std::string> tendons;    // length, rate of change
   bool contacts = true;                // contact count
   // "all" in a scenario file instead of a list: every one the scene has, by
   // index (every body that can move), after any named above.
-  bool all_bodies = false, all_joints = false, all_actuators = false, all_sensors = false;
+  bool all_bodies = false, all_joints = false, all_actuators = false, all_sensors = false, all_tendons = false;
 };
 
 // How a run starts, beyond the scene's reset pose: a scenario file's
@@ -144,7 +145,7 @@ struct ResolvedScenario {
   };
   std::vector<Control> controls;
   std::vector<Disturbance> disturbances;
-  std::vector<int> bodies, joints, actuators, sensors;  // to record
+  std::vector<int> bodies, joints, actuators, sensors, tendons;  // to record
   bool contacts = true;
   // What the start draws against: the scene's qpos0 and its nv.
   std::vector<double> qpos0;

@@ -5,12 +5,16 @@
 #include <cmath>
 #include <cstring>
 #include <memory>
+#include <string>
+#include <vector>
 
 #include "simloop/chapter_scene.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/model.hpp"
 #include "simloop/recorder.hpp"
 #include "simloop/scenario.hpp"
+#include "simloop/scenario_run.hpp"
+#include "test_util.hpp"
 
 namespace {
 
@@ -168,3 +172,32 @@ TEST(ScenarioRun, AnArmPushesAPuckOnTwoSlides) {
 }
 
 }  // namespace
+
+TEST(ScenarioRun, ATendonsLengthAndRateAreRecordedForTheRowsState) {
+  // A fixed tendon over two slides: its length is their positions' sum, its rate their velocities'.
+  const simloop::Model scene = simloop::Model::from_xml_string(R"(<mujoco>
+  <worldbody>
+    <body><joint name="a" type="slide" axis="1 0 0"/><geom size="0.1" mass="1"/>
+      <body><joint name="b" type="slide" axis="0 1 0"/><geom size="0.1" mass="1"/></body></body>
+  </worldbody>
+  <tendon><fixed name="sum"><joint joint="a" coef="1"/><joint joint="b" coef="1"/></fixed></tendon>
+  <actuator><motor name="push" joint="a"/></actuator>
+</mujoco>)");
+  const simloop::Scenario s = simloop::Scenario::from_toml_string(
+      "steps = 50\n[[control]]\nactuator = \"push\"\nvalue = 1.0\n[reset]\nqvel = [0.0, 0.5]\n"
+      "[record]\njoints = \"all\"\ntendons = [\"sum\"]\n");
+  const simloop::RunRecord r = simloop::run_scenario(scene, s, {});
+  std::vector<std::string> names;
+  for (const simloop::Column& c : r.columns) names.push_back(c.name);
+  EXPECT_EQ(names, (std::vector<std::string>{"step", "time", "push_ctrl", "a_pos", "a_vel", "b_pos", "b_vel",
+                                              "sum_length", "sum_vel", "ncon"}));
+  for (std::int64_t row = 0; row < r.trajectory.rows(); ++row) {
+    EXPECT_EQ(r.trajectory.at(row, 7), r.trajectory.at(row, 3) + r.trajectory.at(row, 5)) << row;
+    EXPECT_EQ(r.trajectory.at(row, 8), r.trajectory.at(row, 4) + r.trajectory.at(row, 6)) << row;
+  }
+  EXPECT_GT(r.trajectory.at(50, 7), 0.05);  // the slides moved
+  EXPECT_EQ(test::error_of([&] {
+              (void)simloop::run_scenario(scene, simloop::Scenario::from_toml_string("[record]\ntendons = [\"summ\"]\n"), {});
+            }),
+            "record.tendons: no tendon named 'summ' (did you mean 'sum'?); its tendons: sum");
+}

@@ -111,6 +111,20 @@ def test_record_all_takes_every_joint_and_actuator_of_a_robot_of_hinges():
     assert list(ScenarioEnv(every).observation_names) == list(result.column_names[2:])
 
 
+def test_tendons_are_recorded_by_name_or_all(tmp_path):
+    scene = _write(tmp_path / "two_slides.xml", """<mujoco><worldbody>
+      <body><joint name="a" type="slide" axis="1 0 0"/><geom size="0.1" mass="1"/>
+        <body><joint name="b" type="slide" axis="0 1 0"/><geom size="0.1" mass="1"/></body></body></worldbody>
+      <tendon><fixed name="sum"><joint joint="a" coef="1"/><joint joint="b" coef="1"/></fixed></tendon>
+    </mujoco>""")
+    for tendons in (["sum"], "all"):
+        r = simloop.run_scenario(simloop.Scenario(scene=scene, steps=20, reset={"qvel": [0.3, 0.5]},
+                                                  record={"joints": "all", "tendons": tendons}))
+        assert r.column_names[-3:] == ("sum_length", "sum_vel", "ncon") and r.column_units["sum_length"] == "m or rad"
+        np.testing.assert_array_equal(r.column("sum_length"), r.column("a_pos") + r.column("b_pos"))
+        assert r.column("sum_length")[-1] > 0.01
+
+
 def _write(path: Path, text: str) -> Path:
     path.write_text(text)
     return path
