@@ -85,6 +85,10 @@ class StepObserver {
   virtual void at_end(const mjModel* /*m*/, const mjData* /*d*/, double* /*row*/) noexcept {}
 };
 
+// forward_keeping_state, leaving MuJoCo's warning counters as it found them
+// (the step that follows derives the same state again and counts them).
+void derive_uncounted(const mjModel* m, mjData* d);
+
 // The observation before a decision, and the physics step after it.
 //
 // mj_step is mj_step1 (positions, velocities, their sensors) then mj_step2
@@ -104,10 +108,6 @@ class StepObserver {
 // state (a full contact buffer, say) counts once a step either way, as in an
 // open-loop run: the whole forward pass leaves the warning counters as it
 // found them, since the step derives the same state again.
-// forward_keeping_state, leaving MuJoCo's warning counters as it found them
-// (the step that follows derives the same state again and counts them).
-void derive_uncounted(const mjModel* m, mjData* d);
-
 class DecisionStep {
  public:
   DecisionStep(const mjModel* m, const RowRecorder& recorder);

@@ -92,7 +92,8 @@ Model Model::from_file(const std::string& path) {
     const std::size_t first = start.find_first_not_of(" \t\r\n\xEF\xBB\xBF");
     if (first == std::string::npos || start[first] == '<') throw;
     const char c = start[first];
-    const std::string begins = c >= 0x20 && c < 0x7f ? std::string("begins with '") + c + "', not '<'" : "does not begin with '<'";
+    const std::string begins =
+        c >= 0x20 && c < 0x7f ? std::string("begins with '") + c + "', not '<'" : std::string("does not begin with '<'");
     throw MujocoError(path + ": not an MJCF scene (its text " + begins +
                       "); a scenario file (TOML) runs as a scenario (--scenario, simloop.Scenario.from_file)");
   }
