@@ -10,8 +10,9 @@ as dm_control's physics.named does.
 A NamedArray is a numpy view (np.asarray(it), or .array) whose first index
 also takes names: of the objects its rows are ("nbody" rows: bodies, "ngeom":
 geoms, ...), of joints for the nq rows (a joint's positions) and the nv
-rows (its velocities), and of sensors for sensordata (a sensor's values). Names are resolved once per array, so a named read
-costs about what a numpy one does.
+rows (its velocities), and of sensors for sensordata (a sensor's values).
+Names are resolved once per array, so a named read costs about what a numpy
+one does.
 
 What can be written: mjData's inputs and state (qpos, qvel, ctrl, act,
 qfrc_applied, xfrc_applied); of mjModel, the parameters a trainer randomises
