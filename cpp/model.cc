@@ -6,6 +6,7 @@
 #include <cstring>
 #include <fstream>
 #include <limits>
+#include <optional>
 #include <sstream>
 
 #include "isolated_load.hpp"
@@ -89,9 +90,9 @@ Model Model::from_file(const std::string& path) {
     std::string start(64, '\0');
     probe.read(start.data(), static_cast<std::streamsize>(start.size()));
     start.resize(static_cast<std::size_t>(probe.gcount()));
-    const std::size_t first = start.find_first_not_of(" \t\r\n\xEF\xBB\xBF");
-    if (first == std::string::npos || start[first] == '<') throw;
-    const char c = start[first];
+    const std::optional<char> first = detail::first_visible(start);
+    if (!first || *first == '<') throw;
+    const char c = *first;
     const std::string begins =
         c >= 0x20 && c < 0x7f ? std::string("begins with '") + c + "', not '<'" : std::string("does not begin with '<'");
     throw MujocoError(path + ": not an MJCF scene (its text " + begins +

@@ -12,6 +12,7 @@
 #include <sstream>
 #include <string>
 
+#include "model_detail.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/number_format.hpp"
 #include "simloop/run.hpp"
@@ -43,8 +44,7 @@ Scenario Scenario::from_toml_file(const std::filesystem::path& path) {
   text << in.rdbuf();
   if (in.bad()) throw IoError(path.string() + ": cannot read (" + std::strerror(errno) + ")");
   const std::string toml = text.str();
-  const size_t first = toml.find_first_not_of(" \t\r\n\xEF\xBB\xBF");  // (past a UTF-8 byte order mark too)
-  if (first != std::string::npos && toml[first] == '<') {
+  if (detail::first_visible(toml) == '<') {
     throw InvalidArgument(path.string() + ": an MJCF scene, not a scenario file (TOML): make it a scenario's scene "
                           "(scene = \"...\" in a scenario file, or simloop.Scenario(scene=...))");
   }
