@@ -248,6 +248,60 @@ void check_inputs(const mjModel* m, const RunInputs& inputs, std::int64_t steps)
   }
 }
 
+namespace {
+
+// A shape as numpy prints one: (5,) or (2, 3).
+std::string shape_text(const std::vector<std::int64_t>& shape) {
+  std::string text;
+  for (const std::int64_t n : shape) text += (text.empty() ? "" : ", ") + std::to_string(n);
+  return "(" + text + (shape.size() == 1 ? ",)" : ")");
+}
+
+// How far apart runs' slices of `array` are: 0 when every run reads the
+// whole array (it has a run's `dims`), else a run's size (it has one more,
+// the runs). `shapes` names what it may be.
+std::size_t run_stride(const char* name, const InputArray& array, std::size_t runs, bool batch, std::size_t dims,
+                       const std::string& shapes, const char* per_run) {
+  const std::size_t given = array.shape.size();
+  if (given != dims && !(batch && given == dims + 1)) {
+    throw InvalidArgument(std::string(name) + " must be shaped " + shapes + ", got shape " + shape_text(array.shape));
+  }
+  if (given == dims) return 0;
+  if (static_cast<std::size_t>(array.shape.front()) != runs) {
+    throw InvalidArgument(std::string(name) + ": " + std::to_string(array.shape.front()) + " " + per_run + " for " +
+                          std::to_string(runs) + " runs");
+  }
+  std::size_t stride = 1;
+  for (std::size_t d = 1; d < given; ++d) stride *= static_cast<std::size_t>(array.shape[d]);
+  return stride;
+}
+
+}  // namespace
+
+std::vector<RunInputs> split_inputs(std::size_t runs, bool batch, const std::optional<InputArray>& controls,
+                                    const std::optional<InputArray>& initial_state) {
+  std::vector<RunInputs> out(runs);
+  if (controls) {
+    const std::size_t stride = run_stride("controls", *controls, runs, batch, 2,
+                                          batch ? "(runs, steps, nu) or (steps, nu)" : "(steps, nu)", "runs' controls");
+    for (std::size_t i = 0; i < runs; ++i) {
+      out[i].controls = controls->data + i * stride;
+      out[i].control_steps = controls->shape[controls->shape.size() - 2];
+      out[i].control_width = controls->shape.back();
+    }
+  }
+  if (initial_state) {
+    const std::size_t stride =
+        run_stride("initial_state", *initial_state, runs, batch, 1,
+                   batch ? "(runs, state_size) or (state_size,)" : "(state_size,)", "states");
+    for (std::size_t i = 0; i < runs; ++i) {
+      out[i].initial_state = initial_state->data + i * stride;
+      out[i].state_size = static_cast<std::size_t>(initial_state->shape.back());
+    }
+  }
+  return out;
+}
+
 RunRecord run_schedule(const mjModel* m, mjData* d, const ResolvedScenario& scenario,
                                const Schedule& schedule, std::int64_t record_every, RowSink* sink,
                                RunControl* control, const RunInputs& inputs) {

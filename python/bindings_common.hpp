@@ -8,6 +8,7 @@
 #include <pybind11/stl/filesystem.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdint>
 #include <filesystem>
 #include <new>
@@ -118,6 +119,25 @@ class Interruptible {
   simloop::RunControl control_;
 };
 
+
+// Waits with the GIL released, in slices of RunControl::kPollInterval
+// (wait_slice(interval) waits up to one and says whether the wait is over),
+// running Python's signal handlers between them, so Ctrl-C and SIGTERM act
+// during a long wait. False if `timeout` seconds pass first.
+template <class WaitSlice>
+bool wait_in_slices(WaitSlice&& wait_slice, std::optional<double> timeout = std::nullopt) {
+  const auto start = std::chrono::steady_clock::now();
+  for (;;) {
+    bool over = false;
+    {
+      py::gil_scoped_release release;
+      over = wait_slice(simloop::RunControl::kPollInterval);
+    }
+    if (over) return true;
+    if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+    if (timeout && std::chrono::steady_clock::now() - start >= std::chrono::duration<double>(*timeout)) return false;
+  }
+}
 
 // Text from the C++ side that may hold a path's raw bytes (not UTF-8): as a
 // str the way Python decodes file names (os.fsdecode, surrogateescape).

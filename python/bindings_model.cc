@@ -111,7 +111,7 @@ void bind_model(py::module_& m) {
             // The model's fixed facts the named views need, as plain values.
             const mjModel* raw = model.get();
             const mjtObj type = object_type(kind);
-            if (id < 0 || id >= simloop::object_count(raw, type)) throw py::value_error(kind + " id out of range");
+            id = simloop::checked_object_index(raw, type, id);
             if (type == mjOBJ_BODY) return py::dict("mass"_a = raw->body_mass[id]);
             if (type == mjOBJ_JOINT) {
               const simloop::JointSize size = simloop::joint_size(raw->jnt_type[id]);

@@ -5,7 +5,6 @@
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
-#include <chrono>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -75,19 +74,7 @@ void bind_outputs(py::module_& m) {
       .def(
           "wait",
           [](simloop::PipedFile& f, double timeout) {
-            // In slices, between which Python's signal handlers run: Ctrl-C
-            // and SIGTERM act while the other side finishes writing.
-            const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout);
-            for (;;) {
-              bool ended = false;
-              {
-                py::gil_scoped_release release;
-                ended = f.wait_for_end(simloop::RunControl::kPollInterval);
-              }
-              if (ended) return true;
-              if (PyErr_CheckSignals() != 0) throw py::error_already_set();
-              if (std::chrono::steady_clock::now() >= deadline) return false;
-            }
+            return wait_in_slices([&](auto slice) { return f.wait_for_end(slice); }, timeout);
           },
           "timeout"_a, "Waits up to timeout seconds for the writer to close its end; True once it did.")
       .def("finish", &simloop::PipedFile::finish,

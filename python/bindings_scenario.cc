@@ -27,44 +27,14 @@ namespace {
 using namespace pybind11::literals;
 using simloop::RunRecord;
 
-// One RunInputs per run from Python's arrays (already checked and made
-// C-contiguous float64 by simloop.scenario_runs): controls (B, T, nu) gives run i
-// its own slice, (T, nu) the same array to every run; initial_state (B, n)
-// or (n,) likewise. The arrays are read in place: the caller keeps them
-// alive (they are this call's arguments) for the whole call.
+// Python's arrays (made C-contiguous float64 by simloop.scenario_runs) as
+// the library reads them, in place: the caller keeps them alive (they are
+// this call's arguments) for the whole call.
 using DoubleArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
 
-std::vector<simloop::RunInputs> run_inputs(std::size_t runs, const std::optional<DoubleArray>& controls,
-                                           const std::optional<DoubleArray>& initial_state) {
-  std::vector<simloop::RunInputs> out(runs);
-  if (controls) {
-    const py::ssize_t nd = controls->ndim();
-    if (nd != 2 && nd != 3) throw py::value_error("controls must be (steps, nu) or (runs, steps, nu)");
-    if (nd == 3 && static_cast<std::size_t>(controls->shape(0)) != runs) {
-      throw py::value_error("controls: " + std::to_string(controls->shape(0)) + " runs' controls for " +
-                            std::to_string(runs) + " runs");
-    }
-    const std::int64_t steps = controls->shape(nd - 2), width = controls->shape(nd - 1);
-    for (std::size_t i = 0; i < runs; ++i) {
-      out[i].controls = controls->data() + (nd == 3 ? i * static_cast<std::size_t>(steps * width) : 0);
-      out[i].control_steps = steps;
-      out[i].control_width = width;
-    }
-  }
-  if (initial_state) {
-    const py::ssize_t nd = initial_state->ndim();
-    if (nd != 1 && nd != 2) throw py::value_error("initial_state must be (state_size,) or (runs, state_size)");
-    if (nd == 2 && static_cast<std::size_t>(initial_state->shape(0)) != runs) {
-      throw py::value_error("initial_state: " + std::to_string(initial_state->shape(0)) + " states for " +
-                            std::to_string(runs) + " runs");
-    }
-    const auto size = static_cast<std::size_t>(initial_state->shape(nd - 1));
-    for (std::size_t i = 0; i < runs; ++i) {
-      out[i].initial_state = initial_state->data() + (nd == 2 ? i * size : 0);
-      out[i].state_size = size;
-    }
-  }
-  return out;
+std::optional<simloop::InputArray> input_array(const std::optional<DoubleArray>& array) {
+  if (!array) return std::nullopt;
+  return simloop::InputArray{array->data(), std::vector<std::int64_t>(array->shape(), array->shape() + array->ndim())};
 }
 
 // A Python callable as the loop's Policy: decide(step, row) -> ctrl, where
@@ -163,7 +133,8 @@ void bind_scenario(py::module_& m) {
       [](const simloop::Model& scene, const simloop::Scenario& scenario, const simloop::ScenarioConfig& config,
          std::optional<DoubleArray> controls, std::optional<DoubleArray> initial_state, py::object decide,
          std::int64_t control_every, py::object progress) {
-        simloop::RunInputs inputs = run_inputs(1, controls, initial_state).front();
+        simloop::RunInputs inputs =
+            simloop::split_inputs(1, false, input_array(controls), input_array(initial_state)).front();
         std::optional<PyPolicy> policy;
         if (!decide.is_none()) inputs.policy = &policy.emplace(std::move(decide), control_every);
         const std::string what = "run_scenario(" + scenario.name + (policy ? ", policy=...)" : ")");
@@ -180,7 +151,9 @@ void bind_scenario(py::module_& m) {
          std::optional<DoubleArray> initial_state, py::object decide, std::int64_t control_every, bool keep_rows,
          py::object progress) {
         std::vector<simloop::RunInputs> inputs;
-        if (controls || initial_state) inputs = run_inputs(configs.size(), controls, initial_state);
+        if (controls || initial_state) {
+          inputs = simloop::split_inputs(configs.size(), true, input_array(controls), input_array(initial_state));
+        }
         std::optional<PyPolicy> policy;
         if (!decide.is_none()) {
           inputs.assign(configs.size(), simloop::RunInputs::deciding(policy.emplace(std::move(decide), control_every)));

@@ -188,29 +188,21 @@ void bind_sim(py::module_& m) {
            }), "name"_a, "start"_a, "count"_a, "A copy of values start .. start+count-1 of array(name), flattened.")
       .def(
           "step",
-          [](PySim& s, std::int64_t n) {
+          [](PySim& s, std::int64_t n, py::object progress) {
             SimLock lock(s);
-            if (n <= simloop::RunControl::kChunkSteps) {
+            if (progress.is_none() && n <= simloop::RunControl::kChunkSteps) {
               // One chunk: nothing to interrupt, so no RunControl to pay for
               // (Python checks for Ctrl-C between the calls of a tight loop).
               py::gil_scoped_release release;
               s.sim.step(n);
               return;
             }
-            Interruptible work{py::none()};
-            work.run([&](simloop::RunControl* control) { s.sim.step(n, control); });
-          },
-          "n"_a)
-      .def_static("check_steps", &simloop::Sim::check_steps, "n"_a, "What step() checks, checked alone.")
-      .def(
-          "step_with_progress",
-          [](PySim& s, std::int64_t n, py::object progress) {
-            SimLock lock(s);
             Interruptible work(std::move(progress));
             work.run([&](simloop::RunControl* control) { s.sim.step(n, control); });
             work.finish();
           },
-          "n"_a, "progress"_a)
+          "n"_a, "progress"_a = py::none())
+      .def_static("check_steps", &simloop::Sim::check_steps, "n"_a, "What step() checks, checked alone.")
       .def_property_readonly("time", locked(&simloop::Sim::time))
       .def_property_readonly("steps_taken", locked(&simloop::Sim::steps_taken))
       .def_property_readonly("contacts", locked(&simloop::Sim::contacts))

@@ -11,6 +11,7 @@
 #include <thread>
 #include <vector>
 
+#include "bindings_common.hpp"
 #include "simloop/control.hpp"
 #include "simloop/episode.hpp"
 #include "simloop/model.hpp"
@@ -45,15 +46,7 @@ class CallLock {
       throw py::value_error(std::string(what) + " in the middle of a call on this thread (a signal handler or "
                             "progress callback called it); call it after that call returns");
     }
-    while (!s.mutex.try_lock()) {
-      bool locked = false;
-      {
-        py::gil_scoped_release release;
-        locked = s.mutex.try_lock_for(simloop::RunControl::kPollInterval);
-      }
-      if (locked) break;
-      if (PyErr_CheckSignals() != 0) throw py::error_already_set();
-    }
+    if (!s.mutex.try_lock()) wait_in_slices([&](auto slice) { return s.mutex.try_lock_for(slice); });
     s.holder.store(std::this_thread::get_id(), std::memory_order_relaxed);
   }
   ~CallLock() {

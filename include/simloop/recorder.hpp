@@ -5,6 +5,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -189,6 +190,23 @@ struct RunInputs {
     return inputs;
   }
 };
+
+// A caller's whole array, as numpy holds one: C-contiguous doubles and
+// their shape.
+struct InputArray {
+  const double* data = nullptr;
+  std::vector<std::int64_t> shape;
+};
+
+// Each run's inputs, read in place from whole arrays: controls shaped
+// (runs, steps, nu) give run i its own slice and (steps, nu) every run the
+// same; initial_state (runs, state_size) or (state_size,) likewise. With
+// `batch` false (one run) only the shapes without runs are taken. Throws
+// InvalidArgument naming the array and its shape otherwise; check_inputs
+// then checks the sizes against the run.
+[[nodiscard]] std::vector<RunInputs> split_inputs(std::size_t runs, bool batch,
+                                                  const std::optional<InputArray>& controls,
+                                                  const std::optional<InputArray>& initial_state);
 
 // Throws InvalidArgument naming `controls` or `initial_state` unless
 // `inputs` fit a run of `steps` steps of `m`: control_steps == steps,

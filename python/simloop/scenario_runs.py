@@ -5,7 +5,7 @@ a policy deciding them (policy=).
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any, Iterable, Optional, Tuple
+from typing import TYPE_CHECKING, Any, Iterable, Optional
 
 from . import _core
 from ._checks import (ModelLike, Progress, _check_bool, _check_int, _check_progress, _check_real, _check_seed,
@@ -19,10 +19,10 @@ if TYPE_CHECKING:  # numpy and the tables load when used: `import simloop` stays
     from .tables import BatchTable
 
 
-def _inputs_array(name: str, value: object, shapes: Tuple[int, ...], described: str) -> Optional[np.ndarray]:
+def _inputs_array(name: str, value: object, described: str) -> Optional[np.ndarray]:
     """value as a C-contiguous float64 array (the same array, not a copy,
-    when it already is one), or None. Values are checked by the C++ side,
-    which knows the run's steps, actuators and state size."""
+    when it already is one), or None. Its shape and values are checked by
+    the C++ side, which knows the run's steps, actuators and state size."""
     if value is None:
         return None
     import numpy as np
@@ -35,8 +35,6 @@ def _inputs_array(name: str, value: object, shapes: Tuple[int, ...], described: 
         raise TypeError(f"{name} must be an array of numbers {described}, got {_describe(value)}") from None
     if array.dtype.kind not in "iuf":
         raise TypeError(f"{name} must be an array of numbers {described}, got an array of dtype {array.dtype}")
-    if array.ndim not in shapes:
-        raise ValueError(f"{name} must be {described}, got shape {array.shape}")
     return np.ascontiguousarray(array, dtype=np.float64)
 
 
@@ -85,8 +83,8 @@ def run_scenario(scenario: ScenarioLike, *, seed: int = 0, rng: str = "mt19937_6
     """
     scenario, scene = _scenario_and_scene(scenario, model)
     config = scenario_config(seed, rng, timestep, steps, perturb, record_every)
-    own = _inputs_array("controls", controls, (2,), "shaped (steps, nu)")
-    start = _inputs_array("initial_state", initial_state, (1,), "shaped (state_size,)")
+    own = _inputs_array("controls", controls, "shaped (steps, nu)")
+    start = _inputs_array("initial_state", initial_state, "shaped (state_size,)")
     if policy is not None:
         if own is not None or start is not None:
             raise ValueError("policy with controls or initial_state is not supported: the policy decides ctrl, "
@@ -180,8 +178,8 @@ def run_scenario_batch(scenario: ScenarioLike, seeds: Iterable[int] = (0,),
                                                control_every=decide_every, progress=_check_progress(progress)),
                       keep_results=True)
     _check_no_control_every(control_every)
-    own = _inputs_array("controls", controls, (2, 3), "shaped (runs, steps, nu) or (steps, nu)")
-    start = _inputs_array("initial_state", initial_state, (1, 2), "shaped (runs, state_size) or (state_size,)")
+    own = _inputs_array("controls", controls, "shaped (runs, steps, nu) or (steps, nu)")
+    start = _inputs_array("initial_state", initial_state, "shaped (runs, state_size) or (state_size,)")
     results = _core.run_scenario_batch(scene, scenario._core, configs, workers, controls=own, initial_state=start,
                                        keep_rows=not metrics_only, progress=_check_progress(progress))
     return _table(results, keep_results=not metrics_only)

@@ -224,10 +224,7 @@ class Sim:
         self._sim.check_steps(count)  # before ctrl is written: a refused call changes nothing
         if ctrl is not None:
             self.ctrl = ctrl
-        if progress is None:
-            self._sim.step(count)
-        else:
-            self._sim.step_with_progress(count, _check_progress(progress))
+        self._sim.step(count, _check_progress(progress))
 
     def forward(self) -> None:
         """Brings xpos, xquat, velocities, sensordata and contacts up to the current

@@ -5,11 +5,14 @@
 
 #include <cmath>
 #include <cstring>
+#include <functional>
+#include <optional>
 #include <random>
 #include <string>
 #include <vector>
 
 #include "simloop/output.hpp"
+#include "simloop/recorder.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/scenario_run.hpp"
 #include "simloop/state.hpp"
@@ -176,6 +179,39 @@ TEST(BatchControls, BadInputsAreRefusedByNameBeforeAnyStep) {
   }
   inputs.pop_back();
   EXPECT_THROW((void)simloop::run_scenario_batch(scene, scenario, cs, 1, nullptr, inputs), simloop::InvalidArgument);
+}
+
+TEST(BatchControls, WholeArraysSplitIntoRunsOrAreSharedAndWrongShapesAreNamed) {
+  const std::vector<double> values(3 * 4 * 2, 0.0);
+  const simloop::InputArray per_run{values.data(), {3, 4, 2}}, shared{values.data(), {4, 2}};
+  const std::vector<simloop::RunInputs> own = simloop::split_inputs(3, true, per_run, std::nullopt);
+  ASSERT_EQ(own.size(), 3u);
+  EXPECT_EQ(own[2].controls, values.data() + 2 * 4 * 2);
+  EXPECT_EQ(own[2].control_steps, 4);
+  EXPECT_EQ(own[2].control_width, 2);
+  EXPECT_EQ(own[2].initial_state, nullptr);
+  const std::vector<simloop::RunInputs> same =
+      simloop::split_inputs(3, true, shared, simloop::InputArray{values.data(), {5}});
+  EXPECT_EQ(same[2].controls, values.data());
+  EXPECT_EQ(same[2].initial_state, values.data());
+  EXPECT_EQ(same[2].state_size, 5u);
+  const auto refused = [](const std::function<void()>& call, const std::string& message) {
+    try {
+      call();
+      ADD_FAILURE() << "accepted: " << message;
+    } catch (const simloop::InvalidArgument& e) {
+      EXPECT_EQ(e.what(), message);
+    }
+  };
+  refused([&] { (void)simloop::split_inputs(1, false, per_run, std::nullopt); },
+          "controls must be shaped (steps, nu), got shape (3, 4, 2)");
+  refused([&] { (void)simloop::split_inputs(2, true, simloop::InputArray{values.data(), {24}}, std::nullopt); },
+          "controls must be shaped (runs, steps, nu) or (steps, nu), got shape (24,)");
+  refused([&] { (void)simloop::split_inputs(4, true, per_run, std::nullopt); }, "controls: 3 runs' controls for 4 runs");
+  refused([&] { (void)simloop::split_inputs(1, false, std::nullopt, simloop::InputArray{values.data(), {}}); },
+          "initial_state must be shaped (state_size,), got shape ()");
+  refused([&] { (void)simloop::split_inputs(2, true, std::nullopt, simloop::InputArray{values.data(), {3, 8}}); },
+          "initial_state: 3 states for 2 runs");
 }
 
 }  // namespace
