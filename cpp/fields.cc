@@ -7,7 +7,6 @@
 #include "mujoco_compat.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/object_names.hpp"
-#include "simloop/scenario.hpp"  // did_you_mean
 
 namespace simloop {
 namespace {

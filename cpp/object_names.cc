@@ -1,12 +1,14 @@
 #include "simloop/object_names.hpp"
 
+#include <algorithm>
+#include <cctype>
+#include <limits>
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include "mujoco_compat.hpp"
 #include "simloop/errors.hpp"
-#include "simloop/scenario.hpp"  // did_you_mean
 
 namespace simloop {
 namespace {
@@ -57,25 +59,37 @@ const Kind& kind_of(mjtObj type) {
   throw InvalidArgument("objects of MuJoCo type " + std::to_string(type) + " are not looked up by name");
 }
 
-// "the scene's joints: hip, knee (and 2 unnamed)": what a lookup could have named.
-std::string listing(const mjModel* m, mjtObj type, std::vector<std::string>& names) {
+// "the scene's joints: hip, knee; unnamed, by index: 0, 3 to 5", or "the
+// scene has no joints": what a lookup could have named.
+std::string listing(const mjModel* m, mjtObj type, ObjectFilter listed) {
   const int count = object_count(m, type);
-  int unnamed = 0;
+  const std::string what = listed.what ? listed.what : kind_of(type).many;
+  std::string named, unnamed;
+  int run_start = -1;  // a run of consecutive unnamed indices, shown as "3 to 5"
+  const auto end_run = [&](int last) {
+    if (run_start < 0) return;
+    unnamed += (unnamed.empty() ? "" : ", ") + std::to_string(run_start);
+    if (last > run_start + 1) unnamed += " to " + std::to_string(last);
+    if (last == run_start + 1) unnamed += ", " + std::to_string(last);
+    run_start = -1;
+  };
   for (int i = 0; i < count; ++i) {
+    if (listed.keep && !listed.keep(m, i)) {
+      end_run(i - 1);
+      continue;
+    }
     const char* name = mj_id2name(m, type, i);
     if (name != nullptr && *name != '\0') {
-      names.emplace_back(name);
-    } else {
-      ++unnamed;
+      end_run(i - 1);
+      named += (named.empty() ? "" : ", ") + std::string(name);
+    } else if (run_start < 0) {
+      run_start = i;
     }
   }
-  if (count == 0) return std::string("the scene has no ") + kind_of(type).many;
-  std::string out = std::string("the scene's ") + kind_of(type).many + ": ";
-  if (names.empty()) out += "(none named)";
-  for (std::size_t i = 0; i < names.size(); ++i) out += (i ? ", " : "") + names[i];
-  if (unnamed > 0 && !names.empty()) out += " (and " + std::to_string(unnamed) + " unnamed)";
-  if (unnamed > 0) out += "; " + std::to_string(count) + " in all, by index 0 to " + std::to_string(count - 1);
-  return out;
+  end_run(count - 1);
+  if (named.empty() && unnamed.empty()) return "the scene has no " + what;
+  return "the scene's " + what + ": " + named + (named.empty() || unnamed.empty() ? "" : "; ") +
+         (unnamed.empty() ? "" : "unnamed, by index: " + unnamed);
 }
 
 }  // namespace
@@ -132,25 +146,65 @@ const char* joint_type_name(int type) noexcept {
   }
 }
 
+std::string unknown_name_message(const mjModel* m, mjtObj type, const std::string& name, ObjectFilter listed) {
+  std::vector<std::string> names = object_names(m, type);
+  names.erase(std::remove(names.begin(), names.end(), std::string()), names.end());
+  const std::string hint = did_you_mean(name, names);
+  return std::string("no ") + kind_of(type).one + " named '" + name + "'" +
+         (hint.empty() ? "" : " (did you mean '" + hint + "'?)") + "; " + listing(m, type, listed);
+}
+
+std::string index_out_of_range_message(const mjModel* m, mjtObj type, const std::string& index, ObjectFilter listed) {
+  const int count = object_count(m, type);
+  const Kind& kind = kind_of(type);
+  if (count == 0) return std::string(kind.one) + " index " + index + " is out of range: the scene has no " + kind.many;
+  return std::string(kind.one) + " index " + index + " is out of range: the scene has " + std::to_string(count) + " " +
+         (count == 1 ? kind.one : kind.many) + " (0 to " + std::to_string(count - 1) + "); " + listing(m, type, listed);
+}
+
 int object_id(const mjModel* m, mjtObj type, const std::string& name) {
   (void)object_count(m, type);  // a type we look up
   const int found = mj_name2id(m, type, name.c_str());
   if (found >= 0) return found;
-  std::vector<std::string> names;
-  const std::string known = listing(m, type, names);
-  const std::string hint = did_you_mean(name, names);
-  throw InvalidArgument(std::string("no ") + kind_of(type).one + " named '" + name + "'" +
-                        (hint.empty() ? "" : " (did you mean '" + hint + "'?)") + "; " + known);
+  throw InvalidArgument(unknown_name_message(m, type, name));
 }
 
 int checked_object_index(const mjModel* m, mjtObj type, long long index) {
   const int count = object_count(m, type);
   if (index >= 0 && index < count) return static_cast<int>(index);
-  std::vector<std::string> names;
-  throw InvalidArgument(std::string(kind_of(type).one) + " index " + std::to_string(index) +
-                        " is out of range: the scene has " + std::to_string(count) + " " +
-                        (count == 1 ? kind_of(type).one : kind_of(type).many) +
-                        (count > 0 ? "; " + listing(m, type, names) : std::string()));
+  throw InvalidArgument(index_out_of_range_message(m, type, std::to_string(index)));
+}
+
+std::string did_you_mean(std::string_view name, const std::vector<std::string>& candidates) {
+  // Edit distance with transpositions (optimal string alignment),
+  // case-insensitive; a likely typo is at most a third of the longer name's
+  // length away ("bodys" for "bodies"), and at least one edit for short names.
+  const auto same = [](char a, char b) {
+    return std::tolower(static_cast<unsigned char>(a)) == std::tolower(static_cast<unsigned char>(b));
+  };
+  std::string best;
+  std::size_t best_distance = std::numeric_limits<std::size_t>::max();
+  for (const std::string& candidate : candidates) {
+    const std::size_t n = name.size(), k = candidate.size();
+    if (std::max(n, k) - std::min(n, k) > std::max<std::size_t>(1, std::max(n, k) / 3)) continue;
+    std::vector<std::vector<std::size_t>> dist(n + 1, std::vector<std::size_t>(k + 1));
+    for (std::size_t i = 0; i <= n; ++i) dist[i][0] = i;
+    for (std::size_t j = 0; j <= k; ++j) dist[0][j] = j;
+    for (std::size_t i = 1; i <= n; ++i) {
+      for (std::size_t j = 1; j <= k; ++j) {
+        dist[i][j] = std::min({dist[i - 1][j] + 1, dist[i][j - 1] + 1,
+                               dist[i - 1][j - 1] + (same(name[i - 1], candidate[j - 1]) ? 0 : 1)});
+        if (i > 1 && j > 1 && same(name[i - 1], candidate[j - 2]) && same(name[i - 2], candidate[j - 1])) {
+          dist[i][j] = std::min(dist[i][j], dist[i - 2][j - 2] + 1);
+        }
+      }
+    }
+    if (dist[n][k] <= std::max<std::size_t>(1, std::max(n, k) / 3) && dist[n][k] < best_distance) {
+      best_distance = dist[n][k];
+      best = candidate;
+    }
+  }
+  return best;
 }
 
 }  // namespace simloop

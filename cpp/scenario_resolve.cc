@@ -13,116 +13,45 @@
 
 #include "simloop/errors.hpp"
 #include "simloop/number_format.hpp"
+#include "simloop/object_names.hpp"
 #include "simloop/scene_params.hpp"
 
 namespace simloop {
 
-std::string did_you_mean(std::string_view name, const std::vector<std::string>& candidates) {
-  // Edit distance with transpositions (optimal string alignment),
-  // case-insensitive; a likely typo is at most a third of the longer name's
-  // length away ("bodys" for "bodies"), and at least one edit for short names.
-  const auto same = [](char a, char b) {
-    return std::tolower(static_cast<unsigned char>(a)) == std::tolower(static_cast<unsigned char>(b));
-  };
-  std::string best;
-  std::size_t best_distance = std::numeric_limits<std::size_t>::max();
-  for (const std::string& candidate : candidates) {
-    const std::size_t n = name.size(), k = candidate.size();
-    if (std::max(n, k) - std::min(n, k) > std::max<std::size_t>(1, std::max(n, k) / 3)) continue;
-    std::vector<std::vector<std::size_t>> dist(n + 1, std::vector<std::size_t>(k + 1));
-    for (std::size_t i = 0; i <= n; ++i) dist[i][0] = i;
-    for (std::size_t j = 0; j <= k; ++j) dist[0][j] = j;
-    for (std::size_t i = 1; i <= n; ++i) {
-      for (std::size_t j = 1; j <= k; ++j) {
-        dist[i][j] = std::min({dist[i - 1][j] + 1, dist[i][j - 1] + 1,
-                               dist[i - 1][j - 1] + (same(name[i - 1], candidate[j - 1]) ? 0 : 1)});
-        if (i > 1 && j > 1 && same(name[i - 1], candidate[j - 2]) && same(name[i - 2], candidate[j - 1])) {
-          dist[i][j] = std::min(dist[i][j], dist[i - 2][j - 2] + 1);
-        }
-      }
-    }
-    if (dist[n][k] <= std::max<std::size_t>(1, std::max(n, k) / 3) && dist[n][k] < best_distance) {
-      best_distance = dist[n][k];
-      best = candidate;
-    }
-  }
-  return best;
-}
-
 namespace {
 
-std::vector<std::string> names_of(const mjModel* m, mjtObj type, int count, bool (*keep)(const mjModel*, int)) {
-  std::vector<std::string> out;
-  for (int i = 0; i < count; ++i) {
-    const char* name = mj_id2name(m, type, i);
-    if (name != nullptr && *name != '\0' && (keep == nullptr || keep(m, i))) out.emplace_back(name);
-  }
-  return out;
-}
-
 bool body_moves(const mjModel* m, int body) { return m->body_dofnum[body] > 0; }
-
-std::string join(const std::vector<std::string>& names) {
-  if (names.empty()) return "(none)";
-  std::string out;
-  for (const std::string& n : names) out += (out.empty() ? "" : ", ") + n;
-  return out;
-}
-
-// What a lookup could have named: the names, and the unnamed by index.
-std::string listing(const mjModel* m, mjtObj type, int count, bool (*keep)(const mjModel*, int)) {
-  std::string unnamed;
-  for (int i = 0; i < count; ++i) {
-    const char* name = mj_id2name(m, type, i);
-    if ((name == nullptr || *name == '\0') && (keep == nullptr || keep(m, i))) {
-      unnamed += (unnamed.empty() ? "" : ", ") + std::to_string(i);
-    }
-  }
-  const std::vector<std::string> named = names_of(m, type, count, keep);
-  if (unnamed.empty()) return join(named);
-  return (named.empty() ? std::string() : join(named) + "; ") + "unnamed, by index: " + unnamed;
-}
+constexpr ObjectFilter kMovingBodies{"bodies that can move", body_moves};
 
 bool is_index(const std::string& name) {
   return !name.empty() && name.size() <= 9 &&
          std::all_of(name.begin(), name.end(), [](char c) { return c >= '0' && c <= '9'; });
 }
 
-// An index past the scene's objects of a kind: what it has, by index and name.
-[[noreturn]] void out_of_range(const std::string& context, const char* kind, const std::string& index, int count,
-                               const char* what_listed, const std::string& listed) {
-  throw InvalidArgument(context + ": " + kind + " index " + index + " is out of range; the scene has " +
-                        (count == 0 ? std::string("none") : std::to_string(count) + " (0 to " + std::to_string(count - 1) + ")") +
-                        "; " + what_listed + ": " + listed);
-}
-
-// A name, or (if no object has that name) an index.
-int find(const mjModel* m, mjtObj type, const char* kind, const char* what_listed, int count,
-         bool (*listed)(const mjModel*, int), const std::string& name, const std::string& context) {
+// A name, or (if no object has that name) an index; `context` leads the
+// error, which lists the objects `listed` passes.
+int find(const mjModel* m, mjtObj type, const std::string& name, const std::string& context, ObjectFilter listed = {}) {
   const int id = mj_name2id(m, type, name.c_str());
   if (id >= 0) return id;
   if (is_index(name)) {
     const long index = std::stol(name);
-    if (index < count) return static_cast<int>(index);
-    out_of_range(context, kind, name, count, what_listed, listing(m, type, count, listed));
+    if (index < object_count(m, type)) return static_cast<int>(index);
+    throw InvalidArgument(context + ": " + index_out_of_range_message(m, type, name, listed));
   }
-  const std::vector<std::string> all = names_of(m, type, count, nullptr);
-  const std::string hint = did_you_mean(name, all);
-  throw InvalidArgument(context + ": no " + kind + " named '" + name + "'" +
-                        (hint.empty() ? "" : " (did you mean '" + hint + "'?)") + "; " + what_listed + ": " +
-                        listing(m, type, count, listed));
+  throw InvalidArgument(context + ": " + unknown_name_message(m, type, name, listed));
 }
 
+// An actuator: digits are its index (a scenario's actuator = 0), anything
+// else its name.
 int find_actuator(const mjModel* m, const std::string& name, const std::string& context) {
   if (!name.empty() && std::all_of(name.begin(), name.end(), [](char c) { return c >= '0' && c <= '9'; })) {
     const long index = name.size() > 9 ? -1 : std::stol(name);
-    const int count = detail::compat::as_int(m->nu);
-    if (index < 0 || index >= count) {
-      out_of_range(context, "actuator", name, count, "its actuators", listing(m, mjOBJ_ACTUATOR, count, nullptr));
+    if (index < 0 || index >= m->nu) {
+      throw InvalidArgument(context + ": " + index_out_of_range_message(m, mjOBJ_ACTUATOR, name));
     }
     return static_cast<int>(index);
   }
-  return find(m, mjOBJ_ACTUATOR, "actuator", "its actuators", detail::compat::as_int(m->nu), nullptr, name, context);
+  return find(m, mjOBJ_ACTUATOR, name, context);
 }
 
 }  // namespace
@@ -143,24 +72,23 @@ ResolvedScenario resolve(const Scenario& scenario, const mjModel* m) {
   }
   for (std::size_t i = 0; i < scenario.disturbances.size(); ++i) {
     const DisturbanceSpec& d = scenario.disturbances[i];
-    const int body = find(m, mjOBJ_BODY, "body", "bodies that can move", detail::compat::as_int(m->nbody), body_moves, d.body,
-                          "disturbance[" + std::to_string(i) + "]");
+    const int body = find(m, mjOBJ_BODY, d.body, "disturbance[" + std::to_string(i) + "]", kMovingBodies);
     if (body == 0) throw InvalidArgument("disturbance[" + std::to_string(i) + "]: the world body cannot be pushed");
     r.disturbances.push_back({body, d});
   }
   const RecordSpec& rec = scenario.record;
   for (const std::string& n : rec.bodies) {
-    r.bodies.push_back(find(m, mjOBJ_BODY, "body", "bodies that can move", detail::compat::as_int(m->nbody), body_moves, n, "record.bodies"));
+    r.bodies.push_back(find(m, mjOBJ_BODY, n, "record.bodies", kMovingBodies));
   }
   for (const std::string& n : rec.joints) {
-    r.joints.push_back(find(m, mjOBJ_JOINT, "joint", "its joints", detail::compat::as_int(m->njnt), nullptr, n, "record.joints"));
+    r.joints.push_back(find(m, mjOBJ_JOINT, n, "record.joints"));
   }
   for (const std::string& n : rec.actuators) r.actuators.push_back(find_actuator(m, n, "record.actuators"));
   for (const std::string& n : rec.sensors) {
-    r.sensors.push_back(find(m, mjOBJ_SENSOR, "sensor", "its sensors", detail::compat::as_int(m->nsensor), nullptr, n, "record.sensors"));
+    r.sensors.push_back(find(m, mjOBJ_SENSOR, n, "record.sensors"));
   }
   for (const std::string& n : rec.tendons) {
-    r.tendons.push_back(find(m, mjOBJ_TENDON, "tendon", "its tendons", detail::compat::as_int(m->ntendon), nullptr, n, "record.tendons"));
+    r.tendons.push_back(find(m, mjOBJ_TENDON, n, "record.tendons"));
   }
   const auto every = [m](std::vector<int>& out, int first, int count, bool keep(const mjModel*, int)) {
     for (int i = first; i < count; ++i) {

@@ -18,6 +18,7 @@
 #include "simloop/errors.hpp"
 #include "simloop/scene_params.hpp"
 #include "simloop/number_format.hpp"
+#include "simloop/object_names.hpp"
 
 namespace simloop {
 namespace {

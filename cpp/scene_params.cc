@@ -7,6 +7,7 @@
 
 #include "mujoco_guard.hpp"
 #include "simloop/errors.hpp"
+#include "simloop/object_names.hpp"
 #include "simloop/number_format.hpp"
 #include "simloop/scenario.hpp"
 
@@ -18,21 +19,12 @@ std::string describe(const SceneParam& p) {
          python_float_repr(p.value);
 }
 
-// The id of the object named `name`, or InvalidArgument listing the named
-// ones of that type (with a did-you-mean).
-int find_named(const mjModel* m, mjtObj type, int count, const char* kind, const char* kinds, const SceneParam& p) {
+// The id of the object named `name`, or InvalidArgument saying what the
+// scene has (one wording for every lookup: object_names.hpp).
+int find_named(const mjModel* m, mjtObj type, const SceneParam& p) {
   const int id = mj_name2id(m, type, p.name.c_str());
   if (id >= 0) return id;
-  std::vector<std::string> names;
-  for (int i = 0; i < count; ++i) {
-    const char* n = mj_id2name(m, type, i);
-    if (n != nullptr && *n != '\0') names.emplace_back(n);
-  }
-  const std::string hint = did_you_mean(p.name, names);
-  std::string list;
-  for (const std::string& n : names) list += (list.empty() ? "" : ", ") + n;
-  throw InvalidArgument(describe(p) + ": no " + kind + " named '" + p.name + "'" +
-                        (hint.empty() ? "" : " (did you mean '" + hint + "'?)") + "; " + kinds + ": " + (list.empty() ? "(none named)" : list));
+  throw InvalidArgument(describe(p) + ": " + unknown_name_message(m, type, p.name));
 }
 
 void check_value(const SceneParam& p) {
@@ -50,14 +42,14 @@ bool apply(const mjModel* scene, mjModel* m, const SceneParam& p) {
   check_value(p);
   switch (p.kind) {
     case SceneParam::Kind::kFriction: {
-      const int first = p.name.empty() ? 0 : find_named(scene, mjOBJ_GEOM, detail::compat::as_int(scene->ngeom), "geom", "geoms", p);
+      const int first = p.name.empty() ? 0 : find_named(scene, mjOBJ_GEOM, p);
       const int end = p.name.empty() ? detail::compat::as_int(scene->ngeom) : first + 1;
       if (m == nullptr) return false;
       for (int g = first; g < end; ++g) m->geom_friction[3 * g] = p.value;
       return false;
     }
     case SceneParam::Kind::kDamping: {
-      const int first = p.name.empty() ? 0 : find_named(scene, mjOBJ_JOINT, detail::compat::as_int(scene->njnt), "joint", "joints", p);
+      const int first = p.name.empty() ? 0 : find_named(scene, mjOBJ_JOINT, p);
       const int end = p.name.empty() ? detail::compat::as_int(scene->njnt) : first + 1;
       if (m == nullptr) return false;
       for (int j = first; j < end; ++j) {
@@ -69,7 +61,7 @@ bool apply(const mjModel* scene, mjModel* m, const SceneParam& p) {
     }
     case SceneParam::Kind::kMass: {
       if (p.name.empty()) throw InvalidArgument(describe(p) + ": a mass needs a body's name");
-      const int body = find_named(scene, mjOBJ_BODY, detail::compat::as_int(scene->nbody), "body", "bodies", p);
+      const int body = find_named(scene, mjOBJ_BODY, p);
       if (body == 0) throw InvalidArgument(describe(p) + ": the world body has no mass to set");
       const double old_mass = scene->body_mass[body];
       if (!(old_mass > 0.0)) {

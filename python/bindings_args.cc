@@ -9,7 +9,7 @@
 #include <string>
 
 #include "bindings_common.hpp"
-#include "simloop/scenario.hpp"
+#include "simloop/object_names.hpp"
 
 namespace simloop_py {
 

@@ -32,6 +32,26 @@ namespace simloop {
 // The same for an index: throws InvalidArgument unless 0 <= index < count.
 [[nodiscard]] int checked_object_index(const mjModel* m, mjtObj type, long long index);
 
+// Which objects of a kind a lookup may name, for its error's listing: all
+// (no `keep`), or those `keep` passes, called `what` ("bodies that can move").
+struct ObjectFilter {
+  const char* what = nullptr;
+  bool (*keep)(const mjModel*, int) = nullptr;
+};
+
+// Every lookup's error, one wording: "no body named 'torsoo' (did you mean
+// 'torso'?); the scene's bodies: world, torso; unnamed, by index: 3 to 5",
+// and "body index 9 is out of range: the scene has 6 bodies (0 to 5); the
+// scene's bodies: ...". The hint is drawn from every name of the kind.
+[[nodiscard]] std::string unknown_name_message(const mjModel* m, mjtObj type, const std::string& name,
+                                               ObjectFilter listed = {});
+[[nodiscard]] std::string index_out_of_range_message(const mjModel* m, mjtObj type, const std::string& index,
+                                                     ObjectFilter listed = {});
+
+// The likely typo's fix among `candidates` ("" if none is close): case
+// aside, at most a third of the longer name's edits away (at least one).
+[[nodiscard]] std::string did_you_mean(std::string_view name, const std::vector<std::string>& candidates);
+
 // How many qpos and qvel values a joint of MuJoCo's type `type` has: free
 // 7 and 6, ball 4 and 3, slide and hinge 1 and 1; and the type's word.
 struct JointSize {

@@ -198,8 +198,4 @@ struct Schedule {
 // key: "reset.qpos must hold the scene's nq = 7 values, got 3").
 void check_reset(const ResolvedScenario& scenario, const ResetSpec& reset, const mjModel* m);
 
-// The closest of `candidates` to `name` by edit distance, if close enough to
-// be a likely typo; empty otherwise.
-[[nodiscard]] std::string did_you_mean(std::string_view name, const std::vector<std::string>& candidates);
-
 }  // namespace simloop

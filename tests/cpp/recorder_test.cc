@@ -199,5 +199,5 @@ TEST(ScenarioRun, ATendonsLengthAndRateAreRecordedForTheRowsState) {
   EXPECT_EQ(test::error_of([&] {
               (void)simloop::run_scenario(scene, simloop::Scenario::from_toml_string("[record]\ntendons = [\"summ\"]\n"), {});
             }),
-            "record.tendons: no tendon named 'summ' (did you mean 'sum'?); its tendons: sum");
+            "record.tendons: no tendon named 'summ' (did you mean 'sum'?); the scene's tendons: sum");
 }

@@ -145,7 +145,7 @@ TEST(ScenarioReset, BadResetsNameTheKey) {
   const auto run_error = [](const std::string& reset) { return error_of([&] { (void)run(pusht(reset), 0); }); };
   EXPECT_EQ(run_error("qpos = [1, 2, 3]\n"), "reset.qpos must hold the scene's nq = 9 values, got 3");
   EXPECT_EQ(run_error("[[reset.param]]\nkind = \"friction\"\nname = \"flor\"\nvalue = 0.5\n"),
-            "reset.param[0]: friction of 'flor' = 0.5: no geom named 'flor' (did you mean 'floor'?); geoms: floor, "
+            "reset.param[0]: friction of 'flor' = 0.5: no geom named 'flor' (did you mean 'floor'?); the scene's geoms: floor, "
             "goal, t_bar, t_stem, tip");
   EXPECT_EQ(run_error("[[reset.param]]\nkind = \"gravity\"\nname = \"floor\"\nvalue = 9\n"),
             "reset.param[0]: gravity of 'floor' = 9.0: gravity is the whole scene's: give no name");

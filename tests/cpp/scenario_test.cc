@@ -111,14 +111,14 @@ TEST(Scenario, UnknownNamesListWhatTheSceneHasWithADidYouMean) {
   Scenario s = Scenario::chapter();
   s.disturbances[0].body = "bx";
   EXPECT_EQ(error_of([&] { (void)simloop::resolve(s, chapter_model()); }),
-            "disturbance[0]: no body named 'bx' (did you mean 'box'?); bodies that can move: box, pusher");
+            "disturbance[0]: no body named 'bx' (did you mean 'box'?); the scene's bodies that can move: box, pusher");
   s = Scenario::chapter();
   s.controls[0].actuator = "motor";
   EXPECT_EQ(error_of([&] { (void)simloop::resolve(s, chapter_model()); }),
-            "control[0]: no actuator named 'motor'; its actuators: push_motor");
+            "control[0]: no actuator named 'motor'; the scene's actuators: push_motor");
   s.controls[0].actuator = "3";
   EXPECT_EQ(error_of([&] { (void)simloop::resolve(s, chapter_model()); }),
-            "control[0]: actuator index 3 is out of range; the scene has 1 (0 to 0); its actuators: push_motor");
+            "control[0]: actuator index 3 is out of range: the scene has 1 actuator (0 to 0); the scene's actuators: push_motor");
   s = Scenario::chapter();
   s.controls.push_back({"0", {{When::steps(0), 0.5}}});  // push_motor again, by index
   EXPECT_EQ(error_of([&] { (void)simloop::resolve(s, chapter_model()); }),
@@ -127,7 +127,7 @@ TEST(Scenario, UnknownNamesListWhatTheSceneHasWithADidYouMean) {
   s = Scenario::chapter();
   s.record.joints = {"pusher_slid"};
   EXPECT_EQ(error_of([&] { (void)simloop::resolve(s, chapter_model()); }),
-            "record.joints: no joint named 'pusher_slid' (did you mean 'pusher_slide'?); its joints: pusher_slide; "
+            "record.joints: no joint named 'pusher_slid' (did you mean 'pusher_slide'?); the scene's joints: pusher_slide; "
             "unnamed, by index: 0");
   // A scene whose moving bodies are unnamed (MuJoCo's tendon_arm/arm26.xml):
   // they are listed, and taken, by index.
@@ -140,10 +140,10 @@ TEST(Scenario, UnknownNamesListWhatTheSceneHasWithADidYouMean) {
   s.record = simloop::RecordSpec{};
   s.disturbances[0].body = "upper";
   EXPECT_EQ(error_of([&] { (void)simloop::resolve(s, arm.get()); }),
-            "disturbance[0]: no body named 'upper'; bodies that can move: unnamed, by index: 1, 2");
+            "disturbance[0]: no body named 'upper'; the scene's bodies that can move: unnamed, by index: 1, 2");
   s.disturbances[0].body = "3";
   EXPECT_EQ(error_of([&] { (void)simloop::resolve(s, arm.get()); }),
-            "disturbance[0]: body index 3 is out of range; the scene has 3 (0 to 2); bodies that can move: unnamed, "
+            "disturbance[0]: body index 3 is out of range: the scene has 3 bodies (0 to 2); the scene's bodies that can move: unnamed, "
             "by index: 1, 2");
   s.disturbances[0].body = "2";
   EXPECT_EQ(simloop::resolve(s, arm.get()).disturbances.at(0).body, 2);
@@ -178,7 +178,7 @@ TEST(Scenario, AllInARecordListMeansEveryOneTheSceneHas) {
   EXPECT_TRUE(r.actuators.empty());
   // A list holding "all" names an object called all; any other string is refused.
   EXPECT_EQ(error_of([&] { (void)simloop::resolve(Scenario::from_toml_string("[record]\njoints = [\"all\"]\n"), m); }),
-            "record.joints: no joint named 'all'; its joints: pusher_slide; unnamed, by index: 0");
+            "record.joints: no joint named 'all'; the scene's joints: pusher_slide; unnamed, by index: 0");
   EXPECT_EQ(error_of([] { (void)Scenario::from_toml_string("[record]\nsensors = \"every\"\n"); }),
             "<string>: record.sensors: expected an array of names or \"all\", got a string");
 }
@@ -264,16 +264,6 @@ TEST(Scenario, AnMjcfSceneIsNotAScenarioFileAndSaysWhatToDoWithIt) {
         << e.what();
   }
 }
-
-TEST(DidYouMean, SuggestsOnlyLikelyTypos) {
-  EXPECT_EQ(simloop::did_you_mean("tblok", {"tblock", "pusher"}), "tblock");
-  EXPECT_EQ(simloop::did_you_mean("PUSHER", {"tblock", "pusher"}), "pusher");
-  EXPECT_EQ(simloop::did_you_mean("floor", {"tblock", "pusher"}), "");
-  EXPECT_EQ(simloop::did_you_mean("bodys", {"bodies", "joints"}), "bodies");  // two edits in six letters
-  EXPECT_EQ(simloop::did_you_mean("box", {"bar", "pusher"}), "");               // not two in three
-  EXPECT_EQ(simloop::did_you_mean("x", {}), "");
-}
-
 
 TEST(Scenario, AControlMayComeFromACsvWithARowPerStep) {
   test::TempDir dir;

@@ -107,9 +107,9 @@ TEST(SceneParams, WhatEachParamWrites) {
 TEST(SceneParams, BadNamesAndValuesAreRefusedByName) {
   const simloop::Model scene = simloop::pusher_scene();
   EXPECT_EQ(error_of(scene, {{Kind::kMass, "bx", 1.0}}),
-            "mass of 'bx' = 1.0: no body named 'bx' (did you mean 'box'?); bodies: world, box, pusher");
+            "mass of 'bx' = 1.0: no body named 'bx' (did you mean 'box'?); the scene's bodies: world, box, pusher");
   EXPECT_EQ(error_of(scene, {{Kind::kFriction, "box_gem", 1.0}}),
-            "friction of 'box_gem' = 1.0: no geom named 'box_gem' (did you mean 'box_geom'?); geoms: floor, "
+            "friction of 'box_gem' = 1.0: no geom named 'box_gem' (did you mean 'box_geom'?); the scene's geoms: floor, "
             "box_geom, pusher_geom");
   EXPECT_EQ(error_of(scene, {{Kind::kDamping, "slide", 1.0}}).rfind("damping of 'slide' = 1.0: no joint named 'slide'", 0), 0u);
   EXPECT_EQ(error_of(scene, {{Kind::kFriction, "", -0.1}}), "friction = -0.1: friction must be a finite number >= 0");

@@ -150,7 +150,7 @@ TEST(SimAny, UnknownNamesListWhatTheSceneHasWithALikelyFix) {
             "shin_left, thigh_right, shin_right");
   EXPECT_EQ(test::error_of([&] { (void)sim.id(mjOBJ_KEY, "stand"); }), "no keyframe named 'stand'; the scene has no keyframes");
   EXPECT_NE(test::error_of([&] { (void)sim.checked_index(mjOBJ_ACTUATOR, 4); })
-                .find("actuator index 4 is out of range: the scene has 4 actuators"),
+                .find("actuator index 4 is out of range: the scene has 4 actuators (0 to 3)"),
             std::string::npos);
 }
 
@@ -223,7 +223,7 @@ TEST(SimAny, ResetsToAKeyframe) {
   EXPECT_EQ(sim.data()->qpos[2], 3.0);
   EXPECT_EQ(sim.time(), 0.0);
   EXPECT_EQ(sim.steps_taken(), 0);
-  EXPECT_NE(test::error_of([&] { sim.reset_to_keyframe(1); }).find("keyframe index 1 is out of range: the scene has 1 keyframe; the scene's keyframes: high"),
+  EXPECT_NE(test::error_of([&] { sim.reset_to_keyframe(1); }).find("keyframe index 1 is out of range: the scene has 1 keyframe (0 to 0); the scene's keyframes: high"),
             std::string::npos);
 }
 
