@@ -2,6 +2,8 @@
 // in one line naming the flag and the value (UsageError).
 #include "cli_options.hpp"
 
+#include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
@@ -82,7 +84,15 @@ double parse_timestep(std::string_view flag, std::string_view value) {
   const bool plain = plain_decimal(text);
   const double x = plain ? std::strtod(text.c_str(), nullptr) : 0.0;
   if (!plain || !std::isfinite(x) || !(x > 0.0)) {
-    throw UsageError(std::string(flag) + " must be a positive, finite number of seconds, got " + quoted(value));
+    // 0.002s, 2ms: a number with a unit after it.
+    const size_t unit = text.find_first_not_of("0123456789.");
+    const std::string suffix = unit == std::string::npos ? std::string() : text.substr(unit);
+    const bool has_unit = unit != 0 && !suffix.empty() && plain_decimal(text.substr(0, unit)) && suffix != "e" &&
+                          suffix != "E" && std::all_of(suffix.begin(), suffix.end(), [](unsigned char c) {
+                            return std::isalpha(c) != 0;
+                          });
+    throw UsageError(std::string(flag) + " must be a positive, finite number of seconds" +
+                     (has_unit ? " without a unit (0.002, not 0.002s)" : "") + ", got " + quoted(value));
   }
   return x;
 }
@@ -157,6 +167,12 @@ Options parse(int argc, const char* const* argv) {
     const auto value = [&]() -> std::string_view {
       if (inline_value) return *inline_value;
       if (i + 1 >= argc) throw UsageError(std::string(arg) + " needs a value");
+      // A forgotten value must not swallow the next flag (--out --no-perturb
+      // would run the shoved run into a folder named --no-perturb).
+      if (const std::string_view next = argv[i + 1]; next.size() > 2 && next.rfind("--", 0) == 0) {
+        throw UsageError(std::string(arg) + " needs a value, got the flag " + std::string(next) + " (write " +
+                         std::string(arg) + "=" + std::string(next) + " for a value that begins with --)");
+      }
       return argv[++i];
     };
     const auto no_value = [&] {
@@ -269,6 +285,10 @@ Options parse(int argc, const char* const* argv) {
       opts.version = true;
     } else if (arg.rfind("-", 0) == 0) {
       throw UsageError("unknown option " + quoted(arg) + " (see --help)");
+    } else if (i == 1 && (arg == "plot" || arg == "batch")) {
+      // Commands the Python package adds (matplotlib, pyarrow): not sim_loop's.
+      throw UsageError(std::string(arg) + " is a command of the Python package: python -m simloop " + std::string(arg) +
+                       " (see python -m simloop " + std::string(arg) + " --help)");
     } else {
       throw UsageError("unexpected argument " + quoted(arg) + " (see --help)");
     }

@@ -57,9 +57,18 @@ class TerminalProgress {
     if (now - started_ < kDelay || (drawn_ && now - last_draw_ < kRedraw)) return;
     last_draw_ = now;
     const double fraction = std::min(1.0, static_cast<double>(done) / static_cast<double>(total));
-    char counts[96];
-    std::snprintf(counts, sizeof counts, "] %3d%% %lld/%lld steps", static_cast<int>(fraction * 100.0),
-                  static_cast<long long>(done), static_cast<long long>(total));
+    char counts[128];
+    const int written = std::snprintf(counts, sizeof counts, "] %3d%% %lld/%lld steps",
+                                      static_cast<int>(fraction * 100.0), static_cast<long long>(done),
+                                      static_cast<long long>(total));
+    // The time left at the rate so far, once there is a rate to go by.
+    const double elapsed = std::chrono::duration<double>(now - started_).count();
+    if (done > 0 && done < total && elapsed >= 1.0 && written > 0) {
+      const double left = elapsed * static_cast<double>(total - done) / static_cast<double>(done);
+      const auto seconds = static_cast<long long>(std::min(left, 359999.0 * 100));
+      std::snprintf(counts + written, sizeof counts - static_cast<size_t>(written), ", %lld:%02lld:%02lld left",
+                    seconds / 3600, seconds / 60 % 60, seconds % 60);
+    }
     const std::string head = "sim_loop [";
     const int room = columns_ - 1 - static_cast<int>(head.size() + std::strlen(counts));
     const int width = std::max(0, std::min(room, 40));

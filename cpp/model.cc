@@ -4,6 +4,7 @@
 #include <cstddef>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <optional>
@@ -75,7 +76,9 @@ Model Model::from_own_xml(std::string_view xml, std::string_view source) {
 
 Model Model::from_file(const std::string& path) {
   detail::install_mujoco_handlers();
-  // MuJoCo's own message for a missing file is vague; check first.
+  // MuJoCo's own message for a missing file, or a directory, is vague; check first.
+  std::error_code not_a_folder;
+  if (std::filesystem::is_directory(path, not_a_folder)) throw IoError(path + ": is a directory, not an MJCF file");
   std::ifstream probe(path);
   if (!probe) {
     throw IoError(path + ": cannot open (" + std::strerror(errno) + ")");

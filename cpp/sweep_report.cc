@@ -106,8 +106,8 @@ std::string chapter_marks(const SweepPoint& point, bool edge) {
 std::string sweep_summary(const SweepResult& result) {
   char line[256];
   std::string out;
-  std::snprintf(line, sizeof line, "swept %zu timesteps, %s s of sim time each, no shove\n", result.points.size(),
-                python_float_repr(result.duration).c_str());
+  std::snprintf(line, sizeof line, "swept %zu timestep%s, %s s of sim time each, no shove\n", result.points.size(),
+                result.points.size() == 1 ? "" : "s", python_float_repr(result.duration).c_str());
   out += line;
   const std::vector<std::string> header = {"timestep (s)", "steps", "peak z (m)", "max |y| (m)", "final z (m)",
                                            "contacts +work (J)", "unexplained (J)", "warnings", "stable"};
@@ -157,9 +157,9 @@ std::string sweep_csv(const ScenarioSweepResult& result) {
 std::string sweep_summary(const ScenarioSweepResult& result) {
   char line[512];
   std::string out;
-  std::snprintf(line, sizeof line, "swept scenario %s over %zu timesteps, %s s of sim time each\n",
+  std::snprintf(line, sizeof line, "swept scenario %s over %zu timestep%s, %s s of sim time each\n",
                 result.name.empty() ? "(unnamed)" : result.name.c_str(), result.points.size(),
-                python_float_repr(result.duration).c_str());
+                result.points.size() == 1 ? "" : "s", python_float_repr(result.duration).c_str());
   out += line;
   std::vector<std::string> header = {"timestep (s)", "steps", "warnings", "diverged", "peak speed (m/s)"};
   for (const std::string& b : result.bodies) header.push_back(b + " off (m)");

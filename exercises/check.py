@@ -143,6 +143,10 @@ def check_edge(path: Path) -> Verdict:
                "the timestep; past it each step extrapolates so far into the contact that the solver's correction "
                "throws the box up, and the contacts do positive work (the 'contacts +work' column) that no force "
                "explains. The chapter's 0.002 s has a factor of 2 to spare."]
+    elif predicted < high and mine is not None and not mine.stable:
+        why = [f"Your {_fmt(predicted)} is unstable on its own, although the sweep's grid is stable up to "
+               f"{_fmt(edge)}: near the edge the hop wavers around the 5 mm criterion, so the edge is a band rather "
+               "than a line, and an answer must be stable itself. Try a little lower."]
     elif predicted >= high or (mine is not None and not mine.stable):
         if mine is not None and mine.stable:
             why = [f"Your {_fmt(predicted)} is stable on its own, but it is past the edge: the edge is the largest "

@@ -90,7 +90,10 @@ TEST(CliOptions, BadValuesNameTheFlagAndTheValue) {
   EXPECT_EQ(usage_error({"--timestep", "1e999"}),
             "--timestep must be a positive, finite number of seconds, got '1e999'");
   EXPECT_EQ(usage_error({"--timestep", "0.002s"}),
-            "--timestep must be a positive, finite number of seconds, got '0.002s'");
+            "--timestep must be a positive, finite number of seconds without a unit (0.002, not 0.002s), got '0.002s'");
+  EXPECT_EQ(usage_error({"--timestep", "2ms"}),
+            "--timestep must be a positive, finite number of seconds without a unit (0.002, not 0.002s), got '2ms'");
+  EXPECT_EQ(usage_error({"--timestep", "1e"}), "--timestep must be a positive, finite number of seconds, got '1e'");
   EXPECT_EQ(usage_error({"--steps", "0"}), "--steps must be a whole number from 1 to 4611686018427387903, got '0'");
   EXPECT_EQ(usage_error({"--steps", "-5"}), "--steps must be a whole number from 1 to 4611686018427387903, got '-5'");
   EXPECT_EQ(usage_error({"--steps", "2.5"}), "--steps must be a whole number from 1 to 4611686018427387903, got '2.5'");
@@ -102,10 +105,20 @@ TEST(CliOptions, BadValuesNameTheFlagAndTheValue) {
   EXPECT_EQ(usage_error({"--record-every", "0"}),
             "--record-every must be a whole number from 1 to 4611686018427387903, got '0'");
   EXPECT_EQ(usage_error({"--seed"}), "--seed needs a value");
+  // A forgotten value does not swallow the next flag; --out=--x is a folder named so.
+  EXPECT_EQ(usage_error({"--out", "--no-perturb"}),
+            "--out needs a value, got the flag --no-perturb (write --out=--no-perturb for a value that begins with --)");
+  EXPECT_EQ(usage_error({"--out", "--seed", "3"}),
+            "--out needs a value, got the flag --seed (write --out=--seed for a value that begins with --)");
+  EXPECT_EQ(parse({"--out=--x"}).out, std::filesystem::path("--x"));
+  EXPECT_EQ(usage_error({"--seed", "-1"}).rfind("--seed must be a whole number", 0), 0u);
   EXPECT_EQ(usage_error({"--out", ""}), "--out must name a directory, got ''");
   EXPECT_EQ(usage_error({"--model="}), "--model must name an MJCF file, got ''");
   EXPECT_EQ(usage_error({"--frobnicate"}), "unknown option '--frobnicate' (see --help)");
   EXPECT_EQ(usage_error({"seed"}), "unexpected argument 'seed' (see --help)");
+  EXPECT_EQ(usage_error({"plot", "trajectory"}),
+            "plot is a command of the Python package: python -m simloop plot (see python -m simloop plot --help)");
+  EXPECT_EQ(usage_error({"--seed", "1", "batch"}), "unexpected argument 'batch' (see --help)");
   EXPECT_EQ(usage_error({"--smoke=yes"}), "--smoke takes no value, got 'yes'");
   EXPECT_EQ(usage_error({"--rng", "pcg64"}), "--rng must be mt19937_64 or numpy, got 'pcg64'");
   EXPECT_EQ(usage_error({"--rng"}), "--rng needs a value");

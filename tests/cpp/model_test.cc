@@ -154,6 +154,9 @@ TEST(Model, FromFile) {
   const std::string msg =
       message_of<simloop::IoError>([&] { (void)simloop::Model::from_file((dir.path() / "nope.xml").string()); });
   EXPECT_NE(msg.find("nope.xml: cannot open (No such file or directory)"), std::string::npos) << msg;
+  // A directory opens for reading on Linux: MuJoCo then said "XML parse error 5".
+  EXPECT_EQ(message_of<simloop::IoError>([&] { (void)simloop::Model::from_file(dir.path().string()); }),
+            dir.path().string() + ": is a directory, not an MJCF file");
 }
 
 TEST(Model, MujocoErrorsBecomeExceptionsAndWriteNoLog) {

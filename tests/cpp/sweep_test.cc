@@ -41,6 +41,9 @@ TEST(Sweep, FindsTheEdgeWhereTheHopBegins) {
   EXPECT_FALSE(s.points[7].stable);
   const std::string summary = simloop::sweep_summary(s);
   EXPECT_NE(summary.find("largest stable timestep: 0.004 s"), std::string::npos) << summary;
+  EXPECT_EQ(summary.rfind("swept 8 timesteps, 4.0 s of sim time each", 0), 0u) << summary;
+  const std::string one = simloop::sweep_summary(simloop::sweep(scene(), {0.002}, 0.1));
+  EXPECT_EQ(one.rfind("swept 1 timestep, 0.1 s of sim time each", 0), 0u) << one;
 }
 
 TEST(Sweep, NamesTheChaptersTimestepsByWhatTheyRanHere) {
