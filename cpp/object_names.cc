@@ -59,39 +59,6 @@ const Kind& kind_of(mjtObj type) {
   throw InvalidArgument("objects of MuJoCo type " + std::to_string(type) + " are not looked up by name");
 }
 
-// "the scene's joints: hip, knee; unnamed, by index: 0, 3 to 5", or "the
-// scene has no joints": what a lookup could have named.
-std::string listing(const mjModel* m, mjtObj type, ObjectFilter listed) {
-  const int count = object_count(m, type);
-  const std::string what = listed.what ? listed.what : kind_of(type).many;
-  std::string named, unnamed;
-  int run_start = -1;  // a run of consecutive unnamed indices, shown as "3 to 5"
-  const auto end_run = [&](int last) {
-    if (run_start < 0) return;
-    unnamed += (unnamed.empty() ? "" : ", ") + std::to_string(run_start);
-    if (last > run_start + 1) unnamed += " to " + std::to_string(last);
-    if (last == run_start + 1) unnamed += ", " + std::to_string(last);
-    run_start = -1;
-  };
-  for (int i = 0; i < count; ++i) {
-    if (listed.keep && !listed.keep(m, i)) {
-      end_run(i - 1);
-      continue;
-    }
-    const char* name = mj_id2name(m, type, i);
-    if (name != nullptr && *name != '\0') {
-      end_run(i - 1);
-      named += (named.empty() ? "" : ", ") + std::string(name);
-    } else if (run_start < 0) {
-      run_start = i;
-    }
-  }
-  end_run(count - 1);
-  if (named.empty() && unnamed.empty()) return "the scene has no " + what;
-  return "the scene's " + what + ": " + named + (named.empty() || unnamed.empty() ? "" : "; ") +
-         (unnamed.empty() ? "" : "unnamed, by index: " + unnamed);
-}
-
 }  // namespace
 
 mjtObj object_type_named(std::string_view kind) noexcept {
@@ -146,12 +113,61 @@ const char* joint_type_name(int type) noexcept {
   }
 }
 
+// Walked up the tree rather than read from body_weldid: MuJoCo 2.2 welds a
+// mocap body to the world, later versions to itself.
+bool body_can_move(const mjModel* m, int body) {
+  for (; body > 0; body = m->body_parentid[body]) {
+    if (m->body_dofnum[body] > 0 || m->body_mocapid[body] >= 0) return true;
+  }
+  return false;
+}
+
+bool body_can_be_pushed(const mjModel* m, int body) {
+  for (; body > 0; body = m->body_parentid[body]) {
+    if (m->body_dofnum[body] > 0) return true;
+  }
+  return false;
+}
+
+// "the scene's joints: hip, knee; unnamed, by index: 0, 3 to 5", or "the
+// scene has no joints": what a lookup could have named.
+std::string object_listing(const mjModel* m, mjtObj type, ObjectFilter listed) {
+  const int count = object_count(m, type);
+  const std::string what = listed.what ? listed.what : kind_of(type).many;
+  std::string named, unnamed;
+  int run_start = -1;  // a run of consecutive unnamed indices, shown as "3 to 5"
+  const auto end_run = [&](int last) {
+    if (run_start < 0) return;
+    unnamed += (unnamed.empty() ? "" : ", ") + std::to_string(run_start);
+    if (last > run_start + 1) unnamed += " to " + std::to_string(last);
+    if (last == run_start + 1) unnamed += ", " + std::to_string(last);
+    run_start = -1;
+  };
+  for (int i = 0; i < count; ++i) {
+    if (listed.keep && !listed.keep(m, i)) {
+      end_run(i - 1);
+      continue;
+    }
+    const char* name = mj_id2name(m, type, i);
+    if (name != nullptr && *name != '\0') {
+      end_run(i - 1);
+      named += (named.empty() ? "" : ", ") + std::string(name);
+    } else if (run_start < 0) {
+      run_start = i;
+    }
+  }
+  end_run(count - 1);
+  if (named.empty() && unnamed.empty()) return "the scene has no " + what;
+  return "the scene's " + what + ": " + named + (named.empty() || unnamed.empty() ? "" : "; ") +
+         (unnamed.empty() ? "" : "unnamed, by index: " + unnamed);
+}
+
 std::string unknown_name_message(const mjModel* m, mjtObj type, const std::string& name, ObjectFilter listed) {
   std::vector<std::string> names = object_names(m, type);
   names.erase(std::remove(names.begin(), names.end(), std::string()), names.end());
   const std::string hint = did_you_mean(name, names);
   return std::string("no ") + kind_of(type).one + " named '" + name + "'" +
-         (hint.empty() ? "" : " (did you mean '" + hint + "'?)") + "; " + listing(m, type, listed);
+         (hint.empty() ? "" : " (did you mean '" + hint + "'?)") + "; " + object_listing(m, type, listed);
 }
 
 std::string index_out_of_range_message(const mjModel* m, mjtObj type, const std::string& index, ObjectFilter listed) {
@@ -159,7 +175,7 @@ std::string index_out_of_range_message(const mjModel* m, mjtObj type, const std:
   const Kind& kind = kind_of(type);
   if (count == 0) return std::string(kind.one) + " index " + index + " is out of range: the scene has no " + kind.many;
   return std::string(kind.one) + " index " + index + " is out of range: the scene has " + std::to_string(count) + " " +
-         (count == 1 ? kind.one : kind.many) + " (0 to " + std::to_string(count - 1) + "); " + listing(m, type, listed);
+         (count == 1 ? kind.one : kind.many) + " (0 to " + std::to_string(count - 1) + "); " + object_listing(m, type, listed);
 }
 
 int object_id(const mjModel* m, mjtObj type, const std::string& name) {

@@ -20,8 +20,8 @@ namespace simloop {
 
 namespace {
 
-bool body_moves(const mjModel* m, int body) { return m->body_dofnum[body] > 0; }
-constexpr ObjectFilter kMovingBodies{"bodies that can move", body_moves};
+constexpr ObjectFilter kMovingBodies{"bodies that can move", body_can_move};
+constexpr ObjectFilter kPushableBodies{"bodies a force can move", body_can_be_pushed};
 
 bool is_index(const std::string& name) {
   return !name.empty() && name.size() <= 9 &&
@@ -72,8 +72,15 @@ ResolvedScenario resolve(const Scenario& scenario, const mjModel* m) {
   }
   for (std::size_t i = 0; i < scenario.disturbances.size(); ++i) {
     const DisturbanceSpec& d = scenario.disturbances[i];
-    const int body = find(m, mjOBJ_BODY, d.body, "disturbance[" + std::to_string(i) + "]", kMovingBodies);
-    if (body == 0) throw InvalidArgument("disturbance[" + std::to_string(i) + "]: the world body cannot be pushed");
+    const std::string where = "disturbance[" + std::to_string(i) + "]";
+    const int body = find(m, mjOBJ_BODY, d.body, where, kPushableBodies);
+    if (body == 0) throw InvalidArgument(where + ": the world body cannot be pushed");
+    if (!body_can_be_pushed(m, body)) {
+      throw InvalidArgument(where + ": a force on body '" + d.body + "' moves nothing: it is " +
+                            (body_can_move(m, body) ? "a mocap body or fixed to one (moved by mocap_pos)"
+                                                    : "fixed to the world") +
+                            "; " + object_listing(m, mjOBJ_BODY, kPushableBodies));
+    }
     r.disturbances.push_back({body, d});
   }
   const RecordSpec& rec = scenario.record;
@@ -96,7 +103,7 @@ ResolvedScenario resolve(const Scenario& scenario, const mjModel* m) {
     }
   };
   const auto any = [](const mjModel*, int) { return true; };
-  if (rec.all_bodies) every(r.bodies, 1, detail::compat::as_int(m->nbody), body_moves);
+  if (rec.all_bodies) every(r.bodies, 1, detail::compat::as_int(m->nbody), body_can_move);
   if (rec.all_joints) every(r.joints, 0, detail::compat::as_int(m->njnt), any);
   if (rec.all_actuators) every(r.actuators, 0, detail::compat::as_int(m->nu), any);
   if (rec.all_sensors) every(r.sensors, 0, detail::compat::as_int(m->nsensor), any);

@@ -14,6 +14,7 @@
 #include "run_detail.hpp"
 #include "simloop/batch.hpp"
 #include "simloop/errors.hpp"
+#include "simloop/object_names.hpp"
 #include "simloop/number_format.hpp"
 #include "simloop/output.hpp"
 #include "simloop/scene_params.hpp"
@@ -164,7 +165,7 @@ namespace {
 std::vector<int> moving_body_ids(const mjModel* m) {
   std::vector<int> out;
   for (int b = 1; b < m->nbody; ++b) {
-    if ((m->body_weldid[b] != 0 || m->body_mocapid[b] >= 0) && m->body_geomnum[b] > 0) out.push_back(b);
+    if (body_can_move(m, b) && m->body_geomnum[b] > 0) out.push_back(b);
   }
   return out;
 }

@@ -39,6 +39,9 @@ ArrayView array_of(const mjModel* m, const mjData* d, std::string_view name) {
   if (name == "act") return {d->act, as_int(m->na), 0, true};
   if (name == "qfrc_applied") return {d->qfrc_applied, as_int(m->nv), 0, true};
   if (name == "xfrc_applied") return {d->xfrc_applied, as_int(m->nbody), 6, true};
+  // Where the mocap bodies are: inputs, as ctrl is (row i: the body whose body_mocapid is i).
+  if (name == "mocap_pos") return {d->mocap_pos, as_int(m->nmocap), 3, true};
+  if (name == "mocap_quat") return {d->mocap_quat, as_int(m->nmocap), 4, true};
   if (name == "sensordata") return {d->sensordata, as_int(m->nsensordata), 0, false};
   if (name == "actuator_force") return {d->actuator_force, as_int(m->nu), 0, false};
   if (name == "xpos") return {d->xpos, as_int(m->nbody), 3, false};

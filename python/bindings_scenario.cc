@@ -19,6 +19,7 @@
 #include "simloop/recorder.hpp"
 #include "simloop/scenario.hpp"
 #include "simloop/scenario_run.hpp"
+#include "simloop/scene_params.hpp"
 #include "simloop/sweep.hpp"
 
 namespace simloop_py {
@@ -85,6 +86,14 @@ void bind_scenario(py::module_& m) {
       .def_readonly("name", &simloop::Scenario::name)
       .def_property_readonly("scene", [](const simloop::Scenario& s) { return fs_str(s.scene.native()); })
       .def_readonly("timestep", &simloop::Scenario::timestep)
+      .def_property_readonly(
+          "reset_params",
+          [](const simloop::Scenario& s) {
+            py::list params;
+            for (const auto& p : s.reset.params) params.append(py::make_tuple(simloop::scene_param_kind_name(p.kind), p.name));
+            return params;
+          },
+          "(kind, name) of each [[reset.param]]: the scene parameters each run draws at its reset.")
       .def("__repr__", [](const simloop::Scenario& s) {
         std::string length;
         switch (s.length.unit) {

@@ -32,12 +32,23 @@ namespace simloop {
 // The same for an index: throws InvalidArgument unless 0 <= index < count.
 [[nodiscard]] int checked_object_index(const mjModel* m, mjtObj type, long long index);
 
+// Whether a body can move: it is not welded to the world (it, or a body it
+// is fixed to, has a joint or is a mocap body). And whether a force on it
+// moves anything: the body it is fixed to has joints (a mocap body moves
+// only where mocap_pos puts it).
+[[nodiscard]] bool body_can_move(const mjModel* m, int body);
+[[nodiscard]] bool body_can_be_pushed(const mjModel* m, int body);
+
 // Which objects of a kind a lookup may name, for its error's listing: all
 // (no `keep`), or those `keep` passes, called `what` ("bodies that can move").
 struct ObjectFilter {
   const char* what = nullptr;
   bool (*keep)(const mjModel*, int) = nullptr;
 };
+
+// What a lookup could have named: "the scene's joints: hip, knee; unnamed,
+// by index: 0, 3 to 5", or "the scene has no joints".
+[[nodiscard]] std::string object_listing(const mjModel* m, mjtObj type, ObjectFilter listed = {});
 
 // Every lookup's error, one wording: "no body named 'torsoo' (did you mean
 // 'torso'?); the scene's bodies: world, torso; unnamed, by index: 3 to 5",

@@ -132,7 +132,7 @@ class Sim {
   [[nodiscard]] mjData* data() noexcept { return data_.get(); }
   [[nodiscard]] const mjData* data() const noexcept { return data_.get(); }
   // mjData's array `name`: qpos, qvel, ctrl, act, qfrc_applied, xfrc_applied
-  // (nbody x 6) writable; sensordata, actuator_force, xpos (nbody x 3), xquat
+  // (nbody x 6), mocap_pos (nmocap x 3), mocap_quat (nmocap x 4) writable; sensordata, actuator_force, xpos (nbody x 3), xquat
   // (nbody x 4) not. Throws InvalidArgument for another name.
   [[nodiscard]] ArrayView array(std::string_view name);
   // Any of mjData's arrays (fields.hpp's data_field), read-only: valid

@@ -186,6 +186,12 @@ def batch_command(args: List[str]) -> int:
         return _fail(EXIT_USAGE, f"batch: --scenario: {e}")
     axes = []
     for column, kind, name, values in opts["params"]:
+        # The scenario's own draw at each reset would override the grid's value, which the table would still show.
+        for drawn_kind, drawn_name in scenario._core.reset_params:
+            if drawn_kind == kind and (drawn_name == name or not drawn_name or not name):
+                what = f"{kind} of '{drawn_name}'" if drawn_name else f"{kind} of everything"
+                return _fail(EXIT_USAGE, f"batch: --{kind}: the scenario's [[reset.param]] sets {what} at each "
+                                         "run's reset, which would override the grid: grid it or draw it, not both")
         for value in values:
             try:
                 _core.with_scene_params(scene, [(kind, name, value)])

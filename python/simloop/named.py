@@ -36,7 +36,7 @@ if TYPE_CHECKING:
     from numpy.typing import NDArray
 
 # mjData's arrays a Sim lets a caller write (its views, Sim.qpos and the like).
-_WRITABLE_DATA = ("qpos", "qvel", "ctrl", "act", "qfrc_applied", "xfrc_applied")
+_WRITABLE_DATA = ("qpos", "qvel", "ctrl", "act", "qfrc_applied", "xfrc_applied", "mocap_pos", "mocap_quat")
 Key = Union[str, int, slice, Sequence[Union[str, int]], Tuple[Any, ...]]
 
 

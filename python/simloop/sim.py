@@ -32,8 +32,8 @@ def _view_property(name: str, doc: str, settable: bool = False) -> property:
     return property(get, set if settable else None, doc=doc)
 
 
-_ARRAYS = ("qpos", "qvel", "ctrl", "act", "qfrc_applied", "xfrc_applied", "sensordata", "actuator_force", "xpos",
-           "xquat")
+_ARRAYS = ("qpos", "qvel", "ctrl", "act", "qfrc_applied", "xfrc_applied", "mocap_pos", "mocap_quat", "sensordata",
+           "actuator_force", "xpos", "xquat")
 
 
 class Sim:
@@ -46,7 +46,7 @@ class Sim:
         sim.body("torso").xpos, sim.joint("hip").qpos, sim.sensor(0).data
         saved = sim.get_state(); ...; sim.set_state(saved)  # bit for bit
 
-    Arrays. qpos, qvel, ctrl, act, qfrc_applied and xfrc_applied (nbody x 6)
+    Arrays. qpos, qvel, ctrl, act, qfrc_applied, xfrc_applied (nbody x 6), mocap_pos and mocap_quat
     are numpy VIEWS into MuJoCo's mjData, writable: a write takes effect at
     the next step, and what you hold changes when the Sim steps (copy it to
     keep it). sensordata is a read-only view. A view keeps its Sim alive, and
@@ -163,6 +163,9 @@ class Sim:
     qfrc_applied = _view_property("qfrc_applied", "Generalized forces applied (nv), a writable view; it persists.")
     xfrc_applied = _view_property("xfrc_applied", "Force and torque on each body, world frame (nbody x 6), a "
                                                   "writable view; it persists.")
+    mocap_pos = _view_property("mocap_pos", "Where each mocap body is (nmocap x 3; row i is the body whose "
+                                            "body_mocapid is i), a writable view: MuJoCo moves it there, no force.")
+    mocap_quat = _view_property("mocap_quat", "Each mocap body's orientation (nmocap x 4, w x y z), a writable view.")
     sensordata = _view_property("sensordata", "Every sensor's reading (nsensordata), a read-only view, as of the "
                                               "last step.")
 

@@ -111,7 +111,7 @@ TEST(Scenario, UnknownNamesListWhatTheSceneHasWithADidYouMean) {
   Scenario s = Scenario::chapter();
   s.disturbances[0].body = "bx";
   EXPECT_EQ(error_of([&] { (void)simloop::resolve(s, chapter_model()); }),
-            "disturbance[0]: no body named 'bx' (did you mean 'box'?); the scene's bodies that can move: box, pusher");
+            "disturbance[0]: no body named 'bx' (did you mean 'box'?); the scene's bodies a force can move: box, pusher");
   s = Scenario::chapter();
   s.controls[0].actuator = "motor";
   EXPECT_EQ(error_of([&] { (void)simloop::resolve(s, chapter_model()); }),
@@ -140,10 +140,10 @@ TEST(Scenario, UnknownNamesListWhatTheSceneHasWithADidYouMean) {
   s.record = simloop::RecordSpec{};
   s.disturbances[0].body = "upper";
   EXPECT_EQ(error_of([&] { (void)simloop::resolve(s, arm.get()); }),
-            "disturbance[0]: no body named 'upper'; the scene's bodies that can move: unnamed, by index: 1, 2");
+            "disturbance[0]: no body named 'upper'; the scene's bodies a force can move: unnamed, by index: 1, 2");
   s.disturbances[0].body = "3";
   EXPECT_EQ(error_of([&] { (void)simloop::resolve(s, arm.get()); }),
-            "disturbance[0]: body index 3 is out of range: the scene has 3 bodies (0 to 2); the scene's bodies that can move: unnamed, "
+            "disturbance[0]: body index 3 is out of range: the scene has 3 bodies (0 to 2); the scene's bodies a force can move: unnamed, "
             "by index: 1, 2");
   s.disturbances[0].body = "2";
   EXPECT_EQ(simloop::resolve(s, arm.get()).disturbances.at(0).body, 2);
@@ -181,6 +181,31 @@ TEST(Scenario, AllInARecordListMeansEveryOneTheSceneHas) {
             "record.joints: no joint named 'all'; the scene's joints: pusher_slide; unnamed, by index: 0");
   EXPECT_EQ(error_of([] { (void)Scenario::from_toml_string("[record]\nsensors = \"every\"\n"); }),
             "<string>: record.sensors: expected an array of names or \"all\", got a string");
+}
+
+TEST(Scenario, BodiesFixedToAMovingOneOrMocapMoveAndOnlyJointedOnesArePushed) {
+  // A hand fixed to a jointed arm and a mocap target move (a Franka's hand, a
+  // Menagerie mocap target); a force moves only what has joints.
+  const simloop::Model scene = simloop::Model::from_xml_string(R"(<mujoco><worldbody>
+    <body name="arm"><joint type="hinge"/><geom size=".1"/><body name="hand"><geom size=".1"/></body></body>
+    <body name="base"><geom size=".1"/></body>
+    <body name="target" mocap="true"><geom size=".1"/></body>
+  </worldbody></mujoco>)");
+  const mjModel* m = scene.get();
+  const simloop::ResolvedScenario all = simloop::resolve(Scenario::from_toml_string("[record]\nbodies = \"all\"\n"), m);
+  EXPECT_EQ(all.bodies, (std::vector<int>{1, 2, 4}));  // arm, hand, target; not base
+  const auto pushing = [&](const char* body) {
+    return error_of([&] {
+      (void)simloop::resolve(Scenario::from_toml_string(std::string("[[disturbance]]\nbody = \"") + body +
+                                                        "\"\nforce = [1, 0, 0]\n"),
+                             m);
+    });
+  };
+  EXPECT_EQ(pushing("hand"), test::kNoInvalidArgument);
+  EXPECT_EQ(pushing("base"), "disturbance[0]: a force on body 'base' moves nothing: it is fixed to the world; the "
+                             "scene's bodies a force can move: arm, hand");
+  EXPECT_EQ(pushing("target"), "disturbance[0]: a force on body 'target' moves nothing: it is a mocap body or fixed "
+                               "to one (moved by mocap_pos); the scene's bodies a force can move: arm, hand");
 }
 
 TEST(Schedule, TheChaptersShoveIsOneDisturbanceDrawnAsBefore) {

@@ -308,6 +308,23 @@ def test_bad_input_is_one_line_exit_2_and_nothing_written(tmp_path):
     assert [p.name for p in tmp_path.iterdir()] == ["folder"] and not list((tmp_path / "folder").iterdir())
 
 
+def test_a_grid_of_a_parameter_the_scenario_draws_is_refused(tmp_path):
+    """The scenario's [[reset.param]] is applied at each reset, over the grid's value: the table would show
+    values no run used."""
+    (tmp_path / "drawn.toml").write_text('steps = 10\n[[reset.param]]\nkind = "mass"\nname = "box"\n'
+                                         'uniform = [1.0, 2.0]\n[[reset.param]]\nkind = "friction"\n'
+                                         'name = "box_geom"\nuniform = [0.5, 1.0]\n')
+    for args, words in [(["--mass", "box=3,4"], "batch: --mass: the scenario's [[reset.param]] sets mass of 'box' "
+                                                 "at each run's reset, which would override the grid"),
+                        (["--friction", "0.3"], "batch: --friction: the scenario's [[reset.param]] sets friction of "
+                                                "'box_geom'")]:
+        done = batch(["--scenario", "drawn.toml", *args, "--out", "out.parquet"], tmp_path)
+        assert done.returncode == 2 and done.stderr.count("\n") == 1 and words in done.stderr, done.stderr
+    assert not (tmp_path / "out.parquet").exists()
+    done = batch(["--scenario", "drawn.toml", "--mass", "pusher=3", "--seeds", "0:2", "--out", "out.parquet"], tmp_path)
+    assert done.returncode == 0, done.stderr
+
+
 def test_resume_after_ctrl_c_gives_the_bytes_of_an_uninterrupted_batch(tmp_path):
     args = ["--seeds", "0:800", "--steps", "500", "--chunk-size", "20", "--threads", "1"]
     whole = batch([*args, "--out", "whole.parquet"], tmp_path)

@@ -83,7 +83,7 @@ def test_keyword_scenarios_read_like_files(tmp_path):
     assert from_keywords.column_names == from_file.column_names
     np.testing.assert_array_equal(from_keywords.trajectory, from_file.trajectory)
     with pytest.raises(ValueError, match=r"no body named 'tblok' \(did you mean 'tblock'\?\); "
-                                         r"the scene's bodies that can move: tblock, pusher"):
+                                         r"the scene's bodies a force can move: tblock, pusher"):
         simloop.run_scenario(simloop.Scenario(scene=SCENES / "pusht.xml", steps=10,
                                               disturbances=[dict(body="tblok", force=[1, 0, 0])]))
     with pytest.raises(ValueError, match="setps: unknown key"):
@@ -145,7 +145,7 @@ def test_quick_flags_on_any_scene(tmp_path):
         (["--model", walker], '--model: {}: the model has no body named "box"; for any other scene, name the body'
                               ' to shove (--body) or run a --scenario'.format(walker)),
         (["--model", walker, "--body", "torsoo"], "--body: no body named 'torsoo' (did you mean 'torso'?); the scene's "
-                                                  "bodies that can move: torso, thigh_left, shin_left, thigh_right, shin_right"),
+                                                  "bodies a force can move: torso, thigh_left, shin_left, thigh_right, shin_right"),
         (["--model", walker, "--body", "torso", "--ctrl", "hip=1"], "--ctrl hip: no actuator named 'hip'; the scene's "
                                                                     "actuators: hip_left, knee_left, hip_right, knee_right"),
         (["--ctrl", "push_motor=fast"], "--ctrl must be ACTUATOR=VALUE (an actuator's name or index, a finite number), "

@@ -43,7 +43,7 @@ def test_an_unnamed_body_is_shoved_by_its_index(tmp_path, python):
     refused = run_command(["--model", arm, "--body", "3", "--out", "o"], tmp_path, python)
     assert refused.returncode == 2
     assert refused.stderr.endswith("--body: body index 3 is out of range: the scene has 3 bodies (0 to 2); the scene's "
-                                   "bodies that can move: unnamed, by index: 1, 2\n"), refused.stderr
+                                   "bodies a force can move: unnamed, by index: 1, 2\n"), refused.stderr
     assert refused.stderr.count("\n") == 1
 
 

@@ -59,6 +59,22 @@ def test_array_writes_take_effect_at_the_next_step():
     assert sim.actuator("push_x").force == 0.7  # a motor: gain 1, before its gear
 
 
+def test_a_mocap_body_goes_where_mocap_pos_and_mocap_quat_put_it():
+    """MuJoCo's mocap bodies (a Menagerie arm's target) move by their mocap arrays, inputs as ctrl is."""
+    sim = simloop.Sim(simloop.Model.from_xml_string(
+        '<mujoco><worldbody><body name="box"><freejoint/><geom size=".1"/></body>'
+        '<body name="target" mocap="true" pos="0 0 1"><geom size=".05" contype="0" conaffinity="0"/></body>'
+        '</worldbody></mujoco>'))
+    assert sim.mocap_pos.shape == (1, 3) and np.array_equal(sim.mocap_quat, [[1, 0, 0, 0]])
+    sim.mocap_pos[0] = [0.5, 0.0, 0.5]
+    sim.named.data.mocap_quat[0] = [0.0, 0.0, 0.0, 1.0]
+    sim.step(1)
+    assert np.array_equal(sim.body("target").xpos, [0.5, 0.0, 0.5])
+    assert np.array_equal(sim.body("target").xquat, [0.0, 0.0, 0.0, 1.0])
+    with pytest.raises(ValueError, match=r"mocap_pos\[0\] must be finite"):
+        sim.named.data.mocap_pos[0] = [math.nan, 0.0, 0.0]
+
+
 def test_views_are_views_and_keep_their_sim_alive():
     sim = simloop.Sim(PUSHT)
     qpos = sim.qpos
