@@ -111,7 +111,9 @@ Schedule build_schedule(const ResolvedScenario& scenario, const Scenario& spec, 
       f.wrench[static_cast<size_t>(i + 3)] = spec_d.torque[static_cast<size_t>(i)];
     }
     f.start = std::clamp<std::int64_t>(spec_d.start.to_steps(timestep, s.steps), 0, s.steps);
-    const std::int64_t duration = std::max<std::int64_t>(0, spec_d.duration.to_steps(timestep, s.steps));
+    // A push shorter than half a step still pushes, for one step: rounded to
+    // none it would vanish at a coarse timestep, while the report said it ran.
+    const std::int64_t duration = std::max<std::int64_t>(1, spec_d.duration.to_steps(timestep, s.steps));
     f.asked_end = f.start + duration;
     f.end = std::min(f.asked_end, s.steps);
     s.forces.push_back(f);

@@ -98,7 +98,14 @@ class VideoRecording:
         mp4 = requested.suffix.lower() == ".mp4"
         self.ffmpeg = shutil.which("ffmpeg") if mp4 else None
         self.target = requested if self.ffmpeg or requested.suffix.lower() == ".png" else requested.with_suffix(".png")
-        self.note = " (an animated PNG: ffmpeg, which .mp4 needs, is not on PATH)" if mp4 and not self.ffmpeg else ""
+        suffix = requested.suffix.lower()
+        if mp4 and not self.ffmpeg:
+            self.note = " (an animated PNG: ffmpeg, which .mp4 needs, is not on PATH)"
+        elif suffix not in (".mp4", ".png"):  # asked for a GIF, say, or no format at all
+            self.note = (f" (an animated PNG: {suffix or 'a name without a suffix'} is not a format --video writes; "
+                         "FILE.mp4 is an MP4, with ffmpeg)")
+        else:
+            self.note = ""
         self.piped: Any = _core.PipedFile(self.target)
         self.apng: Optional[_Apng] = None if self.ffmpeg else _Apng(WIDTH, HEIGHT)
         self.encoder: "Optional[subprocess.Popen[bytes]]" = None  # ffmpeg, started once the frame rate is known

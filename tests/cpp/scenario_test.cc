@@ -243,6 +243,16 @@ TEST(Schedule, SecondsBecomeStepsAndAWindowCutShortIsReportedAsCut) {
   EXPECT_EQ(schedule.forces[0].start, 30);
   EXPECT_EQ(schedule.forces[0].end, 60);        // what happened: 30 steps
   EXPECT_EQ(schedule.forces[0].asked_end, 80);  // what was asked: 50
+  // A push shorter than half a step pushes for one: it did not vanish at a coarse timestep.
+  s.disturbances[0].duration = When::seconds(0.001);
+  const simloop::Schedule kick = simloop::build_schedule(simloop::resolve(s, m), s, 0.002, *draws);
+  EXPECT_EQ(kick.forces[0].end - kick.forces[0].start, 1);
+  EXPECT_EQ(error_of([] { (void)Scenario::from_toml_string("[[disturbance]]\nbody = 'b'\nforce = [1, 0, 0]\n"
+                                                           "duration = 0.0\n", "s.toml"); }),
+            "s.toml: disturbance[0].duration: must be positive (leave it out for one step, a kick)");
+  EXPECT_EQ(error_of([] { (void)Scenario::from_toml_string("[[disturbance]]\nbody = 'b'\nforce = [1, 0, 0]\n"
+                                                           "steps = 0\n", "s.toml"); }),
+            "s.toml: disturbance[0].steps: must be positive (leave it out for one step, a kick)");
   s.length = When::seconds(0.0009);
   EXPECT_EQ(error_of([&] { (void)simloop::build_schedule(r, s, 0.002, *draws); }),
             "the run's length (0.0009 s) is less than one step of 0.002 s");

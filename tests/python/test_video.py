@@ -83,6 +83,15 @@ def test_without_ffmpeg_an_mp4_becomes_an_animated_png_and_says_so(tmp_path, mon
     assert apng_frames(tmp_path / "clip.png")[0] == 16  # 300 steps of 2 ms: 0.6 s, a frame each 0.04 s
 
 
+@pytest.mark.parametrize("asked, note", [("clip.gif", ".gif is not a format"),
+                                         ("clip", "a name without a suffix is not a format")])
+def test_a_video_asked_in_another_format_is_an_animated_png_and_says_so(asked, note, tmp_path):
+    run = run_command(["--smoke", "--steps", "50", "--no-rerun", "--video", asked, "--out", "out"], tmp_path)
+    assert run.returncode == 0, run.stderr
+    assert f"video: clip.png (an animated PNG: {note} --video writes; FILE.mp4 is an MP4, with ffmpeg)\n" in run.stdout
+    assert apng_frames(tmp_path / "clip.png")[0] > 1
+
+
 @pytest.mark.skipif(shutil.which("ffmpeg") is None, reason="ffmpeg is not on PATH")
 def test_with_ffmpeg_an_mp4_is_written(tmp_path):
     run = run_command(["--smoke", "--no-rerun", "--video", "clip.mp4", "--out", "out"], tmp_path)
