@@ -38,10 +38,15 @@ std::vector<std::string> numbered(const std::string& base, const char* suffix, i
   return out;
 }
 
-const char* joint_unit(int type, bool velocity) {
-  if (type == mjJNT_SLIDE) return velocity ? "m/s" : "m";
-  if (type == mjJNT_HINGE) return velocity ? "rad/s" : "rad";
-  return "";  // ball and free joints mix units (see the README)
+// A joint's columns' units: a free joint's position is metres then a
+// quaternion (no unit), its velocity m/s then rad/s; a ball's a quaternion
+// and rad/s.
+std::vector<std::string> joint_units(int type, bool velocity) {
+  if (type == mjJNT_SLIDE) return {velocity ? "m/s" : "m"};
+  if (type == mjJNT_HINGE) return {velocity ? "rad/s" : "rad"};
+  if (type == mjJNT_BALL) return velocity ? std::vector<std::string>(3, "rad/s") : std::vector<std::string>(4, "");
+  return velocity ? std::vector<std::string>{"m/s", "m/s", "m/s", "rad/s", "rad/s", "rad/s"}
+                  : std::vector<std::string>{"m", "m", "m", "", "", "", ""};
 }
 
 }  // namespace
@@ -63,9 +68,11 @@ CtrlRange ctrl_range(const mjModel* m) {
 }
 
 void Recorder::add(Source::Kind kind, int id, int count, const std::vector<std::string>& names,
-                   const std::string& unit, bool integer, bool input, const std::string& body) {
+                   const std::vector<std::string>& units, bool integer, bool input, const std::string& body) {
   Source source{kind, id, count, width()};
-  for (const std::string& n : names) columns_.push_back({n, unit, integer, input, body});
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    columns_.push_back({names[i], units.size() == 1 ? units[0] : units.at(i), integer, input, body});
+  }
   const bool derived = kind == Source::kBodyPose || kind == Source::kBodyVelocity ||
                        kind == Source::kActuatorForce || kind == Source::kSensor || kind == Source::kTendon ||
                        kind == Source::kContacts;
@@ -82,40 +89,42 @@ Recorder::Recorder(const mjModel* m, const ResolvedScenario& scenario, const Sch
   for (const auto& c : scenario.controls) ctrl_of.insert(c.actuator);
   ctrl_of.insert(scenario.actuators.begin(), scenario.actuators.end());
   for (int a : ctrl_of) {
-    add(Source::kCtrl, a, 1, {name_of(m, mjOBJ_ACTUATOR, a, "actuator") + "_ctrl"}, "", false, true);
+    add(Source::kCtrl, a, 1, {name_of(m, mjOBJ_ACTUATOR, a, "actuator") + "_ctrl"}, {""}, false, true);
   }
   std::set<int> pushed;
   for (const Schedule::Force& f : schedule.forces) pushed.insert(f.body);
   for (int b : pushed) {
     add(Source::kXfrc, b, 6, suffixed(name_of(m, mjOBJ_BODY, b, "body"), {"_fx", "_fy", "_fz", "_tx", "_ty", "_tz"}),
-        "N, N m", false, true);
+        {"N", "N", "N", "N m", "N m", "N m"}, false, true);
   }
   for (int b : scenario.bodies) {
     const std::string base = name_of(m, mjOBJ_BODY, b, "body");
-    add(Source::kBodyPose, b, 7, suffixed(base, {"_x", "_y", "_z", "_qw", "_qx", "_qy", "_qz"}), "m", false, false,
-        base);
-    add(Source::kBodyVelocity, b, 6, suffixed(base, {"_vx", "_vy", "_vz", "_wx", "_wy", "_wz"}), "m/s, rad/s", false,
-        false, base);
+    add(Source::kBodyPose, b, 7, suffixed(base, {"_x", "_y", "_z", "_qw", "_qx", "_qy", "_qz"}),
+        joint_units(mjJNT_FREE, false), false, false, base);
+    add(Source::kBodyVelocity, b, 6, suffixed(base, {"_vx", "_vy", "_vz", "_wx", "_wy", "_wz"}),
+        joint_units(mjJNT_FREE, true), false, false, base);
   }
   for (int j : scenario.joints) {
     const std::string base = name_of(m, mjOBJ_JOINT, j, "joint");
     const int type = m->jnt_type[j];
     const auto [nq, nv] = joint_size(type);
-    add(Source::kQpos, m->jnt_qposadr[j], nq, joint_position_columns(m, j), joint_unit(type, false));
-    add(Source::kQvel, m->jnt_dofadr[j], nv, numbered(base, "_vel", nv), joint_unit(type, true));
+    add(Source::kQpos, m->jnt_qposadr[j], nq, joint_position_columns(m, j), joint_units(type, false));
+    add(Source::kQvel, m->jnt_dofadr[j], nv, numbered(base, "_vel", nv), joint_units(type, true));
   }
   for (int a : scenario.actuators) {
-    add(Source::kActuatorForce, a, 1, {name_of(m, mjOBJ_ACTUATOR, a, "actuator") + "_force"}, "N or N m");
+    add(Source::kActuatorForce, a, 1, {name_of(m, mjOBJ_ACTUATOR, a, "actuator") + "_force"}, {"N or N m"});
   }
   for (int s : scenario.sensors) {
     add(Source::kSensor, m->sensor_adr[s], m->sensor_dim[s], numbered(name_of(m, mjOBJ_SENSOR, s, "sensor"), "", m->sensor_dim[s]),
-        "");
+        {""});
     reads_acceleration_stage_ = reads_acceleration_stage_ || m->sensor_needstage[s] == mjSTAGE_ACC;
   }
   for (int t : scenario.tendons) {  // a spatial tendon's metres, a fixed one's sum of its joints' coordinates
-    add(Source::kTendon, t, 2, suffixed(name_of(m, mjOBJ_TENDON, t, "tendon"), {"_length", "_vel"}), "m or rad");
+    const bool spatial = m->wrap_type[m->tendon_adr[t]] != mjWRAP_JOINT;
+    add(Source::kTendon, t, 2, suffixed(name_of(m, mjOBJ_TENDON, t, "tendon"), {"_length", "_vel"}),
+        spatial ? std::vector<std::string>{"m", "m/s"} : std::vector<std::string>{"m or rad", "m/s or rad/s"});
   }
-  if (scenario.contacts) add(Source::kContacts, 0, 1, {"ncon"}, "", true);
+  if (scenario.contacts) add(Source::kContacts, 0, 1, {"ncon"}, {""}, true);
 
   std::set<std::string> seen;
   for (const Column& c : columns_) {

@@ -89,8 +89,10 @@ class Recorder final : public RowRecorder {
     int count = 1;   // numbers it fills
     int column = 0;  // its first column
   };
-  void add(Source::Kind kind, int id, int count, const std::vector<std::string>& names, const std::string& unit,
-           bool integer = false, bool input = false, const std::string& body = "");
+  // units: one per column, or one for them all.
+  void add(Source::Kind kind, int id, int count, const std::vector<std::string>& names,
+           const std::vector<std::string>& units, bool integer = false, bool input = false,
+           const std::string& body = "");
   std::vector<Column> columns_;
   std::vector<Source> before_, after_;
   CtrlRange ctrl_range_;

@@ -161,7 +161,7 @@ def _eye(low: Any, high: Any, tracking: Optional[str] = None) -> Any:
 QUANTITIES = [
     ("positions (m)", lambda name, unit: unit == "m" and not name[-3:] in ("_qw", "_qx", "_qy", "_qz")),
     ("orientations (quaternion w x y z)", lambda name, unit: name[-3:] in ("_qw", "_qx", "_qy", "_qz")),
-    ("velocities (m/s, rad/s)", lambda name, unit: unit.startswith("m/s")),
+    ("velocities (m/s, rad/s)", lambda name, unit: unit.startswith(("m/s", "rad/s"))),
     ("forces (N, N m)", lambda name, unit: unit.startswith("N")),
     ("controls", lambda name, unit: name.endswith("_ctrl")),
     ("contacts", lambda name, unit: name == "ncon"),

@@ -59,6 +59,12 @@ def test_the_python_result_holds_what_the_scenario_asked():
                                                                 result.column("tblock_y")[-1],
                                                                 result.column("tblock_z")[-1])]
     assert result.column_units["tblock_x"] == "m"
+    # Each column its own unit: a quaternion has none, a velocity's angular part is rad/s, a torque N m.
+    units = result.column_units
+    assert [units[f"tblock_{c}"] for c in ("qw", "vx", "wz", "fy", "tz")] == ["", "m/s", "rad/s", "N", "N m"]
+    free = simloop.run_scenario(simloop.Scenario(steps=2, record=dict(joints="all"))).column_units  # the box's
+    assert [free[f"joint0_pos{i}"] for i in (2, 3)] + [free[f"joint0_vel{i}"] for i in (2, 3)] == ["m", "", "m/s",
+                                                                                                 "rad/s"]
     # the seed draws the bump and nothing else
     other = simloop.run_scenario(SCENES / "pusht.toml", seed=4)
     assert other.disturbances[0]["force"][1] != bump["force"][1]
