@@ -9,6 +9,7 @@
 #include "json_text.hpp"
 #include "simloop/number_format.hpp"
 #include "simloop/output.hpp"
+#include "simloop/scene_params.hpp"
 
 namespace simloop {
 
@@ -145,6 +146,17 @@ std::string metrics_json(const RunRecord& r) {
                                          {"steps_asked", {f.asked_end - f.start}}}});
   }
   m["disturbances"] = {disturbances};
+  // The scene parameters this run drew at its reset ([[reset.param]]): what
+  // a sweep of domain randomisation is read by. Absent when none are drawn.
+  if (!r.schedule.start.params.empty()) {
+    Json::Array params;
+    for (const SceneParam& p : r.schedule.start.params) {
+      params.push_back({Json::Object{{"kind", {std::string(scene_param_kind_name(p.kind))}},
+                                     {"name", {p.name}},
+                                     {"value", {round6(p.value)}}}});
+    }
+    m["params"] = {params};
+  }
   Json::Object warnings;
   for (const Warning& w : r.warnings) warnings[w.name] = {std::int64_t{w.count}};
   m["warnings"] = {warnings};
@@ -184,7 +196,19 @@ std::string summary_text(const RunRecord& r) {
                   r.disturbed_bodies[i].c_str(), w[0], w[1], w[2], w[3], w[4], w[5], window);
     out += line;
   }
-  if (!r.schedule.forces.empty()) {
+  if (!r.schedule.start.params.empty()) {
+    std::string drawn;
+    for (const SceneParam& p : r.schedule.start.params) {
+      char value[32];
+      std::snprintf(value, sizeof value, "%.4g", p.value);
+      const char* every = p.kind == SceneParam::Kind::kFriction ? " of every geom"
+                          : p.kind == SceneParam::Kind::kDamping ? " of every joint" : "";
+      drawn += (drawn.empty() ? "" : ", ") + std::string(scene_param_kind_name(p.kind)) +
+               (p.name.empty() ? every : " of '" + p.name + "'") + " = " + value;
+    }
+    out += "scene parameters drawn: " + drawn + "\n";
+  }
+  if (!r.schedule.forces.empty() || !r.schedule.start.params.empty()) {
     std::snprintf(line, sizeof line, "random draws: %s from seed %llu\n", r.rng.c_str(),
                   static_cast<unsigned long long>(r.seed));
     out += line;

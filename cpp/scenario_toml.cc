@@ -161,7 +161,6 @@ class TableReader {
     return out;
   }
 
-
  private:
   static std::string type_name(const toml::node& node) {
     switch (node.type()) {
@@ -326,10 +325,8 @@ DisturbanceSpec read_disturbance(const TableReader& t) {
   if (d.random_sign && !d.newtons) t.fail("random_sign", "only with newtons (a drawn strength)");
   if (const auto start = read_when(t, "start", "start_step", "start_fraction")) d.start = *start;
   if (const auto duration = read_when(t, "duration", "steps")) {
-    if (duration->unit == When::Unit::kSteps ? duration->count == 0 : duration->value == 0.0) {
-      t.fail(duration->unit == When::Unit::kSteps ? "steps" : "duration",
-             "must be positive (leave it out for one step, a kick)");
-    }
+    const char* key = duration->unit == When::Unit::kSteps ? "steps" : "duration";
+    if (duration->value == 0.0) t.fail(key, "must be positive (leave it out for one step, a kick)");
     d.duration = *duration;
   }
   return d;

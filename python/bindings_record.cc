@@ -13,6 +13,7 @@
 #include "simloop/number_format.hpp"
 #include "simloop/output.hpp"
 #include "simloop/run_record.hpp"
+#include "simloop/scene_params.hpp"
 
 namespace simloop_py {
 
@@ -114,6 +115,16 @@ void bind_record(py::module_& m) {
                                }
                                return out;
                              })
+      .def_property_readonly("params",
+                             [](const RunRecord& r) {
+                               py::list out;
+                               for (const simloop::SceneParam& p : r.schedule.start.params) {
+                                 out.append(py::dict("kind"_a = simloop::scene_param_kind_name(p.kind),
+                                                     "name"_a = p.name, "value"_a = p.value));
+                               }
+                               return out;
+                             },
+                             "The scene parameters the run drew at its reset ([[reset.param]]), as applied.")
       .def_property_readonly("bodies", [](const RunRecord& r) { return simloop::recorded_bodies(r); },
                              "The recorded bodies: {name: the column of its _x}.")
       .def_property_readonly("final_row", [](const RunRecord& r) { return vector_array(r.final_row); },

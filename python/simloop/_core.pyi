@@ -192,6 +192,8 @@ class ScenarioResult(metaclass=_Pybind11Type):
     @property
     def disturbances(self) -> list[_Disturbance]: ...
     @property
+    def params(self) -> list[_DrawnParam]: ...
+    @property
     def bodies(self) -> dict[str, int]: ...
     @property
     def rng(self) -> str: ...
@@ -277,6 +279,12 @@ class _Disturbance(TypedDict):
     start_step: int
     end_step: int
     asked_end_step: int
+
+# One of ScenarioResult.params: a scene parameter drawn at reset.
+class _DrawnParam(TypedDict):
+    kind: str
+    name: str
+    value: float
 
 
 # The scenario's controls; or the caller's (controls: steps x nu, initial_state:

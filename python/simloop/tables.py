@@ -257,6 +257,8 @@ def _scenario_row(r: Any) -> Dict[str, Any]:
             row[f"disturbance{i}_{axis}"] = float(value)
         row[f"disturbance{i}_start_step"] = d["start_step"]
         row[f"disturbance{i}_steps"] = d["end_step"] - d["start_step"]
+    for p in r.params:  # drawn at reset; named as the batch command names a grid's columns
+        row[f"{p['kind']}_{p['name']}" if p["name"] else p["kind"]] = p["value"]
     _warning_counts(row, r.warnings)
     return row
 

@@ -4,12 +4,14 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <string>
 #include <vector>
 
 #include "simloop/episode.hpp"
 #include "simloop/errors.hpp"
+#include "simloop/output.hpp"
 #include "test_util.hpp"
 #include "simloop/scenario_run.hpp"
 #include "simloop/scene_params.hpp"
@@ -100,6 +102,20 @@ TEST(ScenarioReset, ParamsAreTheRunsOwnSceneCopy) {
   ASSERT_EQ(g1.schedule.start.params.size(), 1u);
   const double v1 = g1.schedule.start.params[0].value, v2 = g2.schedule.start.params[0].value;
   EXPECT_TRUE(v1 >= 4.0 && v1 < 12.0 && v2 >= 4.0 && v2 < 12.0 && v1 != v2);
+  // What was drawn is reported, in metrics.json and the summary; a run that
+  // draws none has no "params" key.
+  const std::string metrics = simloop::metrics_json(g1);
+  char value[32];
+  std::snprintf(value, sizeof value, "%.6f", v1);
+  EXPECT_NE(metrics.find("\"params\": [\n    {\n      \"kind\": \"gravity\",\n      \"name\": \"\",\n      "
+                         "\"value\": " + std::string(value)),
+            std::string::npos)
+      << metrics;
+  std::snprintf(value, sizeof value, "%.4g", v1);
+  EXPECT_NE(simloop::summary_text(g1).find("scene parameters drawn: gravity = " + std::string(value) + "\n"),
+            std::string::npos)
+      << simloop::summary_text(g1);
+  EXPECT_EQ(simloop::metrics_json(run(pusht(), 1)).find("\"params\""), std::string::npos);
 }
 
 TEST(ScenarioReset, ABatchAndAnEpisodeStartAsARunDoes) {

@@ -59,3 +59,22 @@ def test_progress_counts_every_run_and_bad_arguments_are_refused_first():
         simloop.run_scenario_batch(simloop.Scenario(SCENES / "pusht.xml", record={"bodies": ["tblok"]}), seeds=[0, 1])
     empty = simloop.run_scenario_batch(SCENES / "pusht.toml", seeds=[])
     assert len(empty) == 0 and empty.column_names == [] and empty.results == []
+
+
+def test_drawn_scene_parameters_are_reported_per_run_and_are_what_ran(tmp_path):
+    """A domain-randomisation batch is read by its draws: each run's, in its result, its table row and its
+    metrics, and each is the value that ran (a run on a model with that value gives the same bits)."""
+    (tmp_path / "drawn.toml").write_text(f'scene = "{SCENES / "walker.xml"}"\nsteps = 40\n[[reset.param]]\n'
+                                         'kind = "mass"\nname = "torso"\nuniform = [5.0, 7.0]\n')
+    table = simloop.run_scenario_batch(tmp_path / "drawn.toml", seeds=range(3))
+    masses = [r.params[0]["value"] for r in table.results]
+    assert len(set(masses)) == 3 and all(5.0 <= m < 7.0 for m in masses)
+    assert list(table["mass_torso"]) == masses
+    first = table.results[0]
+    assert first.params == [{"kind": "mass", "name": "torso", "value": masses[0]}]
+    assert first.metrics["params"] == [{"kind": "mass", "name": "torso", "value": round(masses[0], 6)}]
+    (tmp_path / "undrawn.toml").write_text(f'scene = "{SCENES / "walker.xml"}"\nsteps = 40\n')
+    undrawn = simloop.Scenario.from_file(tmp_path / "undrawn.toml")
+    heavier = simloop._core.with_scene_params(undrawn.model(), [("mass", "torso", masses[0])])
+    again = simloop.run_scenario(undrawn, seed=0, model=heavier)
+    assert np.array_equal(again.trajectory, first.trajectory, equal_nan=True) and "params" not in again.metrics
