@@ -74,7 +74,7 @@ def _finish_stdout(code: int) -> int:
 PLOT_USAGE = ("usage: python -m simloop plot trajectory|sweep [--out DIR] [--compare DIR ...] [--x auto|time|step]\n"
               "  draws DIR/trajectory.png or DIR/sweep.png from the CSV the command wrote there;\n"
               "  --compare DIR (trajectory only, repeatable): draw DIR's run on the same axes;\n"
-              "  --x: sim time, or the step index (auto: time, unless the runs' timesteps differ)")
+              "  --x: sim time, or the step index (auto: time, unless the runs span different sim times)")
 
 
 def _plot_command(args: List[str]) -> int:

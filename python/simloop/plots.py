@@ -115,8 +115,9 @@ def _x_axis(runs, x: str) -> Tuple[str, list]:
     if x not in ("auto", "time", "step"):
         raise ValueError(f"x must be 'auto', 'time' or 'step', got {x!r}")
     timesteps = sorted({round(_timestep(run[0]), 12) for run in runs})
-    if x == "auto":
-        x = "step" if len(timesteps) > 1 else "time"
+    if x == "auto":  # the axis the runs line up on: time when they span the same sim time
+        spans = [float(run[0]["time"][-1]) for run in runs]
+        x = "time" if max(spans) - min(spans) <= 1e-6 * max(max(spans), 1.0) + max(timesteps) else "step"
     return x, timesteps
 
 
@@ -135,8 +136,8 @@ def trajectory_figure(csv: PathLike, compare: Iterable[PathLike] = (), x: str = 
 
     compare: other trajectory.csv files, drawn on the same axes (each run in
     its own colour; the box solid, the pusher dashed). x: "time" (sim
-    seconds), "step" (step index), or "auto": time, unless the runs have
-    different timesteps (the baseline's 4 s beside Break It's 100 s), then step.
+    seconds), "step" (step index), or "auto": time, unless the runs span
+    different sim times (the baseline's 4 s beside Break It's 100 s), then step.
     """
     import numpy as np
     from matplotlib.lines import Line2D
@@ -231,7 +232,8 @@ def scenario_trajectory_figure(runs, x: str = "auto"):
                                      if f"{b}_x" in cols else len(cols)) if b not in bodies]
     if not bodies:
         raise ValueError("the run recorded no bodies ([record] bodies = [...] in the scenario): no positions to draw")
-    colour = {b: BODY_COLORS[i % len(BODY_COLORS)] for i, b in enumerate(bodies)}
+    palette = BODY_COLORS if len(bodies) <= len(BODY_COLORS) else _many_colours(len(bodies))
+    colour = {b: palette[i % len(palette)] for i, b in enumerate(bodies)}
     contacts = any("ncon" in cols for cols, _, _ in runs)
     plt = _pyplot()
     ratios = [1, 1, 1, 1] + ([0.6] if contacts else [])
@@ -283,6 +285,15 @@ def scenario_trajectory_figure(runs, x: str = "auto"):
     return _titled(fig, title, legend, anchor=0.96, row_height=0.018)
 
 
+def _many_colours(count: int) -> list:
+    """Distinct colours for more bodies than BODY_COLORS has: matplotlib's tab20, then its
+    tab20b and tab20c (60 in all; a humanoid's 21 bodies each get their own)."""
+    from matplotlib import colormaps
+
+    colours = [colormaps[name](i) for name in ("tab20", "tab20b", "tab20c") for i in range(20)]
+    return colours[:max(count, 1)]
+
+
 def _describe_scenario(cols, metrics) -> str:
     """'1000 steps of 0.002 s, seed 0' (no disturbance: 'no disturbance')."""
     text = f"{int(cols['step'][-1])} steps of {_timestep(cols):.4g} s, seed {metrics.get('seed', '?')}"
@@ -293,9 +304,16 @@ def _titled(fig, title: str, legend: list, anchor: float, row_height: float):
     """The title, and one legend in two columns above the axes (never on the
     data), the axes laid out below it (row_height: one legend row's share of
     the figure's height)."""
+    import textwrap
+
     fig.suptitle(title)
     handles, labels = zip(*legend)
-    rows = (len(legend) + 1) // 2
+    # Long labels (a disturbance's force and torque) wrapped to half the
+    # figure's width, so that neither column runs off its edge.
+    labels = [textwrap.fill(label, 68, subsequent_indent="    ") for label in labels]
+    lines = [label.count("\n") + 1 for label in labels]
+    half = (len(labels) + 1) // 2  # matplotlib fills the first column first
+    rows = max(sum(lines[:half]), sum(lines[half:]))
     fig.legend(handles, labels, loc="upper center", bbox_to_anchor=(0.5, anchor), ncol=2, frameon=False, fontsize=8)
     fig.tight_layout(rect=(0, 0, 1, anchor + 0.035 - row_height * rows))
     return fig

@@ -90,6 +90,29 @@ def test_two_scenario_runs_on_the_same_axes(tmp_path):
         plots._pyplot().close(fig)
 
 
+def test_runs_at_two_timesteps_over_the_same_sim_time_line_up_in_time(tmp_path):
+    """PushT's 2 s at 0.002 s and at 0.001 s: drawn against time, where they line up (against the step index
+    the finer run would be stretched twice as wide); runs of different spans are drawn by step."""
+    from simloop import plots
+
+    _scenario_run(tmp_path, "coarse")
+    _scenario_run(tmp_path, "fine", "--timestep", "0.001")
+    _scenario_run(tmp_path, "short", "--steps", "300")
+    same_span = plots.trajectory_figure(tmp_path / "coarse" / "trajectory.csv", [tmp_path / "fine" / "trajectory.csv"])
+    other_span = plots.trajectory_figure(tmp_path / "coarse" / "trajectory.csv", [tmp_path / "short" / "trajectory.csv"])
+    try:
+        assert same_span.axes[-1].get_xlabel() == "sim time (s)"
+        assert other_span.axes[-1].get_xlabel() == "step"
+        # Every legend entry fits inside the figure (long ones are wrapped).
+        same_span.canvas.draw()
+        width = same_span.bbox.width
+        boxes = [t.get_window_extent() for t in same_span.legends[0].get_texts()]
+        assert all(0 <= box.x0 and box.x1 <= width for box in boxes), [(b.x0, b.x1, width) for b in boxes]
+    finally:
+        plots._pyplot().close(same_span)
+        plots._pyplot().close(other_span)
+
+
 def test_a_scenario_beside_the_chapters_run_or_without_bodies_is_refused(tmp_path):
     _scenario_run(tmp_path, "pusht")
     assert run_command(["--smoke", "--no-rerun", "--out", "chapter"], tmp_path).returncode == 0
