@@ -51,7 +51,8 @@ def run_scenario(scenario: ScenarioLike, *, seed: int = 0, rng: str = "mt19937_6
     (scenario.model()), to compile it once for many runs, or another scene
     (a Model, an MJCF file's path, a mujoco.MjModel). Returns a
     ScenarioResult: column_names, trajectory (a read-only numpy view),
-    column(name), metrics (a dict), disturbances, warnings, final_row,
+    column(name), metrics (a dict), disturbances, params (what its
+    [[reset.param]] drew), warnings, final_row,
     final_state (the full state at the end), summary(), write(out).
     Unknown names raise ValueError listing what the scene has.
 
