@@ -175,7 +175,8 @@ std::string index_out_of_range_message(const mjModel* m, mjtObj type, const std:
   const Kind& kind = kind_of(type);
   if (count == 0) return std::string(kind.one) + " index " + index + " is out of range: the scene has no " + kind.many;
   return std::string(kind.one) + " index " + index + " is out of range: the scene has " + std::to_string(count) + " " +
-         (count == 1 ? kind.one : kind.many) + " (0 to " + std::to_string(count - 1) + "); " + object_listing(m, type, listed);
+         (count == 1 ? kind.one : kind.many) + " (0 to " + std::to_string(count - 1) + "); " +
+         object_listing(m, type, listed);
 }
 
 int object_id(const mjModel* m, mjtObj type, const std::string& name) {
