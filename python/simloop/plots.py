@@ -307,10 +307,10 @@ def _titled(fig, title: str, legend: list, anchor: float, row_height: float):
     import textwrap
 
     fig.suptitle(title)
-    handles, labels = zip(*legend)
+    handles = [handle for handle, _ in legend]
     # Long labels (a disturbance's force and torque) wrapped to half the
     # figure's width, so that neither column runs off its edge.
-    labels = [textwrap.fill(label, 68, subsequent_indent="    ") for label in labels]
+    labels = [textwrap.fill(label, 68, subsequent_indent="    ") for _, label in legend]
     lines = [label.count("\n") + 1 for label in labels]
     half = (len(labels) + 1) // 2  # matplotlib fills the first column first
     rows = max(sum(lines[:half]), sum(lines[half:]))
