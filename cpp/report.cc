@@ -183,7 +183,10 @@ std::string summary_text(const RunRecord& r) {
     const Schedule::Force& f = r.schedule.forces[i];
     const std::int64_t acted = f.end - f.start, asked = f.asked_end - f.start;
     char window[96];
-    if (acted < asked) {
+    if (acted == 0 && f.start >= r.schedule.steps) {  // its start is past the run's end (start is clamped to it)
+      std::snprintf(window, sizeof window, "never: it starts after the run's %lld steps",
+                    static_cast<long long>(r.schedule.steps));
+    } else if (acted < asked) {
       std::snprintf(window, sizeof window, "%lld step%s from step %lld (of %lld: the run ended first)",
                     static_cast<long long>(acted), acted == 1 ? "" : "s", static_cast<long long>(f.start),
                     static_cast<long long>(asked));

@@ -180,6 +180,9 @@ def test_a_cut_window_and_the_numpy_generator(tmp_path):
     (cut,) = short.disturbances
     assert cut["end_step"] == 1030 and cut["asked_end_step"] == 1050
     assert "30 steps from step 1000 (of 50: the run ended first)" in short.summary()
+    late = simloop.run_scenario(simloop.Scenario(steps=5, disturbances=[dict(body="box", force=[0, 5, 0],
+                                                                             start_step=250)]))
+    assert "N m, never: it starts after the run's 5 steps\n" in late.summary(), late.summary()
 
 
 def test_the_recording_draws_the_scene(tmp_path):
