@@ -83,6 +83,8 @@ void bind_model(py::module_& m) {
                ">";
       })
       .def_property_readonly("name", &simloop::Model::name, "<mujoco model=...>'s name ('' if none).")
+      .def_property_readonly("load_warnings", &simloop::Model::load_warnings,
+                             "What MuJoCo warned while it parsed and compiled the scene, a line each.")
       .def_property_readonly("has_chapter_layout",
                              [](const simloop::Model& model) { return simloop::chapter_layout_missing(model).empty(); },
                              "True if the scene has the chapter's box and pusher (the chapter's loop runs on it).")

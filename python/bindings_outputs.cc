@@ -44,11 +44,6 @@ void bind_outputs(py::module_& m) {
   for (const int sig : simloop::kTerminatingSignals) signals.append(sig);
   m.attr("TERMINATING_SIGNALS") = py::tuple(signals);
 
-  // What MuJoCo warned while it loaded a scene, and the report's lines for it.
-  auto model_class = py::reinterpret_borrow<py::class_<simloop::Model>>(m.attr("Model"));
-  model_class.def_property_readonly(
-      "load_warnings", [](const simloop::Model& model) { return model.load_warnings(); },
-      "What MuJoCo warned while it parsed and compiled the scene, a line each.");
   py::class_<PyOutputLock>(m, "OutputLock",
                            "One run at a time in an output folder (include/simloop/output_lock.hpp): held until "
                            "release() or the end of a with block; OSError if another process holds it.")
