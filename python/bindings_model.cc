@@ -114,7 +114,9 @@ void bind_model(py::module_& m) {
             const mjModel* raw = model.get();
             const mjtObj type = object_type(kind);
             id = simloop::checked_object_index(raw, type, id);
-            if (type == mjOBJ_BODY) return py::dict("mass"_a = raw->body_mass[id]);
+            if (type == mjOBJ_BODY) {
+              return py::dict("mass"_a = raw->body_mass[id], "mocapid"_a = raw->body_mocapid[id]);
+            }
             if (type == mjOBJ_JOINT) {
               const simloop::JointSize size = simloop::joint_size(raw->jnt_type[id]);
               return py::dict("type"_a = simloop::joint_type_name(raw->jnt_type[id]), "qposadr"_a = raw->jnt_qposadr[id],

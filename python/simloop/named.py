@@ -119,7 +119,8 @@ class NamedArray:
 
 
 def _rows_by_name(model: _core.Model, rows_count: str, kind: str) -> Dict[str, Union[int, slice]]:
-    """Each named row: the objects of `kind`, a joint's slice of the nq / nv rows, or a sensor's of sensordata's."""
+    """Each named row: the objects of `kind`, a joint's slice of the nq / nv rows, a sensor's of sensordata's, or a
+    mocap body's row of mocap_pos and mocap_quat."""
     if kind:
         return {name: i for i, name in enumerate(model.names(kind)) if name}
     if rows_count == "nsensordata":
@@ -134,6 +135,9 @@ def _rows_by_name(model: _core.Model, rows_count: str, kind: str) -> Dict[str, U
             start, count = (info["qposadr"], info["nq"]) if rows_count == "nq" else (info["dofadr"], info["nv"])
             rows[name] = slice(start, start + count)
         return rows
+    if rows_count == "nmocap":  # mocap_pos, mocap_quat: a row per mocap body, in body_mocapid's order
+        bodies = [(name, model.object_info("body", b)["mocapid"]) for b, name in enumerate(model.names("body"))]
+        return {name: mocap for name, mocap in bodies if name and mocap >= 0}
     return {}
 
 

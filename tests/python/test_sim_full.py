@@ -67,12 +67,12 @@ def test_a_mocap_body_goes_where_mocap_pos_and_mocap_quat_put_it():
         '</worldbody></mujoco>'))
     assert sim.mocap_pos.shape == (1, 3) and np.array_equal(sim.mocap_quat, [[1, 0, 0, 0]])
     sim.mocap_pos[0] = [0.5, 0.0, 0.5]
-    sim.named.data.mocap_quat[0] = [0.0, 0.0, 0.0, 1.0]
+    sim.named.data.mocap_quat["target"] = [0.0, 0.0, 0.0, 1.0]  # rows by the mocap body's name
     sim.step(1)
     assert np.array_equal(sim.body("target").xpos, [0.5, 0.0, 0.5])
     assert np.array_equal(sim.body("target").xquat, [0.0, 0.0, 0.0, 1.0])
-    with pytest.raises(ValueError, match=r"mocap_pos\[0\] must be finite"):
-        sim.named.data.mocap_pos[0] = [math.nan, 0.0, 0.0]
+    with pytest.raises(ValueError, match=r"mocap_pos\['target'\] must be finite"):
+        sim.named.data.mocap_pos["target"] = [math.nan, 0.0, 0.0]
 
 
 def test_views_are_views_and_keep_their_sim_alive():
