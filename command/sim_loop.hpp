@@ -64,8 +64,9 @@ class TerminalProgress {
     // The time left at the rate so far, once there is a rate to go by.
     const double elapsed = std::chrono::duration<double>(now - started_).count();
     if (done > 0 && done < total && elapsed >= 1.0 && written > 0) {
+      constexpr double kLongest = 9999 * 3600.0;  // shown as 9999:00:00; keeps the conversion defined
       const double left = elapsed * static_cast<double>(total - done) / static_cast<double>(done);
-      const auto seconds = static_cast<long long>(std::min(left, 359999.0 * 100));
+      const auto seconds = static_cast<long long>(std::min(left, kLongest));
       std::snprintf(counts + written, sizeof counts - static_cast<size_t>(written), ", %lld:%02lld:%02lld left",
                     seconds / 3600, seconds / 60 % 60, seconds % 60);
     }

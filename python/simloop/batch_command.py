@@ -133,11 +133,10 @@ def _parse_batch_args(args: List[str]) -> Dict[str, Any]:
                 raise _BatchUsage(f"--gravity: '{value}': gravity is the whole scene's, give values only: --gravity G,G,...")
             if has_name and not name:
                 raise _BatchUsage(f"{flag}: '{value}' has an empty name before '='")
-            column = f"{kind}_{name}" if name else kind
-            if any(c == column for c, _, _, _ in opts["params"]):
+            if any((k, n) == (kind, name) for k, n, _ in opts["params"]):
                 raise _BatchUsage(f"{flag}: '{value}': {kind} {('of ' + repr(name)) if name else 'of everything'} "
                                   "is given twice")
-            opts["params"].append((column, kind, name, _parse_numbers(flag, values)))
+            opts["params"].append((kind, name, _parse_numbers(flag, values)))
         elif flag in ("--steps", "--threads", "--chunk-size"):
             if not value.isdigit() or int(value) < 1 or int(value) > 2**62 - 1:
                 raise _BatchUsage(f"{flag}: '{value}' is not a whole number from 1")
@@ -170,7 +169,7 @@ def batch_command(args: List[str]) -> int:
     except ImportError as e:
         return _fail(EXIT_USAGE, f"batch: {e} (pip install 'simloop[dask]' for the batch command)")
     # numpy and pyarrow: loaded for this command only
-    from . import distributed
+    from . import distributed, tables
     from .parquet_batch import ParquetBatch, ResumeError
 
     # Everything is checked before any file is touched: the scenario, its
@@ -185,7 +184,7 @@ def batch_command(args: List[str]) -> int:
     except (OSError, ValueError, _core.MujocoError) as e:
         return _fail(EXIT_USAGE, f"batch: --scenario: {e}")
     axes = []
-    for column, kind, name, values in opts["params"]:
+    for kind, name, values in opts["params"]:
         # The scenario's own draw at each reset would override the grid's value, which the table would still show.
         for drawn_kind, drawn_name in scenario._core.reset_params:
             if drawn_kind == kind and (drawn_name == name or not drawn_name or not name):
@@ -224,7 +223,8 @@ def batch_command(args: List[str]) -> int:
         workers = distributed._Pool(client).workers()
         size = opts["chunk_size"] or distributed.default_chunk_size(len(runs), 4 if client is None else workers)
         description = {"scenario": opts["scenario"] or "(the chapter's)", "seeds": len(opts["seeds"]),
-                       "timesteps": opts["timesteps"], "params": [c for c, _, _, _ in opts["params"]]}
+                       "timesteps": opts["timesteps"],
+                       "params": [tables.param_column(kind, name) for kind, name, _ in opts["params"]]}
         batch = ParquetBatch(opts["out"], job, runs, size, description)
         try:
             earlier = batch.prepare(opts["resume"])

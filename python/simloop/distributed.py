@@ -34,7 +34,7 @@ import numpy as np
 
 from . import _core
 from ._checks import _check_int, _check_path, _check_threads
-from .tables import BatchTable, _table
+from .tables import BatchTable, _table, param_column
 
 # A scene parameter as it travels: ("friction" | "mass" | "damping", name or "", value).
 SceneParam = Tuple[str, str, float]
@@ -108,12 +108,6 @@ def _with_params(model: "_core.Model", params: Tuple[SceneParam, ...]) -> "_core
     return _core.with_scene_params(model, list(params)) if params else model
 
 
-def param_column(param: Tuple[str, str]) -> str:
-    """The table column of a scene parameter: friction, friction_<geom>, mass_<body>, damping, damping_<joint>."""
-    kind, name = param
-    return f"{kind}_{name}" if name else kind
-
-
 # ---- The chunk: runs on a worker, returns only metrics -------------------
 
 def run_chunk(job: Dict[str, Any], runs: Sequence[Run]) -> BatchTable[Any]:
@@ -154,7 +148,7 @@ def metrics_table(runs: Sequence[Run], results: Sequence[Any]) -> BatchTable[Any
     local = _table(list(results), keep_results=False)
     columns: Dict[str, np.ndarray] = {"run": np.array([run[0] for run in runs], dtype=np.int64)}
     for j, (kind, name, _) in enumerate(runs[0][3] if runs else ()):
-        columns[param_column((kind, name))] = np.array([run[3][j][2] for run in runs], dtype=np.float64)
+        columns[param_column(kind, name)] = np.array([run[3][j][2] for run in runs], dtype=np.float64)
     columns.update((name, values) for name, values in local.columns.items() if name != "run")
     return BatchTable(columns)
 

@@ -242,6 +242,12 @@ def _run_row(r: Any) -> Dict[str, Any]:
     return row
 
 
+def param_column(kind: str, name: str) -> str:
+    """A scene parameter's column: friction, friction_<geom>, mass_<body>, damping, damping_<joint>,
+    gravity. One rule for a batch's grid and a run's draws, so that a value has one column."""
+    return f"{kind}_{name}" if name else kind
+
+
 def _scenario_row(r: Any) -> Dict[str, Any]:
     row: Dict[str, Any] = {"scenario": r.name, "seed": np.uint64(r.seed), "rng": r.rng, "timestep": r.timestep,
                            "steps": r.steps, "perturb": r.perturb, "sim_time": r.sim_time}
@@ -257,8 +263,8 @@ def _scenario_row(r: Any) -> Dict[str, Any]:
             row[f"disturbance{i}_{axis}"] = float(value)
         row[f"disturbance{i}_start_step"] = d["start_step"]
         row[f"disturbance{i}_steps"] = d["end_step"] - d["start_step"]
-    for p in r.params:  # drawn at reset; named as the batch command names a grid's columns
-        row[f"{p['kind']}_{p['name']}" if p["name"] else p["kind"]] = p["value"]
+    for p in r.params:  # drawn at reset
+        row[param_column(p["kind"], p["name"])] = p["value"]
     _warning_counts(row, r.warnings)
     return row
 
