@@ -10,32 +10,14 @@
 #include <limits>
 #include <optional>
 #include <string_view>
+#include <utility>
+#include <vector>
 
+#include "simloop/errors.hpp"
 #include "simloop/sweep.hpp"
 
 namespace simloop::cli {
 namespace {
-
-// A value as the user typed it, in single quotes, on one line: a quote or
-// backslash gets a backslash, control characters are written \xNN.
-std::string quoted(std::string_view value) {
-  std::string out = "'";
-  for (const char c : value) {
-    const auto byte = static_cast<unsigned char>(c);
-    if (c == '\'' || c == '\\') {
-      out += '\\';
-      out += c;
-    } else if (byte < 0x20 || byte == 0x7f) {
-      static constexpr char kHex[] = "0123456789abcdef";
-      out += "\\x";
-      out += kHex[byte >> 4];
-      out += kHex[byte & 0xf];
-    } else {
-      out += c;
-    }
-  }
-  return out + "'";
-}
 
 // A plain decimal number: [-]digits[.digits][e[+-]digits], at least one
 // digit before the exponent. No spaces, '+' signs, hex, inf or nan: the same
@@ -74,7 +56,7 @@ std::uint64_t parse_u64(std::string_view flag, std::string_view value, std::uint
   const unsigned long long n = all_digits(text) ? std::strtoull(text.c_str(), nullptr, 10) : 0;
   if (!all_digits(text) || errno == ERANGE || n < min || n > max) {
     throw UsageError(std::string(flag) + " must be a whole number from " + std::to_string(min) + " to " +
-                     std::to_string(max) + ", got " + quoted(value));
+                     std::to_string(max) + ", got " + quoted_value(value));
   }
   return n;
 }
@@ -92,7 +74,7 @@ double parse_timestep(std::string_view flag, std::string_view value) {
                             return std::isalpha(c) != 0;
                           });
     throw UsageError(std::string(flag) + " must be a positive, finite number of seconds" +
-                     (has_unit ? " without a unit (0.002, not 0.002s)" : "") + ", got " + quoted(value));
+                     (has_unit ? " without a unit (0.002, not 0.002s)" : "") + ", got " + quoted_value(value));
   }
   return x;
 }
@@ -105,7 +87,7 @@ std::pair<std::string, double> parse_ctrl(std::string_view flag, std::string_vie
   const double x = plain ? std::strtod(number.c_str(), nullptr) : 0.0;
   if (eq == 0 || eq == std::string_view::npos || !plain || !std::isfinite(x)) {
     throw UsageError(std::string(flag) + " must be ACTUATOR=VALUE (an actuator's name or index, a finite number), got " +
-                     quoted(value));
+                     quoted_value(value));
   }
   return {std::string(value.substr(0, eq)), x};
 }
@@ -128,7 +110,7 @@ std::vector<double> parse_range(std::string_view flag, std::string_view value) {
   const size_t a = value.find(':');
   const size_t b = a == std::string_view::npos ? a : value.find(':', a + 1);
   if (b == std::string_view::npos) {
-    throw UsageError(std::string(flag) + " must be FROM:TO:COUNT, got " + quoted(value));
+    throw UsageError(std::string(flag) + " must be FROM:TO:COUNT, got " + quoted_value(value));
   }
   const double from = parse_timestep(flag, value.substr(0, a));
   const double to = parse_timestep(flag, value.substr(a + 1, b - a - 1));
@@ -136,7 +118,42 @@ std::vector<double> parse_range(std::string_view flag, std::string_view value) {
   try {
     return log_spaced(from, to, count);
   } catch (const std::exception& e) {
-    throw UsageError(std::string(flag) + ": " + e.what() + ", got " + quoted(value));
+    throw UsageError(std::string(flag) + ": " + e.what() + ", got " + quoted_value(value));
+  }
+}
+
+// --video's file is a file of its own: not a folder or a device, and not
+// one of the run's other outputs (the .png it falls back to included).
+void check_video_file(const Options& opts) {
+  if (opts.video.empty() || opts.help || opts.version) return;
+  const std::string& given = opts.video.native();
+  if (given.back() == '/' || !opts.video.has_stem() || opts.video.filename() == "..") {
+    throw UsageError("--video must name a file, not a folder, got " + quoted_value(given));
+  }
+  const auto absolute = [](const std::filesystem::path& p) {
+    std::error_code ignored;
+    return std::filesystem::weakly_canonical(std::filesystem::absolute(p, ignored), ignored);
+  };
+  std::vector<std::pair<std::filesystem::path, std::string>> others = {
+      {opts.out / "metrics.json", "metrics.json"}, {opts.out / "trajectory.csv", "trajectory.csv"},
+      {opts.out / "sim_loop.rrd", "recording"}};
+  if (opts.plot) others.emplace_back(opts.out / "trajectory.png", "--plot's trajectory.png");
+  for (const std::filesystem::path& file : {opts.video, std::filesystem::path(opts.video).replace_extension(".png")}) {
+    std::error_code error;
+    const std::filesystem::file_status status = std::filesystem::status(file, error);
+    if (std::filesystem::is_directory(status)) {
+      throw UsageError("--video: " + quoted_value(file.native()) + " is a folder; name a file in it");
+    }
+    if (std::filesystem::exists(status) && !std::filesystem::is_regular_file(status)) {
+      throw UsageError("--video: " + quoted_value(file.native()) +
+                       " is a device, a pipe or a socket, not a file it can write whole");
+    }
+    for (const auto& [other, what] : others) {
+      if (absolute(file) == absolute(other)) {
+        throw UsageError("--video: " + quoted_value(file.native()) + " is also the run's " + what +
+                         "; name another file");
+      }
+    }
   }
 }
 
@@ -176,7 +193,7 @@ Options parse(int argc, const char* const* argv) {
       return argv[++i];
     };
     const auto no_value = [&] {
-      if (inline_value) throw UsageError(std::string(arg) + " takes no value, got " + quoted(*inline_value));
+      if (inline_value) throw UsageError(std::string(arg) + " takes no value, got " + quoted_value(*inline_value));
     };
     const auto run_only = [&] {
       if (sweeping) throw UsageError(std::string(arg) + " is not a sweep option (see sweep --help)");
@@ -199,7 +216,7 @@ Options parse(int argc, const char* const* argv) {
         opts.sweep_duration = parse_timestep(arg, v);
         opts.sweep_duration_given = true;
       } catch (const UsageError&) {
-        throw UsageError("--duration must be a positive, finite number of seconds, got " + quoted(v));
+        throw UsageError("--duration must be a positive, finite number of seconds, got " + quoted_value(v));
       }
     } else if (arg == "--threads") {
       sweep_only();
@@ -214,7 +231,7 @@ Options parse(int argc, const char* const* argv) {
       run_only();
       const std::string_view v = value();
       const std::optional<ShoveRng> rng = parse_rng(v);
-      if (!rng) throw UsageError("--rng must be mt19937_64 or numpy, got " + quoted(v));
+      if (!rng) throw UsageError("--rng must be mt19937_64 or numpy, got " + quoted_value(v));
       opts.run.rng = *rng;
       opts.rng_given = true;
     } else if (arg == "--chapter") {
@@ -284,13 +301,13 @@ Options parse(int argc, const char* const* argv) {
       no_value();
       opts.version = true;
     } else if (arg.rfind("-", 0) == 0) {
-      throw UsageError("unknown option " + quoted(arg) + " (see --help)");
+      throw UsageError("unknown option " + quoted_value(arg) + " (see --help)");
     } else if (i == 1 && (arg == "plot" || arg == "batch")) {
       // Commands the Python package adds (matplotlib, pyarrow): not sim_loop's.
       throw UsageError(std::string(arg) + " is a command of the Python package: python -m simloop " + std::string(arg) +
                        " (see python -m simloop " + std::string(arg) + " --help)");
     } else {
-      throw UsageError("unexpected argument " + quoted(arg) + " (see --help)");
+      throw UsageError("unexpected argument " + quoted_value(arg) + " (see --help)");
     }
   }
   if (opts.chapter) {  // the chapter draws its shove with numpy's default_rng
@@ -336,6 +353,7 @@ Options parse(int argc, const char* const* argv) {
   if (opts.is_scenario() && opts.run.audit_energy) {
     throw UsageError("--energy-audit accounts for the chapter's box and pusher only (not with --scenario, --body or --ctrl)");
   }
+  check_video_file(opts);
   // The library would refuse it too; say it in the flags' words.
   try {
     validate(opts.run);

@@ -16,6 +16,10 @@
 namespace simloop::cli {
 namespace {
 
+// Everything the report prints: names and paths of the user's reach it, and
+// a control character among them is shown, never sent to the terminal.
+void print(Host& host, std::string_view text) { host.print(printable(text)); }
+
 std::string line(const char* name, const std::filesystem::path& path, const std::string& more = "") {
   return std::string(name) + ": " + path.string() + more + "\n";
 }
@@ -53,9 +57,9 @@ int sweep_into(Host& host, const Options& opts, Sweep&& sweep) {
     summary = sweep_summary(result);
   });
   host.outputs_written();
-  host.print(summary);
-  host.print(line("sweep", csv));
-  if (opts.plot) host.print(line("plot", host.plot(opts.out, "sweep")));
+  print(host, summary);
+  print(host, line("sweep", csv));
+  if (opts.plot) print(host, line("plot", host.plot(opts.out, "sweep")));
   return 0;
 }
 
@@ -69,17 +73,17 @@ int run_into(Host& host, const Options& opts, const Model& model, const Scenario
   host.work("running", [&](RunControl* control) { done.emplace(run(recording.get(), control)); });
   host.outputs_written();
   const auto& [result, files] = *done;
-  host.print(summary_text(result));
-  host.print(line("metrics", files.metrics));
-  host.print(line("trajectory", files.trajectory,
+  print(host, summary_text(result));
+  print(host, line("metrics", files.metrics));
+  print(host, line("trajectory", files.trajectory,
                   " (" + std::to_string(result.rows) + " rows" +
                       (scenario ? ", " + std::to_string(result.columns.size()) + " columns" : std::string()) + ")"));
   if (recording) {
-    host.print(recording->line() + "\n");
+    print(host, recording->line() + "\n");
   } else if (opts.rerun) {
-    host.print("recording: none (sim_loop writes no .rrd; python -m simloop records one)\n");
+    print(host, "recording: none (sim_loop writes no .rrd; python -m simloop records one)\n");
   }
-  if (opts.plot) host.print(line("plot", host.plot(opts.out, "trajectory")));
+  if (opts.plot) print(host, line("plot", host.plot(opts.out, "trajectory")));
   return 0;
 }
 
@@ -116,15 +120,15 @@ int run_command(const std::vector<std::string>& args, Host& host) {
     return host.fail(kExitUsage, e.what());
   }
   if (opts.help) {
-    host.print(host.help(opts.command == Command::kSweep));
+    print(host, host.help(opts.command == Command::kSweep));
     return 0;
   }
   if (opts.version) {
-    host.print(host.version() + "\n");
+    print(host, host.version() + "\n");
     return 0;
   }
   // The banner: the chapter's startup contract (the tier; wall-clock at the end).
-  host.print("ch0.1-sim-loop | tier: cpu | " + mujoco_version() + " | simloop " + kVersion + "\n");
+  print(host, "ch0.1-sim-loop | tier: cpu | " + mujoco_version() + " | simloop " + kVersion + "\n");
   try {
     host.flush();
   } catch (const Failure& e) {
@@ -144,6 +148,8 @@ int run_command(const std::vector<std::string>& args, Host& host) {
       scenario = Scenario::from_toml_file(opts.scenario_path);
     } catch (const Error& e) {
       return refuse(kExitUsage, "--scenario: " + std::string(e.what()));
+    } catch (const std::bad_alloc&) {  // toml++ parsing it, under a memory limit
+      return refuse(kExitRunFailed, "--scenario: " + opts.scenario_path + ": out of memory while reading it");
     }
   }
   const std::string model_flag = scenario                  ? "--scenario " + opts.scenario_path
@@ -163,7 +169,7 @@ int run_command(const std::vector<std::string>& args, Host& host) {
   }
   // What MuJoCo said while it loaded the scene, as it says what it warns
   // while stepping: on the report.
-  host.print(load_warnings_text(*model));
+  print(host, load_warnings_text(*model));
   // What runs: a scenario (its names checked now, in the flags' words), or
   // the chapter's loop, which needs the chapter's box and pusher.
   try {
@@ -175,8 +181,9 @@ int run_command(const std::vector<std::string>& args, Host& host) {
   // From here on a file may exist that must go (the output directory's
   // probe, then the temporary outputs): a signal only requests a stop.
   host.loading(false);
+  // Anything at --out, a link to nothing included, is the user's: never removed.
   std::error_code out_check;
-  const bool out_existed = std::filesystem::exists(opts.out, out_check);
+  const bool out_existed = std::filesystem::exists(std::filesystem::symlink_status(opts.out, out_check));
   // --out's lock, held for the rest of the run (one run at a time in a
   // folder); declared first, it is released last, after the folder's removal.
   std::optional<OutputLock> out_lock;
@@ -211,7 +218,7 @@ int run_command(const std::vector<std::string>& args, Host& host) {
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   char wall[96];
   std::snprintf(wall, sizeof wall, "wall-clock: %.1f ms, peak memory: %.1f MiB\n", seconds * 1e3, peak_memory_mib());
-  host.print(wall);
+  print(host, wall);
   return 0;
 }
 

@@ -12,6 +12,7 @@
 #include "worker_pool.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/number_format.hpp"
+#include "simloop/rows.hpp"
 #include "simloop/scene_params.hpp"
 #include "simloop/shove.hpp"
 #include "simloop/state.hpp"
@@ -31,6 +32,18 @@ struct Episode {
   detail::StepHealth health;
   std::optional<detail::DecisionStep> decision;  // from the first reset
 };
+
+// `count` episodes' data, each `bytes`, fit the memory budget a run's
+// trajectories get: a million envs are refused at once, not by the kernel.
+void check_episodes_memory(std::size_t count, std::size_t bytes) {
+  const std::uint64_t budget = trajectory_memory_budget();
+  if (bytes > 0 && count > budget / bytes) {
+    throw InvalidArgument(std::to_string(count) + " episodes need " + std::to_string(count) + " x " +
+                          std::to_string(bytes >> 10) + " KiB of MuJoCo data, more than the " +
+                          std::to_string(budget >> 20) +
+                          " MiB allowed (half of the machine's memory or the process's limit); run fewer");
+  }
+}
 
 }  // namespace
 
@@ -72,7 +85,10 @@ Episodes::Episodes(const Model& scene, const Scenario& scenario, const ScenarioC
   s.recorder.emplace(s.model.get(), s.resolved, schedule);
   s.length = schedule.steps;
   s.episodes.reserve(count);
-  for (std::size_t i = 0; i < count; ++i) s.episodes.emplace_back(s.model);
+  for (std::size_t i = 0; i < count; ++i) {
+    s.episodes.emplace_back(s.model);
+    if (i == 0) check_episodes_memory(count, detail::compat::data_bytes(s.episodes.front().data.get()));
+  }
 }
 
 Episodes::~Episodes() = default;

@@ -4,6 +4,7 @@
 #include <signal.h>
 #include <sys/mman.h>
 #include <sys/prctl.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -11,6 +12,7 @@
 #include <cerrno>
 #include <climits>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <memory>
 #include <mutex>
@@ -19,6 +21,7 @@
 #include "mujoco_compat.hpp"
 #include "mujoco_guard.hpp"
 #include "simloop/errors.hpp"
+#include "simloop/rows.hpp"
 
 namespace simloop::detail {
 namespace {
@@ -84,6 +87,27 @@ bool read_all(int fd, void* data, std::size_t size) {
   return true;
 }
 
+// The child's memory: its data now (the parent's, copied) and the budget a
+// run's trajectories get. Past it MuJoCo's allocations fail and the load ends
+// in one line, where a 100000 x 100000 height field would grow until the
+// kernel's OOM killer ended it (and maybe others).
+void limit_memory(std::uint64_t budget) {
+  std::FILE* statm = std::fopen("/proc/self/statm", "r");
+  unsigned long long pages[6] = {};
+  const bool read = statm != nullptr && std::fscanf(statm, "%llu %llu %llu %llu %llu %llu", &pages[0], &pages[1],
+                                                    &pages[2], &pages[3], &pages[4], &pages[5]) == 6;
+  if (statm != nullptr) std::fclose(statm);
+  if (!read) return;
+  const std::uint64_t data = pages[5] * static_cast<std::uint64_t>(::sysconf(_SC_PAGE_SIZE));  // data + stack
+  struct rlimit limit {};
+  if (::getrlimit(RLIMIT_DATA, &limit) != 0) return;
+  const std::uint64_t wanted = data + budget;
+  if (limit.rlim_cur == RLIM_INFINITY || wanted < limit.rlim_cur) {
+    limit.rlim_cur = static_cast<rlim_t>(wanted);
+    ::setrlimit(RLIMIT_DATA, &limit);
+  }
+}
+
 // The child: compile, send, exit. Never returns.
 [[noreturn]] void child(int out, pid_t parent, const char* filename, const mjVFS* vfs, std::string_view source) {
   // Signals: the default action for each (not the parent's handlers, which
@@ -101,6 +125,7 @@ bool read_all(int fd, void* data, std::size_t size) {
   }
   ::prctl(PR_SET_PDEATHSIG, SIGKILL);
   if (::getppid() != parent) ::_exit(1);
+  limit_memory(trajectory_memory_budget());
   sigset_t none;
   sigemptyset(&none);
   ::pthread_sigmask(SIG_SETMASK, &none, nullptr);

@@ -2,6 +2,7 @@
 
 #include <cerrno>
 #include <cstddef>
+#include <cstdint>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -12,6 +13,7 @@
 
 #include "isolated_load.hpp"
 #include "model_detail.hpp"
+#include "text_input.hpp"
 #include "mujoco_compat.hpp"
 #include "mujoco_guard.hpp"
 #include "simloop/errors.hpp"
@@ -75,6 +77,7 @@ Model Model::from_own_xml(std::string_view xml, std::string_view source) {
 }
 
 Model Model::from_file(const std::string& path) {
+  detail::check_path(path, "an MJCF file");
   detail::install_mujoco_handlers();
   // MuJoCo's own message for a missing file, or a directory, is vague; check first.
   std::error_code not_a_folder;
@@ -143,7 +146,26 @@ bool Data::fits(const Model& model) const noexcept {
   return std::memcmp(sizes_.data(), &model.get()->nq, sizeof sizes_) == 0;
 }
 
-// --- Serialization (pickling): MuJoCo's own binary model format.
+// --- Serialization (pickling): MuJoCo's own binary model format, then a
+// trailer of ours: kSavedModelMagic and the FNV-1a hash of MuJoCo's bytes.
+// mj_loadModel checks the format's sizes but not its contents: a damaged
+// index would reach mj_makeData and crash it, so damage is caught here first.
+
+namespace {
+
+constexpr std::string_view kSavedModelMagic("simloop\x01", 8);
+constexpr std::size_t kTrailerBytes = kSavedModelMagic.size() + sizeof(std::uint64_t);
+
+std::uint64_t fnv1a(std::string_view bytes) {
+  std::uint64_t hash = 0xcbf29ce484222325ULL;
+  for (const char c : bytes) {
+    hash ^= static_cast<unsigned char>(c);
+    hash *= 0x100000001b3ULL;
+  }
+  return hash;
+}
+
+}  // namespace
 
 std::string Model::to_bytes() const {
   const mjModel* m = model_.get();
@@ -156,13 +178,26 @@ std::string Model::to_bytes() const {
   } catch (const MujocoError& e) {
     throw MujocoError(std::string("saving the model as bytes: ") + e.what());
   }
+  const std::uint64_t hash = fnv1a(bytes);
+  bytes += kSavedModelMagic;
+  bytes.append(reinterpret_cast<const char*>(&hash), sizeof hash);
   return bytes;
 }
 
-Model Model::from_bytes(std::string_view bytes, std::string_view source) {
-  if (bytes.empty() || bytes.size() > static_cast<std::size_t>(std::numeric_limits<int>::max())) {
-    throw InvalidArgument(std::string(source) + ": a saved model must be 1 to 2**31-1 bytes, got " +
-                          std::to_string(bytes.size()));
+Model Model::from_bytes(std::string_view saved, std::string_view source) {
+  if (saved.size() <= kTrailerBytes ||
+      saved.size() - kTrailerBytes > static_cast<std::size_t>(std::numeric_limits<int>::max())) {
+    throw InvalidArgument(std::string(source) + ": a saved model must be " + std::to_string(kTrailerBytes + 1) +
+                          " to 2**31-1 bytes, got " + std::to_string(saved.size()));
+  }
+  const std::string_view bytes = saved.substr(0, saved.size() - kTrailerBytes);
+  std::uint64_t hash = 0;
+  std::memcpy(&hash, saved.data() + bytes.size() + kSavedModelMagic.size(), sizeof hash);
+  if (saved.substr(bytes.size(), kSavedModelMagic.size()) != kSavedModelMagic) {
+    throw InvalidArgument(std::string(source) + ": not a model simloop saved (Model.to_bytes or a pickle)");
+  }
+  if (hash != fnv1a(bytes)) {
+    throw InvalidArgument(std::string(source) + ": the saved model is damaged (its checksum does not match)");
   }
   detail::install_mujoco_handlers();
   constexpr const char* kName = "model.mjb";

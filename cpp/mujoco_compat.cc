@@ -412,4 +412,12 @@ bool each_data_array(const mjModel* m, const mjData* d, const std::function<bool
 #undef SIMLOOP_SIZE_LOCAL
 #undef SIMLOOP_MODEL_SIZES
 
+std::size_t data_bytes(const mjData* d) noexcept {
+#if mjVERSION_HEADER >= 300
+  return count(d->nbuffer) + count(d->narena);
+#else
+  return count(d->nbuffer) + count(d->nstack) * sizeof(mjtNum);
+#endif
+}
+
 }  // namespace simloop::detail::compat

@@ -11,6 +11,7 @@
 //   model sizes        int                                mjtSize, int64 (3.5)
 //   state              our own layout (MuJoCo has none)   mj_getState(mjSTATE_INTEGRATION), then
 //                                                         the trees' sleep counters (3.4)
+//   data's memory      nbuffer + nstack mjtNums           nbuffer + narena bytes
 //   plugins            none                               libraries in the package's plugin/ folder
 //   arrays             mjxmacro.h: sizes MJMODEL_INTS,     MJMODEL_SIZES; contacts and constraints
 //                      contacts and constraints njmax-    in d->arena, nefc/ncon rows (MJ_D)
@@ -75,6 +76,10 @@ class OneFileVfs {
 inline constexpr int kMaxKeyframes = 1000000;
 inline constexpr int kMaxUserNumbers = 1000000;  // <size nuserdata>, <size nuser_body> and the like
 [[nodiscard]] mjModel* load_xml(const char* filename, const mjVFS* vfs, char* error, int error_size);
+
+// The bytes one mjData holds: its buffer and its stack (2.2's nstack
+// mjtNums) or arena (3.x's narena bytes).
+[[nodiscard]] std::size_t data_bytes(const mjData* d) noexcept;
 
 // MuJoCo's warnings: how many, each one's name ("mjWARN_BADQACC", from the
 // headers) and its message for a given info, as mju_warningText words it.

@@ -111,6 +111,24 @@ MujocoError error_from_exception(const std::exception_ptr& error) {
 
 namespace simloop {
 
+namespace {
+
+// A control character as \xNN: it would otherwise act on the terminal.
+void append_escaped(std::string& out, char c) {
+  static constexpr char kHex[] = "0123456789abcdef";
+  const auto byte = static_cast<unsigned char>(c);
+  out += "\\x";
+  out += kHex[byte >> 4];
+  out += kHex[byte & 0xf];
+}
+
+bool is_control(char c) {
+  const auto byte = static_cast<unsigned char>(c);
+  return byte < 0x20 || byte == 0x7f;
+}
+
+}  // namespace
+
 std::string one_line(std::string_view text) {
   std::string line;
   bool pending_separator = false;
@@ -123,10 +141,44 @@ std::string one_line(std::string_view text) {
       line += "; ";
       pending_separator = false;
     }
-    line += c;
+    if (is_control(c) && c != '\t') {
+      append_escaped(line, c);
+    } else {
+      line += c;
+    }
   }
   while (!line.empty() && (line.back() == ' ' || line.back() == '\t')) line.pop_back();
   return line;
+}
+
+std::string printable(std::string_view text) {
+  std::string out;
+  out.reserve(text.size());
+  for (const char c : text) {
+    if (is_control(c) && c != '\n' && c != '\t') {
+      append_escaped(out, c);
+    } else {
+      out += c;
+    }
+  }
+  return out;
+}
+
+std::string quoted_value(std::string_view value, std::size_t max_bytes) {
+  std::string out = "'";
+  for (const char c : value.substr(0, max_bytes)) {
+    if (c == '\'' || c == '\\') {
+      out += '\\';
+      out += c;
+    } else if (is_control(c)) {
+      append_escaped(out, c);
+    } else {
+      out += c;
+    }
+  }
+  out += "'";
+  if (value.size() > max_bytes) out += " (" + std::to_string(max_bytes) + " of its " + std::to_string(value.size()) + " bytes)";
+  return out;
 }
 
 }  // namespace simloop

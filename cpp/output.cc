@@ -102,6 +102,10 @@ std::string trajectory_csv(const Trajectory& t, const std::vector<Column>& colum
 
 void prepare_output_dir(const std::filesystem::path& dir) {
   std::error_code ec;
+  if (std::filesystem::is_symlink(dir, ec) && !std::filesystem::exists(dir, ec)) {
+    throw IoError(dir.string() + ": a symbolic link to " + std::filesystem::read_symlink(dir, ec).string() +
+                  ", which does not exist (make that folder, or give another --out)");
+  }
   if (std::filesystem::exists(dir, ec) && !std::filesystem::is_directory(dir, ec)) {
     throw IoError(dir.string() + ": exists and is not a directory");
   }

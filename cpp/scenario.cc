@@ -13,6 +13,7 @@
 #include <string>
 
 #include "model_detail.hpp"
+#include "text_input.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/number_format.hpp"
 #include "simloop/run.hpp"
@@ -34,16 +35,7 @@ std::int64_t When::to_steps(double timestep, std::int64_t run_steps) const {
 }
 
 Scenario Scenario::from_toml_file(const std::filesystem::path& path) {
-  std::error_code error;
-  if (std::filesystem::is_directory(path, error)) {
-    throw IoError(path.string() + ": is a directory, not a scenario file");
-  }
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw IoError(path.string() + ": cannot open (" + std::strerror(errno) + ")");
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) throw IoError(path.string() + ": cannot read (" + std::strerror(errno) + ")");
-  const std::string toml = text.str();
+  const std::string toml = detail::read_text_file(path, detail::kMaxScenarioBytes, "a scenario file");
   if (detail::first_visible(toml) == '<') {
     throw InvalidArgument(path.string() + ": an MJCF scene, not a scenario file (TOML): make it a scenario's scene "
                           "(scene = \"...\" in a scenario file, or simloop.Scenario(scene=...))");

@@ -16,6 +16,7 @@
 #include <toml++/toml.h>
 
 #include "simloop/errors.hpp"
+#include "text_input.hpp"
 #include "simloop/scene_params.hpp"
 #include "simloop/number_format.hpp"
 #include "simloop/object_names.hpp"
@@ -213,8 +214,18 @@ std::optional<When> read_when(const TableReader& t, std::string_view seconds_key
 // last value holds.
 std::vector<std::pair<When, double>> read_csv_schedule(const std::filesystem::path& file, const std::string& column,
                                                        const std::string& where) {
+  detail::check_path(file, where);
+  std::error_code not_a_folder;
+  if (std::filesystem::is_directory(file, not_a_folder)) {
+    throw InvalidArgument(where + ": " + file.string() + ": is a directory, not a CSV file");
+  }
   std::ifstream in(file, std::ios::binary);
   if (!in) throw IoError(where + ": " + file.string() + ": cannot open (" + std::strerror(errno) + ")");
+  const std::string source = where + ": " + file.string();
+  std::int64_t line_number = 1;
+  const auto next_line = [&](std::string& line) {
+    return detail::read_line(in, line, detail::kMaxCsvLineBytes, source, line_number++);
+  };
   const auto cells = [](const std::string& line) {
     std::vector<std::string> out(1);
     for (char c : line) {
@@ -227,7 +238,7 @@ std::vector<std::pair<When, double>> read_csv_schedule(const std::filesystem::pa
     return out;
   };
   std::string line;
-  if (!std::getline(in, line)) throw InvalidArgument(where + ": " + file.string() + ": empty (it needs a header row)");
+  if (!next_line(line)) throw InvalidArgument(where + ": " + file.string() + ": empty (it needs a header row)");
   const std::vector<std::string> header = cells(line);
   std::size_t index = 0;
   if (!column.empty()) {
@@ -244,14 +255,14 @@ std::vector<std::pair<When, double>> read_csv_schedule(const std::filesystem::pa
   }
   std::vector<std::pair<When, double>> schedule;
   std::int64_t step = 0;
-  for (std::int64_t line_number = 2; std::getline(in, line); ++line_number, ++step) {
+  for (; next_line(line); ++step) {
     const std::vector<std::string> row = cells(line);
     const std::string cell = index < row.size() ? row[index] : std::string();
     char* end = nullptr;
     const double value = std::strtod(cell.c_str(), &end);
     if (cell.empty() || end != cell.c_str() + cell.size() || !std::isfinite(value) || std::isspace(static_cast<unsigned char>(cell[0]))) {
-      throw InvalidArgument(where + ": " + file.string() + ":" + std::to_string(line_number) +
-                            ": expected a finite number, got '" + cell + "'");
+      throw InvalidArgument(where + ": " + file.string() + ":" + std::to_string(line_number - 1) +
+                            ": expected a finite number, got " + quoted_value(cell, 40));
     }
     if (schedule.empty() || value != schedule.back().second) schedule.emplace_back(When::steps(step), value);
   }
@@ -381,6 +392,7 @@ ResetSpec read_reset(const TableReader& t, const toml::table& table, std::string
 
 Scenario Scenario::from_toml_string(std::string_view text, std::string_view source,
                                     const std::filesystem::path& base, std::string_view default_name) {
+  detail::check_toml_key_parts(text, source);
   toml::table root;
   try {
     root = toml::parse(text, source);

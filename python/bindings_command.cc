@@ -256,6 +256,9 @@ void bind_command(py::module_& m) {
       "sim_loop's whole command with `host` (simloop.__main__'s) doing the process's part: returns the exit code.");
   m.def("help_text", &simloop::cli::help_text, "program"_a, "recording"_a);
   m.def("_peak_memory_mib", &cli::peak_memory_mib, "VmHWM of this process, MiB (-1 if unknown): the report's.");
+  m.def(
+      "_one_line", [](const py::bytes& text) { return py::bytes(simloop::one_line(std::string(text))); }, "text"_a,
+      "A message's bytes on one line, control characters as \\xNN.");
   m.def("sweep_help_text", &simloop::cli::sweep_help_text, "program"_a);
 }
 

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <stdexcept>
+#include <cstddef>
 #include <cstdint>
 #include <string>
 #include <string_view>
@@ -11,9 +12,21 @@
 namespace simloop {
 
 // `text` on one line: each run of line breaks becomes "; " (MuJoCo's XML
-// errors span lines), and trailing blanks are dropped. Every message simloop
-// throws is one line; the commands print theirs through this too.
+// errors span lines), other control characters \xNN, and trailing blanks
+// are dropped. Every message simloop throws is one line; the commands print
+// theirs through this too.
 [[nodiscard]] std::string one_line(std::string_view text);
+
+// `text` for a terminal: control characters other than line breaks and tabs
+// written \xNN (a scene's names and paths reach the report; an escape
+// sequence in one would act on the terminal).
+[[nodiscard]] std::string printable(std::string_view text);
+
+// A value a user gave, for an error message: in single quotes, a quote or
+// backslash escaped with a backslash, control characters written \xNN, and
+// past `max_bytes` cut, saying how long it was. Every echoed value goes
+// through this, so an error stays one line and nothing acts on the terminal.
+[[nodiscard]] std::string quoted_value(std::string_view value, std::size_t max_bytes = 200);
 
 // A duration in seconds (a timestep, a sweep's duration) that a run can use:
 // throws InvalidArgument "<name> must be a positive, finite number of

@@ -42,7 +42,8 @@ class Model {
   // The compiled model in MuJoCo's binary format (mj_saveModel): what a
   // pickled Model carries. from_bytes loads it back (mj_loadModel through a
   // one-file virtual file system) as a model that steps bit for bit as this
-  // one. Throws MujocoError if MuJoCo refuses the bytes.
+  // one. The bytes end in a checksum: InvalidArgument if they are damaged or
+  // not simloop's, MujocoError if MuJoCo refuses them.
   [[nodiscard]] std::string to_bytes() const;
   [[nodiscard]] static Model from_bytes(std::string_view bytes, std::string_view source = "<saved model>");
   // A copy (mj_copyModel) of a model someone else owns, such as the one

@@ -55,7 +55,8 @@ def _catch_terminating_signals() -> Dict[int, Any]:
 
 
 def _fail(code: int, message: str) -> int:
-    line = "; ".join(part.strip() for part in str(message).splitlines() if part.strip())
+    # As bytes: a path's undecodable bytes (surrogate escapes) go through and come back.
+    line = _core._one_line(str(message).encode("utf-8", "surrogateescape")).decode("utf-8", "surrogateescape")
     if sys.stderr is not None:  # (print(file=None) would write to stdout)
         print(f"{PROGRAM}: {line}", file=sys.stderr)
     return code

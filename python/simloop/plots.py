@@ -58,14 +58,23 @@ def _read_csv(path: Path):
 
 
 def _save_and_close(fig, png: Path) -> Path:
-    """Writes beside the destination, then renames: never a half-written PNG."""
-    temp = png.with_name("." + png.name + ".tmp")
+    """Writes a file of its own beside the destination (created exclusively, so never through a link planted
+    at its name), then renames it onto the destination: never a half-written PNG."""
+    import tempfile
+
     try:
-        fig.savefig(temp, format="png", dpi=110)
+        fd, temp = tempfile.mkstemp(prefix="." + png.name + ".", suffix=".tmp", dir=png.parent)
+    except BaseException:
+        _pyplot().close(fig)
+        raise
+    try:
+        with os.fdopen(fd, "wb") as out:
+            fig.savefig(out, format="png", dpi=110)
         os.replace(temp, png)
     finally:
         _pyplot().close(fig)
-        temp.unlink(missing_ok=True)
+        if os.path.lexists(temp):
+            os.unlink(temp)
     return png
 
 

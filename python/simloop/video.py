@@ -81,6 +81,13 @@ class _Apng:
         self.spool.close()
 
 
+def _frame_delay(seconds: float) -> Fraction:
+    """Seconds between frames as APNG's fcTL stores them (numerator and denominator each at most 65535),
+    the closest such fraction; a frame shows at most 65535 s (an 18-hour timestep is still drawn)."""
+    seconds = min(seconds, 65535.0)
+    return Fraction(seconds).limit_denominator(max(1, min(10000, 65535 // (int(seconds) + 1))))
+
+
 class VideoRecording:
     """A drawing of a run (columns, rows, finish, files, close: what the
     command's run calls) into a video; see the module's documentation.
@@ -198,7 +205,7 @@ class VideoRecording:
     # --- the frames
 
     def _add(self, picture: Any) -> None:
-        delay = Fraction(self.spacing).limit_denominator(10000)
+        delay = _frame_delay(self.spacing)
         if self.apng is not None:
             self.apng.add(picture, delay)
         else:

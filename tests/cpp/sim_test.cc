@@ -240,8 +240,22 @@ TEST(SimAny, AModelSavedAsBytesLoadsBackAndStepsToTheSameBits) {
     drive(b, 300);
     EXPECT_TRUE(same_bits(a.state(), b.state())) << file;
   }
-  EXPECT_THROW((void)Model::from_bytes("not a model"), simloop::MujocoError);
+  EXPECT_THROW((void)Model::from_bytes("not a model"), simloop::InvalidArgument);
   EXPECT_THROW((void)Model::from_bytes(""), simloop::InvalidArgument);
+}
+
+TEST(SimAny, EveryOneByteDamageToASavedModelIsRefusedBeforeMuJoCoReadsIt) {
+  const std::string bytes = scene("walker.xml").to_bytes();
+  for (std::size_t at = 0; at < bytes.size(); at += 1 + bytes.size() / 1500) {
+    std::string damaged = bytes;
+    damaged[at] = static_cast<char>(damaged[at] ^ (1 + at % 255));
+    const std::string message = test::error_of([&] { (void)Model::from_bytes(damaged); });
+    EXPECT_TRUE(message.find("the saved model is damaged") != std::string::npos ||
+                message.find("not a model simloop saved") != std::string::npos)
+        << "byte " << at << ": " << message;
+  }
+  std::string cut = bytes.substr(0, bytes.size() / 2);
+  EXPECT_NE(test::error_of([&] { (void)Model::from_bytes(cut); }), "");
 }
 
 }  // namespace

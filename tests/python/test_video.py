@@ -113,3 +113,31 @@ def test_a_video_that_cannot_be_made_leaves_nothing(tmp_path):
                               "does (nothing was written)\n")
     assert not (tmp_path / "clip.png").exists() and not (tmp_path / "out" / "metrics.json").exists()
     assert [p for p in os.listdir(tmp_path) if p.startswith(".")] == []  # no temporary file left
+
+
+@pytest.mark.parametrize("video, says", [
+    ("out/trajectory.png", "is also the run's --plot's trajectory.png"),
+    ("out/metrics.json", "is also the run's metrics.json"),
+    ("out/trajectory.gif", "is also the run's --plot's trajectory.png"),  # an APNG at out/trajectory.png
+    ("/dev/null", "is a device, a pipe or a socket"),
+    ("somewhere/", "must name a file, not a folder"),
+    ("folder", "is a folder; name a file in it"),
+])
+def test_a_video_never_shares_a_path_with_another_output_nor_writes_a_device_or_a_folder(tmp_path, video, says):
+    (tmp_path / "folder").mkdir()
+    done = run_command(["--steps", "20", "--no-rerun", "--plot", "--video", video, "--out", "out"], tmp_path)
+    assert done.returncode == 2, done.stdout + done.stderr
+    assert says in done.stderr and len(done.stderr.strip().splitlines()) == 1, done.stderr
+    assert not (tmp_path / "out").exists() and not (tmp_path / "somewhere.png").exists()
+    assert not os.path.exists("/dev/null.png")
+
+
+def test_a_timestep_of_a_day_draws_a_video_whose_frames_apng_can_hold(tmp_path):
+    done = run_command(["--steps", "3", "--timestep", "86400", "--no-rerun", "--no-perturb", "--video", "v.png",
+                        "--out", "out"], tmp_path)
+    if "cannot render" in done.stderr:
+        pytest.skip(done.stderr.strip())
+    assert done.returncode == 0, done.stderr[-3000:]
+    frames, delays, _ = apng_frames(tmp_path / "v.png")
+    assert frames == len(delays) >= 1  # (rows the blow-up left without a finite state are not drawn)
+    assert delays == [65535.0] * frames  # a day between frames, held as long as APNG can

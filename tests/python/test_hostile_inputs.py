@@ -1,0 +1,158 @@
+"""Inputs an adversary writes: each ends in one line naming the input, a non-zero exit or an exception, and
+nothing written or removed that the user had (issue 38's cases, on every entry point they reach)."""
+
+from __future__ import annotations
+
+import os
+import resource
+import subprocess
+import sys
+import time
+
+import pytest
+
+from conftest import run_command, run_python, sim_loop_exe
+
+# A table header of 50,000 dotted keys: toml++ recursed once per key and overflowed the stack (exit 139).
+DEEP_HEADER = "[" + ".".join(["a"] * 50000) + "]\nb = 1\n"
+DEEP_QUOTED_KEY = "x = {" + ".".join(['"a"'] * 50000) + " = 1}\n"
+
+
+def one_error_line(stderr: str) -> str:
+    lines = stderr.strip().splitlines()
+    assert len(lines) == 1, stderr[-2000:]
+    return lines[0]
+
+
+@pytest.mark.parametrize("text", [DEEP_HEADER, DEEP_QUOTED_KEY], ids=["header", "inline-table"])
+@pytest.mark.parametrize("python", [False, True], ids=["sim_loop", "python"])
+def test_deep_dotted_keys_are_refused_by_the_commands(tmp_path, text, python):
+    (tmp_path / "dd.toml").write_text(text)
+    done = run_command(["--scenario", "dd.toml", "--out", "out"], tmp_path, python=python)
+    assert done.returncode == 2, done.stderr[-2000:]
+    assert "dd.toml:1:" in one_error_line(done.stderr)
+    assert "more than 64 dotted parts" in done.stderr
+    assert not (tmp_path / "out").exists()
+
+
+def test_deep_dotted_keys_are_refused_by_the_api_and_the_batch_command(tmp_path):
+    (tmp_path / "dd.toml").write_text(DEEP_HEADER)
+    done = run_python(f"""
+        import simloop
+        try:
+            simloop.Scenario.from_file({str(tmp_path / "dd.toml")!r})
+        except ValueError as e:
+            print("refused:", e)
+    """)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert "refused:" in done.stdout and "more than 64 dotted parts" in done.stdout
+    batch = run_command(["batch", "--scenario", "dd.toml", "--seeds", "0:2", "--out", "b.parquet"], tmp_path)
+    assert batch.returncode != 0 and batch.returncode != -11, batch.stderr[-2000:]
+    assert "more than 64 dotted parts" in one_error_line(batch.stderr)
+
+
+def test_keys_up_to_the_limit_still_parse_to_the_scenarios_own_error(tmp_path):
+    (tmp_path / "d64.toml").write_text("[" + ".".join(["a"] * 64) + "]\nb = 1\n")
+    done = run_command(["--scenario", "d64.toml"], tmp_path, python=False)
+    assert done.returncode == 2
+    assert "dotted parts" not in done.stderr and "d64.toml" in one_error_line(done.stderr)
+
+
+@pytest.mark.parametrize("python", [False, True], ids=["sim_loop", "python"])
+def test_an_endless_scenario_file_is_refused_at_its_size_limit(tmp_path, python):
+    done = run_command(["--scenario", "/dev/zero", "--out", "out"], tmp_path, python=python)
+    assert done.returncode == 2
+    assert one_error_line(done.stderr).endswith("/dev/zero: more than 64 MiB, the most a scenario file may hold")
+
+
+def test_an_endless_csv_schedule_is_refused_at_its_line_limit(tmp_path):
+    (tmp_path / "z.toml").write_text('steps = 10\n[[control]]\nactuator = "push_motor"\ncsv = "/dev/zero"\n')
+    done = run_command(["--scenario", "z.toml", "--out", "out"], tmp_path, python=False)
+    assert done.returncode == 2
+    assert "control[0].csv: /dev/zero:1: a line longer than 1 MiB" in one_error_line(done.stderr)
+
+
+def test_a_huge_csv_cell_is_quoted_as_a_short_excerpt_and_control_characters_are_escaped(tmp_path):
+    (tmp_path / "u.csv").write_text("u\n0.5\n\x1b]0;owned\x07" + "9" * 500_000 + "\n")
+    (tmp_path / "s.toml").write_text('steps = 10\n[[control]]\nactuator = "push_motor"\ncsv = "u.csv"\n')
+    done = run_command(["--scenario", "s.toml", "--out", "out"], tmp_path, python=False)
+    assert done.returncode == 2
+    line = one_error_line(done.stderr)
+    assert len(line) < 400, line
+    assert "u.csv:3: expected a finite number, got '\\x1b]0;owned\\x07999" in line
+    assert "(40 of its 500010 bytes)" in line
+    assert "\x1b" not in done.stderr and "\x07" not in done.stderr
+
+
+@pytest.mark.parametrize("python", [False, True], ids=["sim_loop", "python"])
+def test_control_characters_in_a_flag_never_reach_the_terminal(tmp_path, python):
+    done = run_command(["--model", "\x1b]0;owned\x07.xml"], tmp_path, python=python)
+    assert done.returncode != 0
+    assert "\x1b" not in done.stderr and "\x07" not in done.stderr
+    assert "\\x1b]0;owned\\x07.xml" in one_error_line(done.stderr)
+
+
+def test_a_path_with_a_nul_byte_is_refused_not_cut_at_the_nul(tmp_path):
+    (tmp_path / "s.toml").write_text('steps = 10\n[[control]]\nactuator = "push_motor"\ncsv = "u.csv\\u0000.txt"\n')
+    (tmp_path / "u.csv").write_text("u\n0.5\n")
+    done = run_command(["--scenario", "s.toml", "--out", "out"], tmp_path, python=False)
+    assert done.returncode == 2
+    assert "a path cannot hold a NUL byte" in one_error_line(done.stderr)
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("python", [False, True], ids=["sim_loop", "python"])
+def test_a_failed_run_keeps_the_users_link_to_a_missing_folder(tmp_path, python):
+    (tmp_path / "out").symlink_to(tmp_path / "missing")
+    done = run_command(["--steps", "10", "--no-rerun", "--out", "out"], tmp_path, python=python)
+    assert done.returncode == 2
+    assert "a symbolic link to" in one_error_line(done.stderr) and "which does not exist" in done.stderr
+    assert os.readlink(tmp_path / "out") == str(tmp_path / "missing")
+    assert not (tmp_path / "missing").exists()
+
+
+def test_plot_never_writes_through_a_link_planted_at_a_temporary_name(tmp_path):
+    victim = tmp_path / "victim.txt"
+    victim.write_text("the user's file")
+    out = tmp_path / "out"
+    out.mkdir()
+    # The old temporary names, and the new ones' prefix, each a link to the victim.
+    for name in (".trajectory.png.tmp", ".trajectory.png.tmpx", ".sweep.png.tmp"):
+        (out / name).symlink_to(victim)
+    done = run_command(["--steps", "50", "--no-rerun", "--plot", "--out", "out"], tmp_path, python=False)
+    assert done.returncode == 0, done.stderr
+    assert victim.read_text() == "the user's file"
+    assert not (out / "trajectory.png").is_symlink()
+    assert (out / "trajectory.png").read_bytes().startswith(b"\x89PNG")
+    assert sorted(p.name for p in out.iterdir() if p.name.endswith(".tmp")) == [".sweep.png.tmp",
+                                                                                  ".trajectory.png.tmp"]
+
+
+@pytest.mark.parametrize("python", [False, True], ids=["sim_loop", "python"])
+def test_a_scene_too_large_to_compile_fails_at_once_within_the_memory_budget(tmp_path, python):
+    # 1.6e9 heights, 6.4 GB: under an 8 GB ulimit -v the compile child filled them all (a minute, and the
+    # machine's memory) before failing; its budget (half the limit) refuses the allocation at once.
+    (tmp_path / "big.xml").write_text(
+        '<mujoco><asset><hfield name="h" nrow="40000" ncol="40000" size="1 1 1 1"/></asset>'
+        '<worldbody><geom type="hfield" hfield="h"/></worldbody></mujoco>\n')
+    cmd = [sys.executable, "-m", "simloop"] if python else [str(sim_loop_exe())]
+    started = time.monotonic()
+    done = subprocess.run([*cmd, "--model", "big.xml", "--out", "out"], cwd=tmp_path, capture_output=True,
+                          text=True, stdin=subprocess.DEVNULL, timeout=120,
+                          preexec_fn=lambda: resource.setrlimit(resource.RLIMIT_AS, (8 << 30, 8 << 30)))
+    assert time.monotonic() - started < 20
+    assert done.returncode in (1, 2), done.stderr[-2000:]
+    assert "big.xml" in one_error_line(done.stderr) and "memory" in done.stderr.lower(), done.stderr
+    assert not (tmp_path / "out").exists()
+
+
+def test_more_envs_than_memory_holds_are_refused_before_any_is_made():
+    pytest.importorskip("gymnasium")
+    import simloop
+    import simloop.gym
+
+    started = time.monotonic()
+    with pytest.raises(ValueError, match=r"^1048576 episodes need 1048576 x \d+ KiB of MuJoCo data, more than the \d+ "
+                                         r"MiB allowed \(half of the machine's memory or the process's limit\)"):
+        simloop.gym.ScenarioVectorEnv(simloop.Scenario.chapter(), num_envs=1 << 20)  # was killed by the kernel
+    assert time.monotonic() - started < 10
