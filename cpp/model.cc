@@ -77,11 +77,9 @@ Model Model::from_own_xml(std::string_view xml, std::string_view source) {
 }
 
 Model Model::from_file(const std::string& path) {
-  detail::check_path(path, "an MJCF file");
-  detail::install_mujoco_handlers();
   // MuJoCo's own message for a missing file, or a directory, is vague; check first.
-  std::error_code not_a_folder;
-  if (std::filesystem::is_directory(path, not_a_folder)) throw IoError(path + ": is a directory, not an MJCF file");
+  detail::check_regular_file(path, "an MJCF file");
+  detail::install_mujoco_handlers();
   std::ifstream probe(path);
   if (!probe) {
     throw IoError(path + ": cannot open (" + std::strerror(errno) + ")");

@@ -214,10 +214,10 @@ std::optional<When> read_when(const TableReader& t, std::string_view seconds_key
 // last value holds.
 std::vector<std::pair<When, double>> read_csv_schedule(const std::filesystem::path& file, const std::string& column,
                                                        const std::string& where) {
-  detail::check_path(file, where);
-  std::error_code not_a_folder;
-  if (std::filesystem::is_directory(file, not_a_folder)) {
-    throw InvalidArgument(where + ": " + file.string() + ": is a directory, not a CSV file");
+  try {
+    detail::check_regular_file(file, "a CSV file");
+  } catch (const Error& e) {
+    throw InvalidArgument(where + ": " + e.what());
   }
   std::ifstream in(file, std::ios::binary);
   if (!in) throw IoError(where + ": " + file.string() + ": cannot open (" + std::strerror(errno) + ")");

@@ -29,12 +29,21 @@ void check_path(const std::filesystem::path& path, std::string_view what) {
   }
 }
 
-std::string read_text_file(const std::filesystem::path& path, std::size_t max_bytes, std::string_view what) {
+void check_regular_file(const std::filesystem::path& path, std::string_view what) {
   check_path(path, what);
   std::error_code error;
-  if (std::filesystem::is_directory(path, error)) {
+  const std::filesystem::file_status status = std::filesystem::status(path, error);
+  if (std::filesystem::is_directory(status)) {
     throw IoError(path.string() + ": is a directory, not " + std::string(what));
   }
+  if (std::filesystem::exists(status) && !std::filesystem::is_regular_file(status)) {
+    throw InvalidArgument(path.string() + ": is a device, a pipe or a socket, not " + std::string(what) +
+                          " (simloop reads its inputs from files)");
+  }
+}
+
+std::string read_text_file(const std::filesystem::path& path, std::size_t max_bytes, std::string_view what) {
+  check_regular_file(path, what);
   std::ifstream in(path, std::ios::binary);
   if (!in) throw IoError(path.string() + ": cannot open (" + std::strerror(errno) + ")");
   std::string text;

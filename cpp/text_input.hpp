@@ -28,9 +28,14 @@ inline constexpr std::size_t kMaxTomlKeyParts = 64;
 // it only up to the NUL, another file than the one named.
 void check_path(const std::filesystem::path& path, std::string_view what);
 
-// The whole file at `path` (a regular file, a pipe or a device), at most
-// `max_bytes`: IoError naming the path when it cannot be opened or read or
-// memory runs out or it is a folder, InvalidArgument when it holds more.
+// Throws IoError naming `path` when it is a folder, InvalidArgument when it
+// is a device, a pipe or a socket: simloop reads its inputs from files (a
+// pipe with no writer would block the open, /dev/zero never end).
+void check_regular_file(const std::filesystem::path& path, std::string_view what);
+
+// The whole regular file at `path`, at most `max_bytes` (check_path and
+// check_regular_file first): IoError naming the path when it cannot be
+// opened or read or memory runs out, InvalidArgument when it holds more.
 [[nodiscard]] std::string read_text_file(const std::filesystem::path& path, std::size_t max_bytes,
                                          std::string_view what);
 

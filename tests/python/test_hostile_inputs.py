@@ -59,17 +59,41 @@ def test_keys_up_to_the_limit_still_parse_to_the_scenarios_own_error(tmp_path):
 
 
 @pytest.mark.parametrize("python", [False, True], ids=["sim_loop", "python"])
-def test_an_endless_scenario_file_is_refused_at_its_size_limit(tmp_path, python):
-    done = run_command(["--scenario", "/dev/zero", "--out", "out"], tmp_path, python=python)
+def test_a_scenario_file_is_read_from_a_file_of_at_most_64_mib(tmp_path, python):
+    # /dev/zero grew ~0.5 GB/s until killed; a FIFO without a writer blocked the open.
+    os.mkfifo(tmp_path / "fifo.toml")
+    for path, says in [("/dev/zero", "/dev/zero: is a device, a pipe or a socket, not a scenario file"),
+                       ("fifo.toml", "fifo.toml: is a device, a pipe or a socket, not a scenario file")]:
+        done = run_command(["--scenario", path, "--out", "out"], tmp_path, python=python)
+        assert done.returncode == 2 and one_error_line(done.stderr).endswith(says + " (simloop reads its inputs "
+                                                                                    "from files)"), done.stderr
+    with open(tmp_path / "huge.toml", "wb") as f:
+        f.truncate((64 << 20) + 1)  # sparse: no disk, one byte past the limit
+    done = run_command(["--scenario", "huge.toml", "--out", "out"], tmp_path, python=python)
     assert done.returncode == 2
-    assert one_error_line(done.stderr).endswith("/dev/zero: more than 64 MiB, the most a scenario file may hold")
+    assert one_error_line(done.stderr).endswith("huge.toml: more than 64 MiB, the most a scenario file may hold")
+    assert not (tmp_path / "out").exists()
 
 
-def test_an_endless_csv_schedule_is_refused_at_its_line_limit(tmp_path):
-    (tmp_path / "z.toml").write_text('steps = 10\n[[control]]\nactuator = "push_motor"\ncsv = "/dev/zero"\n')
+@pytest.mark.parametrize("csv, says", [
+    ("/dev/zero", "control[0].csv: /dev/zero: is a device, a pipe or a socket, not a CSV file"),
+    ("fifo.csv", "fifo.csv: is a device, a pipe or a socket, not a CSV file"),
+    ("long.csv", "control[0].csv: long.csv:1: a line longer than 1 MiB"),
+])
+def test_a_csv_schedule_is_a_file_read_a_bounded_line_at_a_time(tmp_path, csv, says):
+    os.mkfifo(tmp_path / "fifo.csv")
+    (tmp_path / "long.csv").write_text("u" * (2 << 20) + "\n0.5\n")
+    (tmp_path / "z.toml").write_text(f'steps = 10\n[[control]]\nactuator = "push_motor"\ncsv = "{csv}"\n')
     done = run_command(["--scenario", "z.toml", "--out", "out"], tmp_path, python=False)
     assert done.returncode == 2
-    assert "control[0].csv: /dev/zero:1: a line longer than 1 MiB" in one_error_line(done.stderr)
+    assert says in one_error_line(done.stderr)
+
+
+def test_a_scene_is_read_from_a_file(tmp_path):
+    os.mkfifo(tmp_path / "fifo.xml")
+    for path in ("/dev/zero", "fifo.xml"):
+        done = run_command(["--model", path, "--out", "out"], tmp_path, python=False)
+        assert done.returncode == 2 and "is a device, a pipe or a socket, not an MJCF file" in done.stderr
 
 
 def test_a_huge_csv_cell_is_quoted_as_a_short_excerpt_and_control_characters_are_escaped(tmp_path):
