@@ -140,7 +140,20 @@ Egl& egl_once() {
 struct OffscreenGl::Impl {
   Egl& egl;
   EGLContext context = EGL_NO_CONTEXT;
+  std::mutex current;  // held from make_current to release
 };
+
+std::shared_ptr<OffscreenGl> OffscreenGl::shared() {
+  static std::mutex mutex;
+  static std::weak_ptr<OffscreenGl> context;
+  const std::lock_guard<std::mutex> lock(mutex);
+  std::shared_ptr<OffscreenGl> gl = context.lock();
+  if (gl == nullptr || gl->impl_->egl.pid != getpid()) {
+    gl = std::make_shared<OffscreenGl>();
+    context = gl;
+  }
+  return gl;
+}
 
 namespace {
 
@@ -157,7 +170,7 @@ void check_not_forked(const Egl& egl) {
 
 }  // namespace
 
-OffscreenGl::OffscreenGl() : impl_(new Impl{egl_once()}) {
+OffscreenGl::OffscreenGl() : impl_(new Impl{egl_once(), EGL_NO_CONTEXT, {}}) {
   Egl& egl = impl_->egl;
   check_not_forked(egl);
   if (egl.display == EGL_NO_DISPLAY) throw RenderError(egl.failure);
@@ -182,17 +195,20 @@ OffscreenGl::~OffscreenGl() {
 void OffscreenGl::make_current() {
   Egl& egl = impl_->egl;
   check_not_forked(egl);
+  std::unique_lock<std::mutex> lock(impl_->current);
   // Without a surface (EGL_KHR_surfaceless_context): MuJoCo draws into its
   // own offscreen framebuffer.
   if (egl.MakeCurrent(egl.display, EGL_NO_SURFACE, EGL_NO_SURFACE, impl_->context) != EGL_TRUE) {
     throw RenderError("EGL could not make the OpenGL context current (" + hex(egl.GetError()) + ")");
   }
+  lock.release();  // until release()
 }
 
 void OffscreenGl::release() noexcept {
   Egl& egl = impl_->egl;
   if (egl.pid != getpid()) return;  // the parent's context: never touched here
   egl.MakeCurrent(egl.display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
+  impl_->current.unlock();
 }
 
 }  // namespace simloop::detail

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <mutex>
 #include <string>
 #include <tuple>
@@ -86,7 +87,7 @@ struct Renderer::Impl {
   Model model;
   int width;
   int height;
-  detail::OffscreenGl gl;
+  std::shared_ptr<detail::OffscreenGl> gl = detail::OffscreenGl::shared();
   mjvScene scene;
   mjvOption option;
   mjrContext context;
@@ -108,13 +109,20 @@ Renderer::Renderer(const Model& model, int width, int height) {
   impl_ = std::make_unique<Impl>(model, width, height);
   Impl& r = *impl_;
   const mjModel* m = model.get();
-  // MuJoCo sizes its offscreen framebuffer by the model's <visual><global
-  // offwidth offheight> (640 x 480 unless the scene says): a shallow copy of
-  // the model's struct, only ever read, asks for at least the picture's size.
+  // MuJoCo sizes its offscreen framebuffer (and its multisampled twin) by the
+  // model's <visual><global offwidth offheight>, 640 x 480 unless the scene
+  // says, and its shadow map by <quality shadowsize>, 4096 unless it says:
+  // 86 MiB a renderer, whatever the picture's size. A shallow copy of the
+  // model's struct, only ever read, asks for a buffer of the picture's size
+  // (the same pixels: the picture is drawn in a viewport of that size) and a
+  // shadow map of at most 8 texels per pixel of the picture's larger side.
   mjModel sized = *m;
-  sized.vis.global.offwidth = std::max(m->vis.global.offwidth, width);
-  sized.vis.global.offheight = std::max(m->vis.global.offheight, height);
-  r.gl.make_current();
+  sized.vis.global.offwidth = width;
+  sized.vis.global.offheight = height;
+  int shadow = 512;
+  while (shadow < 8 * std::max(width, height) && shadow < m->vis.quality.shadowsize) shadow *= 2;
+  sized.vis.quality.shadowsize = std::min(m->vis.quality.shadowsize, shadow);
+  r.gl->make_current();
   try {
     detail::mujoco_call([&] {
       mjv_makeScene(m, &r.scene, kMaxGeoms);
@@ -124,10 +132,11 @@ Renderer::Renderer(const Model& model, int width, int height) {
   } catch (const MujocoError& e) {
     mjv_freeScene(&r.scene);
     mjr_freeContext(&r.context);
-    r.gl.release();
-    throw RenderError(std::string("MuJoCo cannot render with this machine's OpenGL: ") + e.what());
+    r.gl->release();
+    // Out of memory (a ulimit -v) as much as a driver that lacks something.
+    throw RenderError(std::string("MuJoCo could not set up a renderer: ") + e.what());
   }
-  r.gl.release();
+  r.gl->release();
   r.rgb.resize(static_cast<std::size_t>(width) * height * 3);
   r.depth.resize(static_cast<std::size_t>(width) * height);
 }
@@ -135,9 +144,9 @@ Renderer::Renderer(const Model& model, int width, int height) {
 Renderer::~Renderer() {
   Impl& r = *impl_;
   try {
-    r.gl.make_current();
+    r.gl->make_current();
     mjr_freeContext(&r.context);  // its textures and buffers live in the context
-    r.gl.release();
+    r.gl->release();
   } catch (const RenderError&) {
     // The context is gone with the display; nothing of ours to free in it.
   }
@@ -157,7 +166,7 @@ void Renderer::render(const Model& model, const mjData* d, const CameraView& vie
   mjvCamera camera = camera_for(m, d, view);
   const mjrRect viewport{0, 0, r.width, r.height};
   std::lock_guard<std::mutex> lock(r.mutex);
-  r.gl.make_current();
+  r.gl->make_current();
   try {
     // mjv_updateScene takes mjData* but only reads the state (positions,
     // contacts, the lights' and cameras' frames), in every MuJoCo we build on.
@@ -168,10 +177,10 @@ void Renderer::render(const Model& model, const mjData* d, const CameraView& vie
       mjr_readPixels(rgb ? r.rgb.data() : nullptr, depth ? r.depth.data() : nullptr, viewport, &r.context);
     });
   } catch (...) {
-    r.gl.release();
+    r.gl->release();
     throw;
   }
-  r.gl.release();
+  r.gl->release();
   const std::size_t w = static_cast<std::size_t>(r.width), h = static_cast<std::size_t>(r.height);
   // OpenGL's depth buffer holds 0..1, non-linear in distance: back to metres
   // with the near and far planes MuJoCo drew with.

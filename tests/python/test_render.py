@@ -8,10 +8,11 @@ import numpy as np
 import pytest
 
 import simloop
-from conftest import run_python
+from conftest import ROOT, run_python
 from simloop.gym import PUSHT_SCENARIO, ScenarioEnv, ScenarioVectorEnv
 
 SIZE = dict(width=96, height=64)
+SCENES = ROOT / "tests" / "scenes"
 
 
 def red(picture):
@@ -218,3 +219,41 @@ def test_a_forked_child_of_a_process_that_rendered_is_told_not_left_waiting():
         "cannot render in a process forked from one that had already rendered (EGL and its driver's threads do not "
         "survive fork): start worker processes with 'spawn' or 'forkserver' (for Gymnasium's AsyncVectorEnv: "
         "context='spawn')", "child 0", "(8, 8, 3)"]
+
+
+def test_renderers_share_one_context_and_small_pictures_take_little_memory():
+    # Each renderer had an EGL context and a 640 x 480 multisampled buffer with a 4096 shadow map: 86 MiB of
+    # memory and ~70 MiB of address space at any size, so under a 1.5 GB ulimit -v the 57th failed (or crashed).
+    done = run_python("""
+        import resource, simloop
+        resource.setrlimit(resource.RLIMIT_AS, (1500 << 20, 1500 << 20))
+        sim = simloop.Sim()
+        renderers, first = [], None
+        try:
+            for i in range(100):
+                renderers.append(simloop.Renderer(sim, width=32, height=24))
+                picture = renderers[-1].render(sim)
+                first = picture if first is None else first
+                assert (picture == first).all()
+        except RuntimeError as e:
+            print("refused:", e)
+        print("renderers:", len(renderers))
+    """)
+    if "cannot render" in done.stdout + done.stderr or "rendering needs EGL" in done.stdout + done.stderr:
+        pytest.skip("this machine cannot render")
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert "renderers: 100" in done.stdout, done.stdout
+
+
+def test_a_picture_is_the_same_whatever_other_renderers_drew_in_the_shared_context():
+    sim = simloop.Sim()
+    sim.step(200, ctrl=1.0)
+    alone = simloop.Renderer(sim, width=96, height=64).render(sim)
+    other = simloop.Sim(SCENES / "walker.xml")
+    others = [simloop.Renderer(other, width=200, height=100), simloop.Renderer(sim, width=640, height=480)]
+    mine = simloop.Renderer(sim, width=96, height=64)
+    for _ in range(2):
+        others[0].render(other)
+        assert np.array_equal(mine.render(sim), alone)
+        others[1].render(sim, track="pusher", distance=3.0)
+    assert np.array_equal(mine.render(sim), alone)
