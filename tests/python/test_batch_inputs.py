@@ -1,0 +1,75 @@
+"""A batch reads its files as they are when it starts: a scene's MJCF, every
+file it includes, the scenario file and its CSV inputs. Executors' workers,
+which keep compiled scenes between batches, give after an edit the table a
+local batch gives of the files as they are now, bit for bit."""
+
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import pytest
+
+import simloop
+from conftest import ROOT
+
+pytest.importorskip("pyarrow")
+
+SCENES = ROOT / "tests" / "scenes"
+TBLOCK = SCENES.joinpath("pusht.xml").read_text().split('<body name="tblock"')[1].split("</body>")[0]
+
+
+def write_scene(folder: Path) -> dict:
+    """PushT with its T-block in an included file and push_x from a CSV file: {what: the file that holds it}."""
+    scene = SCENES.joinpath("pusht.xml").read_text().replace(f'<body name="tblock"{TBLOCK}</body>',
+                                                             '<include file="tblock.xml"/>')
+    assert "tblock.xml" in scene
+    (folder / "pusht.xml").write_text(scene)
+    (folder / "tblock.xml").write_text(f'<mujoco>\n<body name="tblock"{TBLOCK}</body>\n</mujoco>\n')
+    (folder / "push_x.csv").write_text("push_x\n" + "0.8\n" * 50 + "0.6\n")
+    toml = SCENES.joinpath("pusht.toml").read_text().replace("value = 0.8", 'csv = "push_x.csv"')
+    assert 'csv = "push_x.csv"' in toml
+    (folder / "pusht.toml").write_text(toml)
+    return {"scene": folder / "pusht.xml", "include": folder / "tblock.xml", "csv": folder / "push_x.csv",
+            "scenario": folder / "pusht.toml"}
+
+
+# An edit of each file that changes the runs' numbers.
+EDITS = {"scene": ('damping="5"', 'damping="3"'), "include": ('mass="0.2"', 'mass="0.5"'),
+         "csv": ("0.6\n", "-0.4\n"), "scenario": ("newtons = [0.5, 1.5]", "newtons = [2.5, 3.5]")}
+
+
+def edit(path: Path, what: str) -> None:
+    old, new = EDITS[what]
+    text = path.read_text()
+    assert old in text
+    path.write_text(text.replace(old, new))
+
+
+@pytest.mark.parametrize("what", ["scene", "include", "csv"])
+def test_an_executor_batch_after_an_edit_is_the_local_batch_of_the_edited_files(tmp_path, what):
+    files = write_scene(tmp_path)
+    scenario = files["scenario"]
+
+    def both():
+        local = simloop.run_scenario_batch(str(scenario), seeds=range(4), steps=200, metrics_only=True, threads=2)
+        with ThreadPoolExecutor(2) as pool:
+            remote = simloop.run_scenario_batch(str(scenario), seeds=range(4), steps=200, executor=pool,
+                                                chunk_size=2)
+        return local, remote
+
+    before, before_remote = both()
+    assert before_remote == before
+    edit(files[what], what)
+    after, after_remote = both()
+    assert after != before, "the edit changes no number: the test would prove nothing"
+    assert after_remote == after  # not the scene the workers compiled before
+
+
+def test_a_worker_refuses_a_scene_edited_since_the_batch_started(tmp_path):
+    files = write_scene(tmp_path)
+    scenario = simloop.Scenario.from_file(files["scenario"])  # read now; its scene is compiled on each worker
+    from simloop import distributed
+
+    job = distributed.scenario_job(scenario)
+    edit(files["include"], "include")
+    with pytest.raises(distributed.InputMismatch, match=r"tblock\.xml is not the file the batch started with"):
+        distributed.run_chunk(job, [(0, 0, None, ())])
