@@ -169,7 +169,7 @@ def batch_command(args: List[str]) -> int:
     except ImportError as e:
         return _fail(EXIT_USAGE, f"batch: {e} (pip install 'simloop[dask]' for the batch command)")
     # numpy and pyarrow: loaded for this command only
-    from . import distributed, tables
+    from . import distributed, input_files, tables
     from .parquet_batch import ParquetBatch, ResumeError
 
     # Everything is checked before any file is touched: the scenario, its
@@ -225,7 +225,10 @@ def batch_command(args: List[str]) -> int:
         description = {"scenario": opts["scenario"] or "(the chapter's)", "seeds": len(opts["seeds"]),
                        "timesteps": opts["timesteps"],
                        "params": [tables.param_column(kind, name) for kind, name, _ in opts["params"]]}
-        batch = ParquetBatch(opts["out"], job, runs, size, description)
+        # The files the batch reads, as they are now: a part written while any was otherwise is refused.
+        inputs = {**input_files.digests([os.path.abspath(opts["scenario"])] if opts["scenario"] else []),
+                  **job["inputs"]}
+        batch = ParquetBatch(opts["out"], job, runs, size, description, inputs)
         try:
             earlier = batch.prepare(opts["resume"])
         except ResumeError as e:
@@ -244,7 +247,7 @@ def batch_command(args: List[str]) -> int:
 
 
 def _run_batch(batch: "ParquetBatch", client: Any, earlier: int, started: float) -> int:
-    from .distributed import VersionMismatch  # (loaded by batch_command already; numpy)
+    from .distributed import InputMismatch, VersionMismatch  # (loaded by batch_command already; numpy)
 
     total = len(batch.runs)
     bar = None
@@ -263,7 +266,7 @@ def _run_batch(batch: "ParquetBatch", client: Any, earlier: int, started: float)
         name, code = _stopped_by(e)
         return _fail(code, f"interrupted ({name}); {batch.out} not written; {batch.kept_runs()} of {total} runs kept "
                            f"in {batch.parts}/ (add --resume to finish)")
-    except VersionMismatch as e:
+    except (VersionMismatch, InputMismatch) as e:
         return _fail(EXIT_RUN_FAILED, f"batch: {e}")
     except Exception as e:  # a worker's failure as it came back (dask's KilledWorker, a MujocoError, ...)
         return _fail(EXIT_RUN_FAILED, f"batch: {type(e).__name__}: {e} ({batch.kept_runs()} of {total} runs kept in {batch.parts}/; "

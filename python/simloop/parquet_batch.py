@@ -11,6 +11,7 @@ import os
 import shutil
 from typing import Any, Callable, Dict, List, Optional, Sequence
 
+from . import input_files
 from .distributed import Run, chunk_ranges, iter_chunks
 
 
@@ -39,18 +40,19 @@ class ParquetBatch:
     """
 
     def __init__(self, out: "os.PathLike[str] | str", job: Dict[str, Any], runs: Sequence[Run],
-                 chunk_size: int, description: Dict[str, Any]) -> None:
+                 chunk_size: int, description: Dict[str, Any], inputs: Dict[str, str]) -> None:
         self.out = os.fspath(out)
         self.parts = self.out + ".parts"
         self.job, self.runs = job, runs
         identity = {key: value for key, value in job.items() if key != "threads"}  # threads change no bit
-        hasher = hashlib.sha256(json.dumps(identity, sort_keys=True).encode())
+        hasher = hashlib.sha256(json.dumps({**identity, "inputs": inputs}, sort_keys=True).encode())
         for run in runs:  # repr: floats exactly, without building one huge string
             hasher.update(repr(run).encode())
         digest = hasher.hexdigest()
         self.digest = digest  # stamped on every part file
+        self.inputs = inputs  # {file: digest} of every file the batch reads (input_files)
         self.manifest = {"format": 1, "batch": digest, "runs": len(runs), "chunk_size": chunk_size,
-                         "description": description}
+                         "description": description, "inputs": inputs}
         self.chunk_size = chunk_size
         self.done: List[int] = []
 
@@ -70,6 +72,12 @@ class ParquetBatch:
                 theirs = json.load(f)
         except (OSError, ValueError) as e:
             raise ResumeError(f"--resume: {manifest_path}: unreadable ({e}); remove {self.parts}/ to start again")
+        recorded = theirs.get("inputs") if isinstance(theirs, dict) else None  # (a manifest without it: another batch's)
+        differ = input_files.changed(recorded, self.inputs) if isinstance(recorded, dict) else []
+        if differ:
+            raise ResumeError(f"--resume: {differ[0]} is not the file it was when {self.parts}/ was written (edited, "
+                              f"replaced or removed): its chunks ran on the file as it was; restore it, or remove "
+                              f"{self.parts}/ to start again")
         if theirs.get("batch") != self.manifest["batch"]:
             raise ResumeError(f"--resume: {self.parts}/ was written by another batch (other scenario, seeds, grid or "
                               f"simloop version); remove it, or resume with that batch's arguments")

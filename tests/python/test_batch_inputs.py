@@ -1,8 +1,12 @@
 """A batch reads its files as they are when it starts: a scene's MJCF, every
 file it includes, the scenario file and its CSV inputs. Executors' workers,
 which keep compiled scenes between batches, give after an edit the table a
-local batch gives of the files as they are now, bit for bit."""
+local batch gives of the files as they are now, bit for bit; `batch
+--resume` refuses, in one line naming the file, parts written while a file
+was otherwise."""
 
+import subprocess
+import sys
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
@@ -73,3 +77,27 @@ def test_a_worker_refuses_a_scene_edited_since_the_batch_started(tmp_path):
     edit(files["include"], "include")
     with pytest.raises(distributed.InputMismatch, match=r"tblock\.xml is not the file the batch started with"):
         distributed.run_chunk(job, [(0, 0, None, ())])
+
+
+def batch(args, cwd: Path) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "simloop", "batch", *args], cwd=cwd, capture_output=True, text=True,
+                          stdin=subprocess.DEVNULL, timeout=300)
+
+
+@pytest.mark.parametrize("what", ["scene", "include", "csv", "scenario"])
+def test_resume_refuses_parts_written_before_an_edit_naming_the_file(tmp_path, what):
+    from test_batch_resume import interrupted
+
+    files = write_scene(tmp_path)
+    args = ["--scenario", "pusht.toml", "--seeds", "0:300", "--steps", "300", "--chunk-size", "10",
+            "--threads", "1"]
+    parts = interrupted(args, tmp_path, "cut.parquet", 2)
+    before = {p.name: p.read_bytes() for p in parts.iterdir()}
+    edit(files[what], what)
+    refused = batch([*args, "--out", "cut.parquet", "--resume"], tmp_path)
+    assert refused.returncode == 2, refused.stderr
+    assert refused.stderr.count("\n") == 1, refused.stderr
+    assert refused.stderr.startswith(f"sim-loop: batch: --resume: {files[what]} is not the file it was when "), \
+        refused.stderr
+    assert not (tmp_path / "cut.parquet").exists()
+    assert {p.name: p.read_bytes() for p in parts.iterdir()} == before, "the parts folder changed"
