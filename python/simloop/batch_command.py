@@ -229,18 +229,21 @@ def batch_command(args: List[str]) -> int:
         inputs = {**input_files.digests([os.path.abspath(opts["scenario"])] if opts["scenario"] else []),
                   **job["inputs"]}
         batch = ParquetBatch(opts["out"], job, runs, size, description, inputs)
-        try:
-            earlier = batch.prepare(opts["resume"])
-        except ResumeError as e:
-            return _fail(EXIT_USAGE, f"batch: {e}")
         if os.path.isdir(opts["out"]):
             return _fail(EXIT_USAGE, f"batch: --out: {opts['out']} is a directory (name the Parquet file)")
         out_dir = os.path.dirname(os.path.abspath(opts["out"]))
         try:
             os.makedirs(out_dir, exist_ok=True)
+            # One writer per folder, as for the run commands: two batches on one FILE would mix their parts.
+            lock = _core.OutputLock(out_dir)
         except OSError as e:
             return _fail(EXIT_USAGE, f"batch: --out: {e}")
-        return _run_batch(batch, client, earlier, started)
+        with lock:
+            try:
+                earlier = batch.prepare(opts["resume"])
+            except ResumeError as e:
+                return _fail(EXIT_USAGE, f"batch: {e}")
+            return _run_batch(batch, client, earlier, started)
     finally:
         if client is not None:
             client.close()

@@ -3,10 +3,12 @@ file it includes, the scenario file and its CSV inputs. Executors' workers,
 which keep compiled scenes between batches, give after an edit the table a
 local batch gives of the files as they are now, bit for bit; `batch
 --resume` refuses, in one line naming the file, parts written while a file
-was otherwise."""
+was otherwise; and two batches on one --out do not both run."""
 
+import signal
 import subprocess
 import sys
+import time
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
@@ -101,3 +103,30 @@ def test_resume_refuses_parts_written_before_an_edit_naming_the_file(tmp_path, w
         refused.stderr
     assert not (tmp_path / "cut.parquet").exists()
     assert {p.name: p.read_bytes() for p in parts.iterdir()} == before, "the parts folder changed"
+
+
+def test_a_second_batch_on_the_same_out_is_refused_and_the_first_finishes_whole(tmp_path):
+    args = ["--seeds", "0:300", "--steps", "300", "--chunk-size", "10", "--threads", "1"]
+    alone = batch([*args, "--out", "alone.parquet"], tmp_path)
+    assert alone.returncode == 0, alone.stderr
+    parts = tmp_path / "out" / "b.parquet.parts"
+    with subprocess.Popen([sys.executable, "-m", "simloop", "batch", *args, "--out", "out/b.parquet"], cwd=tmp_path,
+                          stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                          text=True) as first:
+        deadline = time.monotonic() + 120
+        while not any(parts.glob("chunk-*.parquet")):  # it is writing: it holds the folder by then
+            assert first.poll() is None and time.monotonic() < deadline, "the first batch ended before it was paused"
+            time.sleep(0.02)
+        first.send_signal(signal.SIGSTOP)  # paused mid-batch, so the second surely starts while it runs
+        try:
+            second = batch([*args[:3], "299", *args[4:], "--out", "out/b.parquet"], tmp_path)  # another batch
+        finally:
+            first.send_signal(signal.SIGCONT)
+        _, err = first.communicate(timeout=300)
+    assert first.returncode == 0, err
+    assert second.returncode == 2, second.stderr
+    assert second.stderr.count("\n") == 1, second.stderr
+    assert second.stderr.startswith("sim-loop: batch: --out: ") and "another simloop run (pid " in second.stderr, \
+        second.stderr
+    assert (tmp_path / "out" / "b.parquet").read_bytes() == (tmp_path / "alone.parquet").read_bytes()
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["b.parquet"]
