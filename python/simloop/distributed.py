@@ -35,7 +35,7 @@ from typing import Any, Callable, Dict, Iterable, Iterator, List, Optional, Sequ
 import numpy as np
 
 from . import _core, input_files
-from ._checks import _check_int, _check_path, _check_threads
+from ._checks import MAX_CHUNK_RUNS, _check_int, _check_path, _check_threads
 from .tables import BatchTable, _table, param_column
 
 # A scene parameter as it travels: ("friction" | "mass" | "damping", name or "", value).
@@ -330,7 +330,7 @@ def _threads(threads: Optional[int]) -> int:
 
 
 def _chunk_size(chunk_size: Optional[int]) -> Optional[int]:
-    return None if chunk_size is None else _check_int("chunk_size", chunk_size, 1, 2**31 - 1)
+    return None if chunk_size is None else _check_int("chunk_size", chunk_size, 1, MAX_CHUNK_RUNS)
 
 
 # ---- The API's executor= paths (arguments already checked by the callers) --
