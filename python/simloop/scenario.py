@@ -86,12 +86,13 @@ def _control_entry(actuator: object, value: object) -> Dict[str, object]:
 def _toml_value(name: str, value: object) -> str:
     if isinstance(value, bool):
         return "true" if value else "false"
+    # int() and float(): a subclass (numpy's float64, an IntEnum) has a repr of its own, which TOML is not.
     if isinstance(value, int):
-        return str(value)
+        return str(int(value))
     if isinstance(value, float):
         if not math.isfinite(value):
             raise ValueError(f"{name} must be finite, got {value!r}")
-        return repr(value)
+        return repr(float(value))
     if isinstance(value, (str, bytes, os.PathLike)):
         return _toml_string(name, os.fsdecode(value))
     if isinstance(value, Sequence):
