@@ -194,6 +194,8 @@ class BatchTable(Generic[Result]):
         the same order), with their results if every table has them. The
         columns are joined as they are: a `run` column keeps each table's
         own values."""
+        if isinstance(tables, (str, bytes, BatchTable)) or not isinstance(tables, Iterable):
+            raise TypeError(f"tables must be a list of BatchTable, got {type(tables).__name__}")
         parts = list(tables)
         if not parts:
             return BatchTable({})
