@@ -11,7 +11,9 @@ chapter's embedded scene), a scenario as its TOML text and the folder its
 relative paths resolve against, the run parameters, and the simloop and
 MuJoCo versions of the client. A worker refuses a chunk from a client of
 another version (the bits of a run are those of one build). Files a scenario
-or model names must exist at the same paths on every worker.
+or model names must exist at the same paths on every worker, with the same
+content: the client sends the sha256 of each (input_files), and a chunk
+whose worker reads other bytes raises InputMismatch.
 
 Dask reschedules the tasks of a worker that dies (up to the scheduler's
 `distributed.scheduler.allowed-failures`, 3 by default); every chunk is a
