@@ -286,8 +286,8 @@ ControlSpec read_control(const TableReader& t, const std::filesystem::path& base
   if (t.has("column") && !t.has("csv")) t.fail("column", "only with csv");
   if (const auto file = t.string("csv")) {
     const std::filesystem::path p(*file);
-    c.schedule = read_csv_schedule(p.is_absolute() || base.empty() ? p : base / p, t.string("column").value_or(""),
-                                   t.where_text("csv"));
+    c.csv = p.is_absolute() || base.empty() ? p : base / p;
+    c.schedule = read_csv_schedule(c.csv, t.string("column").value_or(""), t.where_text("csv"));
   }
   if (const auto v = t.number("value")) c.schedule.emplace_back(When::steps(0), *v);
   if (t.has("schedule")) {

@@ -34,6 +34,26 @@ mjtObj object_type(const std::string& kind) {
   throw py::value_error("kind must be one of " + kinds + ", got '" + kind + "'");
 }
 
+namespace {
+
+// Arguments taken as objects: pybind11's own TypeError for a wrong type lists every signature over four lines.
+std::string kind_arg(const py::object& kind) { return std::string(check_text("kind", kind)); }
+
+long long index_arg(const std::string& name, const py::object& value) {
+  if (PyBool_Check(value.ptr()) || !PyIndex_Check(value.ptr())) {
+    throw py::type_error(name + " must be an int, got " + describe(value));
+  }
+  PyObject* as_int = PyNumber_Index(value.ptr());
+  if (as_int == nullptr) throw py::error_already_set();  // its __index__ raised
+  const py::object index = py::reinterpret_steal<py::object>(as_int);
+  int overflow = 0;
+  const long long number = PyLong_AsLongLongAndOverflow(index.ptr(), &overflow);
+  if (overflow != 0) throw py::value_error(name + " must be an object's index, got " + show(value));
+  return number;
+}
+
+}  // namespace
+
 void bind_model(py::module_& m) {
   py::class_<simloop::Model>(m, "Model", "A compiled MuJoCo world: read-only, shared by every run on it.")
       .def_static("pusher_scene", &simloop::pusher_scene, "The chapter's scene.")
@@ -103,17 +123,17 @@ void bind_model(py::module_& m) {
       .def_property_readonly("nsensordata", [](const simloop::Model& model) { return model.get()->nsensordata; })
       .def_property_readonly("nkey", [](const simloop::Model& model) { return model.get()->nkey; })
       .def(
-          "names", [](const simloop::Model& model, const std::string& kind) {
-            return simloop::object_names(model.get(), object_type(kind));
+          "names", [](const simloop::Model& model, const py::object& kind) {
+            return simloop::object_names(model.get(), object_type(kind_arg(kind)));
           },
           "kind"_a, "Every object's name of a kind, by index ('' for an unnamed one).")
       .def(
           "object_info",
-          [](const simloop::Model& model, const std::string& kind, int id) {
+          [](const simloop::Model& model, const py::object& kind, const py::object& index) {
             // The model's fixed facts the named views need, as plain values.
             const mjModel* raw = model.get();
-            const mjtObj type = object_type(kind);
-            id = simloop::checked_object_index(raw, type, id);
+            const mjtObj type = object_type(kind_arg(kind));
+            const int id = simloop::checked_object_index(raw, type, index_arg("id", index));
             if (type == mjOBJ_BODY) {
               return py::dict("mass"_a = raw->body_mass[id], "mocapid"_a = raw->body_mocapid[id]);
             }

@@ -87,6 +87,16 @@ void bind_scenario(py::module_& m) {
       .def_property_readonly("scene", [](const simloop::Scenario& s) { return fs_str(s.scene.native()); })
       .def_readonly("timestep", &simloop::Scenario::timestep)
       .def_property_readonly(
+          "csv_files",
+          [](const simloop::Scenario& s) {
+            py::list files;
+            for (const auto& c : s.controls) {
+              if (!c.csv.empty()) files.append(fs_str(c.csv.native()));
+            }
+            return files;
+          },
+          "The CSV files the controls were read from, in the file's order.")
+      .def_property_readonly(
           "reset_params",
           [](const simloop::Scenario& s) {
             py::list params;

@@ -60,6 +60,9 @@ struct ControlSpec {
   // Piecewise constant: each (from, value) holds from `from` until the next.
   // A constant is one entry from step 0. Before the first entry the ctrl is 0.
   std::vector<std::pair<When, double>> schedule;
+  // The CSV file the schedule was read from (a file's `csv`, resolved), or empty: what a cache of the scenario
+  // must check is unchanged.
+  std::filesystem::path csv;
 };
 
 // Interference: a force and/or torque on one body, in the world frame, over

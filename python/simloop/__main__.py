@@ -16,44 +16,16 @@ import sys
 import threading
 from pathlib import Path
 from types import FrameType
-from typing import Any, Dict, List, Optional, TextIO, Tuple
+from typing import Any, Dict, List, Optional, Tuple
 
 from . import _core
 from ._command import (EXIT_RUN_FAILED, EXIT_SIGINT, EXIT_SIGTERM, EXIT_USAGE, PROGRAM,  # noqa: F401 (the command's)
-                       _catch_terminating_signals, _fail, _stopped_by)
+                       _catch_terminating_signals, _fail, _Report, _ReportLost, _stopped_by)
 from .batch_command import batch_command
 from .progress import progress_bar
 
 # True once this run's outputs are in place (an interrupt after that keeps them).
 _outputs_written = False
-
-
-class _ReportLost(Exception):
-    """Writing to stdout failed (a full disk, /dev/full): not an OSError, so
-    that the handlers for the outputs' errors do not take it for theirs."""
-
-
-class _Report:
-    """sys.stdout while the command runs: the same stream, but a failed write
-    raises _ReportLost."""
-
-    def __init__(self, stream: TextIO) -> None:
-        self._stream = stream
-
-    def write(self, text: str) -> int:
-        try:
-            return self._stream.write(text)
-        except OSError as e:
-            raise _ReportLost(e.strerror or str(e)) from None
-
-    def flush(self) -> None:
-        try:
-            self._stream.flush()
-        except OSError as e:
-            raise _ReportLost(e.strerror or str(e)) from None
-
-    def __getattr__(self, name: str) -> Any:
-        return getattr(self._stream, name)
 
 
 def _finish_stdout(code: int) -> int:

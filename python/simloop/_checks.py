@@ -37,6 +37,8 @@ MAX_STEPS = _core.MAX_STEPS
 MAX_RECORD_EVERY = _core.MAX_RECORD_EVERY
 # threads: None is one per core; Python's API takes 1 to this many.
 MAX_THREADS = 4096
+# chunk_size (an executor's runs per chunk, the batch command's --chunk-size): 1 to this many.
+MAX_CHUNK_RUNS = 2**31 - 1
 
 # One wording for an argument's type, the compiled methods' and the
 # package's (python/bindings_args.cc): repr on one line, with the type's name;

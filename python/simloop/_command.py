@@ -8,7 +8,7 @@ from __future__ import annotations
 import signal
 import sys
 from types import FrameType
-from typing import Any, Dict, NoReturn, Optional
+from typing import Any, Dict, NoReturn, Optional, TextIO
 
 from . import _core
 
@@ -52,6 +52,34 @@ def _catch_terminating_signals() -> Dict[int, Any]:
         if signal.getsignal(signum) == signal.SIG_DFL:
             previous[signum] = signal.signal(signum, _on_signal)
     return previous
+
+
+class _ReportLost(Exception):
+    """Writing to stdout failed (a full disk, /dev/full): not an OSError, so
+    that the handlers for the outputs' errors do not take it for theirs."""
+
+
+class _Report:
+    """sys.stdout while the command runs: the same stream, but a failed write
+    raises _ReportLost."""
+
+    def __init__(self, stream: TextIO) -> None:
+        self._stream = stream
+
+    def write(self, text: str) -> int:
+        try:
+            return self._stream.write(text)
+        except OSError as e:
+            raise _ReportLost(e.strerror or str(e)) from None
+
+    def flush(self) -> None:
+        try:
+            self._stream.flush()
+        except OSError as e:
+            raise _ReportLost(e.strerror or str(e)) from None
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._stream, name)
 
 
 def _fail(code: int, message: str) -> int:

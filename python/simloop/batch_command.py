@@ -13,7 +13,8 @@ import time
 from typing import TYPE_CHECKING, Any, Dict, List
 
 from . import _core
-from ._command import EXIT_RUN_FAILED, EXIT_USAGE, _fail, _peak_memory_mib, _stopped_by
+from ._checks import MAX_CHUNK_RUNS, MAX_STEPS, MAX_THREADS
+from ._command import EXIT_RUN_FAILED, EXIT_USAGE, _fail, _peak_memory_mib, _ReportLost, _stopped_by
 from .scenario import Scenario
 
 if TYPE_CHECKING:
@@ -56,23 +57,37 @@ class _BatchUsage(ValueError):
     pass
 
 
+# The most runs one batch takes: the client holds each run's parameters (196
+# bytes measured, so about 2 GB at this) before the first starts. Split a
+# larger study into batches.
+MAX_BATCH_RUNS = 10**7
+
+
+def _is_whole(text: str) -> bool:
+    """ASCII digits only (str.isdigit also takes '²', which int() refuses)."""
+    return text.isascii() and text.isdigit()
+
+
 def _parse_seeds(text: str) -> List[int]:
-    seeds: List[int] = []
+    ranges: List[range] = []
     for part in text.split(","):
         fields = part.split(":")
-        if not all(f.isdigit() for f in fields) or len(fields) > 3 or not part:
+        if not all(_is_whole(f) for f in fields) or len(fields) > 3 or not part:
             raise _BatchUsage(f"--seeds: '{text}' is not seeds (N, A:B for A to B-1, A:B:STEP, joined by commas)")
         numbers = [int(f) for f in fields]
         if len(numbers) == 1:
-            seeds.append(numbers[0])
+            ranges.append(range(numbers[0], numbers[0] + 1))
         else:
             step = numbers[2] if len(numbers) == 3 else 1
             if step == 0 or numbers[1] <= numbers[0]:
                 raise _BatchUsage(f"--seeds: '{part}' is an empty range (A:B runs A to B-1)")
-            seeds.extend(range(numbers[0], numbers[1], step))
-    if any(seed > 2**64 - 1 for seed in seeds):
-        raise _BatchUsage(f"--seeds: '{text}': seeds go from 0 to 2^64-1")
-    return seeds
+            ranges.append(range(numbers[0], numbers[1], step))
+        if ranges[-1][-1] > 2**64 - 1:
+            raise _BatchUsage(f"--seeds: '{text}': seeds go from 0 to 2^64-1")
+    count = sum(len(r) for r in ranges)  # before any list is made of them
+    if count > MAX_BATCH_RUNS:
+        raise _BatchUsage(f"--seeds: '{text}' is {count} seeds; a batch runs at most {MAX_BATCH_RUNS} (split it)")
+    return [seed for r in ranges for seed in r]
 
 
 def _parse_numbers(flag: str, text: str) -> List[float]:
@@ -138,8 +153,10 @@ def _parse_batch_args(args: List[str]) -> Dict[str, Any]:
                                   "is given twice")
             opts["params"].append((kind, name, _parse_numbers(flag, values)))
         elif flag in ("--steps", "--threads", "--chunk-size"):
-            if not value.isdigit() or int(value) < 1 or int(value) > 2**62 - 1:
-                raise _BatchUsage(f"{flag}: '{value}' is not a whole number from 1")
+            # The most each takes: as the API's steps, threads and chunk_size.
+            most = {"--steps": MAX_STEPS, "--threads": MAX_THREADS, "--chunk-size": MAX_CHUNK_RUNS}[flag]
+            if not _is_whole(value) or not 1 <= int(value) <= most:
+                raise _BatchUsage(f"{flag}: '{value}' is not a whole number from 1 to {most}")
             opts[flag[2:].replace("-", "_")] = int(value)
         elif flag == "--rng":
             if value not in ("mt19937_64", "numpy"):
@@ -169,7 +186,7 @@ def batch_command(args: List[str]) -> int:
     except ImportError as e:
         return _fail(EXIT_USAGE, f"batch: {e} (pip install 'simloop[dask]' for the batch command)")
     # numpy and pyarrow: loaded for this command only
-    from . import distributed, tables
+    from . import distributed, input_files, tables
     from .parquet_batch import ParquetBatch, ResumeError
 
     # Everything is checked before any file is touched: the scenario, its
@@ -203,6 +220,10 @@ def batch_command(args: List[str]) -> int:
                                                                              opts["perturb"], _core.MAX_RECORD_EVERY))
     except ValueError as e:
         return _fail(EXIT_USAGE, f"batch: {e}")
+    count = math.prod([len(opts["seeds"]), len(opts["timesteps"]), *(len(axis) for axis in axes)])
+    if count > MAX_BATCH_RUNS:
+        return _fail(EXIT_USAGE, f"batch: the seeds and the grid make {count} runs; a batch runs at most "
+                                 f"{MAX_BATCH_RUNS} (split it)")
     runs = [(i, seed, t, tuple(params))
             for i, (*params, t, seed) in enumerate(itertools.product(*axes, opts["timesteps"], opts["seeds"]))]
 
@@ -225,26 +246,32 @@ def batch_command(args: List[str]) -> int:
         description = {"scenario": opts["scenario"] or "(the chapter's)", "seeds": len(opts["seeds"]),
                        "timesteps": opts["timesteps"],
                        "params": [tables.param_column(kind, name) for kind, name, _ in opts["params"]]}
-        batch = ParquetBatch(opts["out"], job, runs, size, description)
-        try:
-            earlier = batch.prepare(opts["resume"])
-        except ResumeError as e:
-            return _fail(EXIT_USAGE, f"batch: {e}")
+        # The files the batch reads, as they are now: a part written while any was otherwise is refused.
+        inputs = {**input_files.digests([os.path.abspath(opts["scenario"])] if opts["scenario"] else []),
+                  **job["inputs"]}
+        batch = ParquetBatch(opts["out"], job, runs, size, description, inputs)
         if os.path.isdir(opts["out"]):
             return _fail(EXIT_USAGE, f"batch: --out: {opts['out']} is a directory (name the Parquet file)")
         out_dir = os.path.dirname(os.path.abspath(opts["out"]))
         try:
             os.makedirs(out_dir, exist_ok=True)
+            # One writer per folder, as for the run commands: two batches on one FILE would mix their parts.
+            lock = _core.OutputLock(out_dir)
         except OSError as e:
             return _fail(EXIT_USAGE, f"batch: --out: {e}")
-        return _run_batch(batch, client, earlier, started)
+        with lock:
+            try:
+                earlier = batch.prepare(opts["resume"])
+            except ResumeError as e:
+                return _fail(EXIT_USAGE, f"batch: {e}")
+            return _run_batch(batch, client, earlier, started)
     finally:
         if client is not None:
             client.close()
 
 
 def _run_batch(batch: "ParquetBatch", client: Any, earlier: int, started: float) -> int:
-    from .distributed import VersionMismatch  # (loaded by batch_command already; numpy)
+    from .distributed import InputMismatch, VersionMismatch  # (loaded by batch_command already; numpy)
 
     total = len(batch.runs)
     bar = None
@@ -263,7 +290,7 @@ def _run_batch(batch: "ParquetBatch", client: Any, earlier: int, started: float)
         name, code = _stopped_by(e)
         return _fail(code, f"interrupted ({name}); {batch.out} not written; {batch.kept_runs()} of {total} runs kept "
                            f"in {batch.parts}/ (add --resume to finish)")
-    except VersionMismatch as e:
+    except (VersionMismatch, InputMismatch) as e:
         return _fail(EXIT_RUN_FAILED, f"batch: {e}")
     except Exception as e:  # a worker's failure as it came back (dask's KilledWorker, a MujocoError, ...)
         return _fail(EXIT_RUN_FAILED, f"batch: {type(e).__name__}: {e} ({batch.kept_runs()} of {total} runs kept in {batch.parts}/; "
@@ -271,8 +298,13 @@ def _run_batch(batch: "ParquetBatch", client: Any, earlier: int, started: float)
     finally:
         if bar is not None:
             bar.close()
-    print(f"batch: {total} runs ({computed} run now, {total - computed} from {batch.parts}/)"
-          if earlier else f"batch: {total} runs")
-    print(f"table: {batch.out}")
-    print(f"wall-clock: {time.perf_counter() - started:.1f} s, peak memory: {_peak_memory_mib():.1f} MiB")
+    try:  # FILE is in place: a report that cannot be written says so, not that nothing was
+        print(f"batch: {total} runs ({computed} run now, {total - computed} from {batch.parts}/)"
+              if earlier else f"batch: {total} runs")
+        print(f"table: {batch.out}")
+        print(f"wall-clock: {time.perf_counter() - started:.1f} s, peak memory: {_peak_memory_mib():.1f} MiB")
+        sys.stdout.flush()
+    except _ReportLost as e:
+        return _fail(EXIT_RUN_FAILED, f"batch: cannot write the report to standard output ({e}); {batch.out} was "
+                                      "written")
     return 0

@@ -11,7 +11,9 @@ chapter's embedded scene), a scenario as its TOML text and the folder its
 relative paths resolve against, the run parameters, and the simloop and
 MuJoCo versions of the client. A worker refuses a chunk from a client of
 another version (the bits of a run are those of one build). Files a scenario
-or model names must exist at the same paths on every worker.
+or model names must exist at the same paths on every worker, with the same
+content: the client sends the sha256 of each (input_files), and a chunk
+whose worker reads other bytes raises InputMismatch.
 
 Dask reschedules the tasks of a worker that dies (up to the scheduler's
 `distributed.scheduler.allowed-failures`, 3 by default); every chunk is a
@@ -21,19 +23,21 @@ dask is imported only when a dask Client is passed.
 
 from __future__ import annotations
 
+import collections
 import concurrent.futures
 import functools
 import itertools
 import math
 import os
 import socket
+import threading
 import uuid
-from typing import Any, Callable, Dict, Iterable, Iterator, List, Optional, Sequence, Tuple, Union, cast
+from typing import Any, Callable, Dict, Iterable, Iterator, List, Optional, Sequence, Tuple, TypeVar, Union, cast
 
 import numpy as np
 
-from . import _core
-from ._checks import _check_int, _check_path, _check_threads
+from . import _core, input_files
+from ._checks import MAX_CHUNK_RUNS, _check_int, _check_path, _check_threads
 from .tables import BatchTable, _table, param_column
 
 # A scene parameter as it travels: ("friction" | "mass" | "damping", name or "", value).
@@ -79,6 +83,11 @@ def scene_source(model: object) -> Tuple[str, str]:
                     f"(a compiled simloop.Model does not travel to workers), got {type(model).__name__}")
 
 
+def scene_inputs(source: Tuple[str, str]) -> Dict[str, str]:
+    """The digests of the files a scene from scene_source reads (input_files), as the client reads them now."""
+    return input_files.digests(input_files.scene_files(source[1])) if source[0] == "path" else {}
+
+
 def scenario_source(scenario: Any) -> Tuple[str, str, str, str]:
     """How a simloop.Scenario travels: ("chapter", "", "", "") or ("toml", its text, the folder its paths resolve
     against, its name): a file's scenario is named for the file unless its text names it, and may be empty."""
@@ -87,20 +96,60 @@ def scenario_source(scenario: Any) -> Tuple[str, str, str, str]:
     return ("toml", scenario.toml, scenario._base, scenario.name)
 
 
-@functools.lru_cache(maxsize=8)
-def _scene(source: Tuple[str, str]) -> "_core.Model":
+class InputMismatch(RuntimeError):
+    """A file a chunk reads is not, on its worker, the file the client read when the batch started."""
+
+
+# Compiled scenes and parsed scenarios, kept for the life of the worker's
+# process, each under its source and the client's digests of the files it
+# read (input_files): used only while the files here still have that content.
+_MADE: "collections.OrderedDict[Any, Any]" = collections.OrderedDict()
+_MADE_LOCK = threading.Lock()  # a ThreadPoolExecutor's workers share the process
+_MADE_KEPT = 8
+Made = TypeVar("Made")
+
+
+def _check_inputs(expected: Dict[str, str], here: Dict[str, str]) -> None:
+    differ = input_files.changed(expected, here)
+    if differ:
+        more = f" (and {len(differ) - 1} more)" if len(differ) > 1 else ""
+        raise InputMismatch(f"worker {socket.gethostname()}: {differ[0]}{more} is not the file the batch started with "
+                            "(edited since, or another copy on this machine): every chunk must read the same files")
+
+
+def _made(source: Any, expected: Dict[str, str], make: Callable[[], Tuple[Made, List[str]]]) -> Made:
+    """make()'s value (it returns the value and the files it read), made once per source and content:
+    InputMismatch when the files here are not those the client digested (`expected`)."""
+    key = (source, tuple(sorted(expected.items())))
+    with _MADE_LOCK:
+        kept = _MADE.get(key)
+    if kept is not None:
+        _check_inputs(expected, input_files.digests(expected))
+        return cast(Made, kept)
+    value, files = make()
+    # Digested after the make: content changed before or during it differs here from what the client saw.
+    _check_inputs(expected, input_files.digests(files))
+    with _MADE_LOCK:
+        _MADE[key] = value
+        while len(_MADE) > _MADE_KEPT:
+            _MADE.popitem(last=False)
+    return value
+
+
+def _scene(source: Tuple[str, str], expected: Dict[str, str]) -> "_core.Model":
     kind, text = source
     if kind == "chapter":
-        return _core.Model.pusher_scene()
-    return _core.Model.from_file(text)
+        return _made(source, expected, lambda: (_core.Model.pusher_scene(), []))
+    return _made(source, expected, lambda: (_core.Model.from_file(text), input_files.scene_files(text)))
 
 
-@functools.lru_cache(maxsize=8)
-def _scenario(source: Tuple[str, str, str, str]) -> Tuple["_core.Scenario", "_core.Model"]:
-    kind, text, base, name = source
-    scenario = (_core.Scenario.chapter() if kind == "chapter"
-                else _core.Scenario.from_toml(text, "scenario", base, default_name=name))
-    return scenario, _core.load_scene(scenario)
+def _scenario(source: Tuple[str, str, str, str], expected: Dict[str, str]) -> Tuple["_core.Scenario", "_core.Model"]:
+    def make() -> Tuple[Tuple["_core.Scenario", "_core.Model"], List[str]]:
+        kind, text, base, name = source
+        scenario = (_core.Scenario.chapter() if kind == "chapter"
+                    else _core.Scenario.from_toml(text, "scenario", base, default_name=name))
+        return (scenario, _core.load_scene(scenario)), input_files.scenario_files(scenario)
+    return _made(source, expected, make)
 
 
 @functools.lru_cache(maxsize=16)
@@ -122,13 +171,13 @@ def run_chunk(job: Dict[str, Any], runs: Sequence[Run]) -> BatchTable[Any]:
     for params, members in groups.items():
         out: Union[List[_core.RunResult], List[_core.ScenarioResult]]
         if job["kind"] == "chapter":
-            model = _with_params(_scene(job["scene"]), params)
+            model = _with_params(_scene(job["scene"], job["inputs"]), params)
             # cast: the chapter's runs always have a timestep (run_batch_on); RunConfig checks it anyway.
             configs = [_core.RunConfig(runs[i][1], job["steps"], cast(float, runs[i][2]), job["perturb"], job["smoke"],
                                        1, job["audit_energy"], job["rng"]) for i in members]
             out = _core.run_batch(model, configs, job["threads"], keep_rows=False)
         else:
-            scenario, scene = _scenario(job["scenario"])
+            scenario, scene = _scenario(job["scenario"], job["inputs"])
             model = _with_params(scene, params)
             scenario_configs = [_core.ScenarioConfig(runs[i][1], job["rng"], runs[i][2], job["steps"], job["perturb"],
                                                      1) for i in members]
@@ -283,7 +332,7 @@ def _threads(threads: Optional[int]) -> int:
 
 
 def _chunk_size(chunk_size: Optional[int]) -> Optional[int]:
-    return None if chunk_size is None else _check_int("chunk_size", chunk_size, 1, 2**31 - 1)
+    return None if chunk_size is None else _check_int("chunk_size", chunk_size, 1, MAX_CHUNK_RUNS)
 
 
 # ---- The API's executor= paths (arguments already checked by the callers) --
@@ -293,7 +342,9 @@ def run_batch_on(executor: object, configs: Sequence["_core.RunConfig"], model: 
                  progress: Optional[Callable[[int, int], object]]) -> BatchTable["_core.RunResult"]:
     """simloop.run_batch(..., executor=...): configs as run_batch built them."""
     first = configs[0] if configs else None
-    job = {"kind": "chapter", "scene": scene_source(model), "versions": versions(), "threads": _threads(threads),
+    source = scene_source(model)
+    job = {"kind": "chapter", "scene": source, "inputs": scene_inputs(source), "versions": versions(),
+           "threads": _threads(threads),
            "steps": first.steps if first else 2000, "perturb": first.perturb if first else True,
            "smoke": first.smoke if first else False, "audit_energy": first.audit_energy if first else False,
            "rng": first.rng if first else "mt19937_64"}
@@ -313,14 +364,15 @@ def run_scenario_batch_on(executor: object, scenario: Any, seeds: Sequence[int],
 
 def scenario_job(scenario: Any, *, rng: str = "mt19937_64", steps: Optional[int] = None, perturb: bool = True,
                  threads: int = 1) -> Dict[str, Any]:
-    return {"kind": "scenario", "scenario": scenario_source(scenario), "versions": versions(), "threads": threads,
-            "rng": rng, "steps": steps, "perturb": perturb}
+    return {"kind": "scenario", "scenario": scenario_source(scenario),
+            "inputs": input_files.digests(input_files.scenario_files(scenario._core)), "versions": versions(),
+            "threads": threads, "rng": rng, "steps": steps, "perturb": perturb}
 
 
-def _sweep_chunk(scene: Tuple[str, str], versions_expected: Sequence[str], timesteps: Sequence[float],
-                 duration: float, threads: int) -> "_core.SweepResult":
+def _sweep_chunk(scene: Tuple[str, str], inputs: Dict[str, str], versions_expected: Sequence[str],
+                 timesteps: Sequence[float], duration: float, threads: int) -> "_core.SweepResult":
     _check_versions(versions_expected)
-    return _core.sweep(_scene(scene), list(timesteps), duration, threads)  # pickles as bytes, bits unchanged
+    return _core.sweep(_scene(scene, inputs), list(timesteps), duration, threads)  # pickles as bytes, bits unchanged
 
 
 def sweep_on(executor: object, timesteps: Sequence[float], duration: float, model: object, threads: Optional[int],
@@ -337,7 +389,8 @@ def sweep_on(executor: object, timesteps: Sequence[float], duration: float, mode
     size = _chunk_size(chunk_size) or default_chunk_size(len(ordered), pool.workers())
     source, count = scene_source(model), _threads(threads)
     ranges = chunk_ranges(len(ordered), size)
-    tasks = ((k, (source, versions(), ordered[a:b], duration, count)) for k, (a, b) in enumerate(ranges))
+    inputs = scene_inputs(source)
+    tasks = ((k, (source, inputs, versions(), ordered[a:b], duration, count)) for k, (a, b) in enumerate(ranges))
     parts: Dict[int, "_core.SweepResult"] = {}
     done = 0
     for key, part in pool.map_unordered(_sweep_chunk, tasks, window=max(8, 4 * pool.workers())):

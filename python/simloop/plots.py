@@ -53,6 +53,8 @@ def _read_csv(path: Path):
     with open(path) as f:
         names = f.readline().strip().split(",")
         rows = [[float(cell) if cell else np.nan for cell in line.rstrip("\n").split(",")] for line in f]
+    if not rows:  # (every figure reads a last row)
+        raise ValueError("no rows after the header: nothing to draw")
     table = np.array(rows, dtype=float).reshape(len(rows), len(names))
     return {name: table[:, i] for i, name in enumerate(names)}
 

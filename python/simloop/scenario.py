@@ -23,8 +23,8 @@ import os
 from typing import Any, Dict, Iterable, Mapping, Optional, Sequence, Tuple, Union
 
 from . import _core
-from ._checks import (ModelLike, _check_bool, _check_int, _check_keys, _check_real, _check_seed, _check_str, _describe,
-                      load_model)
+from ._checks import (ModelLike, _check_bool, _check_int, _check_keys, _check_path, _check_real, _check_seed, _check_str,
+                      _describe, load_model)
 
 ScenarioResult = _core.ScenarioResult
 ScenarioLike = Union["Scenario", str, "os.PathLike[str]"]
@@ -83,21 +83,26 @@ def _control_entry(actuator: object, value: object) -> Dict[str, object]:
     return {"actuator": actuator, "schedule": pairs}
 
 
-def _toml_value(name: str, value: object) -> str:
+# The deepest list a scenario holds is two ([[seconds, value], ...]); past this a "list" holds itself (UserString).
+_MAX_NESTING = 8
+
+
+def _toml_value(name: str, value: object, depth: int = 0) -> str:
     if isinstance(value, bool):
         return "true" if value else "false"
+    # int() and float(): a subclass (numpy's float64, an IntEnum) has a repr of its own, which TOML is not.
     if isinstance(value, int):
-        return str(value)
+        return str(int(value))
     if isinstance(value, float):
         if not math.isfinite(value):
             raise ValueError(f"{name} must be finite, got {value!r}")
-        return repr(value)
+        return repr(float(value))
     if isinstance(value, (str, bytes, os.PathLike)):
         return _toml_string(name, os.fsdecode(value))
-    if isinstance(value, Sequence):
-        return "[" + ", ".join(_toml_value(name, v) for v in value) + "]"
-    if hasattr(value, "tolist"):  # numpy scalars and arrays
-        return _toml_value(name, value.tolist())
+    if isinstance(value, Sequence) and depth < _MAX_NESTING:
+        return "[" + ", ".join(_toml_value(name, v, depth + 1) for v in value) + "]"
+    if hasattr(value, "tolist") and depth < _MAX_NESTING:  # numpy scalars and arrays
+        return _toml_value(name, value.tolist(), depth + 1)
     raise TypeError(f"{name} must be a number, a string or a list of them, got {_describe(value)}")
 
 
@@ -161,6 +166,11 @@ class Scenario:
                  controls: Optional[Mapping[Union[str, int], Any]] = None,
                  disturbances: Iterable[Mapping[str, Any]] = (),
                  record: Optional[Mapping[str, Any]] = None, reset: Optional[Mapping[str, Any]] = None) -> None:
+        for what, given in (("controls", controls), ("record", record)):
+            if given is not None and not isinstance(given, Mapping):
+                raise TypeError(f"{what} must be a dict or None, got {_describe(given)}")
+        if isinstance(disturbances, (str, bytes, Mapping)) or not isinstance(disturbances, Iterable):
+            raise TypeError(f"disturbances must be a list of dicts, got {_describe(disturbances)}")
         text = _toml_table("", {"name": name or None, "scene": scene, "timestep": timestep, "steps": steps,
                                 "duration": duration})
         for actuator, value in (controls or {}).items():
@@ -188,7 +198,8 @@ class Scenario:
     @classmethod
     def from_file(cls, path: Union[str, "os.PathLike[str]"]) -> "Scenario":
         """Reads a scenario file (TOML); a relative scene resolves against its folder."""
-        core = _core.Scenario.from_file(os.fspath(path))
+        path = _check_path("path", path, "a scenario file (TOML)")
+        core = _core.Scenario.from_file(path)
         with open(path, encoding="utf-8") as f:
             toml = f.read()
         path = os.path.abspath(os.fspath(path))

@@ -194,6 +194,8 @@ class BatchTable(Generic[Result]):
         the same order), with their results if every table has them. The
         columns are joined as they are: a `run` column keeps each table's
         own values."""
+        if isinstance(tables, (str, bytes, BatchTable)) or not isinstance(tables, Iterable):
+            raise TypeError(f"tables must be a list of BatchTable, got {type(tables).__name__}")
         parts = list(tables)
         if not parts:
             return BatchTable({})
@@ -255,7 +257,7 @@ def _scenario_row(r: Any) -> Dict[str, Any]:
     for body, c in sorted(r.bodies.items()):
         for i, axis in enumerate("xyz"):
             row[f"{body}_final_pos_{axis}"] = float(final[c + i])
-        row[f"{body}_final_speed"] = math.sqrt(sum(float(v) ** 2 for v in final[c + 7:c + 10]))
+        row[f"{body}_final_speed"] = _speed([float(v) for v in final[c + 7:c + 10]])
     for i, d in enumerate(r.disturbances):
         for axis, value in zip(("fx", "fy", "fz"), d["force"]):
             row[f"disturbance{i}_{axis}"] = float(value)
@@ -267,6 +269,15 @@ def _scenario_row(r: Any) -> Dict[str, Any]:
         row[param_column(p["kind"], p["name"])] = p["value"]
     _warning_counts(row, r.warnings)
     return row
+
+
+def _speed(velocity: List[float]) -> float:
+    """|v|, as sqrt of the sum of squares (the bits every table has had); a square past float's range (a run
+    that blew up) would raise OverflowError, so such a speed is hypot's (or inf)."""
+    try:
+        return math.sqrt(sum(v ** 2 for v in velocity))
+    except OverflowError:
+        return math.hypot(*velocity)
 
 
 def _column(name: str, values: List[Any]) -> np.ndarray:

@@ -307,6 +307,7 @@ TEST(Scenario, AControlMayComeFromACsvWithARowPerStep) {
   const std::string toml = "steps = 6\n[[control]]\nactuator = 'push_motor'\ncsv = 'drive.csv'\ncolumn = 'push_x'\n";
   const simloop::Scenario s = Scenario::from_toml_string(toml, "s.toml", dir.path());
   ASSERT_EQ(s.controls.size(), 1u);
+  EXPECT_EQ(s.controls[0].csv, dir.path() / "drive.csv");  // what a cache of the scenario checks for changes
   const auto& schedule = s.controls[0].schedule;  // only where the value changes
   ASSERT_EQ(schedule.size(), 3u);
   EXPECT_EQ(schedule[0].first.to_steps(0.002, 6), 0);
@@ -323,6 +324,7 @@ TEST(Scenario, AControlMayComeFromACsvWithARowPerStep) {
 
   EXPECT_EQ(Scenario::from_toml_string("[[control]]\nactuator = 0\ncsv = 'one.csv'\n", "s.toml", dir.path())
                 .controls[0].schedule.size(), 2u);
+  EXPECT_TRUE(Scenario::from_toml_string("[[control]]\nactuator = 0\nvalue = 1.0\n").controls[0].csv.empty());
   const auto error = [&](const std::string& text) {
     return error_of([&] { (void)Scenario::from_toml_string(text, "s.toml", dir.path()); });
   };
