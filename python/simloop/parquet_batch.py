@@ -11,7 +11,7 @@ import json
 import os
 import shutil
 import stat
-from typing import Any, Callable, Dict, List, Optional, Sequence
+from typing import Any, BinaryIO, Callable, Dict, List, Optional, Sequence
 
 from . import input_files
 from ._checks import MAX_CHUNK_RUNS
@@ -145,7 +145,7 @@ class ParquetBatch:
         _remove_temporaries(self.parts, lambda stem: stem.startswith("chunk-") or stem == "manifest.json")
         manifest_path = os.path.join(self.parts, "manifest.json")
         if not os.path.isfile(manifest_path):
-            _write_atomically(manifest_path, lambda path: _write_text(path, json.dumps(self.manifest, indent=1)))
+            _write_atomically(manifest_path, lambda out: out.write(json.dumps(self.manifest, indent=1).encode()))
         ranges = chunk_ranges(len(self.runs), self.chunk_size)
         ready = set(self.done)
         done_runs = sum(ranges[k][1] - ranges[k][0] for k in ready)
@@ -153,13 +153,15 @@ class ParquetBatch:
         temporary = os.path.join(directory, f".{os.path.basename(self.out)}.tmp.{os.getpid()}")
         writer: Any = None  # a pyarrow.parquet.ParquetWriter once the first chunk is written
         written = 0  # chunks appended to the temporary file, in order
+        file: Optional[BinaryIO] = None  # the temporary file the writer writes
         try:
             def flush() -> None:
-                nonlocal writer, written
+                nonlocal writer, written, file
                 while written in ready:
                     table = _unstamped(pq.read_table(self._part(written)))
                     if writer is None:
-                        writer = pq.ParquetWriter(temporary, table.schema)
+                        file = _open_new(temporary)
+                        writer = pq.ParquetWriter(file, table.schema)
                     writer.write_table(table)
                     written += 1
 
@@ -174,7 +176,7 @@ class ParquetBatch:
                                                        _STAMP_BATCH: self.digest.encode(),
                                                        _STAMP_CHUNK: str(index).encode(),
                                                        _STAMP_CONTENT: _content_digest(table)})
-                _write_atomically(self._part(index), lambda path: pq.write_table(table, path))
+                _write_atomically(self._part(index), lambda out: pq.write_table(table, out))
                 ready.add(index)
                 count = ranges[index][1] - ranges[index][0]
                 done_runs += count
@@ -184,14 +186,19 @@ class ParquetBatch:
                     progress(done_runs, len(self.runs))
             writer.close()
             writer = None
+            assert file is not None
+            file.close()
             os.replace(temporary, self.out)
         except BaseException:
             try:
-                if writer is not None:
-                    with contextlib.suppress(Exception):  # (a full disk fails the close too: the cause is raised)
+                with contextlib.suppress(Exception):  # (a full disk fails the close too: the cause is raised)
+                    if writer is not None:
                         writer.close()
+                with contextlib.suppress(Exception):
+                    if file is not None:
+                        file.close()
             finally:
-                if os.path.exists(temporary):
+                if file is not None and os.path.lexists(temporary):
                     os.unlink(temporary)
             raise
         shutil.rmtree(self.parts, ignore_errors=True)
@@ -253,17 +260,25 @@ def _remove_temporaries(folder: str, ours: Callable[[str], bool]) -> None:
                 os.unlink(os.path.join(folder, name))
 
 
-def _write_text(path: str, text: str) -> None:
-    with open(path, "w", encoding="utf-8") as f:
-        f.write(text)
+def _open_new(path: str) -> BinaryIO:
+    """A new file at `path` to write: whatever is at that name (a killed batch's leftover, a link planted there) is
+    removed, then the file is created exclusively, so that nothing is ever written through a link."""
+    with contextlib.suppress(FileNotFoundError):
+        os.unlink(path)
+    flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_CLOEXEC", 0)
+    return os.fdopen(os.open(path, flags, 0o644), "wb")
 
 
-def _write_atomically(path: str, write: Callable[[str], object]) -> None:
+def _write_atomically(path: str, write: Callable[[BinaryIO], object]) -> None:
+    """Writes `path` whole or not at all: into a new file beside it (_open_new), then renamed onto it."""
     temporary = f"{path}.tmp.{os.getpid()}"
+    created = False
     try:
-        write(temporary)
+        with _open_new(temporary) as out:
+            created = True
+            write(out)
         os.replace(temporary, path)
     except BaseException:
-        if os.path.exists(temporary):
+        if created and os.path.lexists(temporary):
             os.unlink(temporary)
         raise

@@ -180,3 +180,40 @@ def test_more_envs_than_memory_holds_are_refused_before_any_is_made():
                                          r"MiB allowed \(half of the machine's memory or the process's limit\)"):
         simloop.gym.ScenarioVectorEnv(simloop.Scenario.chapter(), num_envs=1 << 20)  # was killed by the kernel
     assert time.monotonic() - started < 10
+
+
+def test_the_batch_command_never_writes_through_a_link_planted_at_a_temporary_name(tmp_path):
+    victim = tmp_path / "victim.txt"
+    victim.write_text("the user's file")
+    done = run_python(f"""
+        import os, sys
+        os.chdir({str(tmp_path)!r})
+        # The file's temporary is named for the batch's process (the parts' temporaries: the next test).
+        os.symlink({str(victim)!r}, f".b.parquet.tmp.{{os.getpid()}}")
+        from simloop.batch_command import batch_command
+        sys.exit(batch_command(["--seeds", "0:4", "--steps", "50", "--chunk-size", "2", "--out", "b.parquet"]))
+    """)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert victim.read_text() == "the user's file"
+    assert (tmp_path / "b.parquet").is_file() and not (tmp_path / "b.parquet").is_symlink()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["b.parquet", "victim.txt"]
+
+
+def test_a_write_is_never_through_a_link_even_one_planted_after_the_look(tmp_path):
+    from simloop import parquet_batch
+
+    victim = tmp_path / "victim.txt"
+    victim.write_text("the user's file")
+    target = tmp_path / "m.json"
+    real_unlink = os.unlink
+
+    def unlink_then_plant(path, *args, **kwargs):  # a link planted between the removal and the create
+        real_unlink(path, *args, **kwargs)
+        os.symlink(victim, path)
+
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(parquet_batch.os, "unlink", unlink_then_plant)
+        os.symlink(victim, f"{target}.tmp.{os.getpid()}")
+        with pytest.raises(FileExistsError):
+            parquet_batch._write_atomically(str(target), lambda out: out.write(b"{}"))
+    assert victim.read_text() == "the user's file" and not target.exists()
