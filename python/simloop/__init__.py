@@ -11,6 +11,10 @@ numpy views of the trajectory, and writes the rerun recording.
 
 from typing import TYPE_CHECKING
 
+from ._startup import quiet_interrupt_while_starting
+
+quiet_interrupt_while_starting()
+
 try:
     from . import _core  # noqa: F401  (loads libmujoco; the line below explains a failure)
 except ImportError as _error:

@@ -18,7 +18,7 @@ from pathlib import Path
 from types import FrameType
 from typing import Any, Dict, List, Optional, Tuple
 
-from . import _core
+from . import _core, _startup
 from ._command import (EXIT_RUN_FAILED, EXIT_SIGINT, EXIT_SIGTERM, EXIT_USAGE, PROGRAM,  # noqa: F401 (the command's)
                        _catch_terminating_signals, _fail, _Report, _ReportLost, _stopped_by)
 from .batch_command import batch_command
@@ -122,6 +122,7 @@ def main(argv: Optional[List[str]] = None) -> int:
     library writes the outputs together, or none, and no temporary file)."""
     global _outputs_written
     _outputs_written = False
+    _startup.started()
     if sys.stdout is None:  # started with stdout closed
         return _fail(EXIT_RUN_FAILED, "standard output is closed; nothing was run (the report would be lost)")
     previous: Dict[int, Any] = {}

@@ -6,6 +6,7 @@ import subprocess
 import sys
 import textwrap
 import time
+from pathlib import Path
 
 import pytest
 
@@ -185,3 +186,24 @@ def test_ctrl_c_stops_policy_batches_and_vector_envs_promptly(name, daemon):
           f"after SIGINT")
     assert latency < RAISE_BUDGET_S
     assert exit_after < EXIT_BUDGET_S
+
+
+@pytest.mark.parametrize("delay", [0.0, 0.01, 0.03])
+def test_ctrl_c_while_the_command_loads_its_modules_is_one_line_not_a_traceback(tmp_path, delay):
+    # 7 of 20 Ctrl-Cs in the first ~0.2 s printed a KeyboardInterrupt traceback. Sent once the package is
+    # importing (its extension module mapped), and a little later, while the command's modules load.
+    child = subprocess.Popen([sys.executable, "-m", "simloop", "--steps", "100000000", "--record-every",
+                              "1000000", "--no-rerun", "--out", "out"], cwd=tmp_path, stdin=subprocess.DEVNULL,
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                             preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL) and None)
+    deadline = time.monotonic() + 60
+    while "simloop/_core" not in Path(f"/proc/{child.pid}/maps").read_text():
+        assert child.poll() is None and time.monotonic() < deadline
+        time.sleep(0.001)
+    time.sleep(delay)
+    child.send_signal(signal.SIGINT)
+    _, err = child.communicate(timeout=60)
+    assert child.returncode == 130, err
+    assert "Traceback" not in err and len(err.strip().splitlines()) == 1, err
+    assert err.startswith("sim-loop: interrupted (SIGINT)"), err
+    assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())
