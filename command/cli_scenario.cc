@@ -23,10 +23,10 @@ Scenario scenario_from_flags(const Options& opts, const Model* scene) {
   }
   if (!opts.ctrls.empty()) {
     s.controls.clear();
-    for (const auto& [actuator, value] : opts.ctrls) s.controls.push_back({actuator, {{When::steps(0), value}}});
+    for (const auto& [actuator, value] : opts.ctrls) s.controls.push_back({actuator, {{When::steps(0), value}}, {}});
   } else if (!opts.model_path.empty()) {
     s.controls.clear();
-    if (scene != nullptr && scene->get()->nu > 0) s.controls.push_back({"0", {{When::steps(0), 1.0}}});
+    if (scene != nullptr && scene->get()->nu > 0) s.controls.push_back({"0", {{When::steps(0), 1.0}}, {}});
   }
   if (!opts.body.empty()) {
     s.disturbances[0].body = opts.body;

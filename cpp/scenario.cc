@@ -48,7 +48,7 @@ Scenario Scenario::chapter() {
   s.name = std::string(kChapterScenarioName);
   s.timestep = kChapterTimestep;
   s.length = When::steps(2000);
-  s.controls.push_back({"push_motor", {{When::steps(0), 1.0}}});
+  s.controls.push_back({"push_motor", {{When::steps(0), 1.0}}, {}});
   DisturbanceSpec shove;
   shove.body = "box";
   shove.force = {0.0, 1.0, 0.0};

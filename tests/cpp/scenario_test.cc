@@ -120,7 +120,7 @@ TEST(Scenario, UnknownNamesListWhatTheSceneHasWithADidYouMean) {
   EXPECT_EQ(error_of([&] { (void)simloop::resolve(s, chapter_model()); }),
             "control[0]: actuator index 3 is out of range: the scene has 1 actuator (0 to 0); the scene's actuators: push_motor");
   s = Scenario::chapter();
-  s.controls.push_back({"0", {{When::steps(0), 0.5}}});  // push_motor again, by index
+  s.controls.push_back({"0", {{When::steps(0), 0.5}}, {}});  // push_motor again, by index
   EXPECT_EQ(error_of([&] { (void)simloop::resolve(s, chapter_model()); }),
             "control[1]: actuator '0' is already driven by control[0]; give each actuator one control (a schedule "
             "for changes)");
