@@ -35,6 +35,8 @@ ATTEMPTS_FILE = ".check_attempts.json"
 import json  # noqa: E402  (below the header, which a launcher may rewrite)
 import re  # noqa: E402
 
+from drift import half_of_the_sum, rigid_sum, slide_phases, sum_beside_mujoco  # noqa: E402  (exercise 3's physics)
+
 TIMESTEP = 0.002  # the chapter's, s
 # unit: (dimension, factor to SI; for "steps", to steps)
 UNITS = {
@@ -296,32 +298,6 @@ def check_fix(loop_path: Path) -> bool:
 
 # ---- 3. below and above friction ---------------------------------------------
 
-def slide_phases(force: float) -> dict:
-    """A box at rest pushed sideways with `force` N for 50 steps, then left
-    for 500: how far it had moved when the push ended (m) and its speed then
-    (m/s), the furthest it got (m), how far its centre rose above rest (m),
-    and where it ended (m)."""
-    sim = simloop.Sim()
-    sim.step(100)  # settle on the floor, motor off
-    (_, y0, z0) = sim.box_position
-    sim.apply_force([0.0, force, 0.0])
-    sim.step(50)
-    sim.clear_force()
-    out = {"released": sim.box_position[1] - y0, "speed": float(sim.qvel[1]),  # the box's free joint: qvel[0:3]
-           "furthest": 0.0, "rise": 0.0}
-    for _ in range(500):
-        sim.step()
-        (_, y, z) = sim.box_position
-        out["furthest"], out["rise"] = max(out["furthest"], y - y0), max(out["rise"], z - z0)
-    out["end"] = sim.box_position[1] - y0
-    return out
-
-
-def slide(force: float) -> float:
-    """Sideways distance (m) of a box at rest pushed with `force` N for 50 steps, then left for 500."""
-    return slide_phases(force)["end"]
-
-
 def check_drift(path: Path) -> Verdict:
     fields = {}
     for line in answer_lines(path):
@@ -336,8 +312,8 @@ def check_drift(path: Path) -> Verdict:
         raise NoAnswer(f"stays_at_4N must be yes or no, got {fields['stays_at_4N']!r}")
     predicted_m, _ = quantity(fields["slide_at_9N_cm"], "slide_at_9N_cm", ("length",), "cm")
     predicted_cm = predicted_m * 100
-    # The question as shipped: slide() above, a box at rest pushed for 0.1 s.
-    at4 = slide(4.0)
+    # The question as shipped: a box at rest pushed for 0.1 s (drift.py).
+    at4 = slide_phases(4.0)["end"]
     mujoco9 = slide_phases(9.0)
     at9 = mujoco9["end"]
     really_stays = abs(at4) < 0.002
@@ -345,10 +321,8 @@ def check_drift(path: Path) -> Verdict:
     low, high = at9 * 100 / 2, at9 * 100 * 2
     ok_slide = low <= predicted_cm <= high
     said = [f"4 N: you said it {'stays' if stays == 'yes' else 'moves'}.", f"9 N: you said {predicted_cm:g} cm."]
-    friction = 0.5 * 9.81 * 1.0
-    accel = (9.0 - friction) / 0.5
-    v = accel * 0.1
-    push_cm, coast_cm = 0.5 * accel * 0.1**2 * 100, v * v / (2 * 9.81) * 100
+    sums = rigid_sum(9.0)
+    friction = sums["friction"]
     # Why each part holds or not: said beside a right answer, or with the
     # solution. Before that, which part is wrong would give the yes/no half
     # away (a wrong yes is a no), so a first wrong answer hears neither.
@@ -358,15 +332,9 @@ def check_drift(path: Path) -> Verdict:
                      f"only creeps {at4 * 1000:.2f} mm, through the contacts' softness.")
     else:
         parts.append(f"4 N: you expected it to {'stay' if stays == 'yes' else 'move more than 2 mm'}; it did not.")
-    # Half the sum: the push's part or the coast's alone (within 10%).
-    half = min((name for name, cm in (("push", push_cm), ("coast", coast_cm)) if abs(predicted_cm - cm) <= 0.1 * cm),
-               key=lambda name: abs(predicted_cm - (push_cm if name == "push" else coast_cm)), default=None)
+    half = half_of_the_sum(predicted_cm, sums, at9 * 100, ok_slide)
     if half is not None:
-        left_out = (f"the {coast_cm:.1f} cm it coasts after the push (v^2 / (2 mu g))" if half == "push" else
-                    f"the {push_cm:.1f} cm it slides during the push itself (a t^2 / 2, a = net force / m)")
-        parts.append(f"9 N: {predicted_cm:g} cm is half the sum, the {half} alone: it leaves out {left_out}. "
-                     f"Both parts give {push_cm + coast_cm:.1f} cm; MuJoCo slid it {at9 * 100:.2f} cm"
-                     + (", so yours is within a factor of 2 of it, but short for that reason." if ok_slide else "."))
+        parts.append(half)
     elif ok_slide:
         parts.append(f"9 N: right: MuJoCo slid it {at9 * 100:.2f} cm; you said {predicted_cm:g} cm, within a "
                      "factor of 2.")
@@ -387,18 +355,7 @@ def check_drift(path: Path) -> Verdict:
             "v^2 / (2 mu g) more."]
     solution = ([] if holds else parts) + [
         f"4 N: the box moved {at4 * 1000:.2f} mm (it stays). 9 N: it slid {at9 * 100:.2f} cm "
-        f"(accepted: {low:.2f} to {high:.2f} cm).",
-        f"The sum: 9 N - {friction:.2f} N friction = {9 - friction:.2f} N net on 0.5 kg for 0.1 s gives "
-        f"{v:.2f} m/s and {push_cm:.1f} cm by the release; coasting against friction adds {coast_cm:.1f} cm: "
-        f"{push_cm + coast_cm:.1f} cm in all.",
-        f"MuJoCo, by the release: {mujoco9['released'] * 100:.2f} cm at {mujoco9['speed']:.2f} m/s (the sum: "
-        f"{push_cm:.1f} cm at {v:.2f} m/s). After it, the box slides "
-        f"{(mujoco9['furthest'] - mujoco9['released']) * 100:.2f} cm more (the sum: {coast_cm:.1f}), to "
-        f"{mujoco9['furthest'] * 100:.2f} cm" + (
-            ", and rocks: friction acts at its base, below its centre, and a cube with mu = 1 is at the edge of "
-            f"tipping (mu = width / height), so it tips forward (its centre rises {mujoco9['rise'] * 1000:.1f} mm) "
-            f"and falls back, ending {(mujoco9['furthest'] - at9) * 100:.2f} cm behind its furthest, at "
-            f"{at9 * 100:.2f} cm." if mujoco9["rise"] > 0.002 else ", where it stays.")]
+        f"(accepted: {low:.2f} to {high:.2f} cm)."] + sum_beside_mujoco(9.0, sums, mujoco9)
     return Verdict(holds, said, why, hint, solution)
 
 

@@ -161,7 +161,7 @@ def test_exercise_3s_hint_and_solution_are_the_whole_model_and_what_mujoco_did(t
     solution = check(3, "stays_at_4N: yes\nslide_at_9N_cm: 6\n", tmp_path, "--reveal").stdout
     sys.path.insert(0, str(EXERCISES))
     try:
-        from check import slide_phases
+        from drift import slide_phases
     finally:
         sys.path.remove(str(EXERCISES))
     mujoco = slide_phases(9.0)
