@@ -20,10 +20,9 @@ thread_local std::jmp_buf* t_error_target = nullptr;
 thread_local char t_error_message[1024] = "";
 thread_local std::vector<std::string>* t_warnings = nullptr;
 
-// The handlers the process had before ours (the user's own, or none:
-// MuJoCo's default), kept once, as ours are installed.
+// The error handler the process had before ours (the user's own, or none:
+// MuJoCo's default), kept once, as ours is installed.
 void (*g_previous_error)(const char*) = nullptr;
-void (*g_previous_warning)(const char*) = nullptr;
 
 extern "C" void on_mujoco_error(const char* message) {
   std::snprintf(t_error_message, sizeof t_error_message, "%s", message ? message : "");
@@ -44,28 +43,21 @@ extern "C" void on_mujoco_error(const char* message) {
   std::abort();
 }
 
-extern "C" void on_mujoco_warning(const char* message) {
+// Whether a warning MuJoCo raises now is simloop's: inside one of its calls,
+// or while a load listens on this thread.
+bool in_simloop() noexcept { return t_warnings != nullptr || t_error_target != nullptr; }
+
+void on_mujoco_warning(const char* message) {
   // Stepping warnings are read back from mjData::warning (counts, first step,
   // info) by the run loop; nothing is printed or logged here. A load keeps
-  // what comes while it listens.
-  if (t_warnings != nullptr) {
-    try {
-      t_warnings->emplace_back(message ? message : "");
-    } catch (...) {  // out of memory: the warning is lost, nothing else
-    }
-    return;
+  // what comes while it listens. (Warnings outside simloop's calls never come
+  // here: compat::install_warning_route sends them where they would have
+  // gone without simloop.)
+  if (t_warnings == nullptr) return;
+  try {
+    t_warnings->emplace_back(message ? message : "");
+  } catch (...) {  // out of memory: the warning is lost, nothing else
   }
-  if (t_error_target != nullptr) return;  // inside one of simloop's calls
-  // Raised by the process's own MuJoCo code, outside simloop's calls: it goes
-  // where it would have gone without simloop, to the handler that was there
-  // before ours or, with none, MuJoCo's default (MUJOCO_LOG.TXT and stdout).
-  if (g_previous_warning != nullptr) {
-    g_previous_warning(message);
-    return;
-  }
-  const char* const text = message ? message : "";
-  mju_writeLog("WARNING", text);
-  std::printf("WARNING: %s\n\n", text);
 }
 
 }  // namespace
@@ -92,8 +84,7 @@ void set_handlers_once() {
   std::call_once(once, [] {
     if (mju_user_error != on_mujoco_error) g_previous_error = mju_user_error;
     mju_user_error = on_mujoco_error;
-    if (mju_user_warning != on_mujoco_warning) g_previous_warning = mju_user_warning;
-    mju_user_warning = on_mujoco_warning;
+    compat::install_warning_route({in_simloop, on_mujoco_warning});
   });
 }
 }  // namespace
