@@ -41,7 +41,9 @@ options:
   --model FILE      another MJCF scene, at its own timestep unless --timestep
                     is given (default: the chapter's pusher scene). Alone it
                     runs the chapter's loop: a body "box" on a free joint and
-                    an actuator 0 on a slide or hinge joint
+                    an actuator 0 on a slide or hinge joint; a scene with
+                    nothing to push (no body a force can move, no actuator)
+                    runs as it is
   --body BODY       the body (a name or an index) the chapter's shove acts on
                     (default box; on a --model scene, no shove unless given):
                     runs a scenario on any scene (see below)

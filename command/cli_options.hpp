@@ -74,6 +74,16 @@ class UsageError : public std::runtime_error {
 // body and every actuator. The scene's own timestep unless --timestep.
 [[nodiscard]] Scenario scenario_from_flags(const Options& opts, const Model* scene = nullptr);
 
+// True for a run (not a sweep) of a --model alone (no --scenario, --body or
+// --ctrl) whose scene has nothing to push: no body a force can move (every
+// body welded to the world) and no actuator. The chapter's loop cannot run
+// it and --body could name no body; it runs as scenario_from_flags has it
+// (gravity and whatever the scene has, recording what moves), and the
+// summary says so with kNothingToPushLine.
+[[nodiscard]] bool nothing_to_push(const Options& opts, const Model& scene);
+inline constexpr const char* kNothingToPushLine =
+    "nothing could be pushed: the scene has no body a force can move and no actuator; it ran as it is\n";
+
 // Checks what is about to run against its scene, in the words of the flags
 // (UsageError): a scenario's names (with did-you-mean, and what the scene
 // has), or, for the chapter's run, that the scene has the chapter's box and

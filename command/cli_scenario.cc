@@ -52,6 +52,12 @@ Scenario scenario_from_flags(const Options& opts, const Model* scene) {
   return s;
 }
 
+bool nothing_to_push(const Options& opts, const Model& scene) {
+  const mjModel* m = scene.get();
+  return opts.command == Command::kRun && !opts.model_path.empty() && !opts.is_scenario() && m->nv == 0 &&
+         m->nu == 0;
+}
+
 namespace {
 
 // A scenario's bad name, in the words of the flags that gave it: the quick

@@ -73,6 +73,10 @@ int run_into(Host& host, const Options& opts, const Model& model, const Scenario
   host.work("running", [&](RunControl* control) { done.emplace(run(recording.get(), control)); });
   host.outputs_written();
   const auto& [result, files] = *done;
+  // Which scene ran, when it is the user's own: the file, and, for a scene
+  // with nothing to push, that nothing was.
+  if (!opts.model_path.empty() && opts.scenario_path.empty()) print(host, line("model", opts.model_path));
+  if (scenario != nullptr && nothing_to_push(opts, model)) print(host, kNothingToPushLine);
   print(host, summary_text(result));
   print(host, line("metrics", files.metrics));
   print(host, line("trajectory", files.trajectory,
@@ -173,7 +177,11 @@ int run_command(const std::vector<std::string>& args, Host& host) {
   // What runs: a scenario (its names checked now, in the flags' words), or
   // the chapter's loop, which needs the chapter's box and pusher.
   try {
-    if (opts.is_scenario() && !scenario) scenario = scenario_from_flags(opts, &*model);
+    // A --model with nothing to push runs as it is (gravity and whatever it
+    // has), as a scenario with no controls and no shove.
+    if ((opts.is_scenario() || nothing_to_push(opts, *model)) && !scenario) {
+      scenario = scenario_from_flags(opts, &*model);
+    }
     check_run_inputs(opts, *model, scenario ? &*scenario : nullptr);
   } catch (const std::exception& e) {
     return refuse(kExitUsage, e.what());

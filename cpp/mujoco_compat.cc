@@ -70,6 +70,16 @@ mjModel* load_xml(const char* filename, const mjVFS* vfs, char* error, int error
                   "package: SIMLOOP_MUJOCO=pypi scripts/run.sh)",
                   mj_versionString());
   }
+  // A range without its limited flag (the chapter's own SCENE_XML: ctrlrange
+  // without ctrllimited), which current MuJoCo accepts: say the one line
+  // that makes 2.2 take it.
+  if (m == nullptr && std::strstr(error, "autolimits") != nullptr) {
+    const std::size_t used = std::strlen(error);
+    std::snprintf(error + used, static_cast<std::size_t>(error_size) - used,
+                  " (to fix it, put <compiler autolimits=\"true\"/> inside <mujoco>, before <worldbody>: current "
+                  "MuJoCo does this by default, MuJoCo %s does not)",
+                  mj_versionString());
+  }
   return m;
 #endif
 }

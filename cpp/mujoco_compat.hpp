@@ -113,6 +113,18 @@ struct RawArray {
 bool each_model_array(const mjModel* m, const std::function<bool(const RawArray&)>& visit);
 bool each_data_array(const mjModel* m, const mjData* d, const std::function<bool(const RawArray&)>& visit);
 
+// Where MuJoCo's warnings go (mujoco_compat_log.cc): those raised while
+// `in_simloop()` (inside one of simloop's calls, or while a load listens) to
+// `simloop`; every other exactly where MuJoCo would have sent it without
+// simloop (the legacy mju_user_warning, or MuJoCo 4's log handler, that was
+// there before, or MuJoCo's default). Installed once per process; later
+// calls do nothing.
+struct WarningRoute {
+  bool (*in_simloop)() noexcept = nullptr;
+  void (*simloop)(const char* message) = nullptr;
+};
+void install_warning_route(WarningRoute route);
+
 // Loads the plugin libraries that ship beside libmujoco (its plugin/
 // folder), once per process, so scenes that use MuJoCo's first-party
 // plugins (elasticity, sdf, actuator, sensor) load. Nothing on 2.2.

@@ -20,22 +20,39 @@ thread_local std::jmp_buf* t_error_target = nullptr;
 thread_local char t_error_message[1024] = "";
 thread_local std::vector<std::string>* t_warnings = nullptr;
 
+// The error handler the process had before ours (the user's own, or none:
+// MuJoCo's default), kept once, as ours is installed.
+void (*g_previous_error)(const char*) = nullptr;
+
 extern "C" void on_mujoco_error(const char* message) {
   std::snprintf(t_error_message, sizeof t_error_message, "%s", message ? message : "");
   if (t_error_target != nullptr) {
     std::longjmp(*t_error_target, 1);
   }
-  // A MuJoCo call outside call_catching_mujoco_error is a simloop bug. MuJoCo
+  // Outside simloop's calls, a handler of the process's own takes it, as it
+  // would without simloop.
+  if (g_previous_error != nullptr) {
+    g_previous_error(message);
+    return;
+  }
+  // Otherwise a MuJoCo call outside call_catching_mujoco_error is a simloop
+  // bug, or the process's own call with no handler of its own. MuJoCo
   // cannot continue after an error, so stop loudly instead of returning into
   // it -- but never write MUJOCO_LOG.TXT or wait for Enter.
   std::fprintf(stderr, "simloop: MuJoCo error outside a guarded call: %s\n", t_error_message);
   std::abort();
 }
 
-extern "C" void on_mujoco_warning(const char* message) {
+// Whether a warning MuJoCo raises now is simloop's: inside one of its calls,
+// or while a load listens on this thread.
+bool in_simloop() noexcept { return t_warnings != nullptr || t_error_target != nullptr; }
+
+void on_mujoco_warning(const char* message) {
   // Stepping warnings are read back from mjData::warning (counts, first step,
   // info) by the run loop; nothing is printed or logged here. A load keeps
-  // what comes while it listens.
+  // what comes while it listens. (Warnings outside simloop's calls never come
+  // here: compat::install_warning_route sends them where they would have
+  // gone without simloop.)
   if (t_warnings == nullptr) return;
   try {
     t_warnings->emplace_back(message ? message : "");
@@ -65,8 +82,9 @@ namespace {
 void set_handlers_once() {
   static std::once_flag once;
   std::call_once(once, [] {
+    if (mju_user_error != on_mujoco_error) g_previous_error = mju_user_error;
     mju_user_error = on_mujoco_error;
-    mju_user_warning = on_mujoco_warning;
+    compat::install_warning_route({in_simloop, on_mujoco_warning});
   });
 }
 }  // namespace

@@ -4,10 +4,14 @@
 // directory, waits for Enter and exits the process; its warning handler also
 // writes that file. We install process-wide handlers once: warnings go to the
 // CaptureWarnings of the thread, if one is listening (loading a model), and
-// are dropped otherwise (the library reads stepping warnings from mjData's
-// warning counters, which is where they belong per run), and an error jumps back with longjmp to the
-// innermost `call_catching_mujoco_error` on this thread, which then reports
-// failure so the caller can throw a C++ exception from ordinary C++ frames.
+// are dropped otherwise inside simloop's own calls (the library reads stepping
+// warnings from mjData's warning counters, which is where they belong per
+// run); a warning raised outside simloop's calls (the process's own MuJoCo
+// code) goes to the handler installed before ours, or, with none, to MuJoCo's
+// default (MUJOCO_LOG.TXT and stdout), as it would without simloop. An error
+// jumps back with longjmp to the innermost `call_catching_mujoco_error` on
+// this thread, which then reports failure so the caller can throw a C++
+// exception from ordinary C++ frames.
 // No C++ exception ever unwinds through MuJoCo's C frames.
 #pragma once
 

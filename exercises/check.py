@@ -35,6 +35,8 @@ ATTEMPTS_FILE = ".check_attempts.json"
 import json  # noqa: E402  (below the header, which a launcher may rewrite)
 import re  # noqa: E402
 
+from drift import half_of_the_sum, rigid_sum, slide_phases, sum_beside_mujoco  # noqa: E402  (exercise 3's physics)
+
 TIMESTEP = 0.002  # the chapter's, s
 # unit: (dimension, factor to SI; for "steps", to steps)
 UNITS = {
@@ -139,8 +141,11 @@ def check_edge(path: Path) -> Verdict:
     # (an answer the same output calls unstable is never called right).
     holds = low <= predicted < high and (mine is None or mine.stable)
     if holds:
-        why = ["Right. Below the edge the push lifts the box 2 to 4 mm through the contacts' softness, whatever "
-               "the timestep; past it each step extrapolates so far into the contact that the solver's correction "
+        # What the sweep measured up to the edge, not a figure from memory.
+        rises = [(p.peak_box_z - simloop._core.BOX_REST_Z) * 1e3 for p in points[:edge_index + 1]]
+        why = [f"Right. Below the edge the push lifts the box {min(rises):.1f} to {max(rises):.1f} mm through the "
+               "contacts' softness (the sweep's timesteps up to the edge); past it each step extrapolates so far "
+               "into the contact that the solver's correction "
                "throws the box up, and the contacts do positive work (the 'contacts +work' column) that no force "
                "explains. The chapter's 0.002 s has a factor of 2 to spare."]
     elif predicted < high and mine is not None and not mine.stable:
@@ -293,18 +298,6 @@ def check_fix(loop_path: Path) -> bool:
 
 # ---- 3. below and above friction ---------------------------------------------
 
-def slide(force: float) -> float:
-    """Sideways distance (m) of a box at rest pushed with `force` N for 50 steps, then left for 500."""
-    sim = simloop.Sim()
-    sim.step(100)  # settle on the floor, motor off
-    y0 = sim.box_position[1]
-    sim.apply_force([0.0, force, 0.0])
-    sim.step(50)
-    sim.clear_force()
-    sim.step(500)
-    return sim.box_position[1] - y0
-
-
 def check_drift(path: Path) -> Verdict:
     fields = {}
     for line in answer_lines(path):
@@ -319,17 +312,17 @@ def check_drift(path: Path) -> Verdict:
         raise NoAnswer(f"stays_at_4N must be yes or no, got {fields['stays_at_4N']!r}")
     predicted_m, _ = quantity(fields["slide_at_9N_cm"], "slide_at_9N_cm", ("length",), "cm")
     predicted_cm = predicted_m * 100
-    # The question as shipped: slide() above, a box at rest pushed for 0.1 s.
-    at4, at9 = slide(4.0), slide(9.0)
+    # The question as shipped: a box at rest pushed for 0.1 s (drift.py).
+    at4 = slide_phases(4.0)["end"]
+    mujoco9 = slide_phases(9.0)
+    at9 = mujoco9["end"]
     really_stays = abs(at4) < 0.002
     ok_stays = (stays == "yes") == really_stays
     low, high = at9 * 100 / 2, at9 * 100 * 2
     ok_slide = low <= predicted_cm <= high
     said = [f"4 N: you said it {'stays' if stays == 'yes' else 'moves'}.", f"9 N: you said {predicted_cm:g} cm."]
-    friction = 0.5 * 9.81 * 1.0
-    accel = (9.0 - friction) / 0.5
-    v = accel * 0.1
-    push_cm, coast_cm = 0.5 * accel * 0.1**2 * 100, v * v / (2 * 9.81) * 100
+    sums = rigid_sum(9.0)
+    friction = sums["friction"]
     # Why each part holds or not: said beside a right answer, or with the
     # solution. Before that, which part is wrong would give the yes/no half
     # away (a wrong yes is a no), so a first wrong answer hears neither.
@@ -339,7 +332,10 @@ def check_drift(path: Path) -> Verdict:
                      f"only creeps {at4 * 1000:.2f} mm, through the contacts' softness.")
     else:
         parts.append(f"4 N: you expected it to {'stay' if stays == 'yes' else 'move more than 2 mm'}; it did not.")
-    if ok_slide:
+    half = half_of_the_sum(predicted_cm, sums, at9 * 100, ok_slide)
+    if half is not None:
+        parts.append(half)
+    elif ok_slide:
         parts.append(f"9 N: right: MuJoCo slid it {at9 * 100:.2f} cm; you said {predicted_cm:g} cm, within a "
                      "factor of 2.")
     elif predicted_cm > high:
@@ -353,16 +349,13 @@ def check_drift(path: Path) -> Verdict:
         "One or both of your predictions do not hold. Which one stays unsaid for now: for the yes/no part, "
         "that alone would be the answer. The hint covers both."]
     hint = ["4 N: compare it with the largest force friction can hold on a 0.5 kg box (m g mu).",
-            "9 N: only the force above friction accelerates the box during the push: the speed at release is "
-            "(9 N - friction) / m * 0.1 s; then it coasts until friction (a deceleration of mu g) has taken that "
-            "speed: v^2 / (2 mu g)."]
+            "9 N: the slide has two parts; add them. During the push only the force above friction accelerates "
+            "the box (a = (9 N - friction) / m), so by the release, after 0.1 s, it has slid a t^2 / 2 and moves "
+            "at v = a t; then it coasts until friction (a deceleration of mu g) has taken that speed, sliding "
+            "v^2 / (2 mu g) more."]
     solution = ([] if holds else parts) + [
         f"4 N: the box moved {at4 * 1000:.2f} mm (it stays). 9 N: it slid {at9 * 100:.2f} cm "
-        f"(accepted: {low:.2f} to {high:.2f} cm).",
-        f"The sum: 9 N - {friction:.2f} N friction = {9 - friction:.2f} N net on 0.5 kg for 0.1 s gives "
-        f"{v:.2f} m/s and {push_cm:.1f} cm; coasting against friction adds {coast_cm:.1f} cm: "
-        f"{push_cm + coast_cm:.1f} cm in all. MuJoCo's contacts are soft, the box creeps even below friction, "
-        "and the friction cone is approximated, so the real slide differs."]
+        f"(accepted: {low:.2f} to {high:.2f} cm)."] + sum_beside_mujoco(9.0, sums, mujoco9)
     return Verdict(holds, said, why, hint, solution)
 
 

@@ -30,7 +30,8 @@ its scene drawn like any other. What it adds:
   contacts, and the energy audit.
 
 The recording id is derived from what decides the run: seed, steps,
-timestep, shove, generator, record_every, energy audit and the model.
+timestep, shove, generator, record_every, energy audit, the model and the
+MuJoCo it steps on (recording.mujoco_build).
 """
 
 from __future__ import annotations
@@ -44,7 +45,7 @@ from typing import Any, Dict, Mapping, Optional, Sequence, Tuple, Union
 
 from . import _core
 from ._checks import ModelLike, _pusher_scene, load_model
-from .recording import Recording, _eye, _layout, _rotate_into_body
+from .recording import Recording, _eye, _layout, _rotate_into_body, mujoco_build
 
 # rerun accepts these application ids as they are (no "/" or ".").
 APPLICATION_ID = "simloop_ch0_1_sim_loop"
@@ -99,6 +100,7 @@ def config_parameters(config: _core.RunConfig, model: ModelLike = None) -> dict:
         "record_every": config.record_every,
         "audit_energy": config.audit_energy,
         "model": _model_key(model),
+        "mujoco": mujoco_build(),
     }
 
 

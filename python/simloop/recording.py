@@ -35,8 +35,10 @@ its poses from its trajectory, the shove arrow, its series and panels).
 The recording id is derived from what decides the run (the chapter's: seed,
 steps, timestep, shove, generator, record_every, energy audit and the model;
 a scenario's: the command line and the bytes of its scenario and scene
-files), so the same run always gets the same id and two different runs open
-as two recordings instead of merging into one. rerun does not let us make
+files) and from the MuJoCo it steps on (mujoco_build: version and build), so
+the same run on one build always gets the same id and two different runs, or
+the same run on the two builds, open as two recordings instead of merging
+into one. rerun does not let us make
 the bytes repeat: it stamps every chunk and row with a time-based id and
 gives the embedded blueprint a random store id, so two identical runs give
 two files with the same data (`rerun rrd compare --unordered a.rrd b.rrd`
@@ -64,6 +66,7 @@ from pathlib import Path
 from typing import Any, Dict, Iterator, List, Mapping, Optional, Sequence, Tuple, Union
 
 from . import _core
+from ._build import MUJOCO_BUILD
 
 # rerun accepts these application ids as they are (no "/" or ".").
 SCENARIO_APPLICATION_ID = "simloop_scenario"
@@ -76,9 +79,17 @@ PLANE_MARGIN = 0.5  # how far a plane reaches beyond where the bodies start
 
 
 
+def mujoco_build() -> str:
+    """The MuJoCo a run steps on, in its recording id: the same run on another
+    MuJoCo (2.2.2 and the PyPI build's 4.0.0) moves otherwise, so it is
+    another recording."""
+    return f"{_core.MUJOCO_VERSION} ({MUJOCO_BUILD})"
+
+
 def scenario_recording_id(run_key: str) -> str:
-    """A scenario run's recording id, from what decides the run (the command's _run_key)."""
-    return str(uuid.uuid5(uuid.NAMESPACE_URL, "simloop-scenario:" + run_key))
+    """A scenario run's recording id, from what decides the run (the command's
+    _run_key) and the MuJoCo it steps on."""
+    return str(uuid.uuid5(uuid.NAMESPACE_URL, "simloop-scenario:" + mujoco_build() + "\0" + run_key))
 
 
 def _rotate_into_body(quat_wxyz, vectors):

@@ -144,29 +144,33 @@ TEST(DecisionStep, LeavesABadStateAndACallbackToTheWholeStep) {
   const simloop::Recorder recorder(m, resolved, simloop::build_schedule(resolved, scenario, m->opt.timestep, *draws));
   simloop::Data data(scene);
   mjData* d = data.get();
-  mj_forward(m, d);
+  // Stepped inside simloop's guard, as the library steps it: a warning
+  // raised outside simloop's calls would go to MuJoCo's own handler (and
+  // MUJOCO_LOG.TXT).
+  const auto guarded = [](auto&& f) { simloop::detail::mujoco_call(f); };
+  guarded([&] { mj_forward(m, d); });
   simloop::detail::DecisionStep decision(m, recorder);
-  decision.observe(m, d);
+  guarded([&] { decision.observe(m, d); });
   EXPECT_TRUE(decision.begun());
   // A callback would see the ctrl before the decision. What it warns, the
   // step counts once (the whole forward pass and the step both run it).
   mjcb_passive = [](const mjModel*, mjData* data) { mj_warning(data, mjWARN_CONTACTFULL, 1); };
   d->warning[mjWARN_CONTACTFULL].number = 0;
-  decision.observe(m, d);
+  guarded([&] { decision.observe(m, d); });
   EXPECT_FALSE(decision.begun());
-  decision.step(m, d);
+  guarded([&] { decision.step(m, d); });
   mjcb_passive = nullptr;
   EXPECT_EQ(d->warning[mjWARN_CONTACTFULL].number, 1) << "the callback's warning, counted once, as mj_step alone";
   // mj_step1 would reset a bad velocity at the observation: mj_step resets it
   // at the step, as without a decision.
   d->qvel[0] = std::numeric_limits<double>::quiet_NaN();
-  decision.observe(m, d);
+  guarded([&] { decision.observe(m, d); });
   EXPECT_FALSE(decision.begun());
   EXPECT_TRUE(std::isnan(d->qvel[0]));
-  decision.step(m, d);
+  guarded([&] { decision.step(m, d); });
   EXPECT_EQ(d->warning[mjWARN_BADQVEL].number, 1) << "counted once, by the step, as mj_step alone counts it";
   EXPECT_FALSE(std::isnan(d->qvel[0]));
-  decision.observe(m, d);
+  guarded([&] { decision.observe(m, d); });
   EXPECT_TRUE(decision.begun());
 }
 

@@ -176,3 +176,24 @@ def test_command_help_and_version(tmp_path):
     version = run_command(["--version"], tmp_path)
     assert version.stdout == f"simloop {simloop.__version__} ({simloop.MUJOCO_VERSION})\n"
     assert not Path(tmp_path / "outputs").exists()
+
+
+@pytest.mark.parametrize("python", [True, False], ids=["python-m-simloop", "sim_loop"])
+def test_the_chapters_own_scene_xml_says_how_to_fix_it(tmp_path, python):
+    # The chapter's SCENE_XML exactly (simloop's copy adds the compiler line):
+    # MuJoCo 2.2 refuses its ctrlrange without ctrllimited; the message says
+    # the line that fixes it. Current MuJoCo takes it as it is.
+    from expected import expected
+
+    chapter = simloop._core.PUSHER_SCENE_XML.replace('  <compiler autolimits="true"/>\n', "")
+    assert "autolimits" not in chapter
+    (tmp_path / "chapter.xml").write_text(chapter)
+    proc = run_command(["--model", "chapter.xml", "--smoke", "--no-rerun", "--out", "o"], tmp_path, python)
+    if not expected("errors.autolimits_needed"):
+        assert proc.returncode == 0, proc.stderr
+        return
+    assert proc.returncode == 2
+    assert "--model: chapter.xml: Error: actuator has `ctrlrange` but not `ctrllimited`" in proc.stderr, proc.stderr
+    assert ('(to fix it, put <compiler autolimits="true"/> inside <mujoco>, before <worldbody>: current MuJoCo does '
+            f"this by default, {simloop.MUJOCO_VERSION} does not)\n") in proc.stderr, proc.stderr
+    assert proc.stderr.count("\n") == 1

@@ -1,13 +1,17 @@
 """Both MuJoCos from one tree: the pin, the build's MuJoCo, scenes nobody here
 wrote, plugins, sleeping bodies, and a mujoco.MjModel handed to simloop.
 
-Checks that only the PyPI build can pass (plugins, sleep, mujoco.MjModel)
-skip on Debian's 2.2.2, saying so; the rest run on both builds.
+Checks that only the PyPI build can pass (plugins, sleep, mujoco.MjModel, a
+user's own mujoco code beside simloop) skip on Debian's 2.2.2, saying so; the
+rest run on both builds.
 """
 
 from __future__ import annotations
 
 import importlib.util
+import re
+import subprocess
+import sys
 import tomllib
 from pathlib import Path
 
@@ -151,3 +155,41 @@ def test_a_mujoco_mjmodel_from_another_mujoco_is_one_line():
     with pytest.raises(TypeError, match="cannot be run by this simloop") as error:
         simloop.Sim(mujoco.MjModel.from_xml_string("<mujoco/>"))
     assert "\n" not in str(error.value)
+
+
+# A user's own mujoco code, in a process that has (or has not) imported
+# simloop and stepped a Sim: a model that warns (a NaN in qpos).
+USERS_OWN_WARNING = """
+import sys
+import mujoco
+if sys.argv[1] == "with-simloop":
+    import simloop
+    simloop.Sim().step(10)
+model = mujoco.MjModel.from_xml_string("<mujoco><worldbody><body><freejoint/><geom size='0.1'/></body></worldbody></mujoco>")
+data = mujoco.MjData(model)
+data.qpos[0] = float("nan")
+mujoco.mj_step(model, data)
+"""
+
+
+@pypi_only
+def test_a_users_own_mujoco_warning_reaches_the_handler_that_was_there_before_simloop(tmp_path):
+    # No handler of the user's own: MuJoCo's default, which prints the warning
+    # (MuJoCo 4: to stderr) and appends it to MUJOCO_LOG.TXT. simloop's Sim
+    # keeps its own warnings (they are on its report), and must not take the
+    # user's: the process prints and logs what it would without simloop.
+    seen = {}
+    for mode in ("without-simloop", "with-simloop"):
+        folder = tmp_path / mode
+        folder.mkdir()
+        proc = subprocess.run([sys.executable, "-c", USERS_OWN_WARNING, mode], cwd=folder, capture_output=True,
+                              text=True, timeout=120)
+        assert proc.returncode == 0, proc.stderr
+        log = folder / "MUJOCO_LOG.TXT"
+        # The log but its timestamps (asctime's or strftime's "Fri Nov 27 15:31:07 2026").
+        seen[mode] = [proc.stdout, proc.stderr, re.sub(r"\w{3} \w{3} [ \d]\d \d\d:\d\d:\d\d \d{4}", "<time>",
+                                                       log.read_text() if log.exists() else "")]
+    printed, logged = seen["without-simloop"][0] + seen["without-simloop"][1], seen["without-simloop"][2]
+    assert "WARNING: Nan, Inf or huge value in QPOS at DOF 0" in printed, seen
+    assert "Nan, Inf or huge value in QPOS at DOF 0" in logged, seen
+    assert seen["with-simloop"] == seen["without-simloop"]

@@ -229,6 +229,26 @@ def test_recording_id_sees_every_parameter_and_the_model(tmp_path):
     assert recording.recording_id(base, scene2) != recording.recording_id(base, scene)
 
 
+def test_the_recording_id_sees_the_mujoco_build(monkeypatch):
+    # The same run on Debian's 2.2.2 and on the PyPI build's 4.0.0 moves
+    # otherwise: two recordings, not one merged ("one recording per run").
+    import simloop.recording as recorder
+
+    config = simloop.run(steps=20).config
+    ids = {}
+    for version, build in (("MuJoCo 2.2.2", "system"), ("MuJoCo 4.0.0", "pypi")):
+        monkeypatch.setattr(simloop._core, "MUJOCO_VERSION", version)
+        monkeypatch.setattr(recorder, "MUJOCO_BUILD", build)
+        assert recording.config_parameters(config)["mujoco"] == f"{version} ({build})"
+        ids[version] = (recording.config_recording_id(config), recording.config_recording_id(config),
+                        recorder.scenario_recording_id("key"), recorder.scenario_recording_id("key"))
+    for same_build in ids.values():  # the same run on one build: one id
+        assert same_build[0] == same_build[1] and same_build[2] == same_build[3]
+    two_builds = list(ids.values())
+    assert two_builds[0][0] != two_builds[1][0]  # the chapter's run
+    assert two_builds[0][2] != two_builds[1][2]  # a scenario's
+
+
 def test_the_blueprint_opens_the_3d_view_beside_the_time_series(tmp_path):
     rrd = record_with_command(tmp_path, "bp", ["--smoke"])
     reader = rerun.chunk.RrdReader(str(rrd))

@@ -1,8 +1,8 @@
 """Any scene from the quick flags, in both commands: bodies and actuators by
 index as well as by name (a scene may leave its bodies unnamed, as MuJoCo's
-tendon_arm/arm26.xml does), --ctrl alone with no shove, a MuJoCo error while
-stepping quoting the timestep that ran, and MuJoCo's load-time warnings on
-the report."""
+tendon_arm/arm26.xml does), --ctrl alone with no shove, a scene with nothing
+to push, a MuJoCo error while stepping quoting the timestep that ran, and
+MuJoCo's load-time warnings on the report."""
 
 import pytest
 
@@ -104,3 +104,46 @@ def test_the_compilers_load_time_warning_is_on_the_report(tmp_path, python):
     check_load_warning(tmp_path, python, full, warning)
     plain = run_command(["--smoke", "--no-rerun", "--out", "p"], tmp_path, python)
     assert "while loading" not in plain.stdout
+
+
+# Nothing a force can move and no actuator: static geoms only (dm_control's
+# arena), or bodies welded to the world (MuJoCo's shared scene.xml files).
+ONLY_GEOMS = """<mujoco model="arena">
+  <worldbody><light pos="0 0 3"/><geom name="floor" type="plane" size="2 2 0.1"/>
+    <geom name="wall" type="box" pos="1 0 0.2" size="0.05 1 0.2"/></worldbody>
+</mujoco>
+"""
+WELDED = """<mujoco model="welded">
+  <worldbody><geom type="plane" size="2 2 0.1"/>
+    <body name="table" pos="0 0 0.4"><geom type="box" size="0.5 0.5 0.02"/>
+      <body name="lamp" pos="0 0 0.1"><geom type="sphere" size="0.05"/></body></body>
+    <body name="target" mocap="true" pos="0.2 0 0.5"><geom type="sphere" size="0.02" contype="0" conaffinity="0"/></body>
+  </worldbody>
+</mujoco>
+"""
+
+
+@BOTH
+@pytest.mark.parametrize("scene", [ONLY_GEOMS, WELDED], ids=["only-geoms", "welded"])
+def test_a_scene_with_nothing_to_push_runs_and_says_so(tmp_path, python, scene):
+    name = write(tmp_path, "still.xml", scene)
+    proc = run_command(["--model", name, "--steps", "50", "--out", "o"], tmp_path, python)  # recording, in Python
+    assert proc.returncode == 0, proc.stderr
+    lines = proc.stdout.splitlines()
+    assert "model: still.xml" in lines
+    assert ("nothing could be pushed: the scene has no body a force can move and no actuator; it ran as it is"
+            in lines), proc.stdout
+    rows = (tmp_path / "o" / "trajectory.csv").read_text().splitlines()
+    assert len(rows) == 1 + 51 and rows[0].startswith("step,time"), rows[:2]  # a header, then steps 0 to 50
+    assert (tmp_path / "o" / "sim_loop.rrd").exists() == python
+
+
+@BOTH
+def test_the_summary_names_the_model_file(tmp_path, python):
+    chapter = write(tmp_path, "chapter.xml", simloop._core.PUSHER_SCENE_XML)
+    proc = run_command(["--model", chapter, "--smoke", "--no-rerun", "--out", "o"], tmp_path, python)
+    assert proc.returncode == 0, proc.stderr
+    assert "model: chapter.xml" in proc.stdout.splitlines()
+    assert "nothing could be pushed" not in proc.stdout
+    plain = run_command(["--smoke", "--no-rerun", "--out", "p"], tmp_path, python)
+    assert "model:" not in plain.stdout
