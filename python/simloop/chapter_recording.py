@@ -15,9 +15,12 @@ its scene drawn like any other. What it adds:
   other moving bodies are not in the trajectory.
 - world/objects/box/shove: an Arrows3D (amber, 8 mm thick), the shove scaled
   by 0.02 while it acts and zero-length otherwise. A child of the box, so drawn in the box's frame:
-  logged from the box's origin, with the world-frame shove rotated into that
-  frame (the chapter passes world coordinates there, which would put the
-  arrow at twice the box's position).
+  logged from SHOVE_ARROW_HEIGHT above the box's centre (3 cm above its top
+  face, where the camera, above and in front, sees the whole arrow for either
+  sign: from the centre a +y arrow went away behind the box and the pusher,
+  and half of a -y one was inside the box), with the world-frame shove and
+  offset rotated into that frame (the chapter passes world coordinates there,
+  which would put the arrow at twice the box's position).
 - its series: plots/box_x, box_y, box_z, pusher_x, ncon, plots/box_speed, and
   with the energy audit plots/<column> for each of its columns, in joules
   (not every column: that would more than double the file).
@@ -52,6 +55,7 @@ APPLICATION_ID = "simloop_ch0_1_sim_loop"
 # Every chapter recording id lives in this namespace (uuid5 of the run's parameters).
 RECORDING_NAMESPACE = uuid.UUID("5b1e6c2e-9d7a-4f0e-8a43-0c6f3f1d2a10")
 SHOVE_ARROW_SCALE = 0.02
+SHOVE_ARROW_HEIGHT = 0.08  # m above the box's centre, in the world's z
 # The arrow in a colour of its own (not the box's red), thick enough to see.
 SHOVE_ARROW_COLOR = (255, 190, 0)
 SHOVE_ARROW_RADIUS = 0.008  # m
@@ -201,9 +205,11 @@ class ChapterRecording(Recording):
         self._send_series("box_speed", times, np.sqrt(cols["box_vx"] ** 2 + cols["box_vy"] ** 2 + cols["box_vz"] ** 2))
         # The final row has no step after it, so no shove (its input cells are NaN).
         shove = SHOVE_ARROW_SCALE * np.nan_to_num(np.column_stack([cols["shove_x"], cols["shove_y"], cols["shove_z"]]))
+        quat = _box_quat(cols)
+        above = np.tile([0.0, 0.0, SHOVE_ARROW_HEIGHT], (len(shove), 1))
         self._rec.send_columns(f"{self._entity('box')}/shove", indexes=times,
-                               columns=self._rr.Arrows3D.columns(origins=np.zeros_like(shove),
-                                                                 vectors=_rotate_into_body(_box_quat(cols), shove)))
+                               columns=self._rr.Arrows3D.columns(origins=_rotate_into_body(quat, above),
+                                                                 vectors=_rotate_into_body(quat, shove)))
         z = cols["box_z"][np.isfinite(cols["box_z"])]
         if z.size:
             low, high = float(z.min()), float(z.max())

@@ -43,10 +43,16 @@ class _Apng:
     suffix = ".png"
 
     def __init__(self, width: int, height: int) -> None:
+        from concurrent.futures import ThreadPoolExecutor
+
         self.width, self.height = width, height
         self.spool: BinaryIO = tempfile.TemporaryFile()
         self.frames = 0
         self.sequence = 0  # APNG numbers its fcTL and fdAT chunks in one sequence
+        # zlib releases the GIL: a frame compresses on this thread while the next is drawn (the same bytes, in
+        # order: at most one frame waits, so memory stays two frames).
+        self.compressor = ThreadPoolExecutor(max_workers=1, thread_name_prefix="simloop-apng")
+        self.pending: Any = None  # (future of the compressed rows, fcTL bytes) of the frame being compressed
 
     def add(self, picture: Any, delay: Fraction) -> None:
         import numpy as np
@@ -57,10 +63,18 @@ class _Apng:
         up[0] = picture[0]
         np.subtract(picture[1:], picture[:-1], out=up[1:])
         rows = np.concatenate([np.full((self.height, 1), 2, np.uint8), up.reshape(self.height, -1)], axis=1)
-        data = zlib.compress(rows.tobytes(), 6)
-        control = struct.pack(">IIIIIHHBB", self.sequence, self.width, self.height, 0, 0,
-                              delay.numerator, delay.denominator, 0, 0)
-        self.spool.write(_chunk(b"fcTL", control))
+        control = struct.pack(">IIIIIHHBB", 0, self.width, self.height, 0, 0, delay.numerator, delay.denominator, 0, 0)
+        self._spool_pending()
+        self.pending = (self.compressor.submit(zlib.compress, rows.tobytes(), 6), control)
+
+    def _spool_pending(self) -> None:
+        """The frame compressed last, into the spool file, numbered in its place."""
+        if self.pending is None:
+            return
+        future, control = self.pending
+        self.pending = None
+        data = future.result()
+        self.spool.write(_chunk(b"fcTL", struct.pack(">I", self.sequence) + control[4:]))
         self.sequence += 1
         if self.frames == 0:
             self.spool.write(_chunk(b"IDAT", data))  # the first frame is the still image too
@@ -70,6 +84,7 @@ class _Apng:
         self.frames += 1
 
     def write(self, out: BinaryIO) -> None:
+        self._spool_pending()
         out.write(b"\x89PNG\r\n\x1a\n")
         out.write(_chunk(b"IHDR", struct.pack(">IIBBBBB", self.width, self.height, 8, 2, 0, 0, 0)))
         out.write(_chunk(b"acTL", struct.pack(">II", self.frames, 0)))  # 0: play forever
@@ -78,6 +93,7 @@ class _Apng:
         out.write(_chunk(b"IEND", b""))
 
     def close(self) -> None:
+        self.compressor.shutdown(wait=True, cancel_futures=True)
         self.spool.close()
 
 

@@ -217,3 +217,29 @@ def test_a_write_is_never_through_a_link_even_one_planted_after_the_look(tmp_pat
         with pytest.raises(FileExistsError):
             parquet_batch._write_atomically(str(target), lambda out: out.write(b"{}"))
     assert victim.read_text() == "the user's file" and not target.exists()
+
+
+UNDER_A_GIGABYTE = [  # (file to write or None, its text, the command's arguments, words of its one line)
+    ("dd.toml", DEEP_HEADER, ["--scenario", "dd.toml"], "more than 64 dotted parts"),
+    (None, "", ["--scenario", "/dev/zero"], "is a device, a pipe or a socket"),
+    ("z.toml", 'steps = 10\n[[control]]\nactuator = "push_motor"\ncsv = "/dev/zero"\n', ["--scenario", "z.toml"],
+     "is a device, a pipe or a socket"),
+    ("big.xml", '<mujoco><asset><hfield name="h" nrow="40000" ncol="40000" size="1 1 1 1"/></asset>'
+                '<worldbody><geom type="hfield" hfield="h"/></worldbody></mujoco>\n', ["--model", "big.xml"], "memory"),
+]
+
+
+@pytest.mark.parametrize("python", [False, True], ids=["sim_loop", "python"])
+@pytest.mark.parametrize("name, text, args, words", UNDER_A_GIGABYTE, ids=["deep-key", "dev-zero", "csv", "hfield"])
+def test_under_ulimit_v_one_gigabyte_each_input_ends_in_one_line(tmp_path, python, name, text, args, words):
+    if name:
+        (tmp_path / name).write_text(text)
+    cmd = [sys.executable, "-m", "simloop"] if python else [str(sim_loop_exe())]
+    started = time.monotonic()
+    done = subprocess.run([*cmd, *args, "--out", "out"], cwd=tmp_path, capture_output=True, text=True,
+                          stdin=subprocess.DEVNULL, timeout=120,
+                          preexec_fn=lambda: resource.setrlimit(resource.RLIMIT_AS, (10**9, 10**9)))
+    assert time.monotonic() - started < 60
+    assert done.returncode in (1, 2), done.stderr[-2000:]
+    assert words in one_error_line(done.stderr).lower(), done.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ([name] if name else [])

@@ -151,7 +151,12 @@ def test_the_arrow_shows_the_shove_exactly_while_it_acts(recorded):
     assert np.all(lengths[~inside] == 0.0)
     # In the box's frame (the entity is the box's child), 0.02 x the shove.
     np.testing.assert_allclose(lengths[inside], 0.02 * result.shove.newtons, rtol=1e-6)
-    assert np.all(origins == 0.0)
+    # From 8 cm above the box's centre in the world (3 cm above its top face, in view for either sign), so in
+    # the box's frame that offset rotated into it; the arrow's direction is the world's shove.
+    quat = np.column_stack([result.column(c) for c in ("box_qw", "box_qx", "box_qy", "box_qz")])
+    np.testing.assert_allclose(origins, recording._rotate_into_body(quat, np.tile([0.0, 0.0, 0.08], (2001, 1))), atol=1e-12)
+    assert np.all(np.abs(origins[:, 2] - 0.08) < 1e-3)  # the box stays about flat in the default run
+    assert np.all(np.abs(vectors[inside][:, 1]) > 0.9 * lengths[inside])  # sideways, as the shove
 
 
 def test_a_model_of_the_chapters_layout_is_drawn_as_it_is(tmp_path):
