@@ -30,7 +30,9 @@ its scene drawn like any other. What it adds:
 - its panels, stacked beside the 3D view: box z first, on a fixed 0.04 to
   0.12 m axis widened only if the box leaves it (the chapter's diagnosis for
   Break It), box y, the pusher's and the box's x, the box's speed, the
-  contacts, and the energy audit.
+  contacts, and the energy audit; their time axes from 0 to the run's end,
+  an axis at least MIN_AXIS_SPAN wide, a legend (top left) only where a
+  panel holds more than one series.
 
 The recording id is derived from what decides the run: seed, steps,
 timestep, shove, generator, record_every, energy audit, the model and the
@@ -155,7 +157,8 @@ class ChapterRecording(Recording):
         self._energy = config.audit_energy
         self._track = _core.pusher_track(model)
         self._pusher, self._pusher_quat = _pusher_body(model)
-        self._z_range: Optional[Tuple[float, float]] = None  # the box z's, for its plot's axis
+        self._ranges: Dict[str, Tuple[float, float]] = {}  # each plotted series' (low, high), for the axes
+        self._time_end = 0.0  # the last row's sim time: the plots' time axes run from 0 to it
         super().__init__(model, target, config_recording_id(config, model_key), APPLICATION_ID,
                          bodies=["box", self._pusher])
         try:
@@ -202,7 +205,8 @@ class ChapterRecording(Recording):
     def _send_more(self, times: list, cols: Mapping[str, Any]) -> None:
         import numpy as np
 
-        self._send_series("box_speed", times, np.sqrt(cols["box_vx"] ** 2 + cols["box_vy"] ** 2 + cols["box_vz"] ** 2))
+        speed = np.sqrt(cols["box_vx"] ** 2 + cols["box_vy"] ** 2 + cols["box_vz"] ** 2)
+        self._send_series("box_speed", times, speed)
         # The final row has no step after it, so no shove (its input cells are NaN).
         shove = SHOVE_ARROW_SCALE * np.nan_to_num(np.column_stack([cols["shove_x"], cols["shove_y"], cols["shove_z"]]))
         quat = _box_quat(cols)
@@ -210,23 +214,32 @@ class ChapterRecording(Recording):
         self._rec.send_columns(f"{self._entity('box')}/shove", indexes=times,
                                columns=self._rr.Arrows3D.columns(origins=_rotate_into_body(quat, above),
                                                                  vectors=_rotate_into_body(quat, shove)))
-        z = cols["box_z"][np.isfinite(cols["box_z"])]
-        if z.size:
-            low, high = float(z.min()), float(z.max())
-            self._z_range = (low, high) if self._z_range is None else (min(self._z_range[0], low),
-                                                                       max(self._z_range[1], high))
+        for name, values in [("box_speed", speed), *((c, cols[c]) for c in PLOTTED)]:
+            finite = values[np.isfinite(values)]
+            if finite.size:
+                low, high = float(finite.min()), float(finite.max())
+                seen = self._ranges.get(name)
+                self._ranges[name] = (low, high) if seen is None else (min(seen[0], low), max(seen[1], high))
+        self._time_end = max(self._time_end, float(np.nanmax(cols["time"])))
 
     def _blueprint(self) -> Any:
         """The chapter's panels, stacked: box z first (its diagnosis for Break It)."""
         import rerun.blueprint as rrb
 
+        # Time from 0 to the run's end (rerun opened Break It's on empty negative time); a legend only where a
+        # panel has more than one series (its name says the rest), at the top left, where a run's x and energy
+        # are not yet (at the bottom right it covered the z panel's 0.05 m rest line).
+        time_axis = rrb.TimeAxis(view_range=rrb.TimeRange(start=rrb.TimeRangeBoundary.absolute(seconds=0.0),
+                                                           end=rrb.TimeRangeBoundary.absolute(seconds=self._time_end)))
+
         def panel(name, columns, axis_range=None):
-            axis = rrb.ScalarAxis(range=axis_range) if axis_range else None
+            axis_range = axis_range or value_axis_range([self._ranges[c] for c in columns if c in self._ranges])
             return rrb.TimeSeriesView(name=name, origin="/plots", contents=["/plots/" + c for c in columns],
-                                      axis_y=axis, plot_legend=rrb.PlotLegend(visible=True))
+                                      axis_x=time_axis, axis_y=rrb.ScalarAxis(range=axis_range) if axis_range else None,
+                                      plot_legend=rrb.PlotLegend(corner=rrb.Corner2D.LeftTop, visible=len(columns) > 1))
 
         plots = [
-            panel("box z (m): height of its centre", ["box_z"], z_axis_range(self._z_range)),
+            panel("box z (m): height of its centre", ["box_z"], z_axis_range(self._ranges.get("box_z"))),
             panel("box y (m): sideways", ["box_y"]),
             panel("x (m): the pusher and the box", ["box_x", "pusher_x"]),
             panel("box speed (m/s)", ["box_speed"]),
@@ -247,6 +260,25 @@ def _box_quat(cols: Mapping[str, Any]) -> Any:
     import numpy as np
 
     return np.column_stack([cols["box_qw"], cols["box_qx"], cols["box_qy"], cols["box_qz"]])
+
+
+# The series whose ranges set their panels' axes (box_speed is computed, not a column).
+PLOTTED = ("box_z", "box_y", "box_x", "pusher_x", "ncon")
+# The narrowest a value axis shows: below it rerun labelled a still box's y
+# (1e-15 m of rounding on MuJoCo 4) "-0.000 000 000 000 002".
+MIN_AXIS_SPAN = 0.01
+
+
+def value_axis_range(ranges: Sequence[Tuple[float, float]]) -> Optional[Tuple[float, float]]:
+    """None (rerun fits the data) unless the series together span less than MIN_AXIS_SPAN: then that span,
+    centred on them."""
+    if not ranges:
+        return None
+    low, high = min(r[0] for r in ranges), max(r[1] for r in ranges)
+    if high - low >= MIN_AXIS_SPAN:
+        return None
+    middle = (low + high) / 2
+    return (middle - MIN_AXIS_SPAN / 2, middle + MIN_AXIS_SPAN / 2)
 
 
 def z_axis_range(z_range: Optional[Tuple[float, float]]) -> Tuple[float, float]:

@@ -284,3 +284,24 @@ def test_no_rerun_writes_no_recording(tmp_path):
     assert proc.returncode == 0, proc.stderr
     assert not (tmp_path / "o" / "sim_loop.rrd").exists()
     assert "recording" not in proc.stdout
+
+
+def test_the_plots_open_on_the_run_legends_off_the_data_and_no_axis_narrower_than_a_centimetre(tmp_path):
+    # Break It opened on empty negative time (to -20 s); the legends sat on the traces (the z panel's on its
+    # 0.05 m rest line); on MuJoCo 4 a still box's y axis spanned 1e-15 m ("-0.000 000 000 000 002").
+    rrd = record_with_command(tmp_path, "bi", ["--timestep", "0.05", "--no-perturb"])
+    [store] = rerun.chunk.RrdReader(str(rrd)).blueprints()
+    fields: dict = {}
+    for (entity, _), columns in load_chunks(rrd, store=store).items():
+        for name, value in columns.items():
+            fields.setdefault(name.split(":")[-1], []).append((entity.split("/")[2], value[0][0]))
+    views_with_plots = {view for view, _ in fields["view_range"]}
+    assert len(views_with_plots) == 5
+    assert all(r == {"start": 0, "end": 100 * 10**9 - 1} or r == {"start": 0, "end": 100 * 10**9}
+               for _, r in fields["view_range"]), fields["view_range"]  # 2000 steps of 0.05 s: 0 to 100 s
+    legends = dict(fields["visible"])
+    assert sorted(legends.values()) == [False, False, False, False, True]  # only the x panel has two series
+    assert all(corner == 1 for _, corner in fields["corner"])  # the top left
+    assert recording.value_axis_range([(-1e-15, 2e-15)]) == pytest.approx((-0.005 + 5e-16, 0.005 + 5e-16))
+    assert recording.value_axis_range([(0.0, 0.2), (0.1, 0.3)]) is None  # wide enough: rerun fits the data
+    assert recording.value_axis_range([]) is None
