@@ -16,6 +16,7 @@
 #include <toml++/toml.h>
 
 #include "simloop/errors.hpp"
+#include "csv_schedule.hpp"
 #include "text_input.hpp"
 #include "simloop/scene_params.hpp"
 #include "simloop/number_format.hpp"
@@ -208,68 +209,6 @@ std::optional<When> read_when(const TableReader& t, std::string_view seconds_key
   return when;
 }
 
-// One value per step from a CSV file: a header row, then a row per step
-// (step 0 first). The column is `column`, or the only one. Only the steps
-// where the value changes become schedule entries; after the last row the
-// last value holds.
-std::vector<std::pair<When, double>> read_csv_schedule(const std::filesystem::path& file, const std::string& column,
-                                                       const std::string& where) {
-  try {
-    detail::check_regular_file(file, "a CSV file");
-  } catch (const Error& e) {
-    throw InvalidArgument(where + ": " + e.what());
-  }
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw IoError(where + ": " + file.string() + ": cannot open (" + std::strerror(errno) + ")");
-  const std::string source = where + ": " + file.string();
-  std::int64_t line_number = 1;
-  const auto next_line = [&](std::string& line) {
-    return detail::read_line(in, line, detail::kMaxCsvLineBytes, source, line_number++);
-  };
-  const auto cells = [](const std::string& line) {
-    std::vector<std::string> out(1);
-    for (char c : line) {
-      if (c == ',') {
-        out.emplace_back();
-      } else if (c != '\r') {
-        out.back() += c;
-      }
-    }
-    return out;
-  };
-  std::string line;
-  if (!next_line(line)) throw InvalidArgument(where + ": " + file.string() + ": empty (it needs a header row)");
-  const std::vector<std::string> header = cells(line);
-  std::size_t index = 0;
-  if (!column.empty()) {
-    const auto it = std::find(header.begin(), header.end(), column);
-    if (it == header.end()) {
-      std::string names;
-      for (const std::string& h : header) names += (names.empty() ? "" : ", ") + h;
-      throw InvalidArgument(where + ": " + file.string() + " has no column '" + column + "'; its columns: " + names);
-    }
-    index = static_cast<std::size_t>(it - header.begin());
-  } else if (header.size() != 1) {
-    throw InvalidArgument(where + ": " + file.string() + " has " + std::to_string(header.size()) +
-                          " columns: name the one to use (column = \"...\")");
-  }
-  std::vector<std::pair<When, double>> schedule;
-  std::int64_t step = 0;
-  for (; next_line(line); ++step) {
-    const std::vector<std::string> row = cells(line);
-    const std::string cell = index < row.size() ? row[index] : std::string();
-    char* end = nullptr;
-    const double value = std::strtod(cell.c_str(), &end);
-    if (cell.empty() || end != cell.c_str() + cell.size() || !std::isfinite(value) || std::isspace(static_cast<unsigned char>(cell[0]))) {
-      throw InvalidArgument(where + ": " + file.string() + ":" + std::to_string(line_number - 1) +
-                            ": expected a finite number, got " + quoted_value(cell, 40));
-    }
-    if (schedule.empty() || value != schedule.back().second) schedule.emplace_back(When::steps(step), value);
-  }
-  if (schedule.empty()) throw InvalidArgument(where + ": " + file.string() + ": no rows after the header");
-  return schedule;
-}
-
 ControlSpec read_control(const TableReader& t, const std::filesystem::path& base) {
   t.allow_only({"actuator", "value", "schedule", "schedule_steps", "csv", "column"});
   ControlSpec c;
@@ -287,7 +226,7 @@ ControlSpec read_control(const TableReader& t, const std::filesystem::path& base
   if (const auto file = t.string("csv")) {
     const std::filesystem::path p(*file);
     c.csv = p.is_absolute() || base.empty() ? p : base / p;
-    c.schedule = read_csv_schedule(c.csv, t.string("column").value_or(""), t.where_text("csv"));
+    c.schedule = detail::read_csv_schedule(c.csv, t.string("column").value_or(""), t.where_text("csv"));
   }
   if (const auto v = t.number("value")) c.schedule.emplace_back(When::steps(0), *v);
   if (t.has("schedule")) {

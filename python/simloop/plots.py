@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import os
+import tempfile
 from pathlib import Path
 from typing import Iterable, Optional, Tuple, Union
 
@@ -60,22 +61,16 @@ def _read_csv(path: Path):
 
 
 def _save_and_close(fig, png: Path) -> Path:
-    """Writes a file of its own beside the destination (created exclusively, so never through a link planted
-    at its name), then renames it onto the destination: never a half-written PNG."""
-    import tempfile
-
+    """Writes a new file beside png (exclusively: never through a planted link), renamed onto it when whole."""
+    temp = None
     try:
         fd, temp = tempfile.mkstemp(prefix="." + png.name + ".", suffix=".tmp", dir=png.parent)
-    except BaseException:
-        _pyplot().close(fig)
-        raise
-    try:
         with os.fdopen(fd, "wb") as out:
             fig.savefig(out, format="png", dpi=110)
         os.replace(temp, png)
     finally:
         _pyplot().close(fig)
-        if os.path.lexists(temp):
+        if temp is not None and os.path.lexists(temp):
             os.unlink(temp)
     return png
 
