@@ -263,11 +263,17 @@ mjModel* load_xml_in_child(const char* filename, const mjVFS* vfs, std::string_v
     if (said.find("bad_alloc") != std::string::npos) {
       throw MujocoError(std::string(source) + ": loading the model: MuJoCo ran out of memory (" + said + ")");
     }
-    const std::string how = WIFSIGNALED(status)
-                                ? "was killed by signal " + std::to_string(WTERMSIG(status)) + " (" +
-                                      ::strsignal(WTERMSIG(status)) +
-                                      (WTERMSIG(status) == SIGKILL ? "; out of memory?)" : ")")
-                                : "ended early (exit " + std::to_string(WEXITSTATUS(status)) + ")";
+    // MuJoCo 4's compiler does not check every allocation: past the child's
+    // memory budget it can crash where 2.2's said "Could not allocate memory".
+    const int signal = WIFSIGNALED(status) ? WTERMSIG(status) : 0;
+    const std::string crashed = signal == SIGSEGV || signal == SIGBUS || signal == SIGABRT
+                                    ? "; out of memory? a compile may use " +
+                                          std::to_string(trajectory_memory_budget() >> 20) + " MiB"
+                                    : "";
+    const std::string how = signal != 0 ? "was killed by signal " + std::to_string(signal) + " (" +
+                                              ::strsignal(signal) +
+                                              (signal == SIGKILL ? "; out of memory?)" : crashed + ")")
+                                        : "ended early (exit " + std::to_string(WEXITSTATUS(status)) + ")";
     throw MujocoError(std::string(source) + ": loading the model: the process compiling it " + how +
                       (said.empty() ? "" : ": " + said));
   }

@@ -32,7 +32,7 @@ def test_a_value_the_batch_cannot_run_is_refused_before_any_run(tmp_path, args, 
     done = batch([*args, "--out", "out/b.parquet"], tmp_path)
     assert done.returncode == 2, done.stderr
     assert done.stderr.count("\n") == 1 and done.stderr.startswith("sim-loop: batch: "), done.stderr
-    assert words in done.stderr, done.stderr
+    assert any(w in done.stderr for w in words.split(" | ")), done.stderr
     assert not (tmp_path / "out").exists()
 
 
@@ -47,11 +47,12 @@ def stopped(tmp_path_factory):
 
 
 def refused(folder: Path, parts: Path, words: str) -> None:
+    """The batch's --resume refuses the parts, in one line holding `words` (or one of "a | b"), changing nothing."""
     before = {p.name: p.read_bytes() for p in parts.iterdir() if p.is_file()}
     done = batch([*ARGS, "--out", "cut.parquet", "--resume"], folder)
     assert done.returncode == 2, done.stderr
     assert done.stderr.count("\n") == 1 and done.stderr.startswith("sim-loop: batch: --resume: "), done.stderr
-    assert words in done.stderr, done.stderr
+    assert any(w in done.stderr for w in words.split(" | ")), done.stderr
     assert not (folder / "cut.parquet").exists()
     assert {p.name: p.read_bytes() for p in parts.iterdir() if p.is_file()} == before, "the parts folder changed"
 
@@ -89,11 +90,12 @@ def test_a_part_damaged_or_edited_under_its_stamp_or_not_a_file_is_refused(stopp
                                                                         table.field(column).type))
         pq.write_table(edited, first)  # the stamp kept, a value changed
         refused(folder, parts, "chunk-000000000.parquet: damaged or edited")
-        # A byte flipped inside the column data (not in the footer, which pyarrow would reject anyway).
+        # A byte flipped a third of the way in: in the column data the checksum finds it; where a build's file
+        # has a page header there (PyPI's pyarrow and MuJoCo), pyarrow does.
         flipped = bytearray(saved)
         flipped[len(flipped) // 3] ^= 0x10
         first.write_bytes(bytes(flipped))
-        refused(folder, parts, "chunk-000000000.parquet: damaged")
+        refused(folder, parts, "chunk-000000000.parquet: damaged | chunk-000000000.parquet: truncated or damaged")
     finally:
         first.write_bytes(saved)
     fifo = parts / "chunk-000000004.parquet"
