@@ -132,7 +132,8 @@ def main(argv: Optional[List[str]] = None) -> int:
             previous = _catch_terminating_signals()
         sys.stdout = _Report(stdout)
         code = _main(argv)
-        sys.stdout.flush()
+        if code == 0:  # (a failure has said its one line: a report lost as well adds none, _finish_stdout)
+            sys.stdout.flush()
     except KeyboardInterrupt as e:
         name, code = _stopped_by(e)
         kept = "after the outputs were written" if _outputs_written else "the earlier outputs were left as they were"
