@@ -21,6 +21,7 @@ batch's wall and CPU time (user + system). Side by side in one run:
 
     .venv/bin/python bench/bench_batch_memory.py [--runs 10000] [--kept 500] [--threads 2] [--repeat 1]
 """
+
 import argparse
 import statistics
 import subprocess
@@ -79,12 +80,16 @@ def main() -> int:
         peak, wall, cpu = figures[mode]
         print(f"{mode:<28} {runs:>7} {peak:>9.1f} {peak - base:>12.1f} {wall:>8.2f} {cpu:>8.2f}")
     kept_per_run = (figures["kept"][0] - base) / max(args.kept, 1)
-    print(f"{'kept, extrapolated':<28} {args.runs:>7} {base + kept_per_run * args.runs:>9.1f} "
-          f"{kept_per_run * args.runs:>12.1f}")
+    print(
+        f"{'kept, extrapolated':<28} {args.runs:>7} {base + kept_per_run * args.runs:>9.1f} "
+        f"{kept_per_run * args.runs:>12.1f}"
+    )
     peak = max(figures["metrics-only"][0], figures["metrics-only, to_pandas"][0])
-    print(f"metrics-only peak (with to_pandas) {peak:.1f} MiB for {args.runs} runs: "
-          f"{'within' if peak <= BUDGET_MIB else 'OVER'} the {BUDGET_MIB:.0f} MiB budget; "
-          f"kept (extrapolated) / metrics-only: {(base + kept_per_run * args.runs) / figures['metrics-only'][0]:.1f}")
+    print(
+        f"metrics-only peak (with to_pandas) {peak:.1f} MiB for {args.runs} runs: "
+        f"{'within' if peak <= BUDGET_MIB else 'OVER'} the {BUDGET_MIB:.0f} MiB budget; "
+        f"kept (extrapolated) / metrics-only: {(base + kept_per_run * args.runs) / figures['metrics-only'][0]:.1f}"
+    )
     return 0 if peak <= BUDGET_MIB else 1
 
 

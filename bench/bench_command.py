@@ -14,6 +14,7 @@ count this Python process, which the child is a copy of until it execs.
 --callgrind also counts instructions (valgrind, about a minute): the
 driver-versus-bare ratio in instructions does not move with machine load.
 """
+
 import argparse
 import re
 import shutil
@@ -58,10 +59,14 @@ def main() -> int:
     wall = statistics.median(walls)
     mem = statistics.median(rss)
     print(f"sim_loop --seed 0, {args.runs} runs:")
-    print(f"  wall-clock  median {wall * 1e3:.1f} ms  (min {min(walls) * 1e3:.1f}, max {max(walls) * 1e3:.1f})"
-          f"  ratio to the 30 ms budget: {wall / WALL_BUDGET_S:.2f}")
-    print(f"  peak memory median {mem:.1f} MiB  (max {max(rss):.1f})"
-          f"  ratio to the 16 MiB budget: {mem / RSS_BUDGET_MIB:.2f}")
+    print(
+        f"  wall-clock  median {wall * 1e3:.1f} ms  (min {min(walls) * 1e3:.1f}, max {max(walls) * 1e3:.1f})"
+        f"  ratio to the 30 ms budget: {wall / WALL_BUDGET_S:.2f}"
+    )
+    print(
+        f"  peak memory median {mem:.1f} MiB  (max {max(rss):.1f})"
+        f"  ratio to the 16 MiB budget: {mem / RSS_BUDGET_MIB:.2f}"
+    )
     print(flush=True)
     status = subprocess.call([str(args.build / "bench_loop"), "61"])
     if args.callgrind:
@@ -74,24 +79,32 @@ def callgrind_ratio(build: Path) -> str:
     """Instructions of simloop::run against bare_loop, inclusive, from one callgrind run."""
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "callgrind.out"
-        subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", str(build / "bench_loop"),
-                        "3", "2000"], check=True, capture_output=True)
-        report = subprocess.run(["callgrind_annotate", "--inclusive=yes", str(out)], check=True,
-                                capture_output=True, text=True).stdout
+        subprocess.run(
+            ["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", str(build / "bench_loop"), "3", "2000"],
+            check=True,
+            capture_output=True,
+        )
+        report = subprocess.run(
+            ["callgrind_annotate", "--inclusive=yes", str(out)], check=True, capture_output=True, text=True
+        ).stdout
+
     def count(pattern: str) -> int:
         match = re.search(r"^\s*([0-9,]+) .*" + pattern, report, re.MULTILINE)
         if not match:
             sys.exit(f"callgrind: no line for {pattern}")
         return int(match.group(1).replace(",", ""))
+
     # The symbols' leading parameters: the trailing ones (defaulted) change.
     driver = count(re.escape("simloop::run(simloop::Model const&, simloop::RunConfig const&, simloop::Data&"))
     bare = count(r"\bbare_loop\(")
     scenario = count(re.escape("simloop::run_scenario(simloop::Model const&, simloop::Scenario const&"))
     bare_scenario = count(r"\bbare_scenario_loop\(")
-    return (f"callgrind, 4 runs each: simloop::run {driver:,} instructions, bare loop {bare:,}: "
-            f"ratio {driver / bare:.4f}\n"
-            f"  PushT run_scenario {scenario:,} instructions, bare loop {bare_scenario:,}: "
-            f"ratio {scenario / bare_scenario:.4f}")
+    return (
+        f"callgrind, 4 runs each: simloop::run {driver:,} instructions, bare loop {bare:,}: "
+        f"ratio {driver / bare:.4f}\n"
+        f"  PushT run_scenario {scenario:,} instructions, bare loop {bare_scenario:,}: "
+        f"ratio {scenario / bare_scenario:.4f}"
+    )
 
 
 if __name__ == "__main__":

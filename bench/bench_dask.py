@@ -74,24 +74,36 @@ def main() -> None:
         for case in cases if round_index % 2 == 0 else cases[::-1]:
             r = run_case(case, args.runs)
             results[case].append(r)
-            print(f"round {round_index + 1} {case:10s}: wall {r['wall']:.2f} s, client CPU {r['cpu']:.2f} s, "
-                  f"workers' CPU {r['workers_cpu']:.2f} s, client peak RSS {r['peak_mib']:.0f} MiB", flush=True)
+            print(
+                f"round {round_index + 1} {case:10s}: wall {r['wall']:.2f} s, client CPU {r['cpu']:.2f} s, "
+                f"workers' CPU {r['workers_cpu']:.2f} s, client peak RSS {r['peak_mib']:.0f} MiB",
+                flush=True,
+            )
     hashes = {r["hash"] for rs in results.values() for r in rs}
     assert len(hashes) == 1, "the cases' final positions differ"
-    med = {case: {k: statistics.median(r[k] for r in rs) for k in ("wall", "cpu", "workers_cpu", "peak_mib")}
-           for case, rs in results.items()}
+    med = {
+        case: {k: statistics.median(r[k] for r in rs) for k in ("wall", "cpu", "workers_cpu", "peak_mib")}
+        for case, rs in results.items()
+    }
     print(f"\n{args.runs} chapter runs (2000 steps each), medians of {args.rounds} rounds:")
-    for case, label in (("local", "local run_batch, 2 threads"), ("dask", "LocalCluster, 2 processes x 1 thread"),
-                        ("dask-quiet", "the same, workers' profiler off")):
+    for case, label in (
+        ("local", "local run_batch, 2 threads"),
+        ("dask", "LocalCluster, 2 processes x 1 thread"),
+        ("dask-quiet", "the same, workers' profiler off"),
+    ):
         m = med[case]
-        print(f"  {label:38s} wall {m['wall']:7.2f} s  ({args.runs / m['wall']:6.0f} runs/s)  client CPU "
-              f"{m['cpu']:6.2f} s  workers' CPU {m['workers_cpu']:6.2f} s  client peak RSS {m['peak_mib']:5.0f} MiB")
+        print(
+            f"  {label:38s} wall {m['wall']:7.2f} s  ({args.runs / m['wall']:6.0f} runs/s)  client CPU "
+            f"{m['cpu']:6.2f} s  workers' CPU {m['workers_cpu']:6.2f} s  client peak RSS {m['peak_mib']:5.0f} MiB"
+        )
     for case in ("dask", "dask-quiet"):
         ratios = [lo["wall"] / da["wall"] for lo, da in zip(results["local"], results[case])]
         cpu = [lo["cpu"] / (da["cpu"] + da["workers_cpu"]) for lo, da in zip(results["local"], results[case])]
-        print(f"  throughput {case} / local: wall-clock median {statistics.median(ratios):.3f} (per round: "
-              f"{', '.join(f'{x:.3f}' for x in ratios)}; target >= 0.9); CPU time, local / (client + workers): "
-              f"median {statistics.median(cpu):.3f}")
+        print(
+            f"  throughput {case} / local: wall-clock median {statistics.median(ratios):.3f} (per round: "
+            f"{', '.join(f'{x:.3f}' for x in ratios)}; target >= 0.9); CPU time, local / (client + workers): "
+            f"median {statistics.median(cpu):.3f}"
+        )
     print("  results: the same bits in both cases (final box x hashed)")
 
 

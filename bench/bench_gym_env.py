@@ -35,10 +35,9 @@ import time
 from pathlib import Path
 
 import numpy as np
+import simloop
 from gymnasium import spaces
 from gymnasium.envs.mujoco import MujocoEnv
-
-import simloop
 from simloop.gym import PUSHT_SCENARIO, ScenarioEnv, ScenarioVectorEnv, batched
 
 SCENE = str(Path(PUSHT_SCENARIO).with_name("pusht.xml"))
@@ -108,7 +107,7 @@ def compare(label, ours, theirs, actions, rounds, per_call, target):
     times = {"simloop": [], "MujocoEnv": []}
     for r in range(rounds):
         pair = (("simloop", ours), ("MujocoEnv", theirs))
-        for name, env in (pair if r % 2 else pair[::-1]):
+        for name, env in pair if r % 2 else pair[::-1]:
             times[name].append(timed(env, actions, r))
     steps = len(actions) * per_call
     print(f"    {label}:")
@@ -117,8 +116,10 @@ def compare(label, ours, theirs, actions, rounds, per_call, target):
         wall = statistics.median(x[0] for x in t) / steps * 1e6
         print(f"      {name:9s}: {cpu:7.2f} us CPU, {wall:7.2f} us wall per episode step")
     ratio = statistics.median(a[1] / b[1] for a, b in zip(times["simloop"], times["MujocoEnv"]))
-    print(f"      simloop / MujocoEnv: {ratio:.3f} x the CPU time (median of per-round ratios"
-          f"{'; target <= ' + str(target) if target else ''})")
+    print(
+        f"      simloop / MujocoEnv: {ratio:.3f} x the CPU time (median of per-round ratios"
+        f"{'; target <= ' + str(target) if target else ''})"
+    )
 
 
 def main() -> int:
@@ -128,8 +129,10 @@ def main() -> int:
     parser.add_argument("--every", default="1,10")
     parser.add_argument("--envs", type=int, default=8)
     args = parser.parse_args()
-    print(f"{simloop.MUJOCO_VERSION}, simloop {simloop.__version__}; PushT, {args.calls} env.step calls a "
-          f"round, {args.rounds} rounds; CPU time per episode step (wall beside it), medians")
+    print(
+        f"{simloop.MUJOCO_VERSION}, simloop {simloop.__version__}; PushT, {args.calls} env.step calls a "
+        f"round, {args.rounds} rounds; CPU time per episode step (wall beside it), medians"
+    )
     index = ScenarioEnv(PUSHT_SCENARIO).observation_names.index("tblock_x")
     vectorised = batched(lambda o, a, p: p[:, index] - o[:, index] - COST * np.einsum("ij,ij->i", a, a))
 
@@ -142,19 +145,27 @@ def main() -> int:
         target = 1.15 if every == 1 else 1.05
         print(f"  {every} physics step{'s' if every > 1 else ''} per action:")
         actions = rng.uniform(-1, 1, size=(args.calls, 2))
-        scalar, same_numpy = PushTMujocoEnv(every), PushTMujocoEnv(every, batched(
-            lambda o, a, p: p[:, 0] - o[:, 0] - COST * np.einsum("ij,ij->i", a, a)))  # (qpos[0] is tblock_x)
+        scalar, same_numpy = (
+            PushTMujocoEnv(every),
+            PushTMujocoEnv(every, batched(lambda o, a, p: p[:, 0] - o[:, 0] - COST * np.einsum("ij,ij->i", a, a))),
+        )  # (qpos[0] is tblock_x)
         for label, reward, theirs, goal in (
-                ("one env, a vectorised (@batched) reward; MujocoEnv's in Python floats", vectorised, scalar, target),
-                ("one env, a vectorised (@batched) reward; MujocoEnv's the same numpy on one-row arrays",
-                 vectorised, same_numpy, target),
-                ("one env, a per-step reward", per_step, scalar, None)):
+            ("one env, a vectorised (@batched) reward; MujocoEnv's in Python floats", vectorised, scalar, target),
+            (
+                "one env, a vectorised (@batched) reward; MujocoEnv's the same numpy on one-row arrays",
+                vectorised,
+                same_numpy,
+                target,
+            ),
+            ("one env, a per-step reward", per_step, scalar, None),
+        ):
             ours = ScenarioEnv(PUSHT_SCENARIO, control_every=every, steps=length, reward=reward)
             compare(label, ours, theirs, actions, args.rounds, 1, goal)
         scalar.close(), same_numpy.close()
         many = MujocoEnvs(args.envs, every)
-        vector = ScenarioVectorEnv(PUSHT_SCENARIO, args.envs, control_every=every, steps=length, reward=vectorised,
-                                   threads=1)
+        vector = ScenarioVectorEnv(
+            PUSHT_SCENARIO, args.envs, control_every=every, steps=length, reward=vectorised, threads=1
+        )
         batch = rng.uniform(-1, 1, size=(max(args.calls // args.envs, 1), args.envs, 2))
         compare(f"{args.envs} envs, a vectorised reward", vector, many, batch, args.rounds, args.envs, target)
         many.close()

@@ -11,6 +11,8 @@
 //                              line read from stdin; prints its seconds.
 //                              bench/bench_python.py interleaves these with
 //                              simloop.run() calls, so both see the same machine.
+#include <time.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -19,8 +21,6 @@
 #include <iostream>
 #include <string>
 #include <vector>
-
-#include <time.h>
 
 #include "simloop/model.hpp"
 #include "simloop/run.hpp"
@@ -36,8 +36,8 @@ double median(std::vector<double> v) {
 
 // The chapter's loop with nothing around it: no trajectory, no warning
 // bookkeeping, no error guard.
-[[gnu::noinline]] void bare_loop(const mjModel* m, mjData* d, const simloop::ChapterLayout& at, const simloop::Shove& shove,
-               std::int64_t steps) {
+[[gnu::noinline]] void bare_loop(const mjModel* m, mjData* d, const simloop::ChapterLayout& at,
+                                 const simloop::Shove& shove, std::int64_t steps) {
   mj_resetData(m, d);
   mj_forward(m, d);
   double* force = d->xfrc_applied + 6 * at.box_body;
@@ -59,7 +59,8 @@ double median(std::vector<double> v) {
   std::size_t next = 0;
   const auto& changes = schedule.control_changes;
   for (std::int64_t step = 0; step < schedule.steps; ++step) {
-    for (; next < changes.size() && changes[next].step == step; ++next) d->ctrl[changes[next].actuator] = changes[next].value;
+    for (; next < changes.size() && changes[next].step == step; ++next)
+      d->ctrl[changes[next].actuator] = changes[next].value;
     for (const simloop::Schedule::Force& f : schedule.forces) {
       const bool acts = f.start <= step && step < f.end;
       for (int i = 0; i < 6; ++i) d->xfrc_applied[6 * f.body + i] = acts ? f.wrench[static_cast<size_t>(i)] : 0.0;

@@ -26,6 +26,7 @@ the recording is sent to the .rrd in blocks as the run goes. Its peak is
 mostly rerun itself (importing it takes about 150 MiB): what matters is
 that it does not grow with the steps.
 """
+
 import argparse
 import os
 import re
@@ -48,8 +49,9 @@ def run_once(exe, steps: int, out: Path) -> tuple[float, float, float]:
     """One `sim_loop --steps N` (exe: a path, or a command as a list): (wall s, CPU s, peak memory MiB)."""
     command = [str(exe)] if isinstance(exe, Path) else list(exe)
     start = time.perf_counter()
-    proc = subprocess.Popen([*command, "--steps", str(steps), "--out", str(out)], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
+    proc = subprocess.Popen(
+        [*command, "--steps", str(steps), "--out", str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
     _, status, usage = os.wait4(proc.pid, 0)
     wall = time.perf_counter() - start
     proc.returncode = os.waitstatus_to_exitcode(status)
@@ -69,8 +71,12 @@ def main() -> int:
     parser.add_argument("--runs", type=int, default=3, help="runs at 10^5 and 10^6 steps")
     parser.add_argument("--big-runs", type=int, default=1, help="runs at 10^7 steps (about a minute each)")
     parser.add_argument("--scenario-only", action="store_true", help="only the scenario's runs")
-    parser.add_argument("--python", type=Path, default=Path(".venv/bin/python"),
-                        help="the Python with simloop installed, for python -m simloop")
+    parser.add_argument(
+        "--python",
+        type=Path,
+        default=Path(".venv/bin/python"),
+        help="the Python with simloop installed, for python -m simloop",
+    )
     args = parser.parse_args()
     exe = args.build / "sim_loop"
     if not exe.exists():
@@ -83,9 +89,11 @@ def main() -> int:
 
 def scenario(exe: Path, args) -> bool:
     """The PushT scenario from both commands, with and without the recording."""
-    commands = [("sim_loop", [exe, "--scenario", str(SCENARIO)]),
-                ("python --no-rerun", [args.python, "-m", "simloop", "--scenario", str(SCENARIO), "--no-rerun"]),
-                ("python + recording", [args.python, "-m", "simloop", "--scenario", str(SCENARIO)])]
+    commands = [
+        ("sim_loop", [exe, "--scenario", str(SCENARIO)]),
+        ("python --no-rerun", [args.python, "-m", "simloop", "--scenario", str(SCENARIO), "--no-rerun"]),
+        ("python + recording", [args.python, "-m", "simloop", "--scenario", str(SCENARIO)]),
+    ]
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for label, command in commands:
@@ -93,17 +101,32 @@ def scenario(exe: Path, args) -> bool:
                 runs = args.big_runs if steps >= 10**6 else args.runs
                 results = [run_once(command, steps, Path(tmp)) for _ in range(runs)]
                 walls, cpus, peaks = zip(*results)
-                rows.append((label, steps, runs, statistics.median(walls), statistics.median(cpus),
-                             statistics.median(peaks), max(peaks)))
-    print(f"\n{SCENARIO.name} --steps N: medians; peak memory is VmHWM (budget {PEAK_BUDGET_MIB:.0f} MiB over "
-          "the smallest run's peak, per command)")
-    print(f"{'command':>20} {'steps':>9} {'runs':>4} {'wall s':>8} {'CPU s':>8} {'CPU/wall':>8} {'peak MiB':>9} "
-          f"{'/peak@1e4':>9}")
+                rows.append(
+                    (
+                        label,
+                        steps,
+                        runs,
+                        statistics.median(walls),
+                        statistics.median(cpus),
+                        statistics.median(peaks),
+                        max(peaks),
+                    )
+                )
+    print(
+        f"\n{SCENARIO.name} --steps N: medians; peak memory is VmHWM (budget {PEAK_BUDGET_MIB:.0f} MiB over "
+        "the smallest run's peak, per command)"
+    )
+    print(
+        f"{'command':>20} {'steps':>9} {'runs':>4} {'wall s':>8} {'CPU s':>8} {'CPU/wall':>8} {'peak MiB':>9} "
+        f"{'/peak@1e4':>9}"
+    )
     ok = True
     for label, steps, runs, wall, cpu, peak, peak_max in rows:
         base = next(r[5] for r in rows if r[0] == label)
-        print(f"{label:>20} {steps:>9} {runs:>4} {wall:>8.2f} {cpu:>8.2f} {cpu / wall:>8.2f} {peak:>9.1f} "
-              f"{peak / base:>9.2f}")
+        print(
+            f"{label:>20} {steps:>9} {runs:>4} {wall:>8.2f} {cpu:>8.2f} {cpu / wall:>8.2f} {peak:>9.1f} "
+            f"{peak / base:>9.2f}"
+        )
         ok = ok and peak_max - base < PEAK_BUDGET_MIB
     print(f"growth from 10^4 to 10^6 steps: {'within' if ok else 'OVER'} {PEAK_BUDGET_MIB:.0f} MiB for every command")
     return ok
@@ -117,17 +140,22 @@ def chapter(exe: Path, args) -> bool:
             runs = args.big_runs if steps >= 10**7 else args.runs
             results = [run_once(exe, steps, Path(tmp)) for _ in range(runs)]
             walls, cpus, peaks = zip(*results)
-            rows.append((steps, runs, statistics.median(walls), statistics.median(cpus), statistics.median(peaks),
-                         max(peaks)))
+            rows.append(
+                (steps, runs, statistics.median(walls), statistics.median(cpus), statistics.median(peaks), max(peaks))
+            )
             trajectory = Path(tmp) / "trajectory.csv"
             rows[-1] += (trajectory.stat().st_size / 2**20,)
     base_peak = rows[0][4]
     print(f"sim_loop --steps N: medians; peak memory is VmHWM (budget {PEAK_BUDGET_MIB:.0f} MiB at any N)")
-    print(f"{'steps':>10} {'runs':>4} {'wall s':>8} {'CPU s':>8} {'CPU/wall':>8} {'peak MiB':>9} "
-          f"{'/budget':>8} {'/peak@1e5':>9} {'csv MiB':>9}")
-    for steps, runs, wall, cpu, peak, peak_max, csv_mib in rows:
-        print(f"{steps:>10} {runs:>4} {wall:>8.2f} {cpu:>8.2f} {cpu / wall:>8.2f} {peak:>9.1f} "
-              f"{peak / PEAK_BUDGET_MIB:>8.2f} {peak / base_peak:>9.2f} {csv_mib:>9.1f}")
+    print(
+        f"{'steps':>10} {'runs':>4} {'wall s':>8} {'CPU s':>8} {'CPU/wall':>8} {'peak MiB':>9} "
+        f"{'/budget':>8} {'/peak@1e5':>9} {'csv MiB':>9}"
+    )
+    for steps, runs, wall, cpu, peak, _peak_max, csv_mib in rows:
+        print(
+            f"{steps:>10} {runs:>4} {wall:>8.2f} {cpu:>8.2f} {cpu / wall:>8.2f} {peak:>9.1f} "
+            f"{peak / PEAK_BUDGET_MIB:>8.2f} {peak / base_peak:>9.2f} {csv_mib:>9.1f}"
+        )
     worst = max(row[5] for row in rows)
     print(f"largest peak {worst:.1f} MiB: {'within' if worst < PEAK_BUDGET_MIB else 'OVER'} the budget")
     return worst < PEAK_BUDGET_MIB

@@ -19,7 +19,6 @@ import statistics
 import time
 
 import numpy as np
-
 import simloop
 from simloop.gym import PUSHT_SCENARIO
 
@@ -55,20 +54,26 @@ def main() -> int:
     times = {"open": [], "policy": []}
     for r in range(args.rounds):
         order = [("open", open_loop), ("policy", with_policy)]
-        for name, fn in (order if r % 2 else order[::-1]):
+        for name, fn in order if r % 2 else order[::-1]:
             times[name].append(timed(fn))
     decisions = -(-args.steps // args.every)
-    print(f"PushT, {args.steps} steps, a policy every {args.every} steps ({decisions} decisions), "
-          f"{args.rounds} paired rounds")
+    print(
+        f"PushT, {args.steps} steps, a policy every {args.every} steps ({decisions} decisions), "
+        f"{args.rounds} paired rounds"
+    )
     for name in ("open", "policy"):
         wall = statistics.median(t[0] for t in times[name])
         cpu = statistics.median(t[1] for t in times[name])
-        print(f"  {name:>6}: wall median {wall * 1e3:8.3f} ms ({wall / args.steps * 1e6:5.2f} us/step), "
-              f"cpu median {cpu * 1e3:8.3f} ms")
+        print(
+            f"  {name:>6}: wall median {wall * 1e3:8.3f} ms ({wall / args.steps * 1e6:5.2f} us/step), "
+            f"cpu median {cpu * 1e3:8.3f} ms"
+        )
     wall_ratio = statistics.median(p[0] / o[0] for p, o in zip(times["policy"], times["open"]))
     cpu_ratio = statistics.median(p[1] / o[1] for p, o in zip(times["policy"], times["open"]))
-    print(f"  policy / open loop: {wall_ratio:.4f} wall, {cpu_ratio:.4f} cpu (medians of per-round ratios; "
-          f"target <= 1.10)")
+    print(
+        f"  policy / open loop: {wall_ratio:.4f} wall, {cpu_ratio:.4f} cpu (medians of per-round ratios; "
+        f"target <= 1.10)"
+    )
     return 0
 
 

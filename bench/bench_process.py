@@ -37,6 +37,7 @@ What "the same run" is, and why this is the fair comparison:
   script says which, or that neither is there. Instructions do not move with
   the machine's load; CPU time does.
 """
+
 import argparse
 import json
 import math
@@ -58,8 +59,9 @@ def measured(argv: list[str], rusage_run: Path) -> dict:
     """One run under rusage_run: wall, user, sys (seconds), maxrss (KiB)."""
     proc = subprocess.run([str(rusage_run), *argv], capture_output=True, text=True)
     lines = proc.stderr.strip().splitlines()
-    match = re.fullmatch(r"rusage_run: status (\d+) wall (\S+) user (\S+) sys (\S+) maxrss_kib (\d+)",
-                         lines[-1] if lines else "")
+    match = re.fullmatch(
+        r"rusage_run: status (\d+) wall (\S+) user (\S+) sys (\S+) maxrss_kib (\d+)", lines[-1] if lines else ""
+    )
     if not match:
         sys.exit(f"{argv[0]}: no measurement: {proc.stderr.strip()!r}")
     if match.group(1) != "0":
@@ -91,15 +93,16 @@ def shove_of(header: list[str], rows: list[list[float]], csv_text: str) -> tuple
 def check_same_run(sim_dir: Path, bare_dir: Path, csv: bool) -> None:
     """The bare program's files hold what sim_loop's hold (or sys.exit)."""
     if (sim_dir / "metrics.json").read_bytes() != (bare_dir / "metrics.json").read_bytes():
-        sys.exit(f"metrics.json differ:\n{(sim_dir / 'metrics.json').read_text()}\n"
-                 f"{(bare_dir / 'metrics.json').read_text()}")
+        sys.exit(
+            f"metrics.json differ:\n{(sim_dir / 'metrics.json').read_text()}\n{(bare_dir / 'metrics.json').read_text()}"
+        )
     _, sim_rows = read_csv_rows(sim_dir / "trajectory.csv")
     if csv:
         _, bare_rows = read_csv_rows(bare_dir / "trajectory.csv")
     else:
         raw = (bare_dir / "trajectory.f64").read_bytes()
         values = struct.unpack(f"<{len(raw) // 8}d", raw)
-        bare_rows = [list(values[i:i + COLUMNS]) for i in range(0, len(values), COLUMNS)]
+        bare_rows = [list(values[i : i + COLUMNS]) for i in range(0, len(values), COLUMNS)]
     if len(sim_rows) != len(bare_rows):
         sys.exit(f"trajectory: sim_loop wrote {len(sim_rows)} rows, the bare program {len(bare_rows)}")
     for i, (a, b) in enumerate(zip(sim_rows, bare_rows)):
@@ -119,8 +122,9 @@ def count_instructions(argv: list[str], tool: str, scratch: Path) -> int:
         proc = subprocess.run(["perf", "stat", "-x,", "-e", "instructions:u", *argv], capture_output=True, text=True)
         return int(proc.stderr.strip().splitlines()[-1].split(",")[0])
     out = scratch / "callgrind.out"
-    subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", *argv], check=True,
-                   capture_output=True)
+    subprocess.run(
+        ["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", *argv], check=True, capture_output=True
+    )
     match = re.search(r"^(?:summary|totals): (\d+)", out.read_text(), re.MULTILINE)
     if not match:
         sys.exit(f"callgrind: no totals in {out}")
@@ -132,16 +136,25 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--build", type=Path, default=Path("build"), help="CMake build directory")
     parser.add_argument("--runs", type=int, default=21, help="timed runs of each program (default 21)")
-    parser.add_argument("--instruction-runs", type=int, default=3,
-                        help="runs of each under the instruction counter (default 3; 0: none)")
-    parser.add_argument("--bare-csv", action="store_true",
-                        help="also the bare program writing its CSV with printf (slower than sim_loop)")
+    parser.add_argument(
+        "--instruction-runs",
+        type=int,
+        default=3,
+        help="runs of each under the instruction counter (default 3; 0: none)",
+    )
+    parser.add_argument(
+        "--bare-csv",
+        action="store_true",
+        help="also the bare program writing its CSV with printf (slower than sim_loop)",
+    )
     args = parser.parse_args()
     sim_loop, bare, rusage_run = (args.build / name for name in ("sim_loop", "bare_chapter", "rusage_run"))
     for exe in (sim_loop, bare, rusage_run):
         if not exe.exists():
-            sys.exit(f"--build: {exe} not found; build first (README; bare_chapter and rusage_run are "
-                     "built with SIMLOOP_BUILD_BENCH, on by default)")
+            sys.exit(
+                f"--build: {exe} not found; build first (README; bare_chapter and rusage_run are "
+                "built with SIMLOOP_BUILD_BENCH, on by default)"
+            )
 
     with tempfile.TemporaryDirectory(prefix="bench_process.") as tmp:
         scratch = Path(tmp)
@@ -156,13 +169,23 @@ def main() -> int:
         formats = ["binary"] + (["csv"] if args.bare_csv else [])
         for fmt in formats:
             name = "bare" if fmt == "binary" else "bare csv"
-            programs[name] = (lambda fmt: lambda out: [str(bare), str(out), str(steps), str(start), str(count),
-                                                         force, "0", fmt])(fmt)
+            programs[name] = lambda out, fmt=fmt: [
+                str(bare),
+                str(out),
+                str(steps),
+                str(start),
+                str(count),
+                force,
+                "0",
+                fmt,
+            ]
             (first / fmt).mkdir()
             subprocess.run(programs[name](first / fmt), check=True, capture_output=True)
             check_same_run(first / "sim", first / fmt, fmt == "csv")
-        print(f"sim_loop --seed 0 against build/bare_chapter: {steps} steps, shove {force} N in y at steps "
-              f"{start} to {start + count - 1}; metrics.json the same bytes, the trajectory's rows the same bits")
+        print(
+            f"sim_loop --seed 0 against build/bare_chapter: {steps} steps, shove {force} N in y at steps "
+            f"{start} to {start + count - 1}; metrics.json the same bytes, the trajectory's rows the same bits"
+        )
         names = list(programs)
 
         # Timed: fresh empty folders, rounds alternating the order.
@@ -202,21 +225,31 @@ def main() -> int:
         print(f"\n  sim_loop against {label}")
         print(f"  {'':24}{'sim_loop':>12}{'bare':>12}{'ratio':>9}  target")
         for key, what, unit, scale in (("wall", "wall-clock", "ms", 1e3), ("cpu", "CPU (user+sys)", "ms", 1e3)):
-            print(f"  {what + ' median':24}{med('sim_loop', key) * scale:9.1f} {unit}{med(other, key) * scale:9.1f} "
-                  f"{unit}{paired(other, key):9.3f}  {'<= %.2f' % TARGET if key == 'cpu' else ''}")
-        print(f"  {'peak memory median':24}{med('sim_loop', 'rss'):8.1f} MiB{med(other, 'rss'):8.1f} MiB"
-              f"{med('sim_loop', 'rss') / med(other, 'rss'):9.3f}")
+            print(
+                f"  {what + ' median':24}{med('sim_loop', key) * scale:9.1f} {unit}{med(other, key) * scale:9.1f} "
+                f"{unit}{paired(other, key):9.3f}  {'<= %.2f' % TARGET if key == 'cpu' else ''}"
+            )
+        print(
+            f"  {'peak memory median':24}{med('sim_loop', 'rss'):8.1f} MiB{med(other, 'rss'):8.1f} MiB"
+            f"{med('sim_loop', 'rss') / med(other, 'rss'):9.3f}"
+        )
         if instructions:
-            print(f"  {'instructions (' + tool + ')':24}{instructions['sim_loop'] / 1e6:10.1f} M"
-                  f"{instructions[other] / 1e6:10.1f} M{instructions['sim_loop'] / instructions[other]:9.3f}"
-                  f"  <= {TARGET:.2f}")
+            print(
+                f"  {'instructions (' + tool + ')':24}{instructions['sim_loop'] / 1e6:10.1f} M"
+                f"{instructions[other] / 1e6:10.1f} M{instructions['sim_loop'] / instructions[other]:9.3f}"
+                f"  <= {TARGET:.2f}"
+            )
     print("\n  (ratios: wall and CPU the median of each round's sim_loop / bare; memory and instructions of medians)")
     if not tool:
-        print("  instructions: not measured: perf cannot count them on this machine and valgrind is not "
-              "installed (apt-get install valgrind)")
+        print(
+            "  instructions: not measured: perf cannot count them on this machine and valgrind is not "
+            "installed (apt-get install valgrind)"
+        )
     elif args.instruction_runs > 0:
-        print(f"  instructions: {tool}, median of {args.instruction_runs} runs each"
-              + ("" if tool == "perf" else " (perf cannot count instructions on this machine)"))
+        print(
+            f"  instructions: {tool}, median of {args.instruction_runs} runs each"
+            + ("" if tool == "perf" else " (perf cannot count instructions on this machine)")
+        )
     return 0
 
 

@@ -27,8 +27,9 @@ def timed(cmd, cwd, on_terminal):
     started = time.perf_counter()
     if on_terminal:
         master, slave = pty.openpty()
-        proc = subprocess.Popen(cmd, cwd=cwd, env=env, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-                                stderr=slave)
+        proc = subprocess.Popen(
+            cmd, cwd=cwd, env=env, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=slave
+        )
         os.close(slave)
         drawn = bytearray()
 
@@ -49,8 +50,9 @@ def timed(cmd, cwd, on_terminal):
         os.close(master)
         assert drawn, "no bar was drawn"
     else:
-        proc = subprocess.run(cmd, cwd=cwd, env=env, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-                              stderr=subprocess.DEVNULL)
+        proc = subprocess.run(
+            cmd, cwd=cwd, env=env, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL
+        )
     wall = time.perf_counter() - started
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     assert proc.returncode == 0
@@ -60,8 +62,10 @@ def timed(cmd, cwd, on_terminal):
 def main():
     rounds = int(sys.argv[1]) if len(sys.argv) > 1 else 9
     steps = sys.argv[2] if len(sys.argv) > 2 else "2000000"
-    commands = {"sim_loop": [str(ROOT / "build" / "sim_loop")],
-                "python -m simloop": [str(ROOT / ".venv" / "bin" / "python"), "-m", "simloop", "--no-rerun"]}
+    commands = {
+        "sim_loop": [str(ROOT / "build" / "sim_loop")],
+        "python -m simloop": [str(ROOT / ".venv" / "bin" / "python"), "-m", "simloop", "--no-rerun"],
+    }
     with tempfile.TemporaryDirectory() as cwd:
         for name, cmd in commands.items():
             cmd = cmd + ["--steps", steps, "--record-every", "1000", "--out", "out"]
@@ -73,9 +77,12 @@ def main():
             bar_wall = statistics.median(t[0] for t in times[True])
             plain_cpu = statistics.median(t[1] for t in times[False])
             bar_cpu = statistics.median(t[1] for t in times[True])
-            print(f"{name}, {steps} steps, median of {rounds}: no terminal {plain_wall:.3f} s wall {plain_cpu:.3f} s CPU; "
-                  f"bar on a terminal {bar_wall:.3f} s wall {bar_cpu:.3f} s CPU; "
-                  f"bar / none: {bar_wall / plain_wall:.4f} wall, {bar_cpu / plain_cpu:.4f} CPU")
+            print(
+                f"{name}, {steps} steps, median of {rounds}: "
+                f"no terminal {plain_wall:.3f} s wall {plain_cpu:.3f} s CPU; "
+                f"bar on a terminal {bar_wall:.3f} s wall {bar_cpu:.3f} s CPU; "
+                f"bar / none: {bar_wall / plain_wall:.4f} wall, {bar_cpu / plain_cpu:.4f} CPU"
+            )
 
 
 if __name__ == "__main__":

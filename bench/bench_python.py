@@ -38,8 +38,9 @@ class CppRunner:
     """bench_loop --serve: one C++ simloop::run per request, timed in C++."""
 
     def __init__(self, build: Path):
-        self.proc = subprocess.Popen([str(build / "bench_loop"), "--serve"], stdin=subprocess.PIPE,
-                                     stdout=subprocess.PIPE, text=True)
+        self.proc = subprocess.Popen(
+            [str(build / "bench_loop"), "--serve"], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True
+        )
 
     def seconds(self) -> float:
         self.proc.stdin.write("run\n")
@@ -78,8 +79,10 @@ def main() -> int:
     cpp_runner.close()
     py_s, cpp_s = statistics.median(py), statistics.median(cpp)
     ratio = statistics.median(p / c for p, c in zip(py, cpp))
-    print(f"simloop.run(), 2000 steps: median {py_s * 1e3:.2f} ms   C++ simloop::run: {cpp_s * 1e3:.2f} ms   "
-          f"ratio {ratio:.3f} (median of {len(py)} paired runs; budget <= 1.05)")
+    print(
+        f"simloop.run(), 2000 steps: median {py_s * 1e3:.2f} ms   C++ simloop::run: {cpp_s * 1e3:.2f} ms   "
+        f"ratio {ratio:.3f} (median of {len(py)} paired runs; budget <= 1.05)"
+    )
 
     # 2. Batch scaling.
     seeds = range(64)
@@ -89,8 +92,10 @@ def main() -> int:
         two.append(median_seconds(lambda: simloop.run_batch(seeds=seeds, threads=2), 1))
     steps = 64 * 2000
     rate1, rate2 = steps / statistics.median(one), steps / statistics.median(two)
-    print(f"run_batch, 64 runs x 2000 steps: 1 thread {rate1:,.0f} steps/s   2 threads {rate2:,.0f} steps/s   "
-          f"ratio {rate2 / rate1:.2f} (budget >= 1.8)")
+    print(
+        f"run_batch, 64 runs x 2000 steps: 1 thread {rate1:,.0f} steps/s   2 threads {rate2:,.0f} steps/s   "
+        f"ratio {rate2 / rate1:.2f} (budget >= 1.8)"
+    )
 
     # 3. The command as a whole process.
     with tempfile.TemporaryDirectory() as tmp:
@@ -101,8 +106,10 @@ def main() -> int:
             recorded.append(process_seconds([], tmp))
     plain_s, recorded_s = statistics.median(plain), statistics.median(recorded)
     print(f"python -m simloop --no-rerun: median {plain_s:.3f} s (budget 0.25 s, ratio {plain_s / 0.25:.2f})")
-    print(f"python -m simloop (recording): median {recorded_s:.3f} s, {recorded_s - plain_s:.3f} s more "
-          f"(budget 0.25 s more, ratio {(recorded_s - plain_s) / 0.25:.2f})")
+    print(
+        f"python -m simloop (recording): median {recorded_s:.3f} s, {recorded_s - plain_s:.3f} s more "
+        f"(budget 0.25 s more, ratio {(recorded_s - plain_s) / 0.25:.2f})"
+    )
     start = time.perf_counter()
     subprocess.run([sys.executable, "-c", "import rerun"], check=True)
     print(f"  of which `import rerun` alone (a fresh interpreter): {time.perf_counter() - start:.3f} s")

@@ -127,8 +127,11 @@ class Inputs:
             self.parts[name] = slice(offset, offset + size)
             offset += size
         # Both starting points must say the same thing where they overlap.
-        for name, part in (("time", slice(0, 1)), ("qpos", slice(1, 1 + m.nq)),
-                           ("qvel", slice(1 + m.nq, 1 + m.nq + m.nv))):
+        for name, part in (
+            ("time", slice(0, 1)),
+            ("qpos", slice(1, 1 + m.nq)),
+            ("qvel", slice(1 + m.nq, 1 + m.nq + m.nv)),
+        ):
             if not np.array_equal(self.simloop_state0[:, self.parts[name]], self.rollout_state0[:, part]):
                 sys.exit(f"bench_rollout: the two initial states differ in {name}")
 
@@ -139,22 +142,29 @@ class Inputs:
     # --- the two sides; each returns what a user would keep
 
     def simloop(self, threads, metrics_only):
-        return simloop.run_scenario_batch(self.scenario, seeds=self.seeds, model=self.simloop_model,
-                                          controls=self.controls, initial_state=self.simloop_state0,
-                                          threads=threads, metrics_only=metrics_only)
+        return simloop.run_scenario_batch(
+            self.scenario,
+            seeds=self.seeds,
+            model=self.simloop_model,
+            controls=self.controls,
+            initial_state=self.simloop_state0,
+            threads=threads,
+            metrics_only=metrics_only,
+        )
 
     def rollout(self, threads, datas, keep):
         if keep:
             return mujoco.rollout.rollout(self.model, datas[:threads], self.rollout_state0, self.controls)
         # skip_checks passes its arguments straight through: a model per run, outputs None (kept: nothing).
-        mujoco.rollout.rollout(self.models, datas[:threads], self.rollout_state0, self.controls,
-                               skip_checks=True, nstep=self.steps)
+        mujoco.rollout.rollout(
+            self.models, datas[:threads], self.rollout_state0, self.controls, skip_checks=True, nstep=self.steps
+        )
         return None
 
     def qpos_qvel_rollout(self, states):
         m = self.model
         last = states[:, -1, :]
-        return last[:, 1:1 + m.nq], last[:, 1 + m.nq:1 + m.nq + m.nv]
+        return last[:, 1 : 1 + m.nq], last[:, 1 + m.nq : 1 + m.nq + m.nv]
 
     def qpos_qvel_simloop(self, results):
         final = np.stack([r.final_state for r in results])
@@ -170,26 +180,32 @@ def check_same(inputs, datas, threads):
     rq, rv = inputs.qpos_qvel_rollout(states)
     same_q = np.array_equal(sq.view(np.uint64), rq.view(np.uint64))
     same_v = np.array_equal(sv.view(np.uint64), rv.view(np.uint64))
-    print(f"  threads={threads}: final qpos {'identical' if same_q else 'DIFFER'}, "
-          f"qvel {'identical' if same_v else 'DIFFER'} in all {inputs.batch} runs"
-          + (f"; simloop warnings in runs {warned}" if warned else ""))
+    print(
+        f"  threads={threads}: final qpos {'identical' if same_q else 'DIFFER'}, "
+        f"qvel {'identical' if same_v else 'DIFFER'} in all {inputs.batch} runs"
+        + (f"; simloop warnings in runs {warned}" if warned else "")
+    )
     if not (same_q and same_v):
         bad = np.flatnonzero((sq != rq).any(axis=1) | (sv != rv).any(axis=1))
         i = int(bad[0])
-        print(f"    {len(bad)} runs differ; run {i}: max |dqpos| {np.abs(sq[i] - rq[i]).max():.3g}, "
-              f"max |dqvel| {np.abs(sv[i] - rv[i]).max():.3g}")
+        print(
+            f"    {len(bad)} runs differ; run {i}: max |dqpos| {np.abs(sq[i] - rq[i]).max():.3g}, "
+            f"max |dqvel| {np.abs(sv[i] - rv[i]).max():.3g}"
+        )
     # The metrics-only table says the same about each recorded free body's final position.
     table = inputs.simloop(threads, metrics_only=True).to_pandas()
     m = inputs.model
     for column in [c for c in table.columns if c.endswith("_final_pos_x")]:
-        body = m.body(column[:-len("_final_pos_x")])
+        body = m.body(column[: -len("_final_pos_x")])
         if body.jntnum[0] < 1 or m.jnt_type[body.jntadr[0]] != mujoco.mjtJoint.mjJNT_FREE:
             continue
         adr = m.jnt_qposadr[body.jntadr[0]]
         tq = table[[column[:-1] + axis for axis in "xyz"]].to_numpy()
-        same_table = np.array_equal(tq, sq[:, adr:adr + 3])
-        print(f"  threads={threads}: metrics_only table's {column[:-2]} "
-              f"{'identical' if same_table else 'DIFFERS'} to the full results' final qpos")
+        same_table = np.array_equal(tq, sq[:, adr : adr + 3])
+        print(
+            f"  threads={threads}: metrics_only table's {column[:-2]} "
+            f"{'identical' if same_table else 'DIFFERS'} to the full results' final qpos"
+        )
     return same_q and same_v
 
 
@@ -211,12 +227,16 @@ def main():
     inputs = Inputs(args.scene, args.batch, args.steps)
     m = inputs.model
     datas = [mujoco.MjData(m) for _ in range(max(args.threads))]
-    print(f"bench_rollout: {args.scene.name}, B={args.batch} x T={args.steps} x nu={m.nu}, "
-          f"MuJoCo {mujoco.__version__} (mujoco) / {mujoco.mj_versionString()}, simloop {simloop.__version__}, "
-          f"{args.rounds} rounds")
-    print(f"simloop state: {sum(n for _, n in inputs.layout)} values "
-          f"({', '.join(f'{k} {n}' for k, n in inputs.layout if n)}); "
-          f"rollout state: {inputs.rollout_state0.shape[1]} values (mjSTATE_FULLPHYSICS)")
+    print(
+        f"bench_rollout: {args.scene.name}, B={args.batch} x T={args.steps} x nu={m.nu}, "
+        f"MuJoCo {mujoco.__version__} (mujoco) / {mujoco.mj_versionString()}, simloop {simloop.__version__}, "
+        f"{args.rounds} rounds"
+    )
+    print(
+        f"simloop state: {sum(n for _, n in inputs.layout)} values "
+        f"({', '.join(f'{k} {n}' for k, n in inputs.layout if n)}); "
+        f"rollout state: {inputs.rollout_state0.shape[1]} values (mjSTATE_FULLPHYSICS)"
+    )
 
     print("same physics?")
     ok = all([check_same(inputs, datas, k) for k in args.threads])
@@ -236,18 +256,22 @@ def main():
     for round_ in range(args.rounds):
         for key in keys:
             name, keep, k = key
-            s = lambda: inputs.simloop(k, not keep)  # noqa: E731
-            r = lambda: inputs.rollout(k, datas, keep)  # noqa: E731
+            s = lambda k=k, keep=keep: inputs.simloop(k, not keep)  # noqa: E731
+            r = lambda k=k, keep=keep: inputs.rollout(k, datas, keep)  # noqa: E731
             order = (("s", s), ("r", r)) if round_ % 2 == 0 else (("r", r), ("s", s))
             for side, fn in order:
                 times[key][side].append(timed(fn))
 
     total = args.batch * args.steps
     us = 1e6 / total
-    print(f"medians over {args.rounds} rounds, per step ({total} steps a call); "
-          f"ratio = median of per-round simloop / rollout; target <= {TARGET} in CPU time")
-    print(f"  {'pair':<7} {'thr':>3} | {'simloop wall':>12} {'cpu':>7} {'rusage':>7} | "
-          f"{'rollout wall':>12} {'cpu':>7} {'rusage':>7} | {'ratio wall':>10} {'cpu':>6}")
+    print(
+        f"medians over {args.rounds} rounds, per step ({total} steps a call); "
+        f"ratio = median of per-round simloop / rollout; target <= {TARGET} in CPU time"
+    )
+    print(
+        f"  {'pair':<7} {'thr':>3} | {'simloop wall':>12} {'cpu':>7} {'rusage':>7} | "
+        f"{'rollout wall':>12} {'cpu':>7} {'rusage':>7} | {'ratio wall':>10} {'cpu':>6}"
+    )
     worst = 0.0
     for key in keys:
         name, keep, k = key
@@ -256,9 +280,11 @@ def main():
         wall_ratio = statistics.median(a[0] / b[0] for a, b in zip(s, r))
         cpu_ratio = statistics.median(a[1] / b[1] for a, b in zip(s, r))
         worst = max(worst, cpu_ratio)
-        print(f"  {name:<7} {k:>3} | {med(s, 0):9.2f} us {med(s, 1):7.2f} {med(s, 2):7.2f} | "
-              f"{med(r, 0):9.2f} us {med(r, 1):7.2f} {med(r, 2):7.2f} | {wall_ratio:10.4f} {cpu_ratio:6.4f}"
-              f"{'' if cpu_ratio <= TARGET else '  (over target)'}")
+        print(
+            f"  {name:<7} {k:>3} | {med(s, 0):9.2f} us {med(s, 1):7.2f} {med(s, 2):7.2f} | "
+            f"{med(r, 0):9.2f} us {med(r, 1):7.2f} {med(r, 2):7.2f} | {wall_ratio:10.4f} {cpu_ratio:6.4f}"
+            f"{'' if cpu_ratio <= TARGET else '  (over target)'}"
+        )
         if args.verbose:
             print("          CPU ratio by round: " + " ".join(f"{a[1] / b[1]:.3f}" for a, b in zip(s, r)))
     print(f"worst CPU ratio {worst:.4f} (target <= {TARGET})")

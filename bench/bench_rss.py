@@ -23,6 +23,7 @@ the target). 10^6 steps with the recording take about half a minute a run
 on the 2-core development machine and write a 200 MB .rrd and a 330 MB CSV
 into a temporary folder.
 """
+
 import argparse
 import os
 import re
@@ -40,8 +41,12 @@ TARGET_RATIO = 1.5
 def run_once(command, steps: int, out: Path):
     """(wall s, CPU s, peak MiB, .rrd bytes or None) of one run."""
     start = time.perf_counter()
-    proc = subprocess.Popen([*map(str, command), "--steps", str(steps), "--out", str(out)], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
+    proc = subprocess.Popen(
+        [*map(str, command), "--steps", str(steps), "--out", str(out)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     _, status, usage = os.wait4(proc.pid, 0)
     wall = time.perf_counter() - start
     stdout, stderr = proc.stdout.read(), proc.stderr.read()
@@ -69,9 +74,11 @@ def main() -> int:
     exe = args.build / "sim_loop"
     if not exe.exists():
         sys.exit(f"--build: {exe} not found; build first (README)")
-    commands = [("sim_loop", [exe]),
-                ("python -m simloop --no-rerun", [args.python, "-m", "simloop", "--no-rerun"]),
-                ("python -m simloop (recording)", [args.python, "-m", "simloop"])]
+    commands = [
+        ("sim_loop", [exe]),
+        ("python -m simloop --no-rerun", [args.python, "-m", "simloop", "--no-rerun"]),
+        ("python -m simloop (recording)", [args.python, "-m", "simloop"]),
+    ]
     rows = []
     with tempfile.TemporaryDirectory(prefix="bench_rss.") as tmp:
         for label, command in commands:
@@ -79,18 +86,28 @@ def main() -> int:
                 runs = args.big_runs if steps >= 10**6 else args.runs
                 results = [run_once(command, steps, Path(tmp)) for _ in range(runs)]
                 walls, cpus, peaks, sizes = zip(*results)
-                rows.append((label, steps, runs, statistics.median(walls), statistics.median(cpus),
-                             statistics.median(peaks), sizes[0]))
+                rows.append(
+                    (
+                        label,
+                        steps,
+                        runs,
+                        statistics.median(walls),
+                        statistics.median(cpus),
+                        statistics.median(peaks),
+                        sizes[0],
+                    )
+                )
                 print(f"  {label} {steps}: peak {rows[-1][5]:.1f} MiB", file=sys.stderr, flush=True)
     print("the chapter's run, --steps N: medians; peak = VmHWM of the command's process")
-    print(f"{'command':>30} {'steps':>8} {'runs':>4} {'wall s':>8} {'CPU s':>8} {'peak MiB':>9} "
-          f"{'/peak@1st':>9} {'rrd B/step':>10}")
+    print(
+        f"{'command':>30} {'steps':>8} {'runs':>4} {'wall s':>8} {'CPU s':>8} {'peak MiB':>9} "
+        f"{'/peak@1st':>9} {'rrd B/step':>10}"
+    )
     ok = True
     for label, steps, runs, wall, cpu, peak, size in rows:
         base = next(r[5] for r in rows if r[0] == label)
         per_step = f"{size / (steps + 1):10.1f}" if size else f"{'-':>10}"
-        print(f"{label:>30} {steps:>8} {runs:>4} {wall:>8.2f} {cpu:>8.2f} {peak:>9.1f} {peak / base:>9.2f} "
-              f"{per_step}")
+        print(f"{label:>30} {steps:>8} {runs:>4} {wall:>8.2f} {cpu:>8.2f} {peak:>9.1f} {peak / base:>9.2f} {per_step}")
     for label, _ in commands:
         mine = [r for r in rows if r[0] == label]
         ratio = mine[-1][5] / mine[0][5]

@@ -16,6 +16,7 @@ when it is quiet, and read the medians.
 
     .venv/bin/python bench/bench_sim.py [--steps 2000] [--repeats 11]
 """
+
 import argparse
 import copy
 import pickle
@@ -24,7 +25,6 @@ import time
 from pathlib import Path
 
 import numpy as np
-
 import simloop
 
 WALKER = Path(__file__).resolve().parents[1] / "tests" / "scenes" / "walker.xml"
@@ -78,8 +78,14 @@ def main() -> None:
         for _ in range(n // 10):
             pickle.loads(pickle.dumps(sim))
 
-    cases = [("bulk", bulk, n), ("view", view, n), ("step_ctrl", step_ctrl, n), ("state", state, n),
-             ("copy", copies, n // 10), ("pickle", pickles, n // 10)]
+    cases = [
+        ("bulk", bulk, n),
+        ("view", view, n),
+        ("step_ctrl", step_ctrl, n),
+        ("state", state, n),
+        ("copy", copies, n // 10),
+        ("pickle", pickles, n // 10),
+    ]
     medians = {}
     for name, work, count in cases:
         samples = [timed(work, count) for _ in range(args.repeats)]

@@ -36,17 +36,21 @@ def main() -> int:
         one.append(seconds(lambda: simloop.sweep(timesteps, threads=1)))
         two.append(seconds(lambda: simloop.sweep(timesteps, threads=2)))
     t1, t2 = statistics.median(one), statistics.median(two)
-    print(f"sweep, 25 timesteps 0.001..0.1 s, 4 s each ({steps} steps): 1 thread {t1:.3f} s, 2 threads {t2:.3f} s "
-          f"(budget 0.3 s, ratio {t2 / 0.3:.2f}); 1 / 2 threads: {t1 / t2:.2f} (budget >= 1.6)")
+    print(
+        f"sweep, 25 timesteps 0.001..0.1 s, 4 s each ({steps} steps): 1 thread {t1:.3f} s, 2 threads {t2:.3f} s "
+        f"(budget 0.3 s, ratio {t2 / 0.3:.2f}); 1 / 2 threads: {t1 / t2:.2f} (budget >= 1.6)"
+    )
 
     plain, audited = [], []
     for _ in range(args.rounds * 10):
         plain.append(seconds(lambda: simloop.run()))
         audited.append(seconds(lambda: simloop.run(audit_energy=True)))
     ratio = statistics.median(a / p for a, p in zip(audited, plain))
-    print(f"energy audit, 2000 steps: plain {statistics.median(plain) * 1e3:.2f} ms, audited "
-          f"{statistics.median(audited) * 1e3:.2f} ms; audited / plain {ratio:.3f} "
-          f"(median of {len(plain)} pairs; budget <= 1.15)")
+    print(
+        f"energy audit, 2000 steps: plain {statistics.median(plain) * 1e3:.2f} ms, audited "
+        f"{statistics.median(audited) * 1e3:.2f} ms; audited / plain {ratio:.3f} "
+        f"(median of {len(plain)} pairs; budget <= 1.15)"
+    )
     return 0
 
 

@@ -23,7 +23,6 @@ import statistics
 import time
 
 import numpy as np
-
 from simloop.gym import PUSHT_SCENARIO, ScenarioVectorEnv
 
 
@@ -54,17 +53,24 @@ def main() -> int:
     timed(envs[1]), timed(envs[2])  # warm up
     times = {1: [], 2: []}
     for r in range(args.rounds):
-        for t in ((1, 2) if r % 2 else (2, 1)):
+        for t in (1, 2) if r % 2 else (2, 1):
             times[t].append(timed(envs[t]))
-    print(f"ScenarioVectorEnv(PushT): {args.envs} envs x {args.every} steps per call x {args.calls} calls "
-          f"= {steps} physics steps a round, {args.rounds} rounds"
-          + (f", {args.pause:g} us paused between calls (not timed; CPU time includes any spent meanwhile)"
-             if pause else ""))
+    print(
+        f"ScenarioVectorEnv(PushT): {args.envs} envs x {args.every} steps per call x {args.calls} calls "
+        f"= {steps} physics steps a round, {args.rounds} rounds"
+        + (
+            f", {args.pause:g} us paused between calls (not timed; CPU time includes any spent meanwhile)"
+            if pause
+            else ""
+        )
+    )
     for t in (1, 2):
         wall = statistics.median(x[0] for x in times[t])
         cpu = statistics.median(x[1] for x in times[t])
-        print(f"  {t} thread{'s' if t > 1 else ' '}: {steps / wall:10.0f} steps/s wall (median {wall * 1e3:7.2f} ms), "
-              f"cpu median {cpu * 1e3:7.2f} ms")
+        print(
+            f"  {t} thread{'s' if t > 1 else ' '}: {steps / wall:10.0f} steps/s wall (median {wall * 1e3:7.2f} ms), "
+            f"cpu median {cpu * 1e3:7.2f} ms"
+        )
     ratio = statistics.median(one[0] / two[0] for one, two in zip(times[1], times[2]))
     print(f"  2 threads / 1 thread: {ratio:.3f} x the steps per second (median of per-round ratios; target >= 1.8)")
     return 0

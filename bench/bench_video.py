@@ -27,9 +27,9 @@ def apng_frames(path: Path) -> int:
     data = path.read_bytes()
     at = 8
     while at < len(data):
-        size, kind = struct.unpack(">I4s", data[at:at + 8])
+        size, kind = struct.unpack(">I4s", data[at : at + 8])
         if kind == b"acTL":
-            return struct.unpack(">I", data[at + 8:at + 12])[0]
+            return struct.unpack(">I", data[at + 8 : at + 12])[0]
         at += 12 + size
     raise ValueError(f"{path}: no acTL chunk")
 
@@ -39,8 +39,13 @@ def one_run(python: str, steps: int) -> tuple[float, float, int]:
     with tempfile.TemporaryDirectory() as folder:
         before = resource.getrusage(resource.RUSAGE_CHILDREN)
         started = time.perf_counter()
-        subprocess.run([python, "-m", "simloop", "--steps", str(steps), "--no-rerun", "--video", "v.png", "--out",
-                        "out"], cwd=folder, check=True, capture_output=True, stdin=subprocess.DEVNULL)
+        subprocess.run(
+            [python, "-m", "simloop", "--steps", str(steps), "--no-rerun", "--video", "v.png", "--out", "out"],
+            cwd=folder,
+            check=True,
+            capture_output=True,
+            stdin=subprocess.DEVNULL,
+        )
         wall = time.perf_counter() - started
         after = resource.getrusage(resource.RUSAGE_CHILDREN)
         cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
@@ -65,8 +70,10 @@ def main() -> None:
         wall = statistics.median(r[0] for r in results)
         cpu = statistics.median(r[1] for r in results)
         fps[label] = frames / wall
-        print(f"{label:6s} {frames} frames: wall {wall:.2f} s ({wall / frames * 1e3:.1f} ms a frame, "
-              f"{fps[label]:.1f} frames/s), CPU {cpu:.2f} s ({cpu / frames * 1e3:.1f} ms a frame)")
+        print(
+            f"{label:6s} {frames} frames: wall {wall:.2f} s ({wall / frames * 1e3:.1f} ms a frame, "
+            f"{fps[label]:.1f} frames/s), CPU {cpu:.2f} s ({cpu / frames * 1e3:.1f} ms a frame)"
+        )
     print(f"frames per second, after / before: {fps['after'] / fps['before']:.2f}")
     print(f"load average at end: {os.getloadavg()[0]:.2f}")
 

@@ -13,6 +13,7 @@ It prints one JSON line: the MuJoCo version, the shove, the chapter's
 lateral_drift and final position, the peak box z over every step and over the
 steps the chapter's recording logs (every 5th), and the largest |y|.
 """
+
 import argparse
 import json
 
@@ -62,7 +63,7 @@ for step in range(num_steps):
     if step == push_start:
         box_pos_at_push = data.xpos[box.id].copy()
     if step % 5 == 0:
-        logged_z.append(float(data.xpos[box.id][2]))   # what the chapter's recording holds
+        logged_z.append(float(data.xpos[box.id][2]))  # what the chapter's recording holds
     zs.append(float(data.qpos[2]))
     ys.append(float(data.qpos[1]))
     data.ctrl[0] = 1.0
@@ -70,9 +71,19 @@ for step in range(num_steps):
     mujoco.mj_step(model, data)
 final_box_pos = data.qpos[0:3]
 lateral_drift = float(abs(final_box_pos[1] - box_pos_at_push[1]))
-print(json.dumps({"mujoco": mujoco.__version__, "seed": args.seed, "timestep": args.timestep, "perturb": args.perturb,
-                  "shove_y": float(push_force[1]), "lateral_drift": round(lateral_drift, 6),
-                  "final_pos": [round(float(v), 6) for v in final_box_pos],
-                  "peak_z_every_step": round(max(zs + [float(data.qpos[2])]), 6),
-                  "peak_z_logged_every_5th": round(max(logged_z), 6),
-                  "max_abs_y": round(max(abs(v) for v in ys), 6)}))
+print(
+    json.dumps(
+        {
+            "mujoco": mujoco.__version__,
+            "seed": args.seed,
+            "timestep": args.timestep,
+            "perturb": args.perturb,
+            "shove_y": float(push_force[1]),
+            "lateral_drift": round(lateral_drift, 6),
+            "final_pos": [round(float(v), 6) for v in final_box_pos],
+            "peak_z_every_step": round(max(zs + [float(data.qpos[2])]), 6),
+            "peak_z_logged_every_5th": round(max(logged_z), 6),
+            "max_abs_y": round(max(abs(v) for v in ys), 6),
+        }
+    )
+)

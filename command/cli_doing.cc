@@ -8,12 +8,11 @@ namespace simloop::cli {
 
 std::string doing(const Options& opts, const Model* scene, const Scenario* scenario) {
   const std::string model = !opts.scenario_path.empty() ? "--scenario " + opts.scenario_path
-                            : opts.model_path.empty()    ? "the pusher scene"
-                                                         : "--model " + opts.model_path;
+                            : opts.model_path.empty()   ? "the pusher scene"
+                                                        : "--model " + opts.model_path;
   if (opts.command == Command::kSweep) {
-    const std::string count = opts.sweep_timesteps.empty()
-                                  ? "the default timesteps"
-                                  : std::to_string(opts.sweep_timesteps.size()) + " timesteps";
+    const std::string count = opts.sweep_timesteps.empty() ? "the default timesteps"
+                                                           : std::to_string(opts.sweep_timesteps.size()) + " timesteps";
     return "sweeping " + count + " of " + model + " (--duration " + python_float_repr(opts.sweep_duration) +
            ", --threads " + (opts.threads > 0 ? std::to_string(opts.threads) : std::string("auto")) + ")";
   }

@@ -69,10 +69,9 @@ double parse_timestep(std::string_view flag, std::string_view value) {
     // 0.002s, 2ms: a number with a unit after it.
     const size_t unit = text.find_first_not_of("0123456789.");
     const std::string suffix = unit == std::string::npos ? std::string() : text.substr(unit);
-    const bool has_unit = unit != 0 && !suffix.empty() && plain_decimal(text.substr(0, unit)) && suffix != "e" &&
-                          suffix != "E" && std::all_of(suffix.begin(), suffix.end(), [](unsigned char c) {
-                            return std::isalpha(c) != 0;
-                          });
+    const bool has_unit =
+        unit != 0 && !suffix.empty() && plain_decimal(text.substr(0, unit)) && suffix != "e" && suffix != "E" &&
+        std::all_of(suffix.begin(), suffix.end(), [](unsigned char c) { return std::isalpha(c) != 0; });
     throw UsageError(std::string(flag) + " must be a positive, finite number of seconds" +
                      (has_unit ? " without a unit (0.002, not 0.002s)" : "") + ", got " + quoted_value(value));
   }
@@ -86,7 +85,8 @@ std::pair<std::string, double> parse_ctrl(std::string_view flag, std::string_vie
   const bool plain = plain_decimal(number);
   const double x = plain ? std::strtod(number.c_str(), nullptr) : 0.0;
   if (eq == 0 || eq == std::string_view::npos || !plain || !std::isfinite(x)) {
-    throw UsageError(std::string(flag) + " must be ACTUATOR=VALUE (an actuator's name or index, a finite number), got " +
+    throw UsageError(std::string(flag) +
+                     " must be ACTUATOR=VALUE (an actuator's name or index, a finite number), got " +
                      quoted_value(value));
   }
   return {std::string(value.substr(0, eq)), x};
@@ -134,9 +134,9 @@ void check_video_file(const Options& opts) {
     std::error_code ignored;
     return std::filesystem::weakly_canonical(std::filesystem::absolute(p, ignored), ignored);
   };
-  std::vector<std::pair<std::filesystem::path, std::string>> others = {
-      {opts.out / "metrics.json", "metrics.json"}, {opts.out / "trajectory.csv", "trajectory.csv"},
-      {opts.out / "sim_loop.rrd", "recording"}};
+  std::vector<std::pair<std::filesystem::path, std::string>> others = {{opts.out / "metrics.json", "metrics.json"},
+                                                                       {opts.out / "trajectory.csv", "trajectory.csv"},
+                                                                       {opts.out / "sim_loop.rrd", "recording"}};
   if (opts.plot) others.emplace_back(opts.out / "trajectory.png", "--plot's trajectory.png");
   for (const std::filesystem::path& file : {opts.video, std::filesystem::path(opts.video).replace_extension(".png")}) {
     std::error_code error;
@@ -199,7 +199,8 @@ Options parse(int argc, const char* const* argv) {
       if (sweeping) throw UsageError(std::string(arg) + " is not a sweep option (see sweep --help)");
     };
     const auto sweep_only = [&] {
-      if (!sweeping) throw UsageError(std::string(arg) + " belongs to the sweep command: sim_loop sweep " + std::string(arg));
+      if (!sweeping)
+        throw UsageError(std::string(arg) + " belongs to the sweep command: sim_loop sweep " + std::string(arg));
     };
     if (arg == "--timesteps") {
       sweep_only();
@@ -312,8 +313,9 @@ Options parse(int argc, const char* const* argv) {
   }
   if (opts.chapter) {  // the chapter draws its shove with numpy's default_rng
     if (opts.rng_given && opts.run.rng != ShoveRng::kNumpy) {
-      throw UsageError("--chapter draws the shove as the chapter does (--rng numpy); it cannot be combined with --rng " +
-                       std::string(rng_name(opts.run.rng)));
+      throw UsageError(
+          "--chapter draws the shove as the chapter does (--rng numpy); it cannot be combined with --rng " +
+          std::string(rng_name(opts.run.rng)));
     }
     opts.run.rng = ShoveRng::kNumpy;
   }
@@ -351,7 +353,8 @@ Options parse(int argc, const char* const* argv) {
     }
   }
   if (opts.is_scenario() && opts.run.audit_energy) {
-    throw UsageError("--energy-audit accounts for the chapter's box and pusher only (not with --scenario, --body or --ctrl)");
+    throw UsageError(
+        "--energy-audit accounts for the chapter's box and pusher only (not with --scenario, --body or --ctrl)");
   }
   check_video_file(opts);
   // The library would refuse it too; say it in the flags' words.

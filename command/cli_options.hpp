@@ -8,8 +8,8 @@
 #include <filesystem>
 #include <stdexcept>
 #include <string>
-#include <vector>
 #include <string_view>
+#include <vector>
 
 #include "simloop/model.hpp"
 #include "simloop/run.hpp"
@@ -27,28 +27,26 @@ struct Options {
   std::vector<double> sweep_timesteps;
   double sweep_duration = 4.0;
   bool sweep_duration_given = false;  // --duration was given (a scenario sweep's default is the scenario's length)
-  int threads = 0;         // 0: one per core
-  bool plot = false;       // --plot: trajectory.png / sweep.png
+  int threads = 0;                    // 0: one per core
+  bool plot = false;                  // --plot: trajectory.png / sweep.png
   std::filesystem::path out = "outputs/ch0.1-sim-loop";
   std::string model_path;  // empty: the embedded pusher scene
   // Your scene, your loop (a scenario instead of the chapter's fixed run):
-  std::string scenario_path;  // --scenario FILE (TOML)
-  std::string body;           // --body NAME: the body the chapter's shove acts on ("" : box)
+  std::string scenario_path;                          // --scenario FILE (TOML)
+  std::string body;                                   // --body NAME: the body the chapter's shove acts on ("" : box)
   std::vector<std::pair<std::string, double>> ctrls;  // --ctrl ACTUATOR=VALUE, in order
-  bool timestep_given = false;  // --timestep was given (else the scene's or scenario's own)
-  bool steps_given = false;     // --steps or --smoke was given (else the scenario's length)
-  bool rng_given = false;       // --rng was given
-  bool chapter = false;         // --chapter: the book's run as closely as this build allows
-  bool rerun = true;       // accepted for the chapter's command lines; sim_loop records nothing
+  bool timestep_given = false;                        // --timestep was given (else the scene's or scenario's own)
+  bool steps_given = false;                           // --steps or --smoke was given (else the scenario's length)
+  bool rng_given = false;                             // --rng was given
+  bool chapter = false;                               // --chapter: the book's run as closely as this build allows
+  bool rerun = true;            // accepted for the chapter's command lines; sim_loop records nothing
   std::filesystem::path video;  // --video FILE: pictures of the run (python -m simloop only)
   bool help = false;
   bool version = false;
 
   // True when the run is a scenario (--scenario, --body or --ctrl), not the
   // chapter's fixed run with its exact outputs.
-  [[nodiscard]] bool is_scenario() const noexcept {
-    return !scenario_path.empty() || !body.empty() || !ctrls.empty();
-  }
+  [[nodiscard]] bool is_scenario() const noexcept { return !scenario_path.empty() || !body.empty() || !ctrls.empty(); }
 };
 
 // A bad command line. The message is one line naming the flag and the value.
@@ -107,8 +105,7 @@ void complete_scenario_sweep(Options& opts, const Model& scene, const Scenario& 
 // --timestep 0.002, --record-every 1)" or "sweeping ...". With the scene and
 // scenario of a scenario run, the timestep and steps it ran with: the
 // flags', else the scenario's, else the scene's own.
-[[nodiscard]] std::string doing(const Options& opts, const Model* scene = nullptr,
-                                const Scenario* scenario = nullptr);
+[[nodiscard]] std::string doing(const Options& opts, const Model* scene = nullptr, const Scenario* scenario = nullptr);
 
 // --help for `program`; `recording` says what --rerun does there, `plot`
 // what --plot does.

@@ -1,12 +1,11 @@
 // The command's flags turned into what runs: the quick flags' scenario
 // (--body, --ctrl), the checks of a run's inputs in the flags' words, a
 // scenario sweep's span and grid, and the ScenarioConfig the flags ask for.
-#include "cli_options.hpp"
-
 #include <cstdlib>
 #include <filesystem>
 #include <string>
 
+#include "cli_options.hpp"
 #include "simloop/chapter_scene.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/number_format.hpp"
@@ -54,8 +53,7 @@ Scenario scenario_from_flags(const Options& opts, const Model* scene) {
 
 bool nothing_to_push(const Options& opts, const Model& scene) {
   const mjModel* m = scene.get();
-  return opts.command == Command::kRun && !opts.model_path.empty() && !opts.is_scenario() && m->nv == 0 &&
-         m->nu == 0;
+  return opts.command == Command::kRun && !opts.model_path.empty() && !opts.is_scenario() && m->nv == 0 && m->nu == 0;
 }
 
 namespace {
@@ -64,7 +62,8 @@ namespace {
 // flags' scenario has the shove as disturbance[0] (--body) and the --ctrl
 // values as control[0], control[1]...
 std::string scenario_error(const Options& opts, const std::string& what) {
-  if (!opts.scenario_path.empty()) return "--scenario: " + opts.scenario_path + ": " + what;  // as a parse error says it
+  if (!opts.scenario_path.empty())
+    return "--scenario: " + opts.scenario_path + ": " + what;  // as a parse error says it
   const std::string shove = "disturbance[0]: ";
   if (what.rfind(shove, 0) == 0) {
     return "--body" + std::string(opts.body.empty() ? " (default box)" : "") + ": " + what.substr(shove.size());

@@ -68,7 +68,8 @@ int sweep_into(Host& host, const Options& opts, Sweep&& sweep) {
 template <class Run>
 int run_into(Host& host, const Options& opts, const Model& model, const Scenario* scenario, Run&& run) {
   std::unique_ptr<Recording> recording;
-  if (opts.rerun || !opts.video.empty()) recording = host.recording(opts, model, scenario);  // begun before anything is written
+  if (opts.rerun || !opts.video.empty())
+    recording = host.recording(opts, model, scenario);  // begun before anything is written
   std::optional<decltype(run(recording.get(), nullptr))> done;
   host.work("running", [&](RunControl* control) { done.emplace(run(recording.get(), control)); });
   host.outputs_written();
@@ -80,8 +81,8 @@ int run_into(Host& host, const Options& opts, const Model& model, const Scenario
   print(host, summary_text(result));
   print(host, line("metrics", files.metrics));
   print(host, line("trajectory", files.trajectory,
-                  " (" + std::to_string(result.rows) + " rows" +
-                      (scenario ? ", " + std::to_string(result.columns.size()) + " columns" : std::string()) + ")"));
+                   " (" + std::to_string(result.rows) + " rows" +
+                       (scenario ? ", " + std::to_string(result.columns.size()) + " columns" : std::string()) + ")"));
   if (recording) {
     print(host, recording->line() + "\n");
   } else if (opts.rerun) {
@@ -165,7 +166,8 @@ int run_command(const std::vector<std::string>& args, Host& host) {
                                       : Model::from_file(opts.model_path);
   } catch (const Error& e) {
     const bool theirs = scenario ? !scenario->scene.empty() : !opts.model_path.empty();
-    return refuse(theirs ? kExitUsage : kExitRunFailed, (scenario ? "--scenario: " : "--model: ") + std::string(e.what()));
+    return refuse(theirs ? kExitUsage : kExitRunFailed,
+                  (scenario ? "--scenario: " : "--model: ") + std::string(e.what()));
   } catch (const std::bad_alloc&) {
     return refuse(kExitRunFailed, model_flag + ": out of memory while loading the model");
   } catch (const std::exception& e) {

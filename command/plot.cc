@@ -33,7 +33,8 @@ std::filesystem::path plot_with_python(const std::filesystem::path& out, const c
   // line (its last line, a traceback's verdict), not as a traceback and ours.
   int err_pipe[2];
   if (::pipe2(err_pipe, O_CLOEXEC) != 0) {
-    throw simloop::cli::Failure(simloop::cli::kExitRunFailed, "--plot: cannot start " + python + " (" + std::strerror(errno) + ")");
+    throw simloop::cli::Failure(simloop::cli::kExitRunFailed,
+                                "--plot: cannot start " + python + " (" + std::strerror(errno) + ")");
   }
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
@@ -52,8 +53,10 @@ std::filesystem::path plot_with_python(const std::filesystem::path& out, const c
   ::close(err_pipe[1]);
   if (spawned != 0) {
     ::close(err_pipe[0]);
-    throw simloop::cli::Failure(simloop::cli::kExitRunFailed, "--plot: cannot start " + python + " (scripts/test.sh installs the simloop package "
-                                "into the project's .venv; or set SIMLOOP_PYTHON to a Python that has it)");
+    throw simloop::cli::Failure(simloop::cli::kExitRunFailed,
+                                "--plot: cannot start " + python +
+                                    " (scripts/test.sh installs the simloop package "
+                                    "into the project's .venv; or set SIMLOOP_PYTHON to a Python that has it)");
   }
   // Read its stderr until it exits (not until the pipe's end: something it
   // started may hold that open); on a stop, end its process group.
@@ -92,7 +95,8 @@ std::filesystem::path plot_with_python(const std::filesystem::path& out, const c
       last = err_text.substr(begin, end - begin + 1);
     }
     if (last.rfind("sim-loop: ", 0) == 0) last.erase(0, 10);
-    throw simloop::cli::Failure(simloop::cli::kExitRunFailed, "--plot: " + python + " -m simloop plot failed" +
+    throw simloop::cli::Failure(simloop::cli::kExitRunFailed,
+                                "--plot: " + python + " -m simloop plot failed" +
                                     (last.empty() ? std::string() : ": " + last) +
                                     " (the outputs above were written; the plot needs the simloop package and "
                                     "matplotlib; scripts/test.sh installs both into the project's .venv)");

@@ -24,11 +24,10 @@ TerminalProgress g_progress;
 // go with the stack. Made at startup, on the main thread (its owner). Its
 // poll draws the progress bar; without a terminal there is no poll at all,
 // so the loop does not even read the clock for it.
-simloop::RunControl g_control = TerminalProgress::wanted()
-                                    ? simloop::RunControl([](std::int64_t done, std::int64_t total) {
-                                        g_progress.draw(done, total);
-                                      })
-                                    : simloop::RunControl();
+simloop::RunControl g_control =
+    TerminalProgress::wanted()
+        ? simloop::RunControl([](std::int64_t done, std::int64_t total) { g_progress.draw(done, total); })
+        : simloop::RunControl();
 volatile std::sig_atomic_t g_signal = 0;
 // Set while nothing is half-done (no temporary file exists): loading the
 // model, which cannot be stopped between chunks, ends the process at once.

@@ -58,9 +58,9 @@ class TerminalProgress {
     last_draw_ = now;
     const double fraction = std::min(1.0, static_cast<double>(done) / static_cast<double>(total));
     char counts[128];
-    const int written = std::snprintf(counts, sizeof counts, "] %3d%% %lld/%lld steps",
-                                      static_cast<int>(fraction * 100.0), static_cast<long long>(done),
-                                      static_cast<long long>(total));
+    const int written =
+        std::snprintf(counts, sizeof counts, "] %3d%% %lld/%lld steps", static_cast<int>(fraction * 100.0),
+                      static_cast<long long>(done), static_cast<long long>(total));
     // The time left at the rate so far, once there is a rate to go by.
     const double elapsed = std::chrono::duration<double>(now - started_).count();
     if (done > 0 && done < total && elapsed >= 1.0 && written > 0) {

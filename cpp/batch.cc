@@ -1,5 +1,7 @@
 #include "simloop/batch.hpp"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -12,12 +14,10 @@
 #include <system_error>
 #include <thread>
 
-#include <unistd.h>
-
 #include "chapter_detail.hpp"
 #include "run_detail.hpp"
-#include "worker_pool.hpp"
 #include "simloop/errors.hpp"
+#include "worker_pool.hpp"
 
 namespace simloop {
 
@@ -136,7 +136,7 @@ void detail::WorkerPool::wait_round(const std::function<void()>& poll) {
   // at work are waited for.
   std::uint64_t ticket = s.ticket.load(std::memory_order_acquire);
   while ((ticket & kSeats) != 0 && !s.ticket.compare_exchange_weak(ticket, ticket & ~kSeats, std::memory_order_acq_rel,
-                                                                    std::memory_order_acquire)) {
+                                                                   std::memory_order_acquire)) {
   }
   if ((ticket & kSeats) != 0) s.running.fetch_sub(static_cast<int>(ticket & kSeats), std::memory_order_acq_rel);
   const auto finished = [&] { return s.running.load(std::memory_order_acquire) == 0; };
@@ -167,9 +167,8 @@ void detail::run_jobs(const Model& model, std::size_t jobs, int threads, const s
   std::vector<Data> datas;
   datas.reserve(static_cast<std::size_t>(workers));
   for (int w = 0; w < workers; ++w) datas.emplace_back(model);
-  run_jobs(jobs, threads, steps, control, [&](std::size_t i, int worker, RunControl& ctl) {
-    job(i, datas[static_cast<std::size_t>(worker)], ctl);
-  });
+  run_jobs(jobs, threads, steps, control,
+           [&](std::size_t i, int worker, RunControl& ctl) { job(i, datas[static_cast<std::size_t>(worker)], ctl); });
 }
 
 void detail::run_jobs(std::size_t jobs, int threads, const std::vector<std::int64_t>& steps, RunControl* control,
@@ -237,8 +236,8 @@ std::vector<RunResult> run_batch(const Model& model, const std::vector<RunConfig
     for (const RunConfig& config : configs) kept.push_back(kept_rows(config));
     check_kept_rows(kept);
   } else if (sinks.size() != configs.size() || std::find(sinks.begin(), sinks.end(), nullptr) != sinks.end()) {
-    throw InvalidArgument("sinks: one RowSink per config, none null, got " + std::to_string(sinks.size()) +
-                          " for " + std::to_string(configs.size()) + " configs");
+    throw InvalidArgument("sinks: one RowSink per config, none null, got " + std::to_string(sinks.size()) + " for " +
+                          std::to_string(configs.size()) + " configs");
   }
   // The model is frozen while stepping, so each setting (timestep, energy)
   // gets its own copy, made here, before the workers share them.
@@ -255,7 +254,8 @@ std::vector<RunResult> run_batch(const Model& model, const std::vector<RunConfig
   std::vector<std::int64_t> steps;
   for (const RunConfig& c : configs) steps.push_back(c.num_steps());
   detail::run_jobs(model, configs.size(), threads, steps, control, [&](std::size_t i, Data& data, RunControl& ctl) {
-    results[i] = detail::run_counted_elsewhere(*model_of[i], configs[i], data, sinks.empty() ? nullptr : sinks[i], &ctl);
+    results[i] =
+        detail::run_counted_elsewhere(*model_of[i], configs[i], data, sinks.empty() ? nullptr : sinks[i], &ctl);
   });
   return results;
 }

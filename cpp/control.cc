@@ -11,8 +11,7 @@ void RunControl::poll_now() {
 
 void RunControl::advance(std::int64_t steps) {
   done_.fetch_add(steps, std::memory_order_relaxed);
-  if (poll_ && std::this_thread::get_id() == owner_ &&
-      std::chrono::steady_clock::now() - last_poll_ >= kPollInterval) {
+  if (poll_ && std::this_thread::get_id() == owner_ && std::chrono::steady_clock::now() - last_poll_ >= kPollInterval) {
     poll_now();
   }
   if (stop_requested() || batch_abandoned()) throw Interrupted("interrupted");

@@ -61,7 +61,8 @@ std::vector<std::pair<When, double>> read_csv_schedule(const std::filesystem::pa
     const std::string cell = index < row.size() ? row[index] : std::string();
     char* end = nullptr;
     const double value = std::strtod(cell.c_str(), &end);
-    if (cell.empty() || end != cell.c_str() + cell.size() || !std::isfinite(value) || std::isspace(static_cast<unsigned char>(cell[0]))) {
+    if (cell.empty() || end != cell.c_str() + cell.size() || !std::isfinite(value) ||
+        std::isspace(static_cast<unsigned char>(cell[0]))) {
       throw InvalidArgument(where + ": " + file.string() + ":" + std::to_string(line_number - 1) +
                             ": expected a finite number, got " + quoted_value(cell, 40));
     }

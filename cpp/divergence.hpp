@@ -24,13 +24,13 @@
 // It costs one comparison per free body per step.
 #pragma once
 
+#include <mujoco/mujoco.h>
+
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <string>
 #include <vector>
-
-#include <mujoco/mujoco.h>
 
 #include "simloop/rows.hpp"
 

@@ -11,13 +11,13 @@
 // is positive, and the integrator's own damping when it is negative.
 #pragma once
 
+#include <mujoco/mujoco.h>
+
 #include <algorithm>
 #include <vector>
 
-#include <mujoco/mujoco.h>
-
-#include "simloop/run.hpp"
 #include "mujoco_compat.hpp"
+#include "simloop/run.hpp"
 
 namespace simloop::detail {
 

@@ -1,5 +1,4 @@
 #include "simloop/episode.hpp"
-#include "mujoco_compat.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -7,15 +6,16 @@
 #include <string>
 
 #include "loop.hpp"
+#include "mujoco_compat.hpp"
 #include "mujoco_guard.hpp"
 #include "run_detail.hpp"
-#include "worker_pool.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/number_format.hpp"
 #include "simloop/rows.hpp"
 #include "simloop/scene_params.hpp"
 #include "simloop/shove.hpp"
 #include "simloop/state.hpp"
+#include "worker_pool.hpp"
 
 namespace simloop {
 
@@ -75,7 +75,12 @@ struct Episodes::Impl {
 
 Episodes::Episodes(const Model& scene, const Scenario& scenario, const ScenarioConfig& config, std::size_t count)
     : impl_(std::make_unique<Impl>(Impl{scene.for_run(run_timestep(scene, scenario, config), false),
-                                        detail::configured_scenario(scenario, config), config, {}, std::nullopt, 0, {}})) {
+                                        detail::configured_scenario(scenario, config),
+                                        config,
+                                        {},
+                                        std::nullopt,
+                                        0,
+                                        {}})) {
   Impl& s = *impl_;
   s.resolved = resolve(s.scenario, s.model.get());
   // The columns depend on which bodies are disturbed, not on the draws.

@@ -77,17 +77,18 @@ FieldView data_field(const mjModel* m, const mjData* d, std::string_view name) {
     return found;
   }
   if (name == "contact") {
-    throw InvalidArgument("mjData's contact array holds structs, not numbers: read a Sim's contacts (with their "
-                          "forces) instead");
+    throw InvalidArgument(
+        "mjData's contact array holds structs, not numbers: read a Sim's contacts (with their "
+        "forces) instead");
   }
   no_such("mjData", name, data_field_names());
 }
 
 bool model_field_writable(std::string_view name) noexcept {
   static constexpr std::array<std::string_view, 19> kWritable{
-      "body_mass",      "body_inertia",     "body_gravcomp",      "geom_friction",   "geom_solref",
-      "geom_solimp",    "geom_margin",      "geom_rgba",          "dof_damping",     "dof_armature",
-      "dof_frictionloss", "jnt_stiffness",  "actuator_gear",      "actuator_gainprm", "actuator_biasprm",
+      "body_mass",          "body_inertia",        "body_gravcomp",    "geom_friction",    "geom_solref",
+      "geom_solimp",        "geom_margin",         "geom_rgba",        "dof_damping",      "dof_armature",
+      "dof_frictionloss",   "jnt_stiffness",       "actuator_gear",    "actuator_gainprm", "actuator_biasprm",
       "actuator_ctrlrange", "actuator_forcerange", "tendon_stiffness", "tendon_damping"};
   return std::find(kWritable.begin(), kWritable.end(), name) != kWritable.end();
 }

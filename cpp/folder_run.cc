@@ -26,8 +26,9 @@ std::pair<RunRecord, OutputFiles> run_to_folder(const Model& scene, const Scenar
                                                 RunDrawing* drawing, RunControl* control) {
   OutputWriter writer(out);
   // A drawing draws every moving body: the run hands it their poses too.
-  RunRecord result = drawing ? run_scenario_drawn(scene, scenario, config, writer.trajectory(), drawing->rows(), control)
-                             : run_scenario(scene, scenario, config, nullptr, &writer.trajectory(), control);
+  RunRecord result = drawing
+                         ? run_scenario_drawn(scene, scenario, config, writer.trajectory(), drawing->rows(), control)
+                         : run_scenario(scene, scenario, config, nullptr, &writer.trajectory(), control);
   if (drawing) drawing->finish(result);
   OutputFiles files = writer.commit(metrics_json(result), control, files_of(drawing));
   return {std::move(result), std::move(files)};

@@ -48,8 +48,7 @@ mjModel* load_unlocked(const char* filename, const mjVFS* vfs, std::string_view 
   }
   for (std::string& w : capture.take()) warnings.push_back(one_line(w));
   if (m == nullptr) {
-    throw MujocoError(std::string(source) + ": " +
-                      (error[0] ? one_line(error) : "MuJoCo could not load the model"));
+    throw MujocoError(std::string(source) + ": " + (error[0] ? one_line(error) : "MuJoCo could not load the model"));
   }
   if (error[0]) warnings.push_back(one_line(error));  // a compiled model: the compiler's warning
   return m;
@@ -266,14 +265,14 @@ mjModel* load_xml_in_child(const char* filename, const mjVFS* vfs, std::string_v
     // MuJoCo 4's compiler does not check every allocation: past the child's
     // memory budget it can crash where 2.2's said "Could not allocate memory".
     const int signal = WIFSIGNALED(status) ? WTERMSIG(status) : 0;
-    const std::string crashed = signal == SIGSEGV || signal == SIGBUS || signal == SIGABRT
-                                    ? "; out of memory? a compile may use " +
-                                          std::to_string(trajectory_memory_budget() >> 20) + " MiB"
-                                    : "";
-    const std::string how = signal != 0 ? "was killed by signal " + std::to_string(signal) + " (" +
-                                              ::strsignal(signal) +
-                                              (signal == SIGKILL ? "; out of memory?)" : crashed + ")")
-                                        : "ended early (exit " + std::to_string(WEXITSTATUS(status)) + ")";
+    const std::string crashed =
+        signal == SIGSEGV || signal == SIGBUS || signal == SIGABRT
+            ? "; out of memory? a compile may use " + std::to_string(trajectory_memory_budget() >> 20) + " MiB"
+            : "";
+    const std::string how = signal != 0
+                                ? "was killed by signal " + std::to_string(signal) + " (" + ::strsignal(signal) +
+                                      (signal == SIGKILL ? "; out of memory?)" : crashed + ")")
+                                : "ended early (exit " + std::to_string(WEXITSTATUS(status)) + ")";
     throw MujocoError(std::string(source) + ": loading the model: the process compiling it " + how +
                       (said.empty() ? "" : ": " + said));
   }

@@ -15,11 +15,11 @@
 // error; whatever fails there goes with the child.
 #pragma once
 
+#include <mujoco/mujoco.h>
+
 #include <string>
 #include <string_view>
 #include <vector>
-
-#include <mujoco/mujoco.h>
 
 namespace simloop::detail {
 

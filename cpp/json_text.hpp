@@ -90,8 +90,9 @@ struct Json {
         const int length = c >= 0xf0 ? 4 : c >= 0xe0 ? 3 : c >= 0xc0 ? 2 : 1;
         std::uint32_t code = length == 1 ? 0xfffd : c & (0x7f >> length);
         for (int k = 1; k < length; ++k) {
-          code = i + static_cast<size_t>(k) < text.size() ? (code << 6) | (static_cast<unsigned char>(text[i + k]) & 0x3f)
-                                                           : 0xfffd;
+          code = i + static_cast<size_t>(k) < text.size()
+                     ? (code << 6) | (static_cast<unsigned char>(text[i + k]) & 0x3f)
+                     : 0xfffd;
         }
         if (code > 0xffff) {
           code -= 0x10000;

@@ -1,5 +1,3 @@
-#include "simloop/rows.hpp"
-
 #include <sys/resource.h>
 #include <unistd.h>
 
@@ -9,6 +7,7 @@
 #include <sstream>
 
 #include "simloop/errors.hpp"
+#include "simloop/rows.hpp"
 
 namespace simloop {
 namespace {

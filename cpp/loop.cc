@@ -22,8 +22,7 @@ MujocoError stepping_error(const mjModel* m, std::int64_t from, std::int64_t to,
 DecisionStep::DecisionStep(const mjModel* m, const RowRecorder& recorder)
     : nq_(compat::as_int(m->nq)),
       nv_(compat::as_int(m->nv)),
-      whole_forward_(recorder.reads_acceleration_stage() || m->opt.integrator == mjINT_RK4 ||
-                     compat::has_plugins(m)),
+      whole_forward_(recorder.reads_acceleration_stage() || m->opt.integrator == mjINT_RK4 || compat::has_plugins(m)),
       entering_(static_cast<std::size_t>(nq_ + nv_)),
       stepped_(entering_.size()) {}
 

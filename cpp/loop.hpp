@@ -14,20 +14,20 @@
 // between chunks the rows go to the sink and the control may stop the run.
 #pragma once
 
+#include <mujoco/mujoco.h>
+
 #include <algorithm>
 #include <cstdint>
 #include <string>
 #include <vector>
 
-#include <mujoco/mujoco.h>
-
 #include "divergence.hpp"
 #include "mujoco_guard.hpp"
-#include "warning_counter.hpp"
 #include "simloop/control.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/recorder.hpp"
 #include "simloop/scenario.hpp"
+#include "warning_counter.hpp"
 
 namespace simloop::detail {
 
@@ -79,8 +79,7 @@ class StepObserver {
  public:
   virtual ~StepObserver() = default;
   virtual void before_step(std::int64_t /*step*/, const mjModel* /*m*/, const mjData* /*d*/) noexcept {}
-  virtual void after_step(std::int64_t /*step*/, const mjModel* /*m*/, mjData* /*d*/,
-                          double* /*row*/) noexcept {}
+  virtual void after_step(std::int64_t /*step*/, const mjModel* /*m*/, mjData* /*d*/, double* /*row*/) noexcept {}
   // After the last step and the final mj_forward; `row` is the final row.
   virtual void at_end(const mjModel* /*m*/, const mjData* /*d*/, double* /*row*/) noexcept {}
 };
@@ -168,9 +167,9 @@ inline void set_start(const mjModel* m, mjData* d, const Schedule::Start& start)
 // the steps it happened in; the control's stop throws Interrupted.
 // `d_is_reset`: d is already as mj_resetData leaves it for m (a fresh Data,
 // Data::fresh_for), which the loop then does not do again.
-[[nodiscard]] LoopResult run_loop(const mjModel* m, mjData* d, const Schedule& schedule,
-                                  const RowRecorder& recorder, std::int64_t record_every, RowSink& rows,
-                                  RunControl* control, const RunInputs& inputs,
-                                  const std::vector<StepObserver*>& observers = {}, bool d_is_reset = false);
+[[nodiscard]] LoopResult run_loop(const mjModel* m, mjData* d, const Schedule& schedule, const RowRecorder& recorder,
+                                  std::int64_t record_every, RowSink& rows, RunControl* control,
+                                  const RunInputs& inputs, const std::vector<StepObserver*>& observers = {},
+                                  bool d_is_reset = false);
 
 }  // namespace simloop::detail

@@ -1,9 +1,9 @@
 #include "simloop/model.hpp"
 
 #include <cerrno>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
-#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -13,15 +13,14 @@
 
 #include "isolated_load.hpp"
 #include "model_detail.hpp"
-#include "text_input.hpp"
 #include "mujoco_compat.hpp"
 #include "mujoco_guard.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/number_format.hpp"
+#include "text_input.hpp"
 
 namespace simloop {
 namespace {
-
 
 struct ModelDeleter {
   void operator()(const mjModel* m) const noexcept { mj_deleteModel(const_cast<mjModel*>(m)); }
@@ -97,8 +96,8 @@ Model Model::from_file(const std::string& path) {
     const std::optional<char> first = detail::first_visible(start);
     if (!first || *first == '<') throw;
     const char c = *first;
-    const std::string begins =
-        c >= 0x20 && c < 0x7f ? std::string("begins with '") + c + "', not '<'" : std::string("does not begin with '<'");
+    const std::string begins = c >= 0x20 && c < 0x7f ? std::string("begins with '") + c + "', not '<'"
+                                                     : std::string("does not begin with '<'");
     throw MujocoError(path + ": not an MJCF scene (its text " + begins +
                       "); a scenario file (TOML) runs as a scenario (--scenario, simloop.Scenario.from_file)");
   }

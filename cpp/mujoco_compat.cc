@@ -1,6 +1,7 @@
 #include "mujoco_compat.hpp"
 
 #include <link.h>
+#include <mujoco/mjxmacro.h>
 
 #include <algorithm>
 #include <array>
@@ -11,8 +12,6 @@
 #include <mutex>
 #include <system_error>
 #include <type_traits>
-
-#include <mujoco/mjxmacro.h>
 
 #include "mujoco_guard.hpp"
 #include "simloop/errors.hpp"
@@ -37,8 +36,9 @@ mjModel* load_xml(const char* filename, const mjVFS* vfs, char* error, int error
   // Sizes MuJoCo 3's compiler fills element by element (2^31 user numbers a
   // body allocated for minutes, then crashed): refused before compiling.
   const std::pair<const char*, int> user_sizes[] = {
-      {"nuserdata", spec->nuserdata},     {"nuser_body", spec->nuser_body}, {"nuser_jnt", spec->nuser_jnt},
-      {"nuser_geom", spec->nuser_geom},   {"nuser_site", spec->nuser_site}, {"nuser_cam", spec->nuser_cam},
+      {"nuserdata", spec->nuserdata},       {"nuser_body", spec->nuser_body},
+      {"nuser_jnt", spec->nuser_jnt},       {"nuser_geom", spec->nuser_geom},
+      {"nuser_site", spec->nuser_site},     {"nuser_cam", spec->nuser_cam},
       {"nuser_tendon", spec->nuser_tendon}, {"nuser_actuator", spec->nuser_actuator},
       {"nuser_sensor", spec->nuser_sensor}};
   const auto too_big = std::find_if(std::begin(user_sizes), std::end(user_sizes),
@@ -63,7 +63,8 @@ mjModel* load_xml(const char* filename, const mjVFS* vfs, char* error, int error
   mjModel* m = mj_loadXML(filename, vfs, error, error_size);
   // Today's scenes use words 2.2 does not know (implicitfast, <size memory>,
   // actuatorfrcrange, ...): say which MuJoCo this is and how to get the other.
-  if (m == nullptr && (std::strstr(error, "Schema violation") != nullptr || std::strstr(error, "invalid keyword") != nullptr)) {
+  if (m == nullptr &&
+      (std::strstr(error, "Schema violation") != nullptr || std::strstr(error, "invalid keyword") != nullptr)) {
     const std::size_t used = std::strlen(error);
     std::snprintf(error + used, static_cast<std::size_t>(error_size) - used,
                   " (this simloop runs MuJoCo %s; for a scene written for newer MuJoCo, build it on the mujoco "
@@ -139,7 +140,8 @@ std::vector<std::pair<std::string, std::size_t>> state_layout(const mjModel* m) 
     const int element = 1 << i;
     if ((kStateSignature & element) == 0) continue;
     std::string name = kStateNames[i] + std::strlen("mjSTATE_");
-    std::transform(name.begin(), name.end(), name.begin(), [](char c) { return c >= 'A' && c <= 'Z' ? char(c + 32) : c; });
+    std::transform(name.begin(), name.end(), name.begin(),
+                   [](char c) { return c >= 'A' && c <= 'Z' ? char(c + 32) : c; });
     layout.emplace_back(std::move(name), static_cast<std::size_t>(mj_stateSize(m, element)));
   }
   if (sleep_size(m) > 0) layout.emplace_back("tree_asleep", sleep_size(m));
@@ -238,20 +240,29 @@ namespace {
 // mjSTATE_INTEGRATION, in this order. These two lists serve get, put and
 // the layout, so they cannot disagree.
 constexpr std::size_t kParts = 11;
-constexpr std::array<const char*, kParts> kNames = {
-    "time", "qpos", "qvel", "act", "qacc_warmstart", "ctrl", "qfrc_applied", "xfrc_applied",
-    "mocap_pos", "mocap_quat", "userdata"};
+constexpr std::array<const char*, kParts> kNames = {"time",           "qpos",       "qvel",         "act",
+                                                    "qacc_warmstart", "ctrl",       "qfrc_applied", "xfrc_applied",
+                                                    "mocap_pos",      "mocap_quat", "userdata"};
 
 std::array<std::size_t, kParts> sizes(const mjModel* m) noexcept {
-  return {1, count(m->nq), count(m->nv), count(m->na), count(m->nv), count(m->nu), count(m->nv),
-          6 * count(m->nbody), 3 * count(m->nmocap), 4 * count(m->nmocap), count(m->nuserdata)};
+  return {1,
+          count(m->nq),
+          count(m->nv),
+          count(m->na),
+          count(m->nv),
+          count(m->nu),
+          count(m->nv),
+          6 * count(m->nbody),
+          3 * count(m->nmocap),
+          4 * count(m->nmocap),
+          count(m->nuserdata)};
 }
 
 template <typename D>
 auto places(D* d) noexcept {
-  return std::array<decltype(&d->time), kParts>{&d->time, d->qpos, d->qvel, d->act, d->qacc_warmstart,
-                                                 d->ctrl, d->qfrc_applied, d->xfrc_applied, d->mocap_pos,
-                                                 d->mocap_quat, d->userdata};
+  return std::array<decltype(&d->time), kParts>{&d->time,          d->qpos,       d->qvel,         d->act,
+                                                d->qacc_warmstart, d->ctrl,       d->qfrc_applied, d->xfrc_applied,
+                                                d->mocap_pos,      d->mocap_quat, d->userdata};
 }
 
 }  // namespace
@@ -351,8 +362,8 @@ bool visit_array(const std::function<bool(const RawArray&)>& visit, const mjMode
   if constexpr (kNumeric<T>) {
     std::string_view count = size_name(rows_count);
     if (count == "nout" && outputs_are_actuators(m, 0)) count = "nu";
-    return visit(RawArray{name, count, const_cast<std::remove_const_t<T>*>(data),
-                          element_of<std::remove_const_t<T>>(), rows, cols});
+    return visit(RawArray{name, count, const_cast<std::remove_const_t<T>*>(data), element_of<std::remove_const_t<T>>(),
+                          rows, cols});
   } else {
     return false;  // the contact structs, the solver's statistics
   }
@@ -373,8 +384,9 @@ bool each_model_array(const mjModel* m, const std::function<bool(const RawArray&
 #define X SIMLOOP_SIZE_LOCAL
   SIMLOOP_MODEL_SIZES
 #undef X
-#define X(type, name, rows, cols) \
-  if (visit_array(visit, m, #name, #rows, m->name, static_cast<long long>(rows), static_cast<long long>(cols))) return true;
+#define X(type, name, rows, cols)                                                                               \
+  if (visit_array(visit, m, #name, #rows, m->name, static_cast<long long>(rows), static_cast<long long>(cols))) \
+    return true;
 #define XNV X
   MJMODEL_POINTERS
 #undef XNV
@@ -389,8 +401,9 @@ bool each_data_array(const mjModel* m, const mjData* d, const std::function<bool
 #if mjVERSION_HEADER >= 300
 #undef MJ_D
 #define MJ_D(n) d->n
-#define X(type, name, rows, cols) \
-  if (visit_array(visit, m, #name, #rows, d->name, static_cast<long long>(rows), static_cast<long long>(cols))) return true;
+#define X(type, name, rows, cols)                                                                               \
+  if (visit_array(visit, m, #name, #rows, d->name, static_cast<long long>(rows), static_cast<long long>(cols))) \
+    return true;
 #define XNV X
   MJDATA_POINTERS
   MJDATA_ARENA_POINTERS
@@ -409,9 +422,9 @@ bool each_data_array(const mjModel* m, const mjData* d, const std::function<bool
   const auto counted_by = [](std::string_view count) -> const char* {
     return count == "njmax" ? "nefc" : count == "nconmax" ? "ncon" : nullptr;
   };
-#define X(type, name, rows, cols)                                                                           \
-  if (visit_array(visit, m, #name, counted_by(#rows) ? counted_by(#rows) : #rows, d->name,                   \
-                  in_use(#rows, static_cast<long long>(rows)), static_cast<long long>(cols)))               \
+#define X(type, name, rows, cols)                                                             \
+  if (visit_array(visit, m, #name, counted_by(#rows) ? counted_by(#rows) : #rows, d->name,    \
+                  in_use(#rows, static_cast<long long>(rows)), static_cast<long long>(cols))) \
     return true;
   MJDATA_POINTERS
 #undef X

@@ -18,6 +18,8 @@
 //                      and nconmax-sized, nefc/ncon used  actuator outputs nout (= nu: actuator rows)
 #pragma once
 
+#include <mujoco/mujoco.h>
+
 #include <cstddef>
 #include <functional>
 #include <memory>
@@ -25,8 +27,6 @@
 #include <string_view>
 #include <utility>
 #include <vector>
-
-#include <mujoco/mujoco.h>
 
 #include "simloop/fields.hpp"
 

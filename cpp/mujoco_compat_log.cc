@@ -3,10 +3,10 @@
 // (mju_setLogHandler), for mujoco_guard.cc. A warning raised inside one of
 // simloop's calls goes to simloop; any other goes exactly where MuJoCo would
 // have sent it had simloop installed nothing.
+#include <mujoco/mujoco.h>
+
 #include <cstdio>
 #include <mutex>
-
-#include <mujoco/mujoco.h>
 
 #include "mujoco_compat.hpp"
 

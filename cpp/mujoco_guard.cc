@@ -1,13 +1,13 @@
 #include "mujoco_guard.hpp"
 
+#include <mujoco/mujoco.h>
+
 #include <csetjmp>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <mutex>
 #include <new>
-
-#include <mujoco/mujoco.h>
 
 #include "mujoco_compat.hpp"
 
@@ -112,7 +112,6 @@ bool call_catching_mujoco_error(void (*fn)(void*), void* context) noexcept {
 
 const char* last_mujoco_error() noexcept { return t_error_message; }
 
-
 MujocoError error_from_exception(const std::exception_ptr& error) {
   try {
     std::rethrow_exception(error);
@@ -195,7 +194,8 @@ std::string quoted_value(std::string_view value, std::size_t max_bytes) {
     }
   }
   out += "'";
-  if (value.size() > max_bytes) out += " (" + std::to_string(max_bytes) + " of its " + std::to_string(value.size()) + " bytes)";
+  if (value.size() > max_bytes)
+    out += " (" + std::to_string(max_bytes) + " of its " + std::to_string(value.size()) + " bytes)";
   return out;
 }
 

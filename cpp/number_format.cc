@@ -1,7 +1,5 @@
 #include "simloop/number_format.hpp"
 
-#include "simloop/errors.hpp"
-
 #include <array>
 #include <charconv>
 #include <cmath>
@@ -10,6 +8,8 @@
 #include <cstdlib>
 #include <cstring>
 #include <system_error>
+
+#include "simloop/errors.hpp"
 
 namespace simloop {
 
@@ -114,7 +114,8 @@ constexpr int floor_shift22(std::int64_t a) { return -static_cast<int>((-a + (1 
 // to odd; the low 64 bits of g's low half times cp are below what matters).
 inline std::uint64_t round_to_odd(Uint128 g, std::uint64_t cp) {
   const Uint128 low = static_cast<Uint128>(static_cast<std::uint64_t>(g)) * cp;
-  const Uint128 y = static_cast<Uint128>(static_cast<std::uint64_t>(g >> 64)) * cp + static_cast<std::uint64_t>(low >> 64);
+  const Uint128 y =
+      static_cast<Uint128>(static_cast<std::uint64_t>(g >> 64)) * cp + static_cast<std::uint64_t>(low >> 64);
   return static_cast<std::uint64_t>(y >> 64) | (static_cast<std::uint64_t>(y) != 0);
 }
 
@@ -171,11 +172,25 @@ inline void put8(char* out, std::uint32_t v) {
 
 // How many decimal digits v >= 1 has: from its bit length, log10(2) ~ 1233 / 4096.
 inline int decimal_length(std::uint64_t v) {
-  static constexpr std::uint64_t kPowers[] = {1ull, 10ull, 100ull, 1000ull, 10000ull, 100000ull, 1000000ull,
-                                              10000000ull, 100000000ull, 1000000000ull, 10000000000ull,
-                                              100000000000ull, 1000000000000ull, 10000000000000ull,
-                                              100000000000000ull, 1000000000000000ull, 10000000000000000ull,
-                                              100000000000000000ull, 1000000000000000000ull,
+  static constexpr std::uint64_t kPowers[] = {1ull,
+                                              10ull,
+                                              100ull,
+                                              1000ull,
+                                              10000ull,
+                                              100000ull,
+                                              1000000ull,
+                                              10000000ull,
+                                              100000000ull,
+                                              1000000000ull,
+                                              10000000000ull,
+                                              100000000000ull,
+                                              1000000000000ull,
+                                              10000000000000ull,
+                                              100000000000000ull,
+                                              1000000000000000ull,
+                                              10000000000000000ull,
+                                              100000000000000000ull,
+                                              1000000000000000000ull,
                                               10000000000000000000ull};
   const int guess = ((64 - __builtin_clzll(v)) * 1233) >> 12;
   return guess + (v >= kPowers[guess]);

@@ -21,8 +21,10 @@ struct Kind {
   int (*count)(const mjModel*);
 };
 
-#define SIMLOOP_KIND(type, one, many, size) \
-  Kind { type, one, many, #size, [](const mjModel* m) { return detail::compat::as_int(m->size); } }
+#define SIMLOOP_KIND(type, one, many, size)                                                  \
+  Kind {                                                                                     \
+    type, one, many, #size, [](const mjModel* m) { return detail::compat::as_int(m->size); } \
+  }
 // The kinds of object a scene names, as Python spells them ("body", "geom").
 const std::vector<Kind>& kinds() {
   static const std::vector<Kind> all{
@@ -105,11 +107,16 @@ JointSize joint_size(int type) noexcept {
 
 const char* joint_type_name(int type) noexcept {
   switch (type) {
-    case mjJNT_FREE: return "free";
-    case mjJNT_BALL: return "ball";
-    case mjJNT_SLIDE: return "slide";
-    case mjJNT_HINGE: return "hinge";
-    default: return "unknown";
+    case mjJNT_FREE:
+      return "free";
+    case mjJNT_BALL:
+      return "ball";
+    case mjJNT_SLIDE:
+      return "slide";
+    case mjJNT_HINGE:
+      return "hinge";
+    default:
+      return "unknown";
   }
 }
 

@@ -64,8 +64,8 @@ bool try_display(Egl& egl, EGLDisplay display, const std::string& what, std::vec
     tried.push_back(what + ": eglInitialize failed (" + hex(egl.GetError()) + ")");
     return false;
   }
-  const EGLint attributes[] = {EGL_RED_SIZE, 8, EGL_GREEN_SIZE, 8, EGL_BLUE_SIZE, 8, EGL_ALPHA_SIZE, 8,
-                               EGL_DEPTH_SIZE, 24, EGL_STENCIL_SIZE, 8, EGL_RENDERABLE_TYPE, EGL_OPENGL_BIT,
+  const EGLint attributes[] = {EGL_RED_SIZE, 8, EGL_GREEN_SIZE, 8, EGL_BLUE_SIZE, 8, EGL_ALPHA_SIZE, 8, EGL_DEPTH_SIZE,
+                               24, EGL_STENCIL_SIZE, 8, EGL_RENDERABLE_TYPE, EGL_OPENGL_BIT,
                                // (the default, a window config, is what a device or the
                                // surfaceless platform lacks; MuJoCo draws into its own
                                // framebuffer, so any surface type does)

@@ -15,8 +15,8 @@
 #include <system_error>
 #include <vector>
 
-#include "simloop/errors.hpp"
 #include "json_text.hpp"
+#include "simloop/errors.hpp"
 #include "simloop/number_format.hpp"
 #include "simloop/signals.hpp"
 
@@ -244,8 +244,8 @@ void write_file_atomically(const std::filesystem::path& path, std::string_view c
 void TrajectoryCsvSink::start(int columns, std::int64_t /*rows*/) {
   if (columns_.empty()) columns_ = chapter_columns(columns);
   if (static_cast<int>(columns_.size()) != columns) {
-    throw InvalidArgument("trajectory.csv: the run records " + std::to_string(columns) + " columns, the writer was given " +
-                          std::to_string(columns_.size()) + " names");
+    throw InvalidArgument("trajectory.csv: the run records " + std::to_string(columns) +
+                          " columns, the writer was given " + std::to_string(columns_.size()) + " names");
   }
   buffer_.clear();
   buffer_.reserve(kFlushBytes + kSliceBytes);

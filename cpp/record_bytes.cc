@@ -17,9 +17,12 @@ enum class Kind : std::uint8_t { kRecord = 1, kRunResult = 2, kSweep = 3 };
 
 const char* kind_name(Kind kind) {
   switch (kind) {
-    case Kind::kRecord: return "ScenarioResult";
-    case Kind::kRunResult: return "RunResult";
-    case Kind::kSweep: return "SweepResult";
+    case Kind::kRecord:
+      return "ScenarioResult";
+    case Kind::kRunResult:
+      return "RunResult";
+    case Kind::kSweep:
+      return "SweepResult";
   }
   return nullptr;
 }
@@ -64,8 +67,8 @@ void fields(Io& io, typename Io::template Of<RunConfig> c) {
 // A sweep point as measured: stable is judged again on reading.
 template <class Io>
 void fields(Io& io, typename Io::template Of<SweepPoint> p) {
-  io(p.timestep, p.steps, p.peak_box_z, p.max_abs_box_y, p.final_box_x, p.final_box_y, p.final_box_z,
-     p.final_pusher_x, p.warnings, p.energy);
+  io(p.timestep, p.steps, p.peak_box_z, p.max_abs_box_y, p.final_box_x, p.final_box_y, p.final_box_z, p.final_pusher_x,
+     p.warnings, p.energy);
 }
 template <class Io>
 void fields(Io& io, typename Io::template Of<SweepResult> r) {
@@ -74,8 +77,8 @@ void fields(Io& io, typename Io::template Of<SweepResult> r) {
 
 template <class Io>
 void fields(Io& io, typename Io::template Of<RunRecord> r) {
-  io(r.name, r.seed, r.rng, r.perturb, r.disturbed_bodies, r.columns, r.final_row, r.final_state, r.trajectory,
-     r.rows, r.schedule.steps, r.schedule.control_changes, r.schedule.forces, r.warnings, r.timestep, r.sim_time);
+  io(r.name, r.seed, r.rng, r.perturb, r.disturbed_bodies, r.columns, r.final_row, r.final_state, r.trajectory, r.rows,
+     r.schedule.steps, r.schedule.control_changes, r.schedule.forces, r.warnings, r.timestep, r.sim_time);
 }
 template <class Io>
 void fields(Io& io, typename Io::template Of<RunResult> r) {
@@ -152,8 +155,7 @@ class Reader {
     field(version);
     if (version != kRecordBytesVersion) {
       throw InvalidArgument(std::string("cannot unpickle a ") + what_ + " pickled by another simloop version (format " +
-                            std::to_string(version) + "; this one reads " + std::to_string(kRecordBytesVersion) +
-                            ")");
+                            std::to_string(version) + "; this one reads " + std::to_string(kRecordBytesVersion) + ")");
     }
     std::uint8_t held = 0;
     field(held);
@@ -202,7 +204,8 @@ class Reader {
     field(rows);
     field(columns);
     if (rows < 0 || columns < 0 ||
-        (columns > 0 && static_cast<std::uint64_t>(rows) > left() / sizeof(double) / static_cast<std::uint64_t>(columns))) {
+        (columns > 0 &&
+         static_cast<std::uint64_t>(rows) > left() / sizeof(double) / static_cast<std::uint64_t>(columns))) {
       fail();
     }
     t = Trajectory(rows, columns);

@@ -1,5 +1,4 @@
 #include "simloop/recorder.hpp"
-#include "mujoco_compat.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -8,6 +7,7 @@
 #include <set>
 
 #include "loop.hpp"
+#include "mujoco_compat.hpp"
 #include "run_detail.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/object_names.hpp"
@@ -73,9 +73,8 @@ void Recorder::add(Source::Kind kind, int id, int count, const std::vector<std::
   for (std::size_t i = 0; i < names.size(); ++i) {
     columns_.push_back({names[i], units.size() == 1 ? units[0] : units.at(i), integer, input, body});
   }
-  const bool derived = kind == Source::kBodyPose || kind == Source::kBodyVelocity ||
-                       kind == Source::kActuatorForce || kind == Source::kSensor || kind == Source::kTendon ||
-                       kind == Source::kContacts;
+  const bool derived = kind == Source::kBodyPose || kind == Source::kBodyVelocity || kind == Source::kActuatorForce ||
+                       kind == Source::kSensor || kind == Source::kTendon || kind == Source::kContacts;
   (derived ? after_ : before_).push_back(source);
 }
 
@@ -115,8 +114,8 @@ Recorder::Recorder(const mjModel* m, const ResolvedScenario& scenario, const Sch
     add(Source::kActuatorForce, a, 1, {name_of(m, mjOBJ_ACTUATOR, a, "actuator") + "_force"}, {"N or N m"});
   }
   for (int s : scenario.sensors) {
-    add(Source::kSensor, m->sensor_adr[s], m->sensor_dim[s], numbered(name_of(m, mjOBJ_SENSOR, s, "sensor"), "", m->sensor_dim[s]),
-        {""});
+    add(Source::kSensor, m->sensor_adr[s], m->sensor_dim[s],
+        numbered(name_of(m, mjOBJ_SENSOR, s, "sensor"), "", m->sensor_dim[s]), {""});
     reads_acceleration_stage_ = reads_acceleration_stage_ || m->sensor_needstage[s] == mjSTAGE_ACC;
   }
   for (int t : scenario.tendons) {  // a spatial tendon's metres, a fixed one's sum of its joints' coordinates
@@ -152,9 +151,14 @@ void Recorder::before_step(double* row, std::int64_t step, const mjModel* m, con
       case Source::kXfrc:
         for (int i = 0; i < 6; ++i) out[i] = inputs ? d->xfrc_applied[6 * s.id + i] : kNone;
         break;
-      case Source::kQpos: std::copy(d->qpos + s.id, d->qpos + s.id + s.count, out); break;
-      case Source::kQvel: std::copy(d->qvel + s.id, d->qvel + s.id + s.count, out); break;
-      default: break;
+      case Source::kQpos:
+        std::copy(d->qpos + s.id, d->qpos + s.id + s.count, out);
+        break;
+      case Source::kQvel:
+        std::copy(d->qvel + s.id, d->qvel + s.id + s.count, out);
+        break;
+      default:
+        break;
     }
   }
 }
@@ -174,14 +178,21 @@ void Recorder::after_step(double* row, const mjModel* m, const mjData* d) const 
         std::copy(velocity, velocity + 3, out + 3);
         break;
       }
-      case Source::kActuatorForce: out[0] = d->actuator_force[s.id]; break;
-      case Source::kSensor: std::copy(d->sensordata + s.id, d->sensordata + s.id + s.count, out); break;
+      case Source::kActuatorForce:
+        out[0] = d->actuator_force[s.id];
+        break;
+      case Source::kSensor:
+        std::copy(d->sensordata + s.id, d->sensordata + s.id + s.count, out);
+        break;
       case Source::kTendon:
         out[0] = d->ten_length[s.id];
         out[1] = d->ten_velocity[s.id];
         break;
-      case Source::kContacts: out[0] = d->ncon; break;
-      default: break;
+      case Source::kContacts:
+        out[0] = d->ncon;
+        break;
+      default:
+        break;
     }
   }
 }
@@ -235,7 +246,8 @@ void check_inputs(const mjModel* m, const RunInputs& inputs, std::int64_t steps)
                             std::to_string(inputs.control_steps) + ", " + std::to_string(inputs.control_width) + ")");
     }
     const std::size_t count = static_cast<std::size_t>(steps) * static_cast<std::size_t>(m->nu);
-    const double* bad = std::find_if(inputs.controls, inputs.controls + count, [](double v) { return !std::isfinite(v); });
+    const double* bad =
+        std::find_if(inputs.controls, inputs.controls + count, [](double v) { return !std::isfinite(v); });
     if (bad != inputs.controls + count) {
       const std::size_t at = static_cast<std::size_t>(bad - inputs.controls);
       throw InvalidArgument("controls must be finite, got " + std::to_string(*bad) + " at step " +
@@ -300,9 +312,8 @@ std::vector<RunInputs> split_inputs(std::size_t runs, bool batch, const std::opt
     }
   }
   if (initial_state) {
-    const std::size_t stride =
-        run_stride("initial_state", *initial_state, runs, batch, 1,
-                   batch ? "(runs, state_size) or (state_size,)" : "(state_size,)", "states");
+    const std::size_t stride = run_stride("initial_state", *initial_state, runs, batch, 1,
+                                          batch ? "(runs, state_size) or (state_size,)" : "(state_size,)", "states");
     for (std::size_t i = 0; i < runs; ++i) {
       out[i].initial_state = initial_state->data + i * stride;
       out[i].state_size = static_cast<std::size_t>(initial_state->shape.back());
@@ -311,23 +322,22 @@ std::vector<RunInputs> split_inputs(std::size_t runs, bool batch, const std::opt
   return out;
 }
 
-RunRecord run_schedule(const mjModel* m, mjData* d, const ResolvedScenario& scenario,
-                               const Schedule& schedule, std::int64_t record_every, RowSink* sink,
-                               RunControl* control, const RunInputs& inputs) {
+RunRecord run_schedule(const mjModel* m, mjData* d, const ResolvedScenario& scenario, const Schedule& schedule,
+                       std::int64_t record_every, RowSink* sink, RunControl* control, const RunInputs& inputs) {
   return detail::run_schedule_with(m, d, Recorder(m, scenario, schedule), schedule, record_every, sink, control,
                                    inputs);
 }
 
-RunRecord detail::run_schedule_with(const mjModel* m, mjData* d, const Recorder& recorder,
-                                            const Schedule& schedule, std::int64_t record_every, RowSink* sink,
-                                            RunControl* control, const RunInputs& inputs) {
+RunRecord detail::run_schedule_with(const mjModel* m, mjData* d, const Recorder& recorder, const Schedule& schedule,
+                                    std::int64_t record_every, RowSink* sink, RunControl* control,
+                                    const RunInputs& inputs) {
   if (control && schedule.steps >= 1 && schedule.steps <= kMaxSteps) control->add_total(schedule.steps);
   return run_schedule_counted_elsewhere(m, d, recorder, schedule, record_every, sink, control, inputs);
 }
 
 RunRecord detail::run_schedule_counted_elsewhere(const mjModel* m, mjData* d, const Recorder& recorder,
-                                                         const Schedule& schedule, std::int64_t record_every,
-                                                         RowSink* sink, RunControl* control, const RunInputs& inputs) {
+                                                 const Schedule& schedule, std::int64_t record_every, RowSink* sink,
+                                                 RunControl* control, const RunInputs& inputs) {
   detail::check_schedule_run(schedule.steps, record_every);
   check_inputs(m, inputs, schedule.steps);
   if (sink == nullptr) check_kept_rows({{schedule.steps, record_every, recorder.width()}});

@@ -29,8 +29,8 @@ void check_size(const char* what, int pixels) {
 }
 
 bool same_structure(const mjModel* a, const mjModel* b) {
-  return a->nq == b->nq && a->nv == b->nv && a->nbody == b->nbody && a->ngeom == b->ngeom &&
-         a->ncam == b->ncam && a->nlight == b->nlight && a->nsite == b->nsite && a->nmesh == b->nmesh;
+  return a->nq == b->nq && a->nv == b->nv && a->nbody == b->nbody && a->ngeom == b->ngeom && a->ncam == b->ncam &&
+         a->nlight == b->nlight && a->nsite == b->nsite && a->nmesh == b->nmesh;
 }
 
 // The view as MuJoCo's camera, its names looked up and its settings checked;

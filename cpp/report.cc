@@ -51,18 +51,16 @@ std::string summary_text(const RunResult& r) {
   std::snprintf(line, sizeof line, "stepped %lld steps of %s s -> %.2f s of sim time\n",
                 static_cast<long long>(m.steps), python_float_repr(r.timestep).c_str(), r.sim_time);
   out += line;
-  std::snprintf(line, sizeof line, "box final position [%.3f, %.3f, %.3f], speed %.3f m/s\n",
-                m.box_final_pos[0], m.box_final_pos[1], m.box_final_pos[2], m.box_final_speed);
+  std::snprintf(line, sizeof line, "box final position [%.3f, %.3f, %.3f], speed %.3f m/s\n", m.box_final_pos[0],
+                m.box_final_pos[1], m.box_final_pos[2], m.box_final_speed);
   out += line;
   if (m.perturb) {
     // The steps the shove acted: its window, cut short if the run ended in it.
-    const std::int64_t pushed = std::max<std::int64_t>(
-        0, std::min(r.shove.num_steps, m.steps - r.shove.start_step));
+    const std::int64_t pushed = std::max<std::int64_t>(0, std::min(r.shove.num_steps, m.steps - r.shove.start_step));
     char window[64];
     if (pushed < r.shove.num_steps) {
-      std::snprintf(window, sizeof window, "%lld step%s (of %lld: the run ended first)",
-                    static_cast<long long>(pushed), pushed == 1 ? "" : "s",
-                    static_cast<long long>(r.shove.num_steps));
+      std::snprintf(window, sizeof window, "%lld step%s (of %lld: the run ended first)", static_cast<long long>(pushed),
+                    pushed == 1 ? "" : "s", static_cast<long long>(r.shove.num_steps));
     } else {
       std::snprintf(window, sizeof window, "%lld steps", static_cast<long long>(pushed));
     }
@@ -85,11 +83,12 @@ std::string summary_text(const RunResult& r) {
                   e.work_constraint_positive, e.unexplained);
     out += line;
   }
-  const bool mujoco_warned = std::any_of(r.warnings.begin(), r.warnings.end(),
-                                         [](const Warning& w) { return w.name.rfind("mj", 0) == 0; });
+  const bool mujoco_warned =
+      std::any_of(r.warnings.begin(), r.warnings.end(), [](const Warning& w) { return w.name.rfind("mj", 0) == 0; });
   if (mujoco_warned) {
-    out += "  (after a bad-value warning MuJoCo resets the state and carries on: "
-           "the numbers above are not one continuous simulation)\n";
+    out +=
+        "  (after a bad-value warning MuJoCo resets the state and carries on: "
+        "the numbers above are not one continuous simulation)\n";
   }
   return out;
 }
@@ -98,7 +97,6 @@ std::string metrics_json(const RunResult& result) { return metrics_json(result.m
 
 namespace {
 
-
 using detail::Json;
 
 Json rounded(const double* values, int count) {
@@ -106,7 +104,6 @@ Json rounded(const double* values, int count) {
   for (int i = 0; i < count; ++i) a.push_back({round6(values[i])});
   return {a};
 }
-
 
 }  // namespace
 
@@ -151,9 +148,8 @@ std::string metrics_json(const RunRecord& r) {
   if (!r.schedule.start.params.empty()) {
     Json::Array params;
     for (const SceneParam& p : r.schedule.start.params) {
-      params.push_back({Json::Object{{"kind", {std::string(scene_param_kind_name(p.kind))}},
-                                     {"name", {p.name}},
-                                     {"value", {round6(p.value)}}}});
+      params.push_back({Json::Object{
+          {"kind", {std::string(scene_param_kind_name(p.kind))}}, {"name", {p.name}}, {"value", {round6(p.value)}}}});
     }
     m["params"] = {params};
   }
@@ -174,8 +170,8 @@ std::string summary_text(const RunRecord& r) {
   out += line;
   for (const auto& [name, c] : recorded_bodies(r)) {
     const double* v = r.final_row.data() + c;
-    std::snprintf(line, sizeof line, "%s final position [%.3f, %.3f, %.3f], speed %.3f m/s\n", name.c_str(), v[0],
-                  v[1], v[2], std::sqrt(v[7] * v[7] + v[8] * v[8] + v[9] * v[9]));
+    std::snprintf(line, sizeof line, "%s final position [%.3f, %.3f, %.3f], speed %.3f m/s\n", name.c_str(), v[0], v[1],
+                  v[2], std::sqrt(v[7] * v[7] + v[8] * v[8] + v[9] * v[9]));
     out += line;
   }
   if (!r.perturb) out += "no disturbances (baseline run)\n";
@@ -195,7 +191,8 @@ std::string summary_text(const RunRecord& r) {
                     acted == 1 ? "" : "s", static_cast<long long>(f.start));
     }
     const double* w = f.wrench.data();
-    std::snprintf(line, sizeof line, "disturbance on %s: force [%+.2f, %+.2f, %+.2f] N, torque [%+.2f, %+.2f, %+.2f] N m, %s\n",
+    std::snprintf(line, sizeof line,
+                  "disturbance on %s: force [%+.2f, %+.2f, %+.2f] N, torque [%+.2f, %+.2f, %+.2f] N m, %s\n",
                   r.disturbed_bodies[i].c_str(), w[0], w[1], w[2], w[3], w[4], w[5], window);
     out += line;
   }
@@ -204,8 +201,9 @@ std::string summary_text(const RunRecord& r) {
     for (const SceneParam& p : r.schedule.start.params) {
       char value[32];
       std::snprintf(value, sizeof value, "%.4g", p.value);
-      const char* every = p.kind == SceneParam::Kind::kFriction ? " of every geom"
-                          : p.kind == SceneParam::Kind::kDamping ? " of every joint" : "";
+      const char* every = p.kind == SceneParam::Kind::kFriction  ? " of every geom"
+                          : p.kind == SceneParam::Kind::kDamping ? " of every joint"
+                                                                 : "";
       drawn += (drawn.empty() ? "" : ", ") + std::string(scene_param_kind_name(p.kind)) +
                (p.name.empty() ? every : " of '" + p.name + "'") + " = " + value;
     }

@@ -1,5 +1,4 @@
 #include "simloop/run.hpp"
-#include "mujoco_compat.hpp"
 
 #include <sys/resource.h>
 #include <unistd.h>
@@ -10,13 +9,14 @@
 #include <limits>
 #include <sstream>
 
+#include "chapter_detail.hpp"
 #include "energy_audit.hpp"
 #include "loop.hpp"
-#include "chapter_detail.hpp"
+#include "mujoco_compat.hpp"
 #include "run_detail.hpp"
-#include "simloop/recorder.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/number_format.hpp"
+#include "simloop/recorder.hpp"
 
 namespace simloop {
 namespace {
@@ -113,11 +113,12 @@ class ChapterWatch final : public detail::StepObserver {
 
 std::vector<Column> chapter_columns(int count) {
   static constexpr const char* kUnits[ChapterColumns::kNumColumns] = {
-      "", "s", "", "N", "N", "N", "m", "m", "m", "", "", "", "", "m/s", "m/s", "m/s", "rad/s", "rad/s", "rad/s",
-      "m", "m/s", "", "J", "J", "J", "J", "J", "J", "J"};
+      "",    "s",     "",      "N",     "N", "N",   "m", "m", "m", "",  "",  "",  "",  "m/s", "m/s",
+      "m/s", "rad/s", "rad/s", "rad/s", "m", "m/s", "",  "J", "J", "J", "J", "J", "J", "J"};
   std::vector<Column> columns;
   for (int c = 0; c < count && c < ChapterColumns::kNumColumns; ++c) {
-    columns.push_back({std::string(ChapterColumns::kNames[c]), kUnits[c], c == ChapterColumns::kStep || c == ChapterColumns::kNcon,
+    columns.push_back({std::string(ChapterColumns::kNames[c]), kUnits[c],
+                       c == ChapterColumns::kStep || c == ChapterColumns::kNcon,
                        c >= ChapterColumns::kCtrl && c <= ChapterColumns::kShoveZ, ""});
   }
   return columns;
@@ -141,16 +142,15 @@ RunResult run(const Model& model, const RunConfig& config) {
   return detail::run_counted_elsewhere(model, config, workspace, nullptr, nullptr);
 }
 
-RunResult run(const Model& model, const RunConfig& config, Data& workspace, RowSink* sink,
-              RunControl* control) {
+RunResult run(const Model& model, const RunConfig& config, Data& workspace, RowSink* sink, RunControl* control) {
   validate(config);
   if (sink == nullptr) check_kept_rows({kept_rows(config)});
   if (control) control->add_total(config.num_steps());
   return detail::run_counted_elsewhere(model, config, workspace, sink, control);
 }
 
-RunResult detail::run_counted_elsewhere(const Model& model_in, const RunConfig& config, Data& workspace,
-                                        RowSink* sink, RunControl* control) {
+RunResult detail::run_counted_elsewhere(const Model& model_in, const RunConfig& config, Data& workspace, RowSink* sink,
+                                        RunControl* control) {
   validate(config);
   const Model model = model_in.for_run(config.timestep, config.audit_energy);
   if (!workspace.fits(model)) {
@@ -166,11 +166,12 @@ RunResult detail::run_counted_elsewhere(const Model& model_in, const RunConfig& 
   result.config = config;
   result.shove = draw_shove(config.seed, steps, config.rng);
   result.schedule = chapter_schedule(at, result.shove, steps, config.perturb);
-  const ChapterRecorder recorder(at, config.audit_energy ? ChapterColumns::kNumColumns : ChapterColumns::kNumBaseColumns);
+  const ChapterRecorder recorder(at,
+                                 config.audit_energy ? ChapterColumns::kNumColumns : ChapterColumns::kNumBaseColumns);
   ChapterWatch watch(m, at, result.shove.start_step, config.audit_energy);
   detail::KeepRows keep(result.trajectory);
-  detail::LoopResult loop = detail::run_loop(m, d, result.schedule, recorder, config.record_every,
-                                             sink ? *sink : keep, control, RunInputs{}, {&watch}, d_is_reset);
+  detail::LoopResult loop = detail::run_loop(m, d, result.schedule, recorder, config.record_every, sink ? *sink : keep,
+                                             control, RunInputs{}, {&watch}, d_is_reset);
   // The record any run leaves, as the chapter's scenario would label it.
   result.name = std::string(kChapterScenarioName);
   result.seed = config.seed;

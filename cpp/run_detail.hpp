@@ -54,15 +54,15 @@ void check_schedule_run(std::int64_t steps, std::int64_t record_every);
 
 // run_schedule() with its recorder already made (a prepared run's).
 [[nodiscard]] RunRecord run_schedule_with(const mjModel* m, mjData* d, const Recorder& recorder,
-                                                  const Schedule& schedule, std::int64_t record_every, RowSink* sink,
-                                                  RunControl* control, const RunInputs& inputs = {});
+                                          const Schedule& schedule, std::int64_t record_every, RowSink* sink,
+                                          RunControl* control, const RunInputs& inputs = {});
 
 // The same without announcing its steps to the control (a batch announces
 // all of its runs' steps up front).
 [[nodiscard]] RunRecord run_schedule_counted_elsewhere(const mjModel* m, mjData* d, const Recorder& recorder,
-                                                               const Schedule& schedule, std::int64_t record_every,
-                                                               RowSink* sink, RunControl* control,
-                                                               const RunInputs& inputs = {});
+                                                       const Schedule& schedule, std::int64_t record_every,
+                                                       RowSink* sink, RunControl* control,
+                                                       const RunInputs& inputs = {});
 
 // A scenario as one run of `config` sees it: its length replaced by
 // config.steps, its disturbances dropped unless config.perturb.
@@ -90,8 +90,7 @@ void check_run(std::size_t i, Check&& check) {
 // workers have stopped, a requested stop throws Interrupted, else the
 // failure of the lowest index is rethrown.
 void run_jobs(const Model& model, std::size_t jobs, int threads, const std::vector<std::int64_t>& steps,
-              RunControl* control,
-              const std::function<void(std::size_t job, Data& data, RunControl& control)>& job);
+              RunControl* control, const std::function<void(std::size_t job, Data& data, RunControl& control)>& job);
 
 // The same for jobs that bring their own Data (Episodes): job(i, worker,
 // control), worker in [0, batch_workers(threads, jobs)); on the threads of

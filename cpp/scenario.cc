@@ -13,10 +13,10 @@
 #include <string>
 
 #include "model_detail.hpp"
-#include "text_input.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/number_format.hpp"
 #include "simloop/run.hpp"
+#include "text_input.hpp"
 
 namespace simloop {
 namespace {
@@ -29,15 +29,16 @@ std::int64_t When::to_steps(double timestep, std::int64_t run_steps) const {
   // Beyond any run a scenario can ask for; keeps the conversion defined.
   constexpr double kFar = 0x1p62;
   if (unit == Unit::kSteps) return std::clamp<std::int64_t>(count, 0, static_cast<std::int64_t>(kFar));
-  const double steps = unit == Unit::kSeconds ? std::nearbyint(value / timestep)
-                                              : std::floor(value * static_cast<double>(run_steps));
+  const double steps =
+      unit == Unit::kSeconds ? std::nearbyint(value / timestep) : std::floor(value * static_cast<double>(run_steps));
   return static_cast<std::int64_t>(std::clamp(steps, 0.0, kFar));
 }
 
 Scenario Scenario::from_toml_file(const std::filesystem::path& path) {
   const std::string toml = detail::read_text_file(path, detail::kMaxScenarioBytes, "a scenario file");
   if (detail::first_visible(toml) == '<') {
-    throw InvalidArgument(path.string() + ": an MJCF scene, not a scenario file (TOML): make it a scenario's scene "
+    throw InvalidArgument(path.string() +
+                          ": an MJCF scene, not a scenario file (TOML): make it a scenario's scene "
                           "(scene = \"...\" in a scenario file, or simloop.Scenario(scene=...))");
   }
   return from_toml_string(toml, path.string(), path.parent_path(), path.stem().string());

@@ -1,19 +1,18 @@
 // resolve(): a scenario's names become the model's indices, once, with errors
 // that list what the scene has; did_you_mean for likely typos.
-#include "simloop/scenario.hpp"
-#include "mujoco_compat.hpp"
-
 #include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <limits>
-#include <utility>
 #include <string>
+#include <utility>
 #include <vector>
 
+#include "mujoco_compat.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/number_format.hpp"
 #include "simloop/object_names.hpp"
+#include "simloop/scenario.hpp"
 #include "simloop/scene_params.hpp"
 
 namespace simloop {
@@ -64,8 +63,9 @@ ResolvedScenario resolve(const Scenario& scenario, const mjModel* m) {
     for (std::size_t k = 0; k < r.controls.size(); ++k) {
       // Two controls on one actuator: the later would silently win.
       if (r.controls[k].actuator == actuator) {
-        throw InvalidArgument("control[" + std::to_string(i) + "]: actuator '" + c.actuator + "' is already driven by control[" +
-                              std::to_string(k) + "]; give each actuator one control (a schedule for changes)");
+        throw InvalidArgument("control[" + std::to_string(i) + "]: actuator '" + c.actuator +
+                              "' is already driven by control[" + std::to_string(k) +
+                              "]; give each actuator one control (a schedule for changes)");
       }
     }
     r.controls.push_back({actuator, c.schedule});
@@ -76,10 +76,10 @@ ResolvedScenario resolve(const Scenario& scenario, const mjModel* m) {
     const int body = find(m, mjOBJ_BODY, d.body, where, kPushableBodies);
     if (body == 0) throw InvalidArgument(where + ": the world body cannot be pushed");
     if (!body_can_be_pushed(m, body)) {
-      throw InvalidArgument(where + ": a force on body '" + d.body + "' moves nothing: it is " +
-                            (body_can_move(m, body) ? "a mocap body or fixed to one (moved by mocap_pos)"
-                                                    : "fixed to the world") +
-                            "; " + object_listing(m, mjOBJ_BODY, kPushableBodies));
+      throw InvalidArgument(
+          where + ": a force on body '" + d.body + "' moves nothing: it is " +
+          (body_can_move(m, body) ? "a mocap body or fixed to one (moved by mocap_pos)" : "fixed to the world") + "; " +
+          object_listing(m, mjOBJ_BODY, kPushableBodies));
     }
     r.disturbances.push_back({body, d});
   }
@@ -138,8 +138,8 @@ void check_reset(const ResolvedScenario& scenario, const ResetSpec& reset, const
   };
   check_values("reset.qpos", reset.qpos, scenario.qpos0.size(), "nq");
   check_values("reset.qvel", reset.qvel, static_cast<std::size_t>(scenario.nv), "nv");
-  for (const auto& [key, noise] : {std::pair{"reset.qpos_noise", reset.qpos_noise},
-                                   std::pair{"reset.qvel_noise", reset.qvel_noise}}) {
+  for (const auto& [key, noise] :
+       {std::pair{"reset.qpos_noise", reset.qpos_noise}, std::pair{"reset.qvel_noise", reset.qvel_noise}}) {
     if (!std::isfinite(noise) || noise < 0.0) {
       throw InvalidArgument(std::string(key) + " must be a finite number >= 0, got " + python_float_repr(noise));
     }

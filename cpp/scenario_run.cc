@@ -1,4 +1,3 @@
-#include "simloop/chapter_scene.hpp"
 #include "simloop/scenario_run.hpp"
 
 #include <algorithm>
@@ -13,9 +12,10 @@
 #include "json_text.hpp"
 #include "run_detail.hpp"
 #include "simloop/batch.hpp"
+#include "simloop/chapter_scene.hpp"
 #include "simloop/errors.hpp"
-#include "simloop/object_names.hpp"
 #include "simloop/number_format.hpp"
+#include "simloop/object_names.hpp"
 #include "simloop/output.hpp"
 #include "simloop/scene_params.hpp"
 
@@ -46,8 +46,7 @@ PreparedRun prepare(const Model& model, const Scenario& scenario, const Scenario
   return run;
 }
 
-RunRecord labelled(RunRecord result, const mjModel* m, const Scenario& scenario,
-                           const ScenarioConfig& config) {
+RunRecord labelled(RunRecord result, const mjModel* m, const Scenario& scenario, const ScenarioConfig& config) {
   result.name = scenario.name;
   result.seed = config.seed;
   result.rng = std::string(rng_name(config.rng));
@@ -58,7 +57,6 @@ RunRecord labelled(RunRecord result, const mjModel* m, const Scenario& scenario,
   }
   return result;
 }
-
 
 }  // namespace
 
@@ -79,8 +77,8 @@ void check_scenario(const Model& scene, const Scenario& scenario, const Scenario
   detail::check_schedule_run(run.schedule.steps, config.record_every);
 }
 
-RunRecord run_scenario(const Model& scene, const Scenario& scenario, const ScenarioConfig& config,
-                               Data* workspace, RowSink* sink, RunControl* control, const RunInputs& inputs) {
+RunRecord run_scenario(const Model& scene, const Scenario& scenario, const ScenarioConfig& config, Data* workspace,
+                       RowSink* sink, RunControl* control, const RunInputs& inputs) {
   const Model model = scene.for_run(run_timestep(scene, scenario, config), false);
   std::optional<Data> own;
   if (workspace == nullptr) workspace = &own.emplace(model);
@@ -94,9 +92,8 @@ RunRecord run_scenario(const Model& scene, const Scenario& scenario, const Scena
 }
 
 std::vector<RunRecord> run_scenario_batch(const Model& scene, const Scenario& scenario,
-                                                  const std::vector<ScenarioConfig>& configs, int threads,
-                                                  RunControl* control, const std::vector<RunInputs>& inputs,
-                                                  bool keep_rows) {
+                                          const std::vector<ScenarioConfig>& configs, int threads, RunControl* control,
+                                          const std::vector<RunInputs>& inputs, bool keep_rows) {
   DiscardRows discard;  // stateless: every worker may write to it at once
   return run_scenario_batch(scene, scenario, configs,
                             std::vector<RowSink*>(configs.size(), keep_rows ? nullptr : &discard), threads, control,
@@ -104,9 +101,9 @@ std::vector<RunRecord> run_scenario_batch(const Model& scene, const Scenario& sc
 }
 
 std::vector<RunRecord> run_scenario_batch(const Model& scene, const Scenario& scenario,
-                                                  const std::vector<ScenarioConfig>& configs,
-                                                  const std::vector<RowSink*>& sinks, int threads,
-                                                  RunControl* control, const std::vector<RunInputs>& inputs) {
+                                          const std::vector<ScenarioConfig>& configs,
+                                          const std::vector<RowSink*>& sinks, int threads, RunControl* control,
+                                          const std::vector<RunInputs>& inputs) {
   if (sinks.size() != configs.size()) {
     throw InvalidArgument("sinks must hold one per config (" + std::to_string(configs.size()) + "), got " +
                           std::to_string(sinks.size()));
@@ -150,8 +147,7 @@ std::vector<RunRecord> run_scenario_batch(const Model& scene, const Scenario& sc
     const Model with_params = with_scene_params(*model_of[i], runs[i].schedule.start.params);
     const mjModel* m = with_params.get();
     results[i] = labelled(detail::run_schedule_counted_elsewhere(m, data.get(), *runs[i].recorder, runs[i].schedule,
-                                                                 configs[i].record_every, sinks[i], &ctl,
-                                                                 inputs_of(i)),
+                                                                 configs[i].record_every, sinks[i], &ctl, inputs_of(i)),
                           m, scenario, configs[i]);
   });
   return results;
@@ -192,7 +188,10 @@ class DrawingSplit final : public RowSink {
  public:
   DrawingSplit(std::vector<Column> columns, std::vector<std::string> bodies, std::vector<std::string> positions,
                RowSink& sink, RowSink& drawing)
-      : columns_(std::move(columns)), bodies_(std::move(bodies)), positions_(std::move(positions)), sink_(sink),
+      : columns_(std::move(columns)),
+        bodies_(std::move(bodies)),
+        positions_(std::move(positions)),
+        sink_(sink),
         drawing_(drawing) {}
   void describe(const std::vector<Column>& wide) override {
     std::map<std::string, std::size_t> index;
@@ -252,8 +251,8 @@ class DrawingSplit final : public RowSink {
 
 }  // namespace
 
-RunRecord run_scenario_drawn(const Model& scene, const Scenario& scenario, const ScenarioConfig& config,
-                                     RowSink& sink, RowSink& drawing, RunControl* control) {
+RunRecord run_scenario_drawn(const Model& scene, const Scenario& scenario, const ScenarioConfig& config, RowSink& sink,
+                             RowSink& drawing, RunControl* control) {
   const Model model = scene.for_run(run_timestep(scene, scenario, config), false);
   const PreparedRun run = prepare(model, scenario, config);
   const Model with_params = with_scene_params(model, run.schedule.start.params);  // as run_scenario's
@@ -270,8 +269,7 @@ RunRecord run_scenario_drawn(const Model& scene, const Scenario& scenario, const
   const std::vector<std::string> bodies = moving_bodies(model);
   DrawingSplit split(run.recorder->columns(), bodies, positions, sink, drawing);
   Data workspace(with_params);
-  RunRecord result =
-      run_schedule(m, workspace.get(), wide, run.schedule, config.record_every, &split, control);
+  RunRecord result = run_schedule(m, workspace.get(), wide, run.schedule, config.record_every, &split, control);
   result.columns = run.recorder->columns();
   result.final_row = split.narrowed(result.final_row);
   return labelled(std::move(result), m, scenario, config);

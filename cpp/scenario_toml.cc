@@ -1,7 +1,7 @@
 // Scenario files' TOML: Scenario::from_toml_string (from_toml_file, in
 // scenario.cc, reads a file into it), with errors that name the file, the key
 // and what is wrong.
-#include "simloop/scenario.hpp"
+#include <toml++/toml.h>
 
 #include <algorithm>
 #include <cctype>
@@ -13,14 +13,13 @@
 #include <tuple>
 #include <utility>
 
-#include <toml++/toml.h>
-
-#include "simloop/errors.hpp"
 #include "csv_schedule.hpp"
-#include "text_input.hpp"
-#include "simloop/scene_params.hpp"
+#include "simloop/errors.hpp"
 #include "simloop/number_format.hpp"
 #include "simloop/object_names.hpp"
+#include "simloop/scenario.hpp"
+#include "simloop/scene_params.hpp"
+#include "text_input.hpp"
 
 namespace simloop {
 namespace {
@@ -51,7 +50,8 @@ class TableReader {
       std::string hint = did_you_mean(key.str(), known);
       std::string list;
       for (const std::string& k : known) list += (list.empty() ? "" : ", ") + k;
-      fail(key.str(), "unknown key" + (hint.empty() ? "" : " (did you mean '" + hint + "'?)") + "; known keys: " + list);
+      fail(key.str(),
+           "unknown key" + (hint.empty() ? "" : " (did you mean '" + hint + "'?)") + "; known keys: " + list);
     }
   }
 
@@ -85,7 +85,8 @@ class TableReader {
     if (node == nullptr) return std::nullopt;
     const auto* i = node->as_integer();
     if (i == nullptr) fail(key, "expected a whole number, got " + type_name(*node));
-    if (i->get() < minimum) fail(key, "must be at least " + std::to_string(minimum) + ", got " + std::to_string(i->get()));
+    if (i->get() < minimum)
+      fail(key, "must be at least " + std::to_string(minimum) + ", got " + std::to_string(i->get()));
     return i->get();
   }
 
@@ -132,8 +133,9 @@ class TableReader {
     const toml::node* node = table_.get(key);
     if (node == nullptr) return {};
     const auto* array = node->as_array();
-    if (array == nullptr) fail(key, "expected an array of names" + std::string(or_else.empty() ? "" : " ") +
-                                        std::string(or_else) + ", got " + type_name(*node));
+    if (array == nullptr)
+      fail(key, "expected an array of names" + std::string(or_else.empty() ? "" : " ") + std::string(or_else) +
+                    ", got " + type_name(*node));
     std::vector<std::string> out;
     for (const toml::node& item : *array) {
       if (const auto* s = item.as_string()) {
@@ -166,13 +168,20 @@ class TableReader {
  private:
   static std::string type_name(const toml::node& node) {
     switch (node.type()) {
-      case toml::node_type::string: return "a string";
-      case toml::node_type::integer: return "an integer";
-      case toml::node_type::floating_point: return "a number";
-      case toml::node_type::boolean: return "a boolean";
-      case toml::node_type::array: return "an array of " + std::to_string(node.as_array()->size());
-      case toml::node_type::table: return "a table";
-      default: return "a date or time";
+      case toml::node_type::string:
+        return "a string";
+      case toml::node_type::integer:
+        return "an integer";
+      case toml::node_type::floating_point:
+        return "a number";
+      case toml::node_type::boolean:
+        return "a boolean";
+      case toml::node_type::array:
+        return "an array of " + std::to_string(node.as_array()->size());
+      case toml::node_type::table:
+        return "a table";
+      default:
+        return "a date or time";
     }
   }
   const toml::table& table_;
@@ -237,7 +246,8 @@ ControlSpec read_control(const TableReader& t, const std::filesystem::path& base
   }
   if (t.has("schedule_steps")) {
     for (const auto& [s, v] : t.pairs("schedule_steps")) {
-      if (s < 0 || s != std::floor(s)) t.fail("schedule_steps", "steps must be whole and not negative, got " + python_float_repr(s));
+      if (s < 0 || s != std::floor(s))
+        t.fail("schedule_steps", "steps must be whole and not negative, got " + python_float_repr(s));
       // Past any run (2^62 steps) it never acts; the clamp keeps the cast defined.
       c.schedule.emplace_back(When::steps(static_cast<std::int64_t>(std::min(s, 0x1p62))), v);
     }
@@ -250,8 +260,8 @@ DisturbanceSpec read_disturbance(const TableReader& t) {
                 "start_fraction", "duration", "steps"});
   DisturbanceSpec d;
   // A body by name, or by index (a scene may leave its bodies unnamed).
-  const auto body = t.is_integer("body") ? std::optional<std::string>(std::to_string(*t.integer("body", 0)))
-                                         : t.string("body");
+  const auto body =
+      t.is_integer("body") ? std::optional<std::string>(std::to_string(*t.integer("body", 0))) : t.string("body");
   if (!body) t.fail("body", "missing: name the body to push (or give its index)");
   d.body = *body;
   if (const auto f = t.numbers("force", 3)) std::copy(f->begin(), f->end(), d.force.begin());
@@ -291,8 +301,10 @@ ResetSpec read_reset(const TableReader& t, const toml::table& table, std::string
   r.qvel = t.number_list("qvel");
   for (const auto& [key, noise] : {std::pair{"qpos_noise", &r.qpos_noise}, std::pair{"qvel_noise", &r.qvel_noise}}) {
     *noise = t.number(key).value_or(0.0);
-    if (*noise < 0.0) t.fail(key, "must not be negative (the half-width of a uniform noise), got " + python_float_repr(*noise));
-    if (!std::isfinite(2.0 * *noise)) t.fail(key, "is too large: [-x, x] must be a range a double holds, got " + python_float_repr(*noise));
+    if (*noise < 0.0)
+      t.fail(key, "must not be negative (the half-width of a uniform noise), got " + python_float_repr(*noise));
+    if (!std::isfinite(2.0 * *noise))
+      t.fail(key, "is too large: [-x, x] must be a range a double holds, got " + python_float_repr(*noise));
   }
   if (const toml::node* node = table.get("param")) {
     const auto* array = node->as_array();
@@ -311,7 +323,8 @@ ResetSpec read_reset(const TableReader& t, const toml::table& table, std::string
       param.name = p.string("name").value_or("");
       const std::optional<double> value = p.number("value");
       const std::optional<std::vector<double>> range = p.numbers("uniform", 2);
-      if (value.has_value() == range.has_value()) p.fail("", "give value (fixed) or uniform = [low, high] (drawn per run)");
+      if (value.has_value() == range.has_value())
+        p.fail("", "give value (fixed) or uniform = [low, high] (drawn per run)");
       if (range && !std::isfinite((*range)[1] - (*range)[0])) {
         p.fail("uniform", "is too wide: high - low must be a number a double holds");
       }
@@ -329,16 +342,16 @@ ResetSpec read_reset(const TableReader& t, const toml::table& table, std::string
 
 }  // namespace
 
-Scenario Scenario::from_toml_string(std::string_view text, std::string_view source,
-                                    const std::filesystem::path& base, std::string_view default_name) {
+Scenario Scenario::from_toml_string(std::string_view text, std::string_view source, const std::filesystem::path& base,
+                                    std::string_view default_name) {
   detail::check_toml_key_parts(text, source);
   toml::table root;
   try {
     root = toml::parse(text, source);
   } catch (const toml::parse_error& e) {
     const auto& at = e.source().begin;
-    throw InvalidArgument(std::string(source) + ":" + std::to_string(at.line) + ":" + std::to_string(at.column) +
-                          ": " + std::string(e.description()));
+    throw InvalidArgument(std::string(source) + ":" + std::to_string(at.line) + ":" + std::to_string(at.column) + ": " +
+                          std::string(e.description()));
   }
   const TableReader top(root, std::string(source));
   top.allow_only({"name", "scene", "timestep", "steps", "duration", "control", "disturbance", "record", "reset"});
@@ -368,7 +381,8 @@ Scenario Scenario::from_toml_string(std::string_view text, std::string_view sour
       top.fail(key, "expected [[" + std::string(key) + "]] tables");
     }
     for (std::size_t i = 0; i < array->size(); ++i) {
-      read(TableReader(*array->get(i)->as_table(), std::string(source), std::string(key) + "[" + std::to_string(i) + "]"));
+      read(TableReader(*array->get(i)->as_table(), std::string(source),
+                       std::string(key) + "[" + std::to_string(i) + "]"));
     }
   };
   each_table("control", [&](const TableReader& t) { s.controls.push_back(read_control(t, base)); });

@@ -15,14 +15,22 @@ std::string name_or(const mjModel* m, mjtObj type, int id, const char* kind) {
 
 GeomShape::Kind kind_of(int type) {
   switch (type) {
-    case mjGEOM_PLANE: return GeomShape::Kind::kPlane;
-    case mjGEOM_SPHERE: return GeomShape::Kind::kSphere;
-    case mjGEOM_CAPSULE: return GeomShape::Kind::kCapsule;
-    case mjGEOM_ELLIPSOID: return GeomShape::Kind::kEllipsoid;
-    case mjGEOM_CYLINDER: return GeomShape::Kind::kCylinder;
-    case mjGEOM_BOX: return GeomShape::Kind::kBox;
-    case mjGEOM_MESH: return GeomShape::Kind::kMesh;
-    default: return GeomShape::Kind::kOther;
+    case mjGEOM_PLANE:
+      return GeomShape::Kind::kPlane;
+    case mjGEOM_SPHERE:
+      return GeomShape::Kind::kSphere;
+    case mjGEOM_CAPSULE:
+      return GeomShape::Kind::kCapsule;
+    case mjGEOM_ELLIPSOID:
+      return GeomShape::Kind::kEllipsoid;
+    case mjGEOM_CYLINDER:
+      return GeomShape::Kind::kCylinder;
+    case mjGEOM_BOX:
+      return GeomShape::Kind::kBox;
+    case mjGEOM_MESH:
+      return GeomShape::Kind::kMesh;
+    default:
+      return GeomShape::Kind::kOther;
   }
 }
 
@@ -42,9 +50,13 @@ std::vector<GeomShape> scene_geometry(const mjModel* m) {
     s.kind = kind_of(m->geom_type[g]);
     const mjtNum* size = m->geom_size + 3 * g;
     switch (s.kind) {
-      case GeomShape::Kind::kSphere: s.half_size = {size[0], size[0], size[0]}; break;
+      case GeomShape::Kind::kSphere:
+        s.half_size = {size[0], size[0], size[0]};
+        break;
       case GeomShape::Kind::kCapsule:
-      case GeomShape::Kind::kCylinder: s.half_size = {size[0], size[0], size[1]}; break;
+      case GeomShape::Kind::kCylinder:
+        s.half_size = {size[0], size[0], size[1]};
+        break;
       case GeomShape::Kind::kPlane:
         s.half_size = {size[0] > 0 ? size[0] : 1.0, size[1] > 0 ? size[1] : 1.0, 0.0};
         break;
@@ -68,7 +80,9 @@ std::vector<GeomShape> scene_geometry(const mjModel* m) {
         }
         break;
       }
-      default: s.half_size = {size[0], size[1], size[2]}; break;
+      default:
+        s.half_size = {size[0], size[1], size[2]};
+        break;
     }
     std::copy(m->geom_pos + 3 * g, m->geom_pos + 3 * g + 3, s.pos.begin());
     std::copy(m->geom_quat + 4 * g, m->geom_quat + 4 * g + 4, s.quat.begin());

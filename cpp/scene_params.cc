@@ -1,14 +1,14 @@
 #include "simloop/scene_params.hpp"
-#include "mujoco_compat.hpp"
 
 #include <cmath>
 #include <string>
 #include <vector>
 
+#include "mujoco_compat.hpp"
 #include "mujoco_guard.hpp"
 #include "simloop/errors.hpp"
-#include "simloop/object_names.hpp"
 #include "simloop/number_format.hpp"
+#include "simloop/object_names.hpp"
 #include "simloop/scenario.hpp"
 
 namespace simloop {
@@ -96,17 +96,21 @@ bool apply(const mjModel* scene, mjModel* m, const SceneParam& p) {
   return false;
 }
 
-constexpr SceneParam::Kind kKinds[] = {SceneParam::Kind::kFriction, SceneParam::Kind::kMass,
-                                       SceneParam::Kind::kDamping, SceneParam::Kind::kGravity};
+constexpr SceneParam::Kind kKinds[] = {SceneParam::Kind::kFriction, SceneParam::Kind::kMass, SceneParam::Kind::kDamping,
+                                       SceneParam::Kind::kGravity};
 
 }  // namespace
 
 const char* scene_param_kind_name(SceneParam::Kind kind) noexcept {
   switch (kind) {
-    case SceneParam::Kind::kFriction: return "friction";
-    case SceneParam::Kind::kMass: return "mass";
-    case SceneParam::Kind::kDamping: return "damping";
-    case SceneParam::Kind::kGravity: return "gravity";
+    case SceneParam::Kind::kFriction:
+      return "friction";
+    case SceneParam::Kind::kMass:
+      return "mass";
+    case SceneParam::Kind::kDamping:
+      return "damping";
+    case SceneParam::Kind::kGravity:
+      return "gravity";
   }
   return "?";
 }

@@ -152,9 +152,7 @@ std::uint32_t bounded_lemire(Pcg64& g, std::uint32_t rng) {
 
 }  // namespace
 
-std::string_view rng_name(ShoveRng rng) noexcept {
-  return rng == ShoveRng::kNumpy ? "numpy" : "mt19937_64";
-}
+std::string_view rng_name(ShoveRng rng) noexcept { return rng == ShoveRng::kNumpy ? "numpy" : "mt19937_64"; }
 
 std::string_view rng_description(ShoveRng rng) noexcept {
   return rng == ShoveRng::kNumpy ? "numpy default_rng (PCG64)" : "std::mt19937_64";

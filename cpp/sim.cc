@@ -1,17 +1,17 @@
 #include "simloop/sim.hpp"
-#include "mujoco_compat.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <string>
 
+#include "loop.hpp"
+#include "mujoco_compat.hpp"
 #include "mujoco_guard.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/number_format.hpp"
 #include "simloop/object_names.hpp"
 #include "simloop/scenario.hpp"
 #include "simloop/state.hpp"
-#include "loop.hpp"
 
 namespace simloop {
 
@@ -55,7 +55,9 @@ Sim::Sim(const Model& model) : model_(model), data_(model) { reset(); }
 
 Sim::Sim(const Sim& other)
     : model_(other.owns_model_ ? other.model_.with_timestep(other.model_.timestep()) : other.model_),
-      owns_model_(other.owns_model_), data_(other.model_), steps_(other.steps_),
+      owns_model_(other.owns_model_),
+      data_(other.model_),
+      steps_(other.steps_),
       counter_(std::make_shared<Counter>(*other.counter_)) {
   const mjModel* m = model_.get();
   mjData* d = data_.get();
@@ -143,9 +145,7 @@ void Sim::apply_wrench(int body, const std::array<double, 3>* force, const std::
   if (torque) std::copy(torque->begin(), torque->end(), slot + 3);
 }
 
-void Sim::clear_forces() noexcept {
-  std::fill_n(data_.get()->xfrc_applied, 6 * model_.get()->nbody, 0.0);
-}
+void Sim::clear_forces() noexcept { std::fill_n(data_.get()->xfrc_applied, 6 * model_.get()->nbody, 0.0); }
 
 void Sim::forward() {
   const mjModel* m = model_.get();
@@ -157,7 +157,9 @@ std::vector<double> Sim::state() const { return get_state(model_.get(), data_.ge
 
 std::size_t Sim::state_size() const noexcept { return simloop::state_size(model_.get()); }
 
-std::vector<std::pair<std::string, std::size_t>> Sim::state_layout() const { return simloop::state_layout(model_.get()); }
+std::vector<std::pair<std::string, std::size_t>> Sim::state_layout() const {
+  return simloop::state_layout(model_.get());
+}
 
 void Sim::set_state(const double* state, std::size_t size) {
   const mjModel* m = model_.get();

@@ -53,10 +53,9 @@ std::int64_t sweep_steps(double duration, double timestep) {
   if (steps < kMinSweepSteps || steps > kMaxSteps) {
     char ratio_text[32];
     std::snprintf(ratio_text, sizeof ratio_text, "%.6g", ratio);
-    throw InvalidArgument("duration " + python_float_repr(duration) + " s at timestep " +
-                          python_float_repr(timestep) + " s is " + ratio_text +
-                          " steps; a sweep point needs " + std::to_string(kMinSweepSteps) + " to " +
-                          std::to_string(kMaxSteps) + " steps (duration / timestep, rounded)");
+    throw InvalidArgument("duration " + python_float_repr(duration) + " s at timestep " + python_float_repr(timestep) +
+                          " s is " + ratio_text + " steps; a sweep point needs " + std::to_string(kMinSweepSteps) +
+                          " to " + std::to_string(kMaxSteps) + " steps (duration / timestep, rounded)");
   }
   return steps;
 }
@@ -194,10 +193,12 @@ SweepResult join_sweeps(const std::vector<SweepResult>& parts) {
 
 double scenario_duration(const Model& scene, const Scenario& scenario) {
   switch (scenario.length.unit) {
-    case When::Unit::kSeconds: return scenario.length.value;
+    case When::Unit::kSeconds:
+      return scenario.length.value;
     case When::Unit::kSteps:
       return static_cast<double>(scenario.length.count) * scenario.timestep.value_or(scene.timestep());
-    default: break;
+    default:
+      break;
   }
   throw InvalidArgument("scenario " + scenario.name + ": its length is a fraction of itself; give a duration");
 }
@@ -271,7 +272,8 @@ ScenarioSweepResult sweep_scenario(const Model& scene, const Scenario& scenario,
     p.timestep = r.timestep;
     p.steps = r.schedule.steps;
     p.peak_speed = reducers[i].peak();
-    for (const Warning& w : r.warnings) (w.name == detail::kDivergedWarning ? p.diverged : p.mujoco_warnings) += w.count;
+    for (const Warning& w : r.warnings)
+      (w.name == detail::kDivergedWarning ? p.diverged : p.mujoco_warnings) += w.count;
     for (const auto& body : bodies) {
       const double* pos = r.final_row.data() + body.first;
       p.final_positions.push_back({pos[0], pos[1], pos[2]});

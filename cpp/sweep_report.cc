@@ -1,7 +1,5 @@
 // What a sweep prints: its CSV and its summary table, for the chapter's
 // sweep and a scenario's (the sweeps themselves are in sweep.cc).
-#include "simloop/sweep.hpp"
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -9,6 +7,7 @@
 #include <vector>
 
 #include "simloop/number_format.hpp"
+#include "simloop/sweep.hpp"
 
 namespace simloop {
 
@@ -18,8 +17,8 @@ std::string sweep_csv(const SweepResult& result) {
       "energy_change,work_actuator,work_passive,work_constraint,work_constraint_positive,energy_unexplained,"
       "stable\n";
   for (const SweepPoint& p : result.points) {
-    const double values[] = {p.timestep, p.peak_box_z, p.max_abs_box_y, p.final_box_x, p.final_box_y,
-                             p.final_box_z, p.final_pusher_x};
+    const double values[] = {p.timestep,    p.peak_box_z,  p.max_abs_box_y, p.final_box_x,
+                             p.final_box_y, p.final_box_z, p.final_pusher_x};
     append_shortest(out, values[0]);
     out += ',' + std::to_string(p.steps);
     for (size_t i = 1; i < std::size(values); ++i) {
@@ -109,16 +108,16 @@ std::string sweep_summary(const SweepResult& result) {
   std::snprintf(line, sizeof line, "swept %zu timestep%s, %s s of sim time each, no shove\n", result.points.size(),
                 result.points.size() == 1 ? "" : "s", python_float_repr(result.duration).c_str());
   out += line;
-  const std::vector<std::string> header = {"timestep (s)", "steps", "peak z (m)", "max |y| (m)", "final z (m)",
-                                           "contacts +work (J)", "unexplained (J)", "warnings", "stable"};
+  const std::vector<std::string> header = {"timestep (s)",    "steps",       "peak z (m)",
+                                           "max |y| (m)",     "final z (m)", "contacts +work (J)",
+                                           "unexplained (J)", "warnings",    "stable"};
   std::vector<std::vector<std::string>> rows;
   for (size_t i = 0; i < result.points.size(); ++i) {
     const SweepPoint& p = result.points[i];
     rows.push_back({python_float_repr(p.timestep), std::to_string(p.steps), fixed(p.peak_box_z, 4),
                     fixed(p.max_abs_box_y, 4), fixed(p.final_box_z, 4), fixed(p.energy.work_constraint_positive, 4),
                     fixed(p.energy.unexplained, 4), std::to_string(p.warnings),
-                    std::string(p.stable ? "yes" : "no") +
-                        chapter_marks(p, static_cast<int>(i) == result.edge_index)});
+                    std::string(p.stable ? "yes" : "no") + chapter_marks(p, static_cast<int>(i) == result.edge_index)});
   }
   out += aligned_table(header, rows);
   out += edge_line(result, "largest stable timestep", "even the finest is unstable");
@@ -132,7 +131,8 @@ std::string sweep_summary(const SweepResult& result) {
 
 std::string sweep_csv(const ScenarioSweepResult& result) {
   std::string out = "timestep,steps,mujoco_warnings,diverged,peak_speed";
-  for (const std::string& b : result.bodies) out += "," + b + "_final_x," + b + "_final_y," + b + "_final_z," + b + "_offset";
+  for (const std::string& b : result.bodies)
+    out += "," + b + "_final_x," + b + "_final_y," + b + "_final_z," + b + "_offset";
   out += ",max_offset,tolerance,blew_up\n";
   for (const ScenarioSweepPoint& p : result.points) {
     append_shortest(out, p.timestep);
@@ -180,8 +180,7 @@ std::string sweep_summary(const ScenarioSweepResult& result) {
   std::snprintf(line, sizeof line,
                 "  blew up: MuJoCo or simloop_DIVERGED warned, or a recorded body ended more than %s m (%g%% of the "
                 "scene's size, %s m) from where the finest timestep left it\n",
-                fixed(result.tolerance, 4).c_str(), kScenarioSweepTolerance * 100,
-                fixed(result.scene_size, 3).c_str());
+                fixed(result.tolerance, 4).c_str(), kScenarioSweepTolerance * 100, fixed(result.scene_size, 3).c_str());
   out += line;
   return out;
 }

@@ -1,11 +1,11 @@
 // Counting MuJoCo's warnings per run (internal to the library).
 #pragma once
 
+#include <mujoco/mujoco.h>
+
 #include <cstdint>
 #include <string>
 #include <vector>
-
-#include <mujoco/mujoco.h>
 
 #include "simloop/rows.hpp"
 

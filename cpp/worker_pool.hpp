@@ -18,6 +18,8 @@
 // starts afresh.
 #pragma once
 
+#include <sys/types.h>
+
 #include <atomic>
 #include <condition_variable>
 #include <cstdint>
@@ -26,8 +28,6 @@
 #include <mutex>
 #include <thread>
 #include <vector>
-
-#include <sys/types.h>
 
 namespace simloop::detail {
 

@@ -13,8 +13,14 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 # The project's Python, which scripts/test.sh makes: .venv, or .venv-pypi
 # where only the PyPI build was made (SIMLOOP_MUJOCO=pypi).
-VENV_PYTHON = next((python for python in (HERE.parent / venv / "bin" / "python" for venv in (".venv", ".venv-pypi"))
-                    if python.exists()), HERE.parent / ".venv" / "bin" / "python")
+VENV_PYTHON = next(
+    (
+        python
+        for python in (HERE.parent / venv / "bin" / "python" for venv in (".venv", ".venv-pypi"))
+        if python.exists()
+    ),
+    HERE.parent / ".venv" / "bin" / "python",
+)
 
 try:
     import simloop
@@ -40,14 +46,25 @@ from drift import half_of_the_sum, rigid_sum, slide_phases, sum_beside_mujoco  #
 TIMESTEP = 0.002  # the chapter's, s
 # unit: (dimension, factor to SI; for "steps", to steps)
 UNITS = {
-    "s": ("time", 1.0), "sec": ("time", 1.0), "secs": ("time", 1.0), "second": ("time", 1.0),
-    "seconds": ("time", 1.0), "ms": ("time", 1e-3),
-    "m": ("length", 1.0), "cm": ("length", 1e-2), "mm": ("length", 1e-3),
+    "s": ("time", 1.0),
+    "sec": ("time", 1.0),
+    "secs": ("time", 1.0),
+    "second": ("time", 1.0),
+    "seconds": ("time", 1.0),
+    "ms": ("time", 1e-3),
+    "m": ("length", 1.0),
+    "cm": ("length", 1e-2),
+    "mm": ("length", 1e-3),
     "n": ("force", 1.0),
-    "step": ("steps", 1.0), "steps": ("steps", 1.0),
+    "step": ("steps", 1.0),
+    "steps": ("steps", 1.0),
 }
-DIMENSIONS = {"time": "a time (s or ms)", "length": "a distance (m, cm or mm)", "force": "a force (N)",
-              "steps": "a number of steps"}
+DIMENSIONS = {
+    "time": "a time (s or ms)",
+    "length": "a distance (m, cm or mm)",
+    "force": "a force (N)",
+    "steps": "a number of steps",
+}
 NUMBER_WITH_UNIT = re.compile(r"\s*([-+]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][-+]?\d+)?)\s*([A-Za-z]*)\s*")
 
 
@@ -68,7 +85,7 @@ def answer_lines(path: Path) -> list:
     try:
         text = path.read_text()
     except OSError as e:
-        raise NoAnswer(f"cannot read {path}: {e.strerror}")
+        raise NoAnswer(f"cannot read {path}: {e.strerror}") from None
     lines = [line.strip() for line in text.splitlines() if line.strip() and not line.strip().startswith("#")]
     if not lines:
         raise NoAnswer(f"{path} holds no answer yet: write it there first")
@@ -113,6 +130,7 @@ def _python() -> str:
 
 # ---- 1. the timestep edge ---------------------------------------------------
 
+
 def check_edge(path: Path) -> Verdict:
     predicted, _ = quantity(answer_lines(path)[0], "the prediction", ("time",), "s")
     if predicted <= 0:
@@ -131,8 +149,9 @@ def check_edge(path: Path) -> Verdict:
         rise_mm = (mine.peak_box_z - simloop._core.BOX_REST_Z) * 1e3
         sink_mm = (simloop._core.BOX_REST_Z - mine.final_box_z) * 1e3
         verdict = "stable" if mine.stable else "unstable"
-        detail = f"rose {rise_mm:.1f} mm above rest" + (f" and ended {sink_mm:.1f} mm into the floor"
-                                                         if sink_mm > 1.0 else "")
+        detail = f"rose {rise_mm:.1f} mm above rest" + (
+            f" and ended {sink_mm:.1f} mm into the floor" if sink_mm > 1.0 else ""
+        )
         report.append(f"At {_fmt(predicted)} the box {detail}: {verdict} by the criterion.")
     else:
         mine = None
@@ -142,41 +161,53 @@ def check_edge(path: Path) -> Verdict:
     holds = low <= predicted < high and (mine is None or mine.stable)
     if holds:
         # What the sweep measured up to the edge, not a figure from memory.
-        rises = [(p.peak_box_z - simloop._core.BOX_REST_Z) * 1e3 for p in points[:edge_index + 1]]
-        why = [f"Right. Below the edge the push lifts the box {min(rises):.1f} to {max(rises):.1f} mm through the "
-               "contacts' softness (the sweep's timesteps up to the edge); past it each step extrapolates so far "
-               "into the contact that the solver's correction "
-               "throws the box up, and the contacts do positive work (the 'contacts +work' column) that no force "
-               "explains. The chapter's 0.002 s has a factor of 2 to spare."]
+        rises = [(p.peak_box_z - simloop._core.BOX_REST_Z) * 1e3 for p in points[: edge_index + 1]]
+        why = [
+            f"Right. Below the edge the push lifts the box {min(rises):.1f} to {max(rises):.1f} mm through the "
+            "contacts' softness (the sweep's timesteps up to the edge); past it each step extrapolates so far "
+            "into the contact that the solver's correction "
+            "throws the box up, and the contacts do positive work (the 'contacts +work' column) that no force "
+            "explains. The chapter's 0.002 s has a factor of 2 to spare."
+        ]
     elif predicted < high and mine is not None and not mine.stable:
-        why = [f"Your {_fmt(predicted)} is unstable on its own, although the sweep's grid is stable up to "
-               f"{_fmt(edge)}: near the edge the hop wavers around the 5 mm criterion, so the edge is a band rather "
-               "than a line, and an answer must be stable itself. Try a little lower."]
+        why = [
+            f"Your {_fmt(predicted)} is unstable on its own, although the sweep's grid is stable up to "
+            f"{_fmt(edge)}: near the edge the hop wavers around the 5 mm criterion, so the edge is a band rather "
+            "than a line, and an answer must be stable itself. Try a little lower."
+        ]
     elif predicted >= high or (mine is not None and not mine.stable):
         if mine is not None and mine.stable:
-            why = [f"Your {_fmt(predicted)} is stable on its own, but it is past the edge: the edge is the largest "
-                   "timestep below which every timestep is stable, and some smaller ones are not."]
+            why = [
+                f"Your {_fmt(predicted)} is stable on its own, but it is past the edge: the edge is the largest "
+                "timestep below which every timestep is stable, and some smaller ones are not."
+            ]
         else:
             why = [f"Your {_fmt(predicted)} is already past the edge: the box hops or sinks there."]
         if predicted >= 0.05:
             why.append("At 0.05 s and beyond you are in Break It itself.")
     else:
-        why = [f"Your {_fmt(predicted)} is stable, and so are timesteps well above it: the edge is higher. The "
-               "chapter warns against 0.0002 s for the same reason: ten times the steps for nothing."]
+        why = [
+            f"Your {_fmt(predicted)} is stable, and so are timesteps well above it: the edge is higher. The "
+            "chapter warns against 0.0002 s for the same reason: ten times the steps for nothing."
+        ]
     python = _python()
-    hint = ["Try a few timesteps before you predict again, each over the question's 4 s, and watch the box's "
-            "height:",
-            f"  {python} -m simloop --timestep T --steps N --no-perturb --plot    (N = 4 s / T: 2000 at 0.002 s; "
-            "trajectory.png; stable: z stays under 0.055 m and ends above 0.049 m)"]
-    solution = [result.summary().rstrip("\n"),
-                f"The edge is {_fmt(edge)}; the next timestep, {_fmt(first_unstable)}, is unstable. Accepted: "
-                f"from {low:.2g} s up to, not including, {high:g} s, if stable itself. The edge is a band rather "
-                "than a line: between 0.003 and 0.005 s the hop wavers around the 5 mm criterion "
-                f"(`{python} -m simloop sweep --plot` draws the whole curve)."]
+    hint = [
+        "Try a few timesteps before you predict again, each over the question's 4 s, and watch the box's height:",
+        f"  {python} -m simloop --timestep T --steps N --no-perturb --plot    (N = 4 s / T: 2000 at 0.002 s; "
+        "trajectory.png; stable: z stays under 0.055 m and ends above 0.049 m)",
+    ]
+    solution = [
+        result.summary().rstrip("\n"),
+        f"The edge is {_fmt(edge)}; the next timestep, {_fmt(first_unstable)}, is unstable. Accepted: "
+        f"from {low:.2g} s up to, not including, {high:g} s, if stable itself. The edge is a band rather "
+        "than a line: between 0.003 and 0.005 s the hop wavers around the 5 mm criterion "
+        f"(`{python} -m simloop sweep --plot` draws the whole curve).",
+    ]
     return Verdict(holds, report, why, hint, solution)
 
 
 # ---- 2. the sticky shove ----------------------------------------------------
+
 
 def load_module(path: Path, name: str):
     spec = importlib.util.spec_from_file_location(name, path)
@@ -198,9 +229,12 @@ class CountingSim(simloop.Sim):
 
 # The chapter's own words for this answer ("Set it once and it pushes
 # forever"): within a run, forever ends with the run's last step.
-TO_THE_END = re.compile(r"(?:for ?ever|always|never stops|infinite(?:ly)?|(?:un)?til the end(?: of the run)?|"
-                        r"to the (?:end|last step)(?: of the run)?|(?:for )?(?:all )?the rest of the run|"
-                        r"every (?:remaining )?step(?: to the end)?)[.!]?", re.IGNORECASE)
+TO_THE_END = re.compile(
+    r"(?:for ?ever|always|never stops|infinite(?:ly)?|(?:un)?til the end(?: of the run)?|"
+    r"to the (?:end|last step)(?: of the run)?|(?:for )?(?:all )?the rest of the run|"
+    r"every (?:remaining )?step(?: to the end)?)[.!]?",
+    re.IGNORECASE,
+)
 
 
 def check_sticky(path: Path) -> Verdict:
@@ -218,46 +252,66 @@ def check_sticky(path: Path) -> Verdict:
         answer = value / TIMESTEP if dimension == "time" else value
         answer = round(answer) if abs(answer - round(answer)) < 1e-6 else answer
         said = f"you answered {answer:g} step{'' if answer == 1 else 's'}" + (
-            f" ({value:g} s at {TIMESTEP} s a step)." if dimension == "time" else ".")
+            f" ({value:g} s at {TIMESTEP} s a step)." if dimension == "time" else "."
+        )
     reference = simloop.run(seed=0)
     holds = answer == actual
-    report = [f"simloop.run(seed=0): the box ends at y {reference.metrics['box_final_pos'][1]:.3f} m "
-              f"(the shove pushed for {shove.steps} steps)",
-              f"the shipped loop.py:  the box ends at y {sim.box_position[1]:.3f} m", said]
+    report = [
+        f"simloop.run(seed=0): the box ends at y {reference.metrics['box_final_pos'][1]:.3f} m "
+        f"(the shove pushed for {shove.steps} steps)",
+        f"the shipped loop.py:  the box ends at y {sim.box_position[1]:.3f} m",
+        said,
+    ]
     if holds:
-        why = [f"Right: written once at step {shove.start_step}, the force stayed in xfrc_applied and pushed on "
-               f"every step to the end of the run, {actual} steps, {actual // shove.steps} times the chapter's "
-               f"{shove.steps}. MuJoCo never clears it" + (": the chapter's 'forever', cut short by the run's end"
-                                                          if in_words else "") +
-               ". The chapter's loop writes 0 explicitly on every step outside the shove's window for exactly "
-               "this reason."]
+        why = [
+            f"Right: written once at step {shove.start_step}, the force stayed in xfrc_applied and pushed on "
+            f"every step to the end of the run, {actual} steps, {actual // shove.steps} times the chapter's "
+            f"{shove.steps}. MuJoCo never clears it"
+            + (": the chapter's 'forever', cut short by the run's end" if in_words else "")
+            + ". The chapter's loop writes 0 explicitly on every step outside the shove's window for exactly "
+            "this reason."
+        ]
     elif abs(answer - actual) <= 2:
-        why = [f"Off by {abs(answer - actual):g}: you have the idea. The force is written before step "
-               f"{shove.start_step}'s mj_step, and the run's last step is step 1999: count the steps from one to "
-               "the other, both included."]
+        why = [
+            f"Off by {abs(answer - actual):g}: you have the idea. The force is written before step "
+            f"{shove.start_step}'s mj_step, and the run's last step is step 1999: count the steps from one to "
+            "the other, both included."
+        ]
     elif answer == shove.steps:
-        why = [f"{shove.steps} is how long the shove was meant to last (shove.steps), and it would be right if "
-               "something stopped it after its window. Look for the line that does."]
+        why = [
+            f"{shove.steps} is how long the shove was meant to last (shove.steps), and it would be right if "
+            "something stopped it after its window. Look for the line that does."
+        ]
     elif answer == 1:
-        why = ["1 would be right if MuJoCo cleared xfrc_applied after each step, as if a force were a kick. "
-               "It does not: read what simloop.Sim.apply_force says about it."]
+        why = [
+            "1 would be right if MuJoCo cleared xfrc_applied after each step, as if a force were a kick. "
+            "It does not: read what simloop.Sim.apply_force says about it."
+        ]
     elif answer <= 0:
         why = ["Then the box would have stayed near its line, as it does in simloop.run: it did not."]
     elif answer > after:
-        why = [f"The force is first written at step {shove.start_step} of 2000, so it cannot have pushed for "
-               f"more than the {after} steps left."]
+        why = [
+            f"The force is first written at step {shove.start_step} of 2000, so it cannot have pushed for "
+            f"more than the {after} steps left."
+        ]
     else:
-        why = [f"Between {shove.steps} and the end of the run, yes, but not {answer:g}: ask what would ever "
-               "change the force after it was written."]
-    hint = ["What does MuJoCo do with xfrc_applied between one mj_step and the next? Which line of loop.py would "
-            "ever set it back to zero?"]
-    solution = [f"The shove pushed for {actual} steps, from step {shove.start_step} to the last step of the run: "
-                "apply_force writes xfrc_applied once, and it persists until something writes it again. "
-                f"{shove.force_y:+.1f} N for {actual * TIMESTEP:g} s instead of {shove.steps * TIMESTEP:g} s drives "
-                f"the box {sim.box_position[1]:.1f} m off its line.",
-                "The fix: clear the force when the window ends (sim.clear_force()), or write the force, zero "
-                "outside the window, on every step, as the chapter's loop does. Then check the fix: "
-                f"`{_python()} {_shown(HERE / 'check.py')} 2 --fix`."]
+        why = [
+            f"Between {shove.steps} and the end of the run, yes, but not {answer:g}: ask what would ever "
+            "change the force after it was written."
+        ]
+    hint = [
+        "What does MuJoCo do with xfrc_applied between one mj_step and the next? Which line of loop.py would "
+        "ever set it back to zero?"
+    ]
+    solution = [
+        f"The shove pushed for {actual} steps, from step {shove.start_step} to the last step of the run: "
+        "apply_force writes xfrc_applied once, and it persists until something writes it again. "
+        f"{shove.force_y:+.1f} N for {actual * TIMESTEP:g} s instead of {shove.steps * TIMESTEP:g} s drives "
+        f"the box {sim.box_position[1]:.1f} m off its line.",
+        "The fix: clear the force when the window ends (sim.clear_force()), or write the force, zero "
+        "outside the window, on every step, as the chapter's loop does. Then check the fix: "
+        f"`{_python()} {_shown(HERE / 'check.py')} 2 --fix`.",
+    ]
     return Verdict(holds, report, why, hint, solution)
 
 
@@ -280,23 +334,32 @@ def check_fix(loop_path: Path) -> bool:
             "box orientation": [final[names.index(c)] for c in ("box_qw", "box_qx", "box_qy", "box_qz")],
             "pusher x": [final[names.index("pusher_x")]],
         }
-        mine = {"box position": list(sim.box_position), "box velocity": list(sim.box_velocity),
-                "box orientation": list(sim.box_quaternion), "pusher x": [sim.pusher_x]}
+        mine = {
+            "box position": list(sim.box_position),
+            "box velocity": list(sim.box_velocity),
+            "box orientation": list(sim.box_quaternion),
+            "pusher x": [sim.pusher_x],
+        }
         differs = [k for k in expected if mine[k] != expected[k]]
         shove_steps = simloop.draw_shove(seed=seed, steps=steps).steps
         if differs:
             ok = False
-            print(f"seed {seed}, {steps} steps: the shove pushed for {sim.shoved} steps (simloop.run: "
-                  f"{shove_steps}); differs from simloop.run in: {', '.join(differs)} "
-                  f"(box y {mine['box position'][1]:.6f} against {expected['box position'][1]:.6f} m).")
+            print(
+                f"seed {seed}, {steps} steps: the shove pushed for {sim.shoved} steps (simloop.run: "
+                f"{shove_steps}); differs from simloop.run in: {', '.join(differs)} "
+                f"(box y {mine['box position'][1]:.6f} against {expected['box position'][1]:.6f} m)."
+            )
         else:
-            print(f"seed {seed}, {steps} steps: the same as simloop.run, bit for bit (the shove pushed for "
-                  f"{sim.shoved} steps).")
+            print(
+                f"seed {seed}, {steps} steps: the same as simloop.run, bit for bit (the shove pushed for "
+                f"{sim.shoved} steps)."
+            )
     print("Your fix holds." if ok else "Your fix does not hold yet.")
     return ok
 
 
 # ---- 3. below and above friction ---------------------------------------------
+
 
 def check_drift(path: Path) -> Verdict:
     fields = {}
@@ -328,34 +391,53 @@ def check_drift(path: Path) -> Verdict:
     # away (a wrong yes is a no), so a first wrong answer hears neither.
     parts = []
     if ok_stays:
-        parts.append(f"4 N: right. It is below what static friction can hold (m g mu = {friction:.2f} N); the box "
-                     f"only creeps {at4 * 1000:.2f} mm, through the contacts' softness.")
+        parts.append(
+            f"4 N: right. It is below what static friction can hold (m g mu = {friction:.2f} N); the box "
+            f"only creeps {at4 * 1000:.2f} mm, through the contacts' softness."
+        )
     else:
         parts.append(f"4 N: you expected it to {'stay' if stays == 'yes' else 'move more than 2 mm'}; it did not.")
     half = half_of_the_sum(predicted_cm, sums, at9 * 100, ok_slide)
     if half is not None:
         parts.append(half)
     elif ok_slide:
-        parts.append(f"9 N: right: MuJoCo slid it {at9 * 100:.2f} cm; you said {predicted_cm:g} cm, within a "
-                     "factor of 2.")
+        parts.append(
+            f"9 N: right: MuJoCo slid it {at9 * 100:.2f} cm; you said {predicted_cm:g} cm, within a factor of 2."
+        )
     elif predicted_cm > high:
-        parts.append(f"9 N: {predicted_cm:g} cm is more than twice what MuJoCo did. Friction acts during the push "
-                     "too, not only after it: only the force above friction accelerates the box.")
+        parts.append(
+            f"9 N: {predicted_cm:g} cm is more than twice what MuJoCo did. Friction acts during the push "
+            "too, not only after it: only the force above friction accelerates the box."
+        )
     else:
-        parts.append(f"9 N: {predicted_cm:g} cm is less than half what MuJoCo did. The box does not stop when the "
-                     "push does: it coasts until friction has taken all its speed.")
+        parts.append(
+            f"9 N: {predicted_cm:g} cm is less than half what MuJoCo did. The box does not stop when the "
+            "push does: it coasts until friction has taken all its speed."
+        )
     holds = ok_stays and ok_slide
-    why = parts if holds else [
-        "One or both of your predictions do not hold. Which one stays unsaid for now: for the yes/no part, "
-        "that alone would be the answer. The hint covers both."]
-    hint = ["4 N: compare it with the largest force friction can hold on a 0.5 kg box (m g mu).",
-            "9 N: the slide has two parts; add them. During the push only the force above friction accelerates "
-            "the box (a = (9 N - friction) / m), so by the release, after 0.1 s, it has slid a t^2 / 2 and moves "
-            "at v = a t; then it coasts until friction (a deceleration of mu g) has taken that speed, sliding "
-            "v^2 / (2 mu g) more."]
-    solution = ([] if holds else parts) + [
-        f"4 N: the box moved {at4 * 1000:.2f} mm (it stays). 9 N: it slid {at9 * 100:.2f} cm "
-        f"(accepted: {low:.2f} to {high:.2f} cm)."] + sum_beside_mujoco(9.0, sums, mujoco9)
+    why = (
+        parts
+        if holds
+        else [
+            "One or both of your predictions do not hold. Which one stays unsaid for now: for the yes/no part, "
+            "that alone would be the answer. The hint covers both."
+        ]
+    )
+    hint = [
+        "4 N: compare it with the largest force friction can hold on a 0.5 kg box (m g mu).",
+        "9 N: the slide has two parts; add them. During the push only the force above friction accelerates "
+        "the box (a = (9 N - friction) / m), so by the release, after 0.1 s, it has slid a t^2 / 2 and moves "
+        "at v = a t; then it coasts until friction (a deceleration of mu g) has taken that speed, sliding "
+        "v^2 / (2 mu g) more.",
+    ]
+    solution = (
+        ([] if holds else parts)
+        + [
+            f"4 N: the box moved {at4 * 1000:.2f} mm (it stays). 9 N: it slid {at9 * 100:.2f} cm "
+            f"(accepted: {low:.2f} to {high:.2f} cm)."
+        ]
+        + sum_beside_mujoco(9.0, sums, mujoco9)
+    )
     return Verdict(holds, said, why, hint, solution)
 
 
@@ -405,8 +487,7 @@ def grade(exercise: int, path: Path, reveal: bool) -> bool:
         print("The solution:\n" + "\n".join(verdict.solution))
     else:
         print("Hint: " + "\n".join(verdict.hint))
-        print("Change your answer and check again; a second, different wrong answer (or --reveal) shows the "
-              "solution.")
+        print("Change your answer and check again; a second, different wrong answer (or --reveal) shows the solution.")
     return False
 
 
@@ -415,9 +496,15 @@ def main(argv=None) -> int:
     parser.add_argument("exercise", type=int, choices=sorted(CHECKS))
     parser.add_argument("--answer", type=Path, help="the answer file (default: the exercise's answer.txt)")
     parser.add_argument("--reveal", action="store_true", help="show the solution even after a first wrong answer")
-    parser.add_argument("--fix", nargs="?", type=Path, const=HERE / FOLDERS[2] / "loop.py", default=None,
-                        metavar="LOOP", help="exercise 2 only: check your fixed loop.py (or LOOP) against "
-                                             "simloop.run, instead of your answer")
+    parser.add_argument(
+        "--fix",
+        nargs="?",
+        type=Path,
+        const=HERE / FOLDERS[2] / "loop.py",
+        default=None,
+        metavar="LOOP",
+        help="exercise 2 only: check your fixed loop.py (or LOOP) against simloop.run, instead of your answer",
+    )
     args = parser.parse_args(argv)
     try:
         if args.fix is not None:

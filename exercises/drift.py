@@ -17,8 +17,12 @@ def slide_phases(force: float) -> dict:
     sim.apply_force([0.0, force, 0.0])
     sim.step(50)
     sim.clear_force()
-    out = {"released": sim.box_position[1] - y0, "speed": float(sim.qvel[1]),  # the box's free joint: qvel[0:3]
-           "furthest": 0.0, "rise": 0.0}
+    out = {
+        "released": sim.box_position[1] - y0,
+        "speed": float(sim.qvel[1]),  # the box's free joint: qvel[0:3]
+        "furthest": 0.0,
+        "rise": 0.0,
+    }
     for _ in range(500):
         sim.step()
         (_, y, z) = sim.box_position
@@ -33,8 +37,12 @@ def rigid_sum(force: float) -> dict:
     friction = MASS * G * MU
     accel = (force - friction) / MASS
     speed = accel * PUSH_S
-    return {"friction": friction, "speed": speed, "push_cm": 0.5 * accel * PUSH_S**2 * 100,
-            "coast_cm": speed * speed / (2 * MU * G) * 100}
+    return {
+        "friction": friction,
+        "speed": speed,
+        "push_cm": 0.5 * accel * PUSH_S**2 * 100,
+        "coast_cm": speed * speed / (2 * MU * G) * 100,
+    }
 
 
 def half_of_the_sum(predicted_cm: float, s: dict, mujoco_cm: float, accepted: bool):
@@ -45,11 +53,16 @@ def half_of_the_sum(predicted_cm: float, s: dict, mujoco_cm: float, accepted: bo
     if not near:
         return None
     half = min(near, key=lambda name: abs(predicted_cm - parts[name]))
-    left_out = (f"the {s['coast_cm']:.1f} cm it coasts after the push (v^2 / (2 mu g))" if half == "push" else
-                f"the {s['push_cm']:.1f} cm it slides during the push itself (a t^2 / 2, a = net force / m)")
-    return (f"9 N: {predicted_cm:g} cm is half the sum, the {half} alone: it leaves out {left_out}. Both parts "
-            f"give {s['push_cm'] + s['coast_cm']:.1f} cm; MuJoCo slid it {mujoco_cm:.2f} cm"
-            + (", so yours is within a factor of 2 of it, but short for that reason." if accepted else "."))
+    left_out = (
+        f"the {s['coast_cm']:.1f} cm it coasts after the push (v^2 / (2 mu g))"
+        if half == "push"
+        else f"the {s['push_cm']:.1f} cm it slides during the push itself (a t^2 / 2, a = net force / m)"
+    )
+    return (
+        f"9 N: {predicted_cm:g} cm is half the sum, the {half} alone: it leaves out {left_out}. Both parts "
+        f"give {s['push_cm'] + s['coast_cm']:.1f} cm; MuJoCo slid it {mujoco_cm:.2f} cm"
+        + (", so yours is within a factor of 2 of it, but short for that reason." if accepted else ".")
+    )
 
 
 def sum_beside_mujoco(force: float, s: dict, m: dict) -> list:
@@ -61,8 +74,13 @@ def sum_beside_mujoco(force: float, s: dict, m: dict) -> list:
         f"MuJoCo, by the release: {m['released'] * 100:.2f} cm at {m['speed']:.2f} m/s (the sum: "
         f"{s['push_cm']:.1f} cm at {s['speed']:.2f} m/s). After it, the box slides "
         f"{(m['furthest'] - m['released']) * 100:.2f} cm more (the sum: {s['coast_cm']:.1f}), to "
-        f"{m['furthest'] * 100:.2f} cm" + (
+        f"{m['furthest'] * 100:.2f} cm"
+        + (
             ", and rocks: friction acts at its base, below its centre, and a cube with mu = 1 is at the edge of "
             f"tipping (mu = width / height), so it tips forward (its centre rises {m['rise'] * 1000:.1f} mm) "
             f"and falls back, ending {(m['furthest'] - m['end']) * 100:.2f} cm behind its furthest, at "
-            f"{m['end'] * 100:.2f} cm." if m["rise"] > 0.002 else ", where it stays.")]
+            f"{m['end'] * 100:.2f} cm."
+            if m["rise"] > 0.002
+            else ", where it stays."
+        ),
+    ]

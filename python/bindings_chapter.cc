@@ -13,7 +13,6 @@
 #include <vector>
 
 #include "bindings_common.hpp"
-#include "warning_counter.hpp"
 #include "simloop/batch.hpp"
 #include "simloop/model.hpp"
 #include "simloop/number_format.hpp"
@@ -21,6 +20,7 @@
 #include "simloop/run.hpp"
 #include "simloop/shove.hpp"
 #include "simloop/sweep.hpp"
+#include "warning_counter.hpp"
 
 namespace simloop_py {
 namespace {
@@ -70,8 +70,8 @@ void bind_chapter(py::module_& m) {
   py::class_<simloop::RunConfig>(m, "RunConfig")
       .def(py::init([](std::uint64_t seed, std::int64_t steps, double timestep, bool perturb, bool smoke,
                        std::int64_t record_every, bool audit_energy, const std::string& rng) {
-             return simloop::RunConfig{seed, steps, timestep, perturb, smoke, record_every, audit_energy,
-                                       shove_rng(rng)};
+             return simloop::RunConfig{seed,  steps,        timestep,     perturb,
+                                       smoke, record_every, audit_energy, shove_rng(rng)};
            }),
            "seed"_a, "steps"_a, "timestep"_a, "perturb"_a, "smoke"_a, "record_every"_a, "audit_energy"_a = false,
            "rng"_a = "mt19937_64")
@@ -92,8 +92,9 @@ void bind_chapter(py::module_& m) {
       .def_readonly("start_step", &simloop::Shove::start_step)
       .def_readonly("steps", &simloop::Shove::num_steps)
       .def_property_readonly("force_y", &simloop::Shove::force_y)
-      .def_property_readonly("rng", [](const simloop::Shove& s) { return std::string(simloop::rng_name(s.rng)); },
-                             "The generator that drew it: 'mt19937_64' or 'numpy'.")
+      .def_property_readonly(
+          "rng", [](const simloop::Shove& s) { return std::string(simloop::rng_name(s.rng)); },
+          "The generator that drew it: 'mt19937_64' or 'numpy'.")
       .def("__repr__", fields_repr("Shove", {"newtons", "sign", "start_step", "steps", "rng"}));
   m.def(
       "draw_shove",
@@ -104,10 +105,12 @@ void bind_chapter(py::module_& m) {
 
   py::class_<RunResult, simloop::RunRecord>(
       m, "RunResult", "What the chapter's run did: its record (a ScenarioResult) with the chapter's report on top.")
-      .def_property_readonly("metrics", [](const RunResult& r) { return metrics_dict(r.metrics); },
-                             "The dict metrics.json holds (floats rounded to 6 decimals).")
-      .def_property_readonly("unrounded_metrics", [](const RunResult& r) { return metrics_dict(r.unrounded_metrics); },
-                             "metrics as computed, not rounded (metrics.json rounds to 6 decimals).")
+      .def_property_readonly(
+          "metrics", [](const RunResult& r) { return metrics_dict(r.metrics); },
+          "The dict metrics.json holds (floats rounded to 6 decimals).")
+      .def_property_readonly(
+          "unrounded_metrics", [](const RunResult& r) { return metrics_dict(r.unrounded_metrics); },
+          "metrics as computed, not rounded (metrics.json rounds to 6 decimals).")
       .def_property_readonly(
           "energy",
           [](const RunResult& r) -> py::object {
@@ -116,8 +119,7 @@ void bind_chapter(py::module_& m) {
             return py::dict("energy_start"_a = e.energy_start, "energy_end"_a = e.energy_end,
                             "work_actuator"_a = e.work_actuator, "work_shove"_a = e.work_shove,
                             "work_passive"_a = e.work_passive, "work_constraint"_a = e.work_constraint,
-                            "work_constraint_positive"_a = e.work_constraint_positive,
-                            "unexplained"_a = e.unexplained);
+                            "work_constraint_positive"_a = e.work_constraint_positive, "unexplained"_a = e.unexplained);
           },
           "The energy audit's totals, J (None unless audit_energy).")
       .def_readonly("shove", &RunResult::shove)
@@ -127,15 +129,16 @@ void bind_chapter(py::module_& m) {
       .def("summary", no_arguments<RunResult, &simloop::summary_text>("RunResult.summary"),
            "The lines sim_loop prints about the run.")
       .def("write", &write_result<RunResult>, "out"_a,
-          "Writes metrics.json and trajectory.csv into out (a directory, made if missing), the bytes sim_loop "
-          "writes; returns their paths.")
-      .def("__repr__", [](const RunResult& r) {
-        return "RunResult(seed=" + std::to_string(r.config.seed) + ", steps=" + std::to_string(r.metrics.steps) +
-               ", timestep=" + simloop::python_float_repr(r.timestep) + ", rows=" +
-               std::to_string(r.trajectory.rows()) + ", lateral_drift=" +
-               simloop::python_float_repr(r.metrics.lateral_drift) + ", warnings=" + std::to_string(r.warnings.size()) +
-               ")";
-      })
+           "Writes metrics.json and trajectory.csv into out (a directory, made if missing), the bytes sim_loop "
+           "writes; returns their paths.")
+      .def("__repr__",
+           [](const RunResult& r) {
+             return "RunResult(seed=" + std::to_string(r.config.seed) + ", steps=" + std::to_string(r.metrics.steps) +
+                    ", timestep=" + simloop::python_float_repr(r.timestep) +
+                    ", rows=" + std::to_string(r.trajectory.rows()) +
+                    ", lateral_drift=" + simloop::python_float_repr(r.metrics.lateral_drift) +
+                    ", warnings=" + std::to_string(r.warnings.size()) + ")";
+           })
       .def(pickle_as_bytes<RunResult, &simloop::run_result_from_bytes>());
   m.def(
       "run",
@@ -181,22 +184,22 @@ void bind_chapter(py::module_& m) {
       .def_readonly("stable", &simloop::SweepPoint::stable)
       .def("__repr__", [](const simloop::SweepPoint& p) {
         return "SweepPoint(timestep=" + simloop::python_float_repr(p.timestep) + ", steps=" + std::to_string(p.steps) +
-               ", stable=" + py_bool(p.stable) + ", peak_box_z=" + simloop::python_float_repr(simloop::round6(p.peak_box_z)) +
+               ", stable=" + py_bool(p.stable) +
+               ", peak_box_z=" + simloop::python_float_repr(simloop::round6(p.peak_box_z)) +
                ", warnings=" + std::to_string(p.warnings) + ")";
       });
   py::class_<simloop::SweepResult> sweep_result(m, "SweepResult", "A timestep sweep of the baseline run.");
   bind_sweep_outputs<simloop::SweepResult, &simloop::sweep_csv, &simloop::sweep_summary>(
       sweep_result, "The largest stable timestep (None if even the finest is unstable).");
-  sweep_result
-      .def_readonly("duration", &simloop::SweepResult::duration)
+  sweep_result.def_readonly("duration", &simloop::SweepResult::duration)
       .def_readonly("points", &simloop::SweepResult::points)
       .def(pickle_as_bytes<simloop::SweepResult, &simloop::sweep_result_from_bytes>());
   m.def(
       "sweep",
       [](const simloop::Model& model, const std::vector<double>& timesteps, double duration, int threads,
          py::object progress) {
-        const std::string what = "sweep(" + std::to_string(timesteps.size()) + " timesteps, duration=" +
-                                 simloop::python_float_repr(duration) + ")";
+        const std::string what = "sweep(" + std::to_string(timesteps.size()) +
+                                 " timesteps, duration=" + simloop::python_float_repr(duration) + ")";
         return long_call(std::move(progress), what, [&](simloop::RunControl* control) {
           return simloop::sweep(model, timesteps, duration, threads, control);
         });

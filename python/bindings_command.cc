@@ -6,8 +6,8 @@
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
-#include <filesystem>
 #include <algorithm>
+#include <filesystem>
 #include <memory>
 #include <optional>
 #include <string>
@@ -103,7 +103,6 @@ class RowsToPython final : public simloop::RowSink {
   std::optional<py::error_already_set> error_;
 };
 
-
 // The recording a Python host made: its rows go to recording.columns/rows,
 // finish(result) to recording.finish, its files are recording.files.
 class PyRecording final : public cli::Recording {
@@ -113,7 +112,7 @@ class PyRecording final : public cli::Recording {
   ~PyRecording() override {
     py::gil_scoped_acquire gil;
     try {
-      recording_.attr("close")();  // abandons the file unless it was finished
+      recording_.attr("close")();       // abandons the file unless it was finished
     } catch (py::error_already_set&) {  // a destructor cannot raise; the run's own error is what matters
     }
     recording_ = py::object();

@@ -3,6 +3,7 @@
 // was being done, and the conversions several topics use.
 #pragma once
 
+#include <mujoco/mujoco.h>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl/filesystem.h>
@@ -19,8 +20,6 @@
 #include <system_error>
 #include <utility>
 #include <vector>
-
-#include <mujoco/mujoco.h>
 
 #include "simloop/control.hpp"
 #include "simloop/number_format.hpp"
@@ -55,7 +54,6 @@ auto naming_failures(const std::string& what, Work&& work) -> decltype(work()) {
   }
 }
 
-
 // Long C++ work that Ctrl-C can stop. The work runs with the GIL released;
 // between its chunks of steps the RunControl polls (on this thread, at most
 // every 20 ms): the poll takes the GIL, runs Python's signal handlers
@@ -69,9 +67,9 @@ class Interruptible {
  public:
   explicit Interruptible(py::object progress)
       : progress_(progress.is_none() ? py::object() : std::move(progress)),
-        control_(progress_ || on_main_thread() ? simloop::RunControl::Poll(
-                                                     [this](std::int64_t done, std::int64_t total) { poll(done, total); })
-                                               : simloop::RunControl::Poll()) {}
+        control_(progress_ || on_main_thread()
+                     ? simloop::RunControl::Poll([this](std::int64_t done, std::int64_t total) { poll(done, total); })
+                     : simloop::RunControl::Poll()) {}
 
   template <class Work>
   auto run(Work&& work) -> decltype(work(static_cast<simloop::RunControl*>(nullptr))) {
@@ -119,7 +117,6 @@ class Interruptible {
   simloop::RunControl control_;
 };
 
-
 // Waits with the GIL released, in slices of RunControl::kPollInterval
 // (wait_slice(interval) waits up to one and says whether the wait is over),
 // running Python's signal handlers between them, so Ctrl-C and SIGTERM act
@@ -151,7 +148,9 @@ inline py::str fs_str(const std::string& text) {
 // messages can span several), decoded as fs_str does.
 void set_error_fs(PyObject* type, const char* what);
 
-inline py::array vec(const double* values, size_t n) { return py::array_t<double>(static_cast<py::ssize_t>(n), values); }
+inline py::array vec(const double* values, size_t n) {
+  return py::array_t<double>(static_cast<py::ssize_t>(n), values);
+}
 inline py::array vector_array(const std::vector<double>& values) { return vec(values.data(), values.size()); }
 inline std::string py_bool(bool b) { return b ? "True" : "False"; }
 inline std::string py_str_repr(const std::string& text) { return py::repr(py::str(text)).cast<std::string>(); }
@@ -194,7 +193,8 @@ mjtObj object_type(const std::string& kind);
 template <class Work>
 auto long_call(py::object progress, const std::string& what, Work&& work) {
   Interruptible call(std::move(progress));
-  auto result = call.run([&](simloop::RunControl* control) { return naming_failures(what, [&] { return work(control); }); });
+  auto result =
+      call.run([&](simloop::RunControl* control) { return naming_failures(what, [&] { return work(control); }); });
   call.finish();
   return result;
 }

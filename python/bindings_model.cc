@@ -15,8 +15,8 @@
 #include "simloop/chapter_scene.hpp"
 #include "simloop/fields.hpp"
 #include "simloop/model.hpp"
-#include "simloop/object_names.hpp"
 #include "simloop/number_format.hpp"
+#include "simloop/object_names.hpp"
 #include "simloop/scenario_run.hpp"
 #include "simloop/scene_geometry.hpp"
 #include "simloop/scene_params.hpp"
@@ -62,7 +62,8 @@ void bind_model(py::module_& m) {
           [](const py::object& xml, const py::object& source) {
             const auto text = std::string(check_text("xml", xml));
             const auto name = std::string(check_text("source", source));
-            return naming_failures("Model.from_xml_string", [&] { return simloop::Model::from_xml_string(text, name); });
+            return naming_failures("Model.from_xml_string",
+                                   [&] { return simloop::Model::from_xml_string(text, name); });
           },
           "xml"_a, "source"_a = "<string>",
           "Compiles MJCF text (str or UTF-8 bytes); source names it in errors. simloop.MujocoError if MuJoCo "
@@ -74,8 +75,7 @@ void bind_model(py::module_& m) {
             return naming_failures("Model.from_file(" + path.string() + ")",
                                    [&] { return simloop::Model::from_file(path.string()); });
           },
-          "path"_a,
-          "Compiles an MJCF file: OSError if it cannot be read, simloop.MujocoError if MuJoCo rejects it.")
+          "path"_a, "Compiles an MJCF file: OSError if it cannot be read, simloop.MujocoError if MuJoCo rejects it.")
       .def_static(
           "_copy_of_address",
           [](std::uintptr_t address, std::string_view source) {
@@ -94,26 +94,29 @@ void bind_model(py::module_& m) {
       .def_property_readonly("nq", [](const simloop::Model& model) { return model.get()->nq; })
       .def_property_readonly("nv", [](const simloop::Model& model) { return model.get()->nv; })
       .def_property_readonly("nu", [](const simloop::Model& model) { return model.get()->nu; })
-      .def("__repr__", [](const simloop::Model& model) {
-        const mjModel* raw = model.get();
-        const std::string name = model.name();
-        return "<simloop.Model " + (name.empty() ? std::string("(unnamed)") : "'" + name + "'") +
-               " nq=" + std::to_string(raw->nq) + " nv=" + std::to_string(raw->nv) + " nu=" + std::to_string(raw->nu) +
-               " nbody=" + std::to_string(raw->nbody) + " timestep=" + simloop::python_float_repr(model.timestep()) +
-               ">";
-      })
+      .def("__repr__",
+           [](const simloop::Model& model) {
+             const mjModel* raw = model.get();
+             const std::string name = model.name();
+             return "<simloop.Model " + (name.empty() ? std::string("(unnamed)") : "'" + name + "'") +
+                    " nq=" + std::to_string(raw->nq) + " nv=" + std::to_string(raw->nv) +
+                    " nu=" + std::to_string(raw->nu) + " nbody=" + std::to_string(raw->nbody) +
+                    " timestep=" + simloop::python_float_repr(model.timestep()) + ">";
+           })
       .def_property_readonly("name", &simloop::Model::name, "<mujoco model=...>'s name ('' if none).")
       .def_property_readonly("load_warnings", &simloop::Model::load_warnings,
                              "What MuJoCo warned while it parsed and compiled the scene, a line each.")
-      .def_property_readonly("has_chapter_layout",
-                             [](const simloop::Model& model) { return simloop::chapter_layout_missing(model).empty(); },
-                             "True if the scene has the chapter's box and pusher (the chapter's loop runs on it).")
+      .def_property_readonly(
+          "has_chapter_layout",
+          [](const simloop::Model& model) { return simloop::chapter_layout_missing(model).empty(); },
+          "True if the scene has the chapter's box and pusher (the chapter's loop runs on it).")
       .def_property_readonly(
           "chapter_layout",
           [](const simloop::Model& model) {
             const simloop::ChapterLayout at = simloop::chapter_layout(model);  // ValueError naming what the scene lacks
-            return py::dict("box_body"_a = at.box_body, "box_qposadr"_a = at.box_qposadr, "box_dofadr"_a = at.box_dofadr,
-                            "pusher_qposadr"_a = at.pusher_qposadr, "pusher_dofadr"_a = at.pusher_dofadr);
+            return py::dict("box_body"_a = at.box_body, "box_qposadr"_a = at.box_qposadr,
+                            "box_dofadr"_a = at.box_dofadr, "pusher_qposadr"_a = at.pusher_qposadr,
+                            "pusher_dofadr"_a = at.pusher_dofadr);
           },
           "Where the chapter's box and pusher are (body id, qpos and qvel addresses).")
       .def_property_readonly("nbody", [](const simloop::Model& model) { return model.get()->nbody; })
@@ -123,7 +126,8 @@ void bind_model(py::module_& m) {
       .def_property_readonly("nsensordata", [](const simloop::Model& model) { return model.get()->nsensordata; })
       .def_property_readonly("nkey", [](const simloop::Model& model) { return model.get()->nkey; })
       .def(
-          "names", [](const simloop::Model& model, const py::object& kind) {
+          "names",
+          [](const simloop::Model& model, const py::object& kind) {
             return simloop::object_names(model.get(), object_type(kind_arg(kind)));
           },
           "kind"_a, "Every object's name of a kind, by index ('' for an unnamed one).")
@@ -139,15 +143,15 @@ void bind_model(py::module_& m) {
             }
             if (type == mjOBJ_JOINT) {
               const simloop::JointSize size = simloop::joint_size(raw->jnt_type[id]);
-              return py::dict("type"_a = simloop::joint_type_name(raw->jnt_type[id]), "qposadr"_a = raw->jnt_qposadr[id],
-                              "nq"_a = size.nq, "dofadr"_a = raw->jnt_dofadr[id], "nv"_a = size.nv,
-                              "body"_a = raw->jnt_bodyid[id]);
+              return py::dict("type"_a = simloop::joint_type_name(raw->jnt_type[id]),
+                              "qposadr"_a = raw->jnt_qposadr[id], "nq"_a = size.nq, "dofadr"_a = raw->jnt_dofadr[id],
+                              "nv"_a = size.nv, "body"_a = raw->jnt_bodyid[id]);
             }
             if (type == mjOBJ_ACTUATOR) {
-              return py::dict("ctrlrange"_a = py::make_tuple(raw->actuator_ctrlrange[2 * id],
-                                                             raw->actuator_ctrlrange[2 * id + 1]),
-                              "ctrllimited"_a = raw->actuator_ctrllimited[id] != 0,
-                              "joint"_a = raw->actuator_trntype[id] == mjTRN_JOINT ? raw->actuator_trnid[2 * id] : -1);
+              return py::dict(
+                  "ctrlrange"_a = py::make_tuple(raw->actuator_ctrlrange[2 * id], raw->actuator_ctrlrange[2 * id + 1]),
+                  "ctrllimited"_a = raw->actuator_ctrllimited[id] != 0,
+                  "joint"_a = raw->actuator_trntype[id] == mjTRN_JOINT ? raw->actuator_trnid[2 * id] : -1);
             }
             if (type == mjOBJ_SENSOR) {
               return py::dict("adr"_a = raw->sensor_adr[id], "dim"_a = raw->sensor_dim[id]);
@@ -160,7 +164,8 @@ void bind_model(py::module_& m) {
   m.def(
       "scene_geometry",
       [](const simloop::Model& model) {
-        static constexpr const char* kKinds[] = {"plane", "sphere", "capsule", "ellipsoid", "cylinder", "box", "mesh", "other"};
+        static constexpr const char* kKinds[] = {"plane",    "sphere", "capsule", "ellipsoid",
+                                                 "cylinder", "box",    "mesh",    "other"};
         py::list out;
         for (const simloop::GeomShape& g : simloop::scene_geometry(model.get())) {
           out.append(py::dict("name"_a = g.name, "body"_a = g.body, "body_id"_a = g.body_id,

@@ -55,7 +55,8 @@ void bind_outputs(py::module_& m) {
            }),
            "dir"_a)
       .def("release", [](PyOutputLock& l) { l.lock.reset(); })
-      .def("__enter__", [](PyOutputLock& l) -> PyOutputLock& { return l; }, py::return_value_policy::reference)
+      .def(
+          "__enter__", [](PyOutputLock& l) -> PyOutputLock& { return l; }, py::return_value_policy::reference)
       .def("__exit__", [](PyOutputLock& l, const py::args&) { l.lock.reset(); });
 
   py::class_<simloop::PipedFile>(m, "PipedFile",

@@ -82,7 +82,8 @@ void bind_record(py::module_& m) {
                                return units;
                              })
       .def_property_readonly(
-          "trajectory", [](const py::object& self) { return trajectory_view(self, self.cast<const RunRecord&>().trajectory); },
+          "trajectory",
+          [](const py::object& self) { return trajectory_view(self, self.cast<const RunRecord&>().trajectory); },
           "(rows, columns) read-only float64 view; columns as in column_names.")
       .def(
           "column",
@@ -102,41 +103,41 @@ void bind_record(py::module_& m) {
             return columns;
           },
           "Every trajectory column by name, as read-only views (no copy).")
-      .def_property_readonly("disturbances",
-                             [](const RunRecord& r) {
-                               py::list out;
-                               for (size_t i = 0; i < r.schedule.forces.size(); ++i) {
-                                 const simloop::Schedule::Force& f = r.schedule.forces[i];
-                                 out.append(py::dict("body"_a = r.disturbed_bodies[i],
-                                                     "force"_a = vec(f.wrench.data(), 3),
-                                                     "torque"_a = vec(f.wrench.data() + 3, 3),
-                                                     "start_step"_a = f.start, "end_step"_a = f.end,
-                                                     "asked_end_step"_a = f.asked_end));
-                               }
-                               return out;
-                             })
-      .def_property_readonly("params",
-                             [](const RunRecord& r) {
-                               py::list out;
-                               for (const simloop::SceneParam& p : r.schedule.start.params) {
-                                 out.append(py::dict("kind"_a = simloop::scene_param_kind_name(p.kind),
-                                                     "name"_a = p.name, "value"_a = p.value));
-                               }
-                               return out;
-                             },
-                             "The scene parameters the run drew at its reset ([[reset.param]]), as applied.")
-      .def_property_readonly("bodies", [](const RunRecord& r) { return simloop::recorded_bodies(r); },
-                             "The recorded bodies: {name: the column of its _x}.")
-      .def_property_readonly("final_row", [](const RunRecord& r) { return vector_array(r.final_row); },
-                             "The last row (columns as column_names), kept or not: a copy.")
+      .def_property_readonly(
+          "disturbances",
+          [](const RunRecord& r) {
+            py::list out;
+            for (size_t i = 0; i < r.schedule.forces.size(); ++i) {
+              const simloop::Schedule::Force& f = r.schedule.forces[i];
+              out.append(py::dict("body"_a = r.disturbed_bodies[i], "force"_a = vec(f.wrench.data(), 3),
+                                  "torque"_a = vec(f.wrench.data() + 3, 3), "start_step"_a = f.start,
+                                  "end_step"_a = f.end, "asked_end_step"_a = f.asked_end));
+            }
+            return out;
+          })
+      .def_property_readonly(
+          "params",
+          [](const RunRecord& r) {
+            py::list out;
+            for (const simloop::SceneParam& p : r.schedule.start.params) {
+              out.append(
+                  py::dict("kind"_a = simloop::scene_param_kind_name(p.kind), "name"_a = p.name, "value"_a = p.value));
+            }
+            return out;
+          },
+          "The scene parameters the run drew at its reset ([[reset.param]]), as applied.")
+      .def_property_readonly(
+          "bodies", [](const RunRecord& r) { return simloop::recorded_bodies(r); },
+          "The recorded bodies: {name: the column of its _x}.")
+      .def_property_readonly(
+          "final_row", [](const RunRecord& r) { return vector_array(r.final_row); },
+          "The last row (columns as column_names), kept or not: a copy.")
       .def_property_readonly(
           "final_state", [](const RunRecord& r) { return vector_array(r.final_state); },
           "The full state at the end (the flat layout of state.hpp): an initial_state that continues this run.")
       .def_property_readonly(
           "metrics",
-          [](const RunRecord& r) {
-            return py::module_::import("json").attr("loads")(simloop::metrics_json(r));
-          },
+          [](const RunRecord& r) { return py::module_::import("json").attr("loads")(simloop::metrics_json(r)); },
           "The dict metrics.json holds (floats rounded to 6 decimals).")
       .def("metrics_json", no_arguments<RunRecord, &simloop::metrics_json>("ScenarioResult.metrics_json"),
            "metrics.json's text.")
@@ -150,15 +151,17 @@ void bind_record(py::module_& m) {
           },
           "trajectory.csv's text.")
       .def("write", &write_result<RunRecord>, "out"_a,
-          "Writes metrics.json and trajectory.csv into out (a directory, made if missing), the bytes the command "
-          "writes; returns their paths.")
-      .def("__repr__", [](const RunRecord& r) {
-        return "ScenarioResult(name=" + py_str_repr(r.name) + ", seed=" + std::to_string(r.seed) + ", steps=" +
-               std::to_string(r.schedule.steps) + ", timestep=" + simloop::python_float_repr(r.timestep) +
-               ", rows=" + std::to_string(r.trajectory.rows()) + ", columns=" + std::to_string(r.columns.size()) +
-               ", disturbances=" + std::to_string(r.schedule.forces.size()) +
-               ", warnings=" + std::to_string(r.warnings.size()) + ")";
-      })
+           "Writes metrics.json and trajectory.csv into out (a directory, made if missing), the bytes the command "
+           "writes; returns their paths.")
+      .def("__repr__",
+           [](const RunRecord& r) {
+             return "ScenarioResult(name=" + py_str_repr(r.name) + ", seed=" + std::to_string(r.seed) +
+                    ", steps=" + std::to_string(r.schedule.steps) +
+                    ", timestep=" + simloop::python_float_repr(r.timestep) +
+                    ", rows=" + std::to_string(r.trajectory.rows()) + ", columns=" + std::to_string(r.columns.size()) +
+                    ", disturbances=" + std::to_string(r.schedule.forces.size()) +
+                    ", warnings=" + std::to_string(r.warnings.size()) + ")";
+           })
       .def(pickle_as_bytes<RunRecord, &simloop::record_from_bytes>());
 }
 

@@ -59,7 +59,8 @@ class PyPolicy final : public simloop::Policy {
     const py::array_t<double, py::array::c_style | py::array::forcecast> out(decide_(step, row));
     if (out.size() != nu) {
       throw simloop::InvalidArgument("policy at decision step " + std::to_string(step) + ": " +
-                                     std::to_string(out.size()) + " ctrl values for " + std::to_string(nu) + " actuators");
+                                     std::to_string(out.size()) + " ctrl values for " + std::to_string(nu) +
+                                     " actuators");
     }
     std::copy(out.data(), out.data() + nu, ctrl);
   }
@@ -68,12 +69,12 @@ class PyPolicy final : public simloop::Policy {
   py::object decide_;
 };
 
-
 }  // namespace
 
 void bind_scenario(py::module_& m) {
   // One parser: the C++ one reads the TOML for both faces.
-  py::class_<simloop::Scenario>(m, "Scenario", "A scenario: scene, timestep, length, controls, disturbances, recording.")
+  py::class_<simloop::Scenario>(m, "Scenario",
+                                "A scenario: scene, timestep, length, controls, disturbances, recording.")
       .def_static("chapter", &simloop::Scenario::chapter, "The chapter's run as a scenario.")
       .def_static(
           "from_file", [](const std::string& path) { return simloop::Scenario::from_toml_file(path); }, "path"_a)
@@ -100,19 +101,27 @@ void bind_scenario(py::module_& m) {
           "reset_params",
           [](const simloop::Scenario& s) {
             py::list params;
-            for (const auto& p : s.reset.params) params.append(py::make_tuple(simloop::scene_param_kind_name(p.kind), p.name));
+            for (const auto& p : s.reset.params)
+              params.append(py::make_tuple(simloop::scene_param_kind_name(p.kind), p.name));
             return params;
           },
           "(kind, name) of each [[reset.param]]: the scene parameters each run draws at its reset.")
       .def("__repr__", [](const simloop::Scenario& s) {
         std::string length;
         switch (s.length.unit) {
-          case simloop::When::Unit::kSteps: length = "steps=" + std::to_string(s.length.count); break;
-          case simloop::When::Unit::kSeconds: length = "duration=" + simloop::python_float_repr(s.length.value); break;
-          default: length = "length=" + simloop::python_float_repr(s.length.value); break;
+          case simloop::When::Unit::kSteps:
+            length = "steps=" + std::to_string(s.length.count);
+            break;
+          case simloop::When::Unit::kSeconds:
+            length = "duration=" + simloop::python_float_repr(s.length.value);
+            break;
+          default:
+            length = "length=" + simloop::python_float_repr(s.length.value);
+            break;
         }
         std::string controls;
-        for (const simloop::ControlSpec& c : s.controls) controls += (controls.empty() ? "" : ", ") + py_str_repr(c.actuator);
+        for (const simloop::ControlSpec& c : s.controls)
+          controls += (controls.empty() ? "" : ", ") + py_str_repr(c.actuator);
         std::string recorded;
         for (const std::string& b : s.record.bodies) recorded += (recorded.empty() ? "" : ", ") + py_str_repr(b);
         recorded = s.record.all_bodies ? "'all'" : "[" + recorded + "]";
@@ -138,10 +147,9 @@ void bind_scenario(py::module_& m) {
       .def("__repr__", [](const simloop::ScenarioConfig& c) {
         return "ScenarioConfig(seed=" + std::to_string(c.seed) + ", rng='" + std::string(simloop::rng_name(c.rng)) +
                "', timestep=" + (c.timestep ? simloop::python_float_repr(*c.timestep) : std::string("None")) +
-               ", steps=" + (c.steps ? std::to_string(*c.steps) : std::string("None")) + ", perturb=" +
-               py_bool(c.perturb) + ", record_every=" + std::to_string(c.record_every) + ")";
+               ", steps=" + (c.steps ? std::to_string(*c.steps) : std::string("None")) +
+               ", perturb=" + py_bool(c.perturb) + ", record_every=" + std::to_string(c.record_every) + ")";
       });
-
 
   // A run, or a batch, follows the scenario's controls; or the caller's
   // (controls, initial_state: arrays simloop.scenario has checked and made
@@ -202,8 +210,7 @@ void bind_scenario(py::module_& m) {
   py::class_<simloop::ScenarioSweepResult> sweep_result(m, "ScenarioSweepResult", "A timestep sweep of a scenario.");
   bind_sweep_outputs<simloop::ScenarioSweepResult, &simloop::sweep_csv, &simloop::sweep_summary>(
       sweep_result, "The largest timestep before any blew up (None if even the finest did).");
-  sweep_result
-      .def_readonly("name", &simloop::ScenarioSweepResult::name)
+  sweep_result.def_readonly("name", &simloop::ScenarioSweepResult::name)
       .def_readonly("duration", &simloop::ScenarioSweepResult::duration)
       .def_readonly("bodies", &simloop::ScenarioSweepResult::bodies)
       .def_readonly("scene_size", &simloop::ScenarioSweepResult::scene_size)

@@ -1,6 +1,8 @@
 // simloop._core's Sim (one run stepped from outside, safe from any thread,
 // with views into its state) and Episodes (N runs stepped a decision at a
 // time, under gym.py).
+#include "bindings_sim.hpp"
+
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -18,12 +20,11 @@
 #include <vector>
 
 #include "bindings_common.hpp"
-#include "bindings_sim.hpp"
 #include "simloop/episode.hpp"
 #include "simloop/fields.hpp"
-#include "simloop/object_names.hpp"
 #include "simloop/model.hpp"
 #include "simloop/number_format.hpp"
+#include "simloop/object_names.hpp"
 #include "simloop/recorder.hpp"
 #include "simloop/sim.hpp"
 
@@ -34,7 +35,7 @@ using namespace pybind11::literals;
 
 using Doubles = py::array_t<double, py::array::c_style | py::array::forcecast>;
 using Part3 = std::optional<std::array<double, 3>>;  // a force or torque, or None
-constexpr std::size_t kRowLabels = 2;  // a recorder row's step and time, ahead of what it observes
+constexpr std::size_t kRowLabels = 2;                // a recorder row's step and time, ahead of what it observes
 
 // fn(sim, args...) -- a Sim method or a function of a Sim -- as a Python
 // method that holds the Sim's lock. Args: the Python arguments' types.
@@ -62,13 +63,27 @@ auto episodes_locked(Fn fn) {
 py::array field_view(const simloop::FieldView& f, const py::object& owner, bool writable) {
   py::dtype dtype;
   switch (f.element) {
-    case simloop::Element::kFloat64: dtype = py::dtype::of<double>(); break;
-    case simloop::Element::kFloat32: dtype = py::dtype::of<float>(); break;
-    case simloop::Element::kInt32: dtype = py::dtype::of<std::int32_t>(); break;
-    case simloop::Element::kInt64: dtype = py::dtype::of<std::int64_t>(); break;
-    case simloop::Element::kUInt64: dtype = py::dtype::of<std::uint64_t>(); break;
-    case simloop::Element::kUInt8: dtype = py::dtype::of<std::uint8_t>(); break;
-    case simloop::Element::kInt8: dtype = py::dtype::of<std::int8_t>(); break;
+    case simloop::Element::kFloat64:
+      dtype = py::dtype::of<double>();
+      break;
+    case simloop::Element::kFloat32:
+      dtype = py::dtype::of<float>();
+      break;
+    case simloop::Element::kInt32:
+      dtype = py::dtype::of<std::int32_t>();
+      break;
+    case simloop::Element::kInt64:
+      dtype = py::dtype::of<std::int64_t>();
+      break;
+    case simloop::Element::kUInt64:
+      dtype = py::dtype::of<std::uint64_t>();
+      break;
+    case simloop::Element::kUInt8:
+      dtype = py::dtype::of<std::uint8_t>();
+      break;
+    case simloop::Element::kInt8:
+      dtype = py::dtype::of<std::int8_t>();
+      break;
   }
   static double empty = 0.0;  // a size-0 view still needs a pointer
   void* at = f.data != nullptr && f.rows > 0 && f.cols > 0 ? f.data : &empty;
@@ -118,7 +133,8 @@ void bind_sim(py::module_& m) {
            "model"_a)
       .def("copy", locked([](const simloop::Sim& sim) {
              return naming_failures("Sim.copy", [&] { return std::make_unique<PySim>(sim); });
-           }), "An independent copy: its own data, the same (shared, read-only) model.")
+           }),
+           "An independent copy: its own data, the same (shared, read-only) model.")
       .def("reset", locked(&simloop::Sim::reset))
       .def("reset_to_keyframe", locked<int>(&simloop::Sim::reset_to_keyframe), "key"_a)
       .def("set_timestep", locked<double>(&simloop::Sim::set_timestep), "timestep"_a)
@@ -126,25 +142,30 @@ void bind_sim(py::module_& m) {
       .def("set_ctrl", locked<double>(py::overload_cast<double>(&simloop::Sim::set_ctrl)), "value"_a)
       .def("set_ctrl_vector", locked<const Doubles&>([](auto& sim, const auto& values) {
              sim.set_ctrl(values.data(), static_cast<size_t>(values.size()));
-           }), "values"_a)
+           }),
+           "values"_a)
       .def_property_readonly("ctrl", locked(&simloop::Sim::ctrl))
       .def("apply_wrench", locked<int, Part3, Part3>([](auto& sim, int body, const auto& force, const auto& torque) {
              sim.apply_wrench(body, force ? &*force : nullptr, torque ? &*torque : nullptr);
-           }), "body"_a, "force"_a, "torque"_a)
+           }),
+           "body"_a, "force"_a, "torque"_a)
       .def("clear_forces", locked(&simloop::Sim::clear_forces))
       .def("forward", locked(&simloop::Sim::forward))
       .def("get_state", locked([](const simloop::Sim& sim) { return vector_array(sim.state()); }))
       .def("set_state", locked<const py::array_t<double, py::array::c_style>&>([](auto& sim, const auto& state) {
              sim.set_state(state.data(), static_cast<size_t>(state.size()));
-           }), "state"_a)
+           }),
+           "state"_a)
       .def_property_readonly("state_layout", locked(&simloop::Sim::state_layout))
       // Names are looked up locked too: set_timestep may be swapping the model.
       .def("id", locked<const std::string&, const std::string&>([](auto& sim, const auto& kind, const auto& name) {
              return sim.id(object_type(kind), name);
-           }), "kind"_a, "name"_a)
+           }),
+           "kind"_a, "name"_a)
       .def("checked_index", locked<const std::string&, long long>([](auto& sim, const auto& kind, long long index) {
              return sim.checked_index(object_type(kind), index);
-           }), "kind"_a, "index"_a)
+           }),
+           "kind"_a, "index"_a)
       .def("body_velocity", locked<int>([](auto& sim, int body) { return vec(sim.body_velocity(body).data(), 6); }),
            "body"_a)
       .def_property_readonly("model", locked(&simloop::Sim::model), "This Sim's own model (with its timestep).")
@@ -182,10 +203,11 @@ void bind_sim(py::module_& m) {
             return field_rows(owner == "model" ? s.sim.model_field(name) : s.sim.data_field(name));
           },
           "owner"_a, "name"_a, "(rows_count, kind of object a row is or '') of a model or data array.")
-      .def("read", locked<const std::string&, long long, long long>([](auto& sim, const auto& name, auto start,
-                                                                         auto count) {
+      .def("read",
+           locked<const std::string&, long long, long long>([](auto& sim, const auto& name, auto start, auto count) {
              return vector_array(sim.read(name, start, count));
-           }), "name"_a, "start"_a, "count"_a, "A copy of values start .. start+count-1 of array(name), flattened.")
+           }),
+           "name"_a, "start"_a, "count"_a, "A copy of values start .. start+count-1 of array(name), flattened.")
       .def(
           "step",
           [](PySim& s, std::int64_t n, py::object progress) {
@@ -226,7 +248,8 @@ void bind_sim(py::module_& m) {
   py::class_<PyEpisodes>(m, "Episodes", "N episodes of a scenario, stepped a decision at a time (gym.py).")
       .def(py::init([](const simloop::Model& scene, const simloop::Scenario& scenario,
                        const simloop::ScenarioConfig& config, std::size_t count) {
-             return naming_failures("Episodes", [&] { return std::make_unique<PyEpisodes>(scene, scenario, config, count); });
+             return naming_failures("Episodes",
+                                    [&] { return std::make_unique<PyEpisodes>(scene, scenario, config, count); });
            }),
            "scene"_a, "scenario"_a, "config"_a, "count"_a)
       // Fixed at construction: read without the lock.
@@ -243,7 +266,8 @@ void bind_sim(py::module_& m) {
       .def_property_readonly("ctrl_range",
                              [](PyEpisodes& e) {
                                const simloop::CtrlRange r = simloop::ctrl_range(e.episodes.model().get());
-                               return py::make_tuple(vec(r.low.data(), r.low.size()), vec(r.high.data(), r.high.size()));
+                               return py::make_tuple(vec(r.low.data(), r.low.size()),
+                                                     vec(r.high.data(), r.high.size()));
                              })
       // reset and step return observations: the recorder's rows without their
       // step and time (the columns after them in column_names).
@@ -282,8 +306,8 @@ void bind_sim(py::module_& m) {
             const auto work_steps = every > 0 ? static_cast<double>(every) * static_cast<double>(n) : 0.0;
             const auto stepping = [&](simloop::RunControl* control) {
               e.episodes.step(actions.data(), static_cast<std::size_t>(actions.size()), every, mask,
-                              active ? static_cast<std::size_t>(active->size()) : 0, e.observations.data(), term,
-                              trunc, threads, control);
+                              active ? static_cast<std::size_t>(active->size()) : 0, e.observations.data(), term, trunc,
+                              threads, control);
             };
             if (work_steps <= static_cast<double>(simloop::RunControl::kChunkSteps)) {
               py::gil_scoped_release release;  // nothing long to interrupt
@@ -292,7 +316,8 @@ void bind_sim(py::module_& m) {
               Interruptible work{py::none()};
               work.run(stepping);
             }
-            py::array_t<double> observations({static_cast<py::ssize_t>(n), static_cast<py::ssize_t>(width - kRowLabels)});
+            py::array_t<double> observations(
+                {static_cast<py::ssize_t>(n), static_cast<py::ssize_t>(width - kRowLabels)});
             double* out = observations.mutable_data();
             for (std::size_t i = 0; i < n; ++i) {
               const double* row = e.observations.data() + i * width;

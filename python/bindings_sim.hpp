@@ -43,7 +43,8 @@ class CallLock {
     // A signal handler or a progress callback, run from inside this object's
     // own call, calling it again: refuse rather than deadlock.
     if (s.holder.load(std::memory_order_relaxed) == std::this_thread::get_id()) {
-      throw py::value_error(std::string(what) + " in the middle of a call on this thread (a signal handler or "
+      throw py::value_error(std::string(what) +
+                            " in the middle of a call on this thread (a signal handler or "
                             "progress callback called it); call it after that call returns");
     }
     if (!s.mutex.try_lock()) wait_in_slices([&](auto slice) { return s.mutex.try_lock_for(slice); });

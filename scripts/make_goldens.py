@@ -29,20 +29,22 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "python"))
 import golden_cases as g  # noqa: E402
 
-ABOUT = ("Outputs of the code at the commit that wrote this file, on the MuJoCo named here; "
-         "made by scripts/make_goldens.py, checked by tests/python/test_goldens.py.")
+ABOUT = (
+    "Outputs of the code at the commit that wrote this file, on the MuJoCo named here; "
+    "made by scripts/make_goldens.py, checked by tests/python/test_goldens.py."
+)
 HOW = {
     "commands": f"each command line runs in an empty folder holding a link 'tests' to the repository's tests/, "
-                f"so paths read as from the repository's root; --out is the relative '{g.OUT}', so the lines naming "
-                "the outputs (metrics:, trajectory:, sweep:) hold no machine's path and are pinned as printed",
+    f"so paths read as from the repository's root; --out is the relative '{g.OUT}', so the lines naming "
+    "the outputs (metrics:, trajectory:, sweep:) hold no machine's path and are pinned as printed",
     "python -m simloop": "the same command line, plus --no-rerun where 'python -m simloop' says so (its recording "
-                         "is not byte-reproducible: rerun stamps time-based ids); it must write the same bytes",
+    "is not byte-reproducible: rerun stamps time-based ids); it must write the same bytes",
     "stdout": "sim_loop's stdout without its 'wall-clock:' line (time and peak memory); 'python -m simloop stdout': "
-              "python's without that line and its 'recording:' line (which names the viewer by the venv's path), "
-              "the same text as sim_loop's without its 'recording: none ...' line",
+    "python's without that line and its 'recording:' line (which names the viewer by the venv's path), "
+    "the same text as sim_loop's without its 'recording: none ...' line",
     "files": "sha256 and size of each output; 'file' or 'text' names a copy kept whole in this folder",
     "api": "parts of a Python API result: numpy arrays by dtype, shape and the sha256 of their raw bytes "
-           "(object arrays as JSON); lists and dicts as json.dumps(sort_keys=True)",
+    "(object arrays as JSON); lists and dicts as json.dumps(sort_keys=True)",
 }
 
 
@@ -77,8 +79,14 @@ def main() -> None:
     if version != simloop.MUJOCO_VERSION:
         fail(f"{args.sim_loop} runs on {version} but simloop on {simloop.MUJOCO_VERSION}: build both alike")
     target = g.golden_dir(version)
-    manifest: dict = {"about": ABOUT, "mujoco": version, "simloop": simloop.__version__, "how": HOW,
-                      "commands": {}, "api": {}}
+    manifest: dict = {
+        "about": ABOUT,
+        "mujoco": version,
+        "simloop": simloop.__version__,
+        "how": HOW,
+        "commands": {},
+        "api": {},
+    }
     keep: dict = {}  # relative path -> bytes, written only once everything agreed
     with tempfile.TemporaryDirectory() as tmp:
         for i, run in enumerate(g.COMMAND_RUNS):
@@ -118,8 +126,10 @@ def main() -> None:
         (target / rel).parent.mkdir(parents=True, exist_ok=True)
         (target / rel).write_bytes(data)
     (target / "manifest.json").write_text(dump(manifest) + "\n")
-    print(f"wrote {target.relative_to(g.ROOT)}: {len(manifest['commands'])} command lines, "
-          f"{len(manifest['api'])} API cases")
+    print(
+        f"wrote {target.relative_to(g.ROOT)}: {len(manifest['commands'])} command lines, "
+        f"{len(manifest['api'])} API cases"
+    )
 
 
 if __name__ == "__main__":

@@ -31,7 +31,7 @@ esac
 # libegl-dev: the EGL headers offscreen rendering builds with; libgl1-mesa-dri:
 # Mesa's software rasteriser, which draws where there is no GPU.
 apt_packages=(libtomlplusplus-dev libegl-dev libgl1-mesa-dri)
-if ((with_tree)); then apt_packages+=(libgtest-dev); fi  # the C++ tests
+if ((with_tree)); then apt_packages+=(libgtest-dev clang-format); fi  # the C++ tests, scripts/lint.sh
 if [[ $mujoco == system ]]; then
   # libmujoco-dev's CMake config asks for OpenGL (find_dependency) and its
   # target for /usr/include/libqhull_r, but it depends on neither dev package.

@@ -33,7 +33,6 @@ namespace simloop {
                                                const std::vector<RowSink*>& sinks, int threads = 0,
                                                RunControl* control = nullptr);
 
-
 // The worker count run_batch uses for `threads` and `jobs`.
 [[nodiscard]] int batch_workers(int threads, std::size_t jobs) noexcept;
 

@@ -23,11 +23,11 @@ namespace simloop {
 // (the pusher). A scene without them still loads (scenarios run on any
 // scene); the chapter's loop then refuses it, saying what is missing.
 struct ChapterLayout {
-  int box_body = -1;       // body named "box"
-  int box_qposadr = -1;    // its free joint: qpos[adr..adr+7) = xyz + wxyz quaternion
-  int box_dofadr = -1;     // qvel[adr..adr+6) = linear velocity (world) + angular (local)
-  int pusher_joint = -1;   // the slide/hinge joint that actuator 0 drives
-  int pusher_body = -1;    // the body that joint moves
+  int box_body = -1;      // body named "box"
+  int box_qposadr = -1;   // its free joint: qpos[adr..adr+7) = xyz + wxyz quaternion
+  int box_dofadr = -1;    // qvel[adr..adr+6) = linear velocity (world) + angular (local)
+  int pusher_joint = -1;  // the slide/hinge joint that actuator 0 drives
+  int pusher_body = -1;   // the body that joint moves
   int pusher_qposadr = -1;
   int pusher_dofadr = -1;
 };

@@ -3,9 +3,9 @@
 // and an exit code, the Python module into an exception).
 #pragma once
 
-#include <stdexcept>
 #include <cstddef>
 #include <cstdint>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 

@@ -5,12 +5,12 @@
 // as dm_control's physics.named does).
 #pragma once
 
+#include <mujoco/mujoco.h>
+
 #include <cstdint>
 #include <string>
 #include <string_view>
 #include <vector>
-
-#include <mujoco/mujoco.h>
 
 namespace simloop {
 

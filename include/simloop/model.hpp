@@ -6,6 +6,8 @@
 // independent datas from one compiled model.
 #pragma once
 
+#include <mujoco/mujoco.h>
+
 #include <array>
 #include <cstddef>
 #include <memory>
@@ -13,15 +15,12 @@
 #include <string_view>
 #include <vector>
 
-#include <mujoco/mujoco.h>
-
 namespace simloop {
 
 class Model {
  public:
   // Any MJCF text. `source` names it in errors.
-  [[nodiscard]] static Model from_xml_string(std::string_view xml,
-                                             std::string_view source = "<string>");
+  [[nodiscard]] static Model from_xml_string(std::string_view xml, std::string_view source = "<string>");
   // An MJCF file on disk (includes and meshes resolve relative to it).
   [[nodiscard]] static Model from_file(const std::string& path);
   // The library's own MJCF text (the chapter's scene), known to compile:

@@ -2,11 +2,11 @@
 // has: the one lookup Sim, the renderer's cameras and bodies share.
 #pragma once
 
+#include <mujoco/mujoco.h>
+
 #include <string>
 #include <string_view>
 #include <vector>
-
-#include <mujoco/mujoco.h>
 
 namespace simloop {
 

@@ -105,7 +105,6 @@ class PendingFile {
   int fd_ = -1;
 };
 
-
 // Replaces `path` with `contents` atomically (a PendingFile committed): readers
 // see the old file or the new, never a half-written one. Throws IoError
 // naming the path; the old file is kept.

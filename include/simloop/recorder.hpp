@@ -1,6 +1,8 @@
 // What a scenario's run records, and the loop that only reads its schedule.
 #pragma once
 
+#include <mujoco/mujoco.h>
+
 #include <algorithm>
 #include <array>
 #include <cstddef>
@@ -8,8 +10,6 @@
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <mujoco/mujoco.h>
 
 #include "simloop/control.hpp"
 #include "simloop/rows.hpp"
@@ -84,7 +84,18 @@ class Recorder final : public RowRecorder {
 
  private:
   struct Source {
-    enum Kind { kCtrl, kXfrc, kBodyPose, kBodyVelocity, kQpos, kQvel, kActuatorForce, kSensor, kTendon, kContacts } kind;
+    enum Kind {
+      kCtrl,
+      kXfrc,
+      kBodyPose,
+      kBodyVelocity,
+      kQpos,
+      kQvel,
+      kActuatorForce,
+      kSensor,
+      kTendon,
+      kContacts
+    } kind;
     int id = 0;      // actuator, body, or address into qpos/qvel/sensordata
     int count = 1;   // numbers it fills
     int column = 0;  // its first column
@@ -98,7 +109,6 @@ class Recorder final : public RowRecorder {
   CtrlRange ctrl_range_;
   bool reads_acceleration_stage_ = false;  // an acceleration-stage sensor is recorded
 };
-
 
 // The schedule's inputs as the loop writes them, step by step: at each step,
 // the ctrl changes and the forces that start or stop there (the sum of the
@@ -225,8 +235,7 @@ void check_inputs(const mjModel* m, const RunInputs& inputs, std::int64_t steps)
 // guard to call it. Without one the steps run exactly as before (one more
 // comparison per chunk of RunControl::kChunkSteps).
 [[nodiscard]] RunRecord run_schedule(const mjModel* m, mjData* d, const ResolvedScenario& scenario,
-                                             const Schedule& schedule, std::int64_t record_every,
-                                             RowSink* sink = nullptr, RunControl* control = nullptr,
-                                             const RunInputs& inputs = {});
+                                     const Schedule& schedule, std::int64_t record_every, RowSink* sink = nullptr,
+                                     RunControl* control = nullptr, const RunInputs& inputs = {});
 
 }  // namespace simloop

@@ -5,12 +5,12 @@
 // run's video draw.
 #pragma once
 
+#include <mujoco/mujoco.h>
+
 #include <cstdint>
 #include <memory>
 #include <optional>
 #include <string>
-
-#include <mujoco/mujoco.h>
 
 #include "simloop/model.hpp"
 

@@ -20,13 +20,13 @@ namespace simloop {
 inline constexpr std::int64_t kSmokeSteps = 300;
 
 struct RunConfig {
-  std::uint64_t seed = 0;          // seeds the shove, and nothing else
-  std::int64_t steps = 2000;       // ignored when smoke is set
-  double timestep = 0.002;         // written into (a copy of) the model
-  bool perturb = true;             // false: no shove (the baseline)
-  bool smoke = false;              // fixed kSmokeSteps steps
-  std::int64_t record_every = 1;   // trajectory row every K steps (+ the final state)
-  bool audit_energy = false;       // account for every joule: adds the energy columns
+  std::uint64_t seed = 0;                // seeds the shove, and nothing else
+  std::int64_t steps = 2000;             // ignored when smoke is set
+  double timestep = 0.002;               // written into (a copy of) the model
+  bool perturb = true;                   // false: no shove (the baseline)
+  bool smoke = false;                    // fixed kSmokeSteps steps
+  std::int64_t record_every = 1;         // trajectory row every K steps (+ the final state)
+  bool audit_energy = false;             // account for every joule: adds the energy columns
   ShoveRng rng = ShoveRng::kMt19937_64;  // the generator that draws the shove from the seed
 
   [[nodiscard]] std::int64_t num_steps() const noexcept { return smoke ? kSmokeSteps : steps; }
@@ -50,18 +50,36 @@ struct Metrics {
   std::array<double, 3> box_final_pos{};
   double box_final_speed = 0.0;
   double pusher_final_x = 0.0;
-  double lateral_drift = 0.0;   // |final y - y when the shove started|
-  bool shove_moved_box = false; // unrounded lateral_drift > 0.01 m
+  double lateral_drift = 0.0;    // |final y - y when the shove started|
+  bool shove_moved_box = false;  // unrounded lateral_drift > 0.01 m
 };
 
 // The chapter's trajectory columns, in order (chapter_columns() describes
 // them as Columns).
 struct ChapterColumns {
   enum : int {
-    kStep, kTime, kCtrl, kShoveX, kShoveY, kShoveZ,
-    kBoxX, kBoxY, kBoxZ, kBoxQw, kBoxQx, kBoxQy, kBoxQz,
-    kBoxVx, kBoxVy, kBoxVz, kBoxWx, kBoxWy, kBoxWz,
-    kPusherX, kPusherVx, kNcon,
+    kStep,
+    kTime,
+    kCtrl,
+    kShoveX,
+    kShoveY,
+    kShoveZ,
+    kBoxX,
+    kBoxY,
+    kBoxZ,
+    kBoxQw,
+    kBoxQx,
+    kBoxQy,
+    kBoxQz,
+    kBoxVx,
+    kBoxVy,
+    kBoxVz,
+    kBoxWx,
+    kBoxWy,
+    kBoxWz,
+    kPusherX,
+    kPusherVx,
+    kNcon,
     kNumBaseColumns,
     // The energy audit's columns (RunConfig::audit_energy), all in joules.
     // energy: kinetic + potential of the row's state. work_*: work done on
@@ -69,17 +87,44 @@ struct ChapterColumns {
     // (cumulative, so any two rows give the work between them). *_positive:
     // only the steps where constraints (contacts) did positive work.
     // energy_unexplained: (energy - energy at t = 0) - all the work above.
-    kEnergy = kNumBaseColumns, kWorkActuator, kWorkShove, kWorkPassive, kWorkConstraint,
-    kWorkConstraintPositive, kEnergyUnexplained,
+    kEnergy = kNumBaseColumns,
+    kWorkActuator,
+    kWorkShove,
+    kWorkPassive,
+    kWorkConstraint,
+    kWorkConstraintPositive,
+    kEnergyUnexplained,
     kNumColumns
   };
-  static constexpr std::array<std::string_view, kNumColumns> kNames = {
-      "step", "time", "ctrl", "shove_x", "shove_y", "shove_z",
-      "box_x", "box_y", "box_z", "box_qw", "box_qx", "box_qy", "box_qz",
-      "box_vx", "box_vy", "box_vz", "box_wx", "box_wy", "box_wz",
-      "pusher_x", "pusher_vx", "ncon",
-      "energy", "work_actuator", "work_shove", "work_passive", "work_constraint",
-      "work_constraint_positive", "energy_unexplained"};
+  static constexpr std::array<std::string_view, kNumColumns> kNames = {"step",
+                                                                       "time",
+                                                                       "ctrl",
+                                                                       "shove_x",
+                                                                       "shove_y",
+                                                                       "shove_z",
+                                                                       "box_x",
+                                                                       "box_y",
+                                                                       "box_z",
+                                                                       "box_qw",
+                                                                       "box_qx",
+                                                                       "box_qy",
+                                                                       "box_qz",
+                                                                       "box_vx",
+                                                                       "box_vy",
+                                                                       "box_vz",
+                                                                       "box_wx",
+                                                                       "box_wy",
+                                                                       "box_wz",
+                                                                       "pusher_x",
+                                                                       "pusher_vx",
+                                                                       "ncon",
+                                                                       "energy",
+                                                                       "work_actuator",
+                                                                       "work_shove",
+                                                                       "work_passive",
+                                                                       "work_constraint",
+                                                                       "work_constraint_positive",
+                                                                       "energy_unexplained"};
 };
 
 // The chapter's first `count` columns (ChapterColumns::kNames).
@@ -87,14 +132,14 @@ struct ChapterColumns {
 
 // The energy audit's totals over a whole run (RunConfig::audit_energy), J.
 struct EnergyTotals {
-  double energy_start = 0.0;     // kinetic + potential at t = 0
-  double energy_end = 0.0;       // ... at the final state
-  double work_actuator = 0.0;    // by the motor
-  double work_shove = 0.0;       // by the shove (xfrc_applied)
-  double work_passive = 0.0;     // by joint damping (and springs, if any)
-  double work_constraint = 0.0;  // by contacts and other constraints
+  double energy_start = 0.0;              // kinetic + potential at t = 0
+  double energy_end = 0.0;                // ... at the final state
+  double work_actuator = 0.0;             // by the motor
+  double work_shove = 0.0;                // by the shove (xfrc_applied)
+  double work_passive = 0.0;              // by joint damping (and springs, if any)
+  double work_constraint = 0.0;           // by contacts and other constraints
   double work_constraint_positive = 0.0;  // the steps where they added energy
-  double unexplained = 0.0;      // (energy_end - energy_start) - all the work
+  double unexplained = 0.0;               // (energy_end - energy_start) - all the work
 };
 
 // The chapter's run: the record any run leaves (its name the chapter
@@ -104,8 +149,8 @@ struct RunResult : RunRecord {
   RunConfig config;
   Metrics metrics;
   Metrics unrounded_metrics;  // the same, floats as computed (tables; metrics.json rounds)
-  Shove shove;             // the shove drawn for this run (applied only if perturb)
-  EnergyTotals energy;     // zeros unless config.audit_energy
+  Shove shove;                // the shove drawn for this run (applied only if perturb)
+  EnergyTotals energy;        // zeros unless config.audit_energy
 };
 
 // Runs the chapter's loop on `model` (a copy of it with config.timestep when
@@ -117,7 +162,7 @@ struct RunResult : RunRecord {
 // workspace held before. With a `sink`, the rows go there and
 // result.trajectory stays empty. With a `control`, the run can be stopped
 // (Interrupted) and watched.
-[[nodiscard]] RunResult run(const Model& model, const RunConfig& config, Data& workspace,
-                            RowSink* sink = nullptr, RunControl* control = nullptr);
+[[nodiscard]] RunResult run(const Model& model, const RunConfig& config, Data& workspace, RowSink* sink = nullptr,
+                            RunControl* control = nullptr);
 
 }  // namespace simloop

@@ -16,9 +16,9 @@
 namespace simloop {
 
 struct RunRecord {
-  std::string name;          // the scenario's
+  std::string name;  // the scenario's
   std::uint64_t seed = 0;
-  std::string rng;           // the generator's name ("mt19937_64", "numpy")
+  std::string rng;  // the generator's name ("mt19937_64", "numpy")
   bool perturb = true;
   std::vector<std::string> disturbed_bodies;  // schedule.forces[i]'s body, by name
   std::vector<Column> columns;

@@ -17,6 +17,8 @@
 // This header holds the first three; they depend on nothing but the model.
 #pragma once
 
+#include <mujoco/mujoco.h>
+
 #include <array>
 #include <cstdint>
 #include <filesystem>
@@ -25,8 +27,6 @@
 #include <string>
 #include <string_view>
 #include <vector>
-
-#include <mujoco/mujoco.h>
 
 #include "simloop/model.hpp"
 #include "simloop/scene_params.hpp"
@@ -114,8 +114,8 @@ struct ResetSpec {
 };
 
 struct Scenario {
-  std::string name;              // for titles and recording ids; the file's stem by default
-  std::filesystem::path scene;   // an MJCF file; empty: the chapter's embedded scene
+  std::string name;                // for titles and recording ids; the file's stem by default
+  std::filesystem::path scene;     // an MJCF file; empty: the chapter's embedded scene
   std::optional<double> timestep;  // the scene's own unless given
   When length = When::steps(2000);
   std::vector<ControlSpec> controls;

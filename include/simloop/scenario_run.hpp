@@ -20,12 +20,12 @@ namespace simloop {
 
 // What one run of a scenario varies; the scenario fixes the rest.
 struct ScenarioConfig {
-  std::uint64_t seed = 0;                  // seeds the random disturbances, and nothing else
-  ShoveRng rng = ShoveRng::kMt19937_64;    // the generator that draws them
-  std::optional<double> timestep;          // instead of the scenario's (or the scene's own)
-  std::optional<std::int64_t> steps;       // instead of the scenario's length
-  bool perturb = true;                     // false: no disturbances (the baseline)
-  std::int64_t record_every = 1;           // a row every K steps, and the final state
+  std::uint64_t seed = 0;                // seeds the random disturbances, and nothing else
+  ShoveRng rng = ShoveRng::kMt19937_64;  // the generator that draws them
+  std::optional<double> timestep;        // instead of the scenario's (or the scene's own)
+  std::optional<std::int64_t> steps;     // instead of the scenario's length
+  bool perturb = true;                   // false: no disturbances (the baseline)
+  std::int64_t record_every = 1;         // a row every K steps, and the final state
 };
 
 // The scene a scenario names, compiled: its MJCF file, or the chapter's
@@ -41,10 +41,9 @@ struct ScenarioConfig {
 // controls, or a policy's decisions (Policy in recorder.hpp), instead of the
 // scenario's controls, and starts from the caller's state; all checked
 // first (InvalidArgument naming them).
-[[nodiscard]] RunRecord run_scenario(const Model& scene, const Scenario& scenario,
-                                             const ScenarioConfig& config, Data* workspace = nullptr,
-                                             RowSink* sink = nullptr, RunControl* control = nullptr,
-                                             const RunInputs& inputs = {});
+[[nodiscard]] RunRecord run_scenario(const Model& scene, const Scenario& scenario, const ScenarioConfig& config,
+                                     Data* workspace = nullptr, RowSink* sink = nullptr, RunControl* control = nullptr,
+                                     const RunInputs& inputs = {});
 
 // Runs `scenario` once per config over one scene, with `threads` workers (0:
 // one per core), each stepping its own Data; the scene is compiled once per
@@ -75,20 +74,20 @@ void check_scenario(const Model& scene, const Scenario& scenario, const Scenario
 // final_row, final_state, warnings and schedule, which is all the metrics
 // need), so a batch's memory does not grow with its runs' lengths.
 [[nodiscard]] std::vector<RunRecord> run_scenario_batch(const Model& scene, const Scenario& scenario,
-                                                                const std::vector<ScenarioConfig>& configs,
-                                                                int threads = 0, RunControl* control = nullptr,
-                                                                const std::vector<RunInputs>& inputs = {},
-                                                                bool keep_rows = true);
+                                                        const std::vector<ScenarioConfig>& configs, int threads = 0,
+                                                        RunControl* control = nullptr,
+                                                        const std::vector<RunInputs>& inputs = {},
+                                                        bool keep_rows = true);
 
 // The same, with run i's rows going to sinks[i] (one per config; null: kept
 // in its result's trajectory; each used by one worker at a time): a sink
 // that reduces rows as they come lets a batch of any length run in little
 // memory (the scenario sweep does; keep_rows false above is DiscardRows).
 [[nodiscard]] std::vector<RunRecord> run_scenario_batch(const Model& scene, const Scenario& scenario,
-                                                                const std::vector<ScenarioConfig>& configs,
-                                                                const std::vector<RowSink*>& sinks,
-                                                                int threads = 0, RunControl* control = nullptr,
-                                                                const std::vector<RunInputs>& inputs = {});
+                                                        const std::vector<ScenarioConfig>& configs,
+                                                        const std::vector<RowSink*>& sinks, int threads = 0,
+                                                        RunControl* control = nullptr,
+                                                        const std::vector<RunInputs>& inputs = {});
 
 // ---------------------------------------------------------------------------
 // Drawing a run (the rerun recording): every body that moves, not only the
@@ -108,8 +107,7 @@ void check_scenario(const Model& scene, const Scenario& scenario, const Scenario
 // going to `drawing`. It is one run: the recorder reads the extra bodies
 // and joints too, and the rows are split. The
 // result is labelled as run_scenario's, with the trajectory's columns.
-[[nodiscard]] RunRecord run_scenario_drawn(const Model& scene, const Scenario& scenario,
-                                                   const ScenarioConfig& config, RowSink& sink, RowSink& drawing,
-                                                   RunControl* control = nullptr);
+[[nodiscard]] RunRecord run_scenario_drawn(const Model& scene, const Scenario& scenario, const ScenarioConfig& config,
+                                           RowSink& sink, RowSink& drawing, RunControl* control = nullptr);
 
 }  // namespace simloop

@@ -36,15 +36,15 @@ class Draws {
  public:
   virtual ~Draws() = default;
   [[nodiscard]] virtual double uniform(double low, double high) = 0;  // [low, high): low + (high - low) * u
-  [[nodiscard]] virtual double sign() = 0;                             // -1 or +1
+  [[nodiscard]] virtual double sign() = 0;                            // -1 or +1
 };
 
 // The generator `rng` seeded with `seed`, drawing as described at draw_shove.
 [[nodiscard]] std::unique_ptr<Draws> make_draws(std::uint64_t seed, ShoveRng rng = ShoveRng::kMt19937_64);
 
 struct Shove {
-  double newtons = 0.0;       // strength, uniform in [6, 12): friction resists with ~5 N
-  double sign = 1.0;          // +1: +y, -1: -y (sideways, across the pusher's line)
+  double newtons = 0.0;         // strength, uniform in [6, 12): friction resists with ~5 N
+  double sign = 1.0;            // +1: +y, -1: -y (sideways, across the pusher's line)
   std::int64_t start_step = 0;  // steps // 2
   std::int64_t num_steps = kShoveSteps;
   ShoveRng rng = ShoveRng::kMt19937_64;  // the generator that drew it

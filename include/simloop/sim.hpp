@@ -12,9 +12,9 @@
 #include <utility>
 #include <vector>
 
+#include "simloop/control.hpp"
 #include "simloop/fields.hpp"
 #include "simloop/model.hpp"
-#include "simloop/control.hpp"
 #include "simloop/rows.hpp"
 
 namespace simloop {
@@ -22,7 +22,7 @@ namespace simloop {
 struct Contact {
   std::string geom1;  // geom names ("" if unnamed)
   std::string geom2;
-  double dist = 0.0;  // signed distance; negative is penetration, m
+  double dist = 0.0;            // signed distance; negative is penetration, m
   std::array<double, 3> pos{};  // contact point, world frame, m
   // The contact's frame (rows: the normal, from geom1 to geom2, then two
   // tangents; world) and the force and torque geom2 feels in it
@@ -132,8 +132,8 @@ class Sim {
   [[nodiscard]] mjData* data() noexcept { return data_.get(); }
   [[nodiscard]] const mjData* data() const noexcept { return data_.get(); }
   // mjData's array `name`: qpos, qvel, ctrl, act, qfrc_applied, xfrc_applied
-  // (nbody x 6), mocap_pos (nmocap x 3), mocap_quat (nmocap x 4) writable; sensordata, actuator_force, xpos (nbody x 3), xquat
-  // (nbody x 4) not. Throws InvalidArgument for another name.
+  // (nbody x 6), mocap_pos (nmocap x 3), mocap_quat (nmocap x 4) writable; sensordata, actuator_force, xpos (nbody x
+  // 3), xquat (nbody x 4) not. Throws InvalidArgument for another name.
   [[nodiscard]] ArrayView array(std::string_view name);
   // Any of mjData's arrays (fields.hpp's data_field), read-only: valid
   // until the next step for the contacts' and constraints' (their rows

@@ -18,12 +18,12 @@
 // it: leave it out and a restored run differs in the last bits.
 #pragma once
 
+#include <mujoco/mujoco.h>
+
 #include <cstddef>
 #include <string>
 #include <utility>
 #include <vector>
-
-#include <mujoco/mujoco.h>
 
 namespace simloop {
 

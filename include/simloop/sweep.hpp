@@ -23,26 +23,26 @@ namespace simloop {
 // floor, and through it from 0.3 s), and (3) no warning was raised
 // (MuJoCo's, or simloop_DIVERGED). Sideways drift does not mark the edge: the box drifts a few
 // centimetres at every timestep on MuJoCo 2.2.2.
-inline constexpr double kStableHop = 0.005;   // m
-inline constexpr double kStableSink = 0.001;  // m
-inline constexpr double kBoxRestZ = 0.05;     // m, the chapter's box at rest
+inline constexpr double kStableHop = 0.005;       // m
+inline constexpr double kStableSink = 0.001;      // m
+inline constexpr double kBoxRestZ = 0.05;         // m, the chapter's box at rest
 inline constexpr double kBreakItTimestep = 0.05;  // s, Break It's: 25 times the chapter's
 
 struct SweepPoint {
   double timestep = 0.0;
   std::int64_t steps = 0;
-  double peak_box_z = 0.0;      // highest the box's centre got, m
-  double max_abs_box_y = 0.0;   // furthest sideways, m
+  double peak_box_z = 0.0;     // highest the box's centre got, m
+  double max_abs_box_y = 0.0;  // furthest sideways, m
   double final_box_x = 0.0, final_box_y = 0.0, final_box_z = 0.0;
   double final_pusher_x = 0.0;
-  std::int64_t warnings = 0;    // warnings raised, all kinds: MuJoCo's and simloop_DIVERGED
-  EnergyTotals energy;          // the energy audit over the run
+  std::int64_t warnings = 0;  // warnings raised, all kinds: MuJoCo's and simloop_DIVERGED
+  EnergyTotals energy;        // the energy audit over the run
   bool stable = false;
 };
 
 struct SweepResult {
-  double duration = 0.0;             // sim seconds each run covers
-  std::vector<SweepPoint> points;    // in ascending timestep order
+  double duration = 0.0;           // sim seconds each run covers
+  std::vector<SweepPoint> points;  // in ascending timestep order
   // The largest timestep below which every swept timestep is stable; -1 if
   // even the finest is not.
   int edge_index = -1;
@@ -114,21 +114,21 @@ inline constexpr double kScenarioSweepTolerance = 0.10;
 struct ScenarioSweepPoint {
   double timestep = 0.0;
   std::int64_t steps = 0;
-  std::int64_t mujoco_warnings = 0;  // MuJoCo's warnings raised, all kinds
-  std::int64_t diverged = 0;         // simloop_DIVERGED raised
-  double peak_speed = 0.0;   // largest linear speed of any recorded body over the run, m/s
+  std::int64_t mujoco_warnings = 0;                    // MuJoCo's warnings raised, all kinds
+  std::int64_t diverged = 0;                           // simloop_DIVERGED raised
+  double peak_speed = 0.0;                             // largest linear speed of any recorded body over the run, m/s
   std::vector<std::array<double, 3>> final_positions;  // per recorded body (ScenarioSweepResult::bodies), m
-  std::vector<double> offsets;  // each one's distance from the reference's final position, m
-  double max_offset = 0.0;      // the largest of them (NaN if any is not finite)
+  std::vector<double> offsets;                         // each one's distance from the reference's final position, m
+  double max_offset = 0.0;                             // the largest of them (NaN if any is not finite)
   bool blew_up = false;
 };
 
 struct ScenarioSweepResult {
-  std::string name;                 // the scenario's
-  double duration = 0.0;            // sim seconds each run covers
-  std::vector<std::string> bodies;  // the recorded bodies, in the columns' order
-  double scene_size = 0.0;          // mjModel::stat.extent, m
-  double tolerance = 0.0;           // kScenarioSweepTolerance * scene_size, m
+  std::string name;                        // the scenario's
+  double duration = 0.0;                   // sim seconds each run covers
+  std::vector<std::string> bodies;         // the recorded bodies, in the columns' order
+  double scene_size = 0.0;                 // mjModel::stat.extent, m
+  double tolerance = 0.0;                  // kScenarioSweepTolerance * scene_size, m
   std::vector<ScenarioSweepPoint> points;  // ascending timesteps; points[0] is the reference
   // The largest timestep below which no swept timestep blew up; -1 if even
   // the finest did.

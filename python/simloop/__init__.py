@@ -26,14 +26,6 @@ except ImportError as _error:
     raise ImportError(_message) from None
 
 from ._checks import load_model
-from ._gym_registry import register_when_gymnasium_loads
-from .policy import Observation
-from .render import MAX_PICTURE_SIZE, Renderer
-from .runs import draw_shove, run, run_batch
-from .scenario import Scenario, ScenarioResult
-from .scenario_runs import run_scenario, run_scenario_batch
-from .sim import Sim
-from .sweeps import sweep
 from ._core import (
     COLUMN_NAMES,
     ENERGY_COLUMN_NAMES,
@@ -50,6 +42,14 @@ from ._core import (
     SweepResult,
     __version__,
 )
+from ._gym_registry import register_when_gymnasium_loads
+from .policy import Observation
+from .render import MAX_PICTURE_SIZE, Renderer
+from .runs import draw_shove, run, run_batch
+from .scenario import Scenario, ScenarioResult
+from .scenario_runs import run_scenario, run_scenario_batch
+from .sim import Sim
+from .sweeps import sweep
 
 __all__ = [
     "BatchTable",

@@ -19,8 +19,18 @@ from types import FrameType
 from typing import Any, Dict, List, Optional, Tuple
 
 from . import _core, _startup
-from ._command import (EXIT_RUN_FAILED, EXIT_SIGINT, EXIT_SIGTERM, EXIT_USAGE, PROGRAM,  # noqa: F401 (the command's)
-                       _catch_terminating_signals, _fail, _Report, _ReportLost, _stopped_by)
+from ._command import (  # noqa: F401 (the command's)
+    EXIT_RUN_FAILED,
+    EXIT_SIGINT,
+    EXIT_SIGTERM,
+    EXIT_USAGE,
+    PROGRAM,
+    _catch_terminating_signals,
+    _fail,
+    _Report,
+    _ReportLost,
+    _stopped_by,
+)
 from .batch_command import batch_command
 from .progress import progress_bar
 
@@ -43,10 +53,12 @@ def _finish_stdout(code: int) -> int:
     return code
 
 
-PLOT_USAGE = ("usage: python -m simloop plot trajectory|sweep [--out DIR] [--compare DIR ...] [--x auto|time|step]\n"
-              "  draws DIR/trajectory.png or DIR/sweep.png from the CSV the command wrote there;\n"
-              "  --compare DIR (trajectory only, repeatable): draw DIR's run on the same axes;\n"
-              "  --x: sim time, or the step index (auto: time, unless the runs span different sim times)")
+PLOT_USAGE = (
+    "usage: python -m simloop plot trajectory|sweep [--out DIR] [--compare DIR ...] [--x auto|time|step]\n"
+    "  draws DIR/trajectory.png or DIR/sweep.png from the CSV the command wrote there;\n"
+    "  --compare DIR (trajectory only, repeatable): draw DIR's run on the same axes;\n"
+    "  --x: sim time, or the step index (auto: time, unless the runs span different sim times)"
+)
 
 
 def _plot_command(args: List[str]) -> int:
@@ -250,7 +262,9 @@ class _Host:
     def help(self, sweep: bool) -> str:
         if sweep:
             return _core.sweep_help_text("python -m simloop")
-        return _core.help_text(f"python -m simloop (or {PROGRAM})", "record sim_loop.rrd in --out (the default), or not")
+        return _core.help_text(
+            f"python -m simloop (or {PROGRAM})", "record sim_loop.rrd in --out (the default), or not"
+        )
 
     def version(self) -> str:
         return f"simloop {_core.__version__} ({_core.MUJOCO_VERSION})"
@@ -271,8 +285,9 @@ class _Host:
         global _outputs_written
         _outputs_written = True
 
-    def recording(self, opts: "_core.CommandLine", model: "_core.Model",
-                  scenario: "Optional[_core.Scenario]") -> "Tuple[Any, str]":
+    def recording(
+        self, opts: "_core.CommandLine", model: "_core.Model", scenario: "Optional[_core.Scenario]"
+    ) -> "Tuple[Any, str]":
         """What draws the run (the rerun recording, --video's pictures, or
         both: each begun before anything is written) and the report's lines
         for them."""
@@ -290,8 +305,9 @@ class _Host:
                     else:
                         drawings.append(Recording(model, rrd, scenario_recording_id(_run_key(self.args, opts))))
                 except ImportError as e:
-                    raise _HostFailure(EXIT_RUN_FAILED, f"{e} (nothing was written; --no-rerun runs without the "
-                                                        "recording)")
+                    raise _HostFailure(
+                        EXIT_RUN_FAILED, f"{e} (nothing was written; --no-rerun runs without the recording)"
+                    ) from None
                 lines.append(f"recording: {rrd} -- open it with: {_viewer()} {rrd}")
             if opts.video:
                 from .video import VideoRecording
@@ -319,7 +335,7 @@ class _Host:
             return str(trajectory_png(folder / "trajectory.csv", folder / "trajectory.png"))
         except ImportError as e:  # matplotlib
             written = "sweep.csv was written" if what == "sweep" else "metrics.json and trajectory.csv were written"
-            raise _HostFailure(EXIT_RUN_FAILED, f"{'plot: ' if what == 'sweep' else ''}{e} ({written})")
+            raise _HostFailure(EXIT_RUN_FAILED, f"{'plot: ' if what == 'sweep' else ''}{e} ({written})") from None
 
 
 if __name__ == "__main__":

@@ -30,7 +30,7 @@ Progress = Optional[Callable[[int, int], object]]
 # The C++ integer types an argument becomes (pybind11 refuses an int outside
 # them with a several-line TypeError).
 U64_MAX = 2**64 - 1
-I64_MIN, I64_MAX = -2**63, 2**63 - 1
+I64_MIN, I64_MAX = -(2**63), 2**63 - 1
 # The ranges sim_loop's --steps and --record-every accept, 1 to 2**62-1
 # (simloop::kMaxSteps, kMaxRecordEvery): steps + record_every fits in int64.
 MAX_STEPS = _core.MAX_STEPS
@@ -62,7 +62,7 @@ def _check_int(name: str, value: object, minimum: int = I64_MIN, maximum: int = 
 
 
 def _did_you_mean(name: str, names: "Iterable[str]") -> str:
-    """" (did you mean 'x'?)" for the closest of names to a mistyped name, or "" (the C++ side's rule)."""
+    """ " (did you mean 'x'?)" for the closest of names to a mistyped name, or "" (the C++ side's rule)."""
     close = _core._did_you_mean(name, list(names))
     return f" (did you mean {close!r}?)" if close else ""
 
@@ -71,8 +71,10 @@ def _check_keys(name: str, mapping: "Mapping[Any, Any]", known: Sequence[str]) -
     """A dict's keys, all known: never silently ignored."""
     unknown = sorted(str(k) for k in mapping if k not in known)
     if unknown:
-        raise ValueError(f"{name}: unknown key{'s' if len(unknown) > 1 else ''} {', '.join(map(repr, unknown))} "
-                         f"(known: {', '.join(map(repr, known)) if known else 'none'})")
+        raise ValueError(
+            f"{name}: unknown key{'s' if len(unknown) > 1 else ''} {', '.join(map(repr, unknown))} "
+            f"(known: {', '.join(map(repr, known)) if known else 'none'})"
+        )
 
 
 def _check_seed(name: str, value: object) -> int:
@@ -99,7 +101,9 @@ def _check_str(name: str, value: object) -> str:
 
 def _check_progress(progress: object) -> Progress:
     if progress is not None and not callable(progress):
-        raise TypeError(f"progress must be None or a callable progress(steps_done, steps_total), got {_describe(progress)}")
+        raise TypeError(
+            f"progress must be None or a callable progress(steps_done, steps_total), got {_describe(progress)}"
+        )
     return progress
 
 
@@ -120,8 +124,12 @@ def _finite_vector(name: str, value: object, size: int, what: str) -> "Union[Seq
     what Python writes itself (a Sim's views), where no C++ check follows."""
     import numpy as np
 
-    if isinstance(value, np.ndarray) and value.dtype == np.float64 and value.shape == (size,) \
-            and np.isfinite(value).all():
+    if (
+        isinstance(value, np.ndarray)
+        and value.dtype == np.float64
+        and value.shape == (size,)
+        and np.isfinite(value).all()
+    ):
         return value  # the common case, kept cheap
     array = _float_array(name, value, size, what)
     if array.shape != (size,):
@@ -168,6 +176,6 @@ def load_model(model: ModelLike = None) -> Model:
         return Model.from_file(_check_path("model", model, "an MJCF file"))
     if is_mujoco_model(model):
         return Model._copy_of_address(mujoco_model_address(model, MUJOCO_VERSION), "mujoco.MjModel")
-    raise TypeError("model must be None, a simloop.Model, a mujoco.MjModel or a path to an MJCF file, "
-                    f"got {_describe(model)}")
-
+    raise TypeError(
+        f"model must be None, a simloop.Model, a mujoco.MjModel or a path to an MJCF file, got {_describe(model)}"
+    )

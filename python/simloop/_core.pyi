@@ -3,7 +3,7 @@
 # naming what is missing or different.
 import os
 from pathlib import Path
-from typing import Any, Callable, Final, Literal, Never, Optional, Protocol, Sequence, TypedDict, Union
+from typing import Any, Callable, Final, Literal, Never, Optional, Sequence, TypedDict, Union
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -236,6 +236,7 @@ class RunResult(ScenarioResult):
     def write(self, out: _PathLike) -> tuple[Path, Path]: ...
 
 def run(model: Model, config: RunConfig, progress: _Progress = None) -> RunResult: ...
+
 # keep_rows False: without the trajectories (rows 0), for metrics only.
 def run_batch(
     model: Model, configs: Sequence[RunConfig], threads: int, keep_rows: bool = True, progress: _Progress = None
@@ -264,13 +265,7 @@ def check_scenario_names(scenario: Scenario, model: Model) -> None: ...
 
 class ScenarioConfig(metaclass=_Pybind11Type):
     def __init__(
-        self,
-        seed: int,
-        rng: str,
-        timestep: Optional[float],
-        steps: Optional[int],
-        perturb: bool,
-        record_every: int,
+        self, seed: int, rng: str, timestep: Optional[float], steps: Optional[int], perturb: bool, record_every: int
     ) -> None: ...
 
 # One of ScenarioResult.disturbances.
@@ -287,7 +282,6 @@ class _DrawnParam(TypedDict):
     kind: str
     name: str
     value: float
-
 
 # The scenario's controls; or the caller's (controls: steps x nu, initial_state:
 # state_size; per run, or one for all); or a policy's decisions (decide, every
@@ -316,6 +310,7 @@ def run_scenario_batch(
 ) -> list[ScenarioResult]: ...
 def check_scenario(scene: Model, scenario: Scenario, config: ScenarioConfig) -> None: ...
 def commit_files(files: Sequence[PipedFile]) -> None: ...
+
 # The signals both commands stop on (include/simloop/signals.hpp).
 TERMINATING_SIGNALS: Final[tuple[int, ...]]
 
@@ -338,8 +333,10 @@ class PipedFile(metaclass=_Pybind11Type):
     def close_writer(self) -> None: ...
     def wait(self, timeout: float) -> bool: ...
     def finish(self) -> None: ...
+
 def scenario_duration(scene: Model, scenario: Scenario) -> float: ...
 def moving_bodies(scene: Model) -> list[str]: ...
+
 # A copy with (kind, "name.field", value) parameters set.
 def with_scene_params(model: Model, params: Sequence[tuple[str, str, float]]) -> Model: ...
 
@@ -363,11 +360,7 @@ class Episodes(metaclass=_Pybind11Type):
     def reset(self, i: int, seed: int, reset: Optional[str] = None) -> _Float64Array: ...
     # (observations, terminated, truncated): a row of each episode's, after step and time.
     def step(
-        self,
-        actions: _ArrayLike,
-        every: int,
-        active: Optional[ArrayLike] = None,
-        threads: int = 1,
+        self, actions: _ArrayLike, every: int, active: Optional[ArrayLike] = None, threads: int = 1
     ) -> tuple[_Float64Array, NDArray[np.bool_], NDArray[np.bool_]]: ...
     # (steps_taken, time) of every episode.
     def progress(self) -> tuple[NDArray[np.int64], _Float64Array]: ...
@@ -449,9 +442,7 @@ class Sim(metaclass=_Pybind11Type):
     def field_rows(self, owner: str, name: str) -> tuple[str, str]: ...
     def body_velocity(self, body: int) -> _Float64Array: ...
     # force and/or torque (3 each) on a body until cleared.
-    def apply_wrench(
-        self, body: int, force: Optional[Sequence[float]], torque: Optional[Sequence[float]]
-    ) -> None: ...
+    def apply_wrench(self, body: int, force: Optional[Sequence[float]], torque: Optional[Sequence[float]]) -> None: ...
     def clear_forces(self) -> None: ...
     def __getstate__(self) -> Any: ...
     def __setstate__(self, state: Any, /) -> None: ...
@@ -530,6 +521,7 @@ def sweep(
 def log_spaced(start: float, stop: float, count: int) -> list[float]: ...
 def default_sweep_timesteps() -> list[float]: ...
 def sweep_steps(duration: float, timestep: float) -> int: ...
+
 # One sweep from chunks of it run apart, in order (a cluster's workers).
 def join_sweeps(parts: Sequence[SweepResult]) -> SweepResult: ...
 

@@ -49,4 +49,3 @@ def register_when_gymnasium_loads() -> None:
             return spec
 
     sys.meta_path.insert(0, _WhenGymnasiumLoads())
-

@@ -24,12 +24,13 @@ def batched(function: Callable[..., Any]) -> Callable[..., Any]:
     leading axis of episodes (obs and next_obs (n, width), actions (n, nu))
     and returning n values. The vector env then calls it once a step rather
     than once per env (the single env calls it with n = 1)."""
-    setattr(function, "simloop_batched", True)
+    setattr(function, "simloop_batched", True)  # noqa: B010 (mypy: a Callable has no such attribute)
     return function
 
 
 def _is_batched(function: object) -> bool:
     return bool(getattr(function, "simloop_batched", False))
+
 
 # Episodes that end this way are terminated, not truncated (episode.hpp).
 _TERMINATING = ("simloop_DIVERGED", "mjWARN_BADQPOS", "mjWARN_BADQVEL", "mjWARN_BADQACC")
@@ -57,13 +58,25 @@ class _Setup:
     """What the single and the vector environment share: the episodes, the
     spaces, the checks of actions."""
 
-    def __init__(self, scenario: ScenarioLike, count: int, control_every: int, reward: Optional[Reward],
-                 terminate: Optional[Terminate], rng: str, timestep: Optional[float], steps: Optional[int],
-                 perturb: bool, model: ModelLike, render: "Rendering") -> None:
+    def __init__(
+        self,
+        scenario: ScenarioLike,
+        count: int,
+        control_every: int,
+        reward: Optional[Reward],
+        terminate: Optional[Terminate],
+        rng: str,
+        timestep: Optional[float],
+        steps: Optional[int],
+        perturb: bool,
+        model: ModelLike,
+        render: "Rendering",
+    ) -> None:
         scenario, scene = _scenario_and_scene(scenario, model)
         if reward is not None and not callable(reward):
-            raise TypeError(f"reward must be None or a callable reward(obs, action, next_obs) -> float, "
-                            f"got {_describe(reward)}")
+            raise TypeError(
+                f"reward must be None or a callable reward(obs, action, next_obs) -> float, got {_describe(reward)}"
+            )
         # (checked here, at construction: the C++ episodes check it only as they step)
         self.control_every = _check_int("control_every", control_every, 1, _core.MAX_STEPS)
         config = scenario_config(0, rng, timestep, steps, perturb, 1)
@@ -89,10 +102,16 @@ class _Setup:
 
     def _condition(self, condition: object) -> Tuple[int, Any, float]:
         """(column, op, value): the episode ends when the observation's column compares so."""
-        if not (isinstance(condition, (tuple, list)) and len(condition) == 3 and isinstance(condition[0], str)
-                and condition[1] in _COMPARISONS):
-            raise TypeError(f"each terminate condition must be (column, op, value) with op one of "
-                            f"{', '.join(_COMPARISONS)}, got {_describe(condition)}")
+        if not (
+            isinstance(condition, (tuple, list))
+            and len(condition) == 3
+            and isinstance(condition[0], str)
+            and condition[1] in _COMPARISONS
+        ):
+            raise TypeError(
+                f"each terminate condition must be (column, op, value) with op one of "
+                f"{', '.join(_COMPARISONS)}, got {_describe(condition)}"
+            )
         column, op, value = condition
         if column not in self.names:
             raise ValueError(f"terminate: no observed column named {column!r}; columns: {', '.join(self.names)}")
@@ -159,8 +178,9 @@ class _Setup:
 
 def _sequence_of(name: str, value: object) -> List[Any]:
     if isinstance(value, (str, bytes)) or not isinstance(value, Sequence):
-        raise TypeError(f"{name} must be a callable or a list of (column, op, value) conditions, got "
-                        f"{_describe(value)}")
+        raise TypeError(
+            f"{name} must be a callable or a list of (column, op, value) conditions, got {_describe(value)}"
+        )
     return list(value)
 
 
@@ -188,8 +208,9 @@ def _batch_of(name: str, values: object, n: int) -> np.ndarray:
     return out
 
 
-def _ended_by(terminated: bool, truncated: bool, decisions: int, max_episode_steps: Optional[int],
-              hooked: bool = False) -> Optional[str]:
+def _ended_by(
+    terminated: bool, truncated: bool, decisions: int, max_episode_steps: Optional[int], hooked: bool = False
+) -> Optional[str]:
     """Why an episode ended on this step, or None: a warning first, then the
     terminate hook, then the scenario's length, then the caller's step limit."""
     if terminated:
@@ -230,5 +251,3 @@ def _episode_seed(np_random: np.random.Generator, seed: Optional[int]) -> int:
     if seed is not None:
         return _check_seed("seed", seed)
     return int(np_random.integers(0, 2**64, dtype=np.uint64))
-
-

@@ -46,7 +46,11 @@ def load_failure_message(error: ImportError) -> str | None:
             f"is not beside simloop: install simloop into the same environment (site-packages) as mujoco, "
             f"or import mujoco before simloop ({error})"
         )
-    where = "this environment has no mujoco package" if found is None else f"this environment's mujoco package ships MuJoCo {found}"
+    where = (
+        "this environment has no mujoco package"
+        if found is None
+        else f"this environment's mujoco package ships MuJoCo {found}"
+    )
     return (
         f"simloop was built on MuJoCo {wanted} from the mujoco package, but {where}: "
         f"pip install mujoco=={wanted}, or rebuild simloop against the mujoco you have "
@@ -73,10 +77,13 @@ def mujoco_model_address(model: object, simloop_mujoco: str) -> int:
     if MUJOCO_BUILD != "pypi":
         raise TypeError(
             f"a mujoco.MjModel ({theirs}) cannot be run by this simloop, built on the system's {simloop_mujoco}: "
-            "pass the scene's MJCF path, or build simloop on the mujoco package (SIMLOOP_MUJOCO=pypi)")
+            "pass the scene's MJCF path, or build simloop on the mujoco package (SIMLOOP_MUJOCO=pypi)"
+        )
     if theirs != simloop_mujoco:
-        raise TypeError(f"a mujoco.MjModel from {theirs} cannot be run by this simloop, built on {simloop_mujoco}: "
-                        f"pip install mujoco=={MUJOCO_LIBRARY_VERSION}, or rebuild simloop against {theirs}")
+        raise TypeError(
+            f"a mujoco.MjModel from {theirs} cannot be run by this simloop, built on {simloop_mujoco}: "
+            f"pip install mujoco=={MUJOCO_LIBRARY_VERSION}, or rebuild simloop against {theirs}"
+        )
     address = getattr(model, "_address", None)
     if not isinstance(address, int) or address == 0:
         raise TypeError(f"this mujoco.MjModel ({theirs}) does not give its address; simloop cannot copy it")

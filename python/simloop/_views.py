@@ -96,12 +96,12 @@ class JointView(_Named):
     @property
     def qpos(self) -> NDArray[np.float64]:
         info = self._info()
-        return self._arrays["qpos"][info["qposadr"]:info["qposadr"] + info["nq"]]
+        return self._arrays["qpos"][info["qposadr"] : info["qposadr"] + info["nq"]]
 
     @property
     def qvel(self) -> NDArray[np.float64]:
         info = self._info()
-        return self._arrays["qvel"][info["dofadr"]:info["dofadr"] + info["nv"]]
+        return self._arrays["qvel"][info["dofadr"] : info["dofadr"] + info["nv"]]
 
     def _details(self) -> str:
         return f" type={self.type}"
@@ -116,7 +116,7 @@ class ActuatorView(_Named):
 
     @property
     def ctrl(self) -> NDArray[np.float64]:
-        return self._arrays["ctrl"][self.id:self.id + 1]
+        return self._arrays["ctrl"][self.id : self.id + 1]
 
     @property
     def force(self) -> float:
@@ -142,4 +142,4 @@ class SensorView(_Named):
     @property
     def data(self) -> NDArray[np.float64]:
         info = self._info()
-        return self._arrays["sensordata"][info["adr"]:info["adr"] + info["dim"]]
+        return self._arrays["sensordata"][info["adr"] : info["adr"] + info["dim"]]

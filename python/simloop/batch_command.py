@@ -106,20 +106,44 @@ def _parse_numbers(flag: str, text: str) -> List[float]:
 def _parse_batch_args(args: List[str]) -> Dict[str, Any]:
     # Any: each option's own type (str, list of seeds, timesteps, parameters, bool, ...), checked as parsed.
     opts: Dict[str, Any] = {
-        "scenario": None, "seeds": [0], "timesteps": [None], "params": [], "steps": None, "rng": "mt19937_64",
-        "perturb": True, "scheduler": None, "threads": None, "chunk_size": None,
-        "out": "outputs/batch.parquet", "resume": False, "help": False}
-    with_value = {"--scenario", "--seeds", "--timestep", "--friction", "--mass", "--damping", "--gravity",
-                  "--steps", "--rng",
-                  "--scheduler", "--threads", "--chunk-size", "--out"}
+        "scenario": None,
+        "seeds": [0],
+        "timesteps": [None],
+        "params": [],
+        "steps": None,
+        "rng": "mt19937_64",
+        "perturb": True,
+        "scheduler": None,
+        "threads": None,
+        "chunk_size": None,
+        "out": "outputs/batch.parquet",
+        "resume": False,
+        "help": False,
+    }
+    with_value = {
+        "--scenario",
+        "--seeds",
+        "--timestep",
+        "--friction",
+        "--mass",
+        "--damping",
+        "--gravity",
+        "--steps",
+        "--rng",
+        "--scheduler",
+        "--threads",
+        "--chunk-size",
+        "--out",
+    }
     i = 0
     while i < len(args):
         flag, eq, value = args[i].partition("=") if args[i].startswith("--") else (args[i], "", "")
         if flag in ("--resume", "--no-perturb", "--help", "-h"):
             if eq:
                 raise _BatchUsage(f"{flag} takes no value, got '{args[i]}'")
-            opts["resume" if flag == "--resume" else "perturb" if flag == "--no-perturb" else "help"] = \
+            opts["resume" if flag == "--resume" else "perturb" if flag == "--no-perturb" else "help"] = (
                 flag != "--no-perturb"
+            )
             i += 1
             continue
         if flag not in with_value:
@@ -145,12 +169,15 @@ def _parse_batch_args(args: List[str]) -> Dict[str, Any]:
             if kind == "mass" and not has_name:
                 raise _BatchUsage(f"--mass: '{value}' needs a body: --mass BODY=KG,KG,...")
             if kind == "gravity" and has_name:
-                raise _BatchUsage(f"--gravity: '{value}': gravity is the whole scene's, give values only: --gravity G,G,...")
+                raise _BatchUsage(
+                    f"--gravity: '{value}': gravity is the whole scene's, give values only: --gravity G,G,..."
+                )
             if has_name and not name:
                 raise _BatchUsage(f"{flag}: '{value}' has an empty name before '='")
             if any((k, n) == (kind, name) for k, n, _ in opts["params"]):
-                raise _BatchUsage(f"{flag}: '{value}': {kind} {('of ' + repr(name)) if name else 'of everything'} "
-                                  "is given twice")
+                raise _BatchUsage(
+                    f"{flag}: '{value}': {kind} {('of ' + repr(name)) if name else 'of everything'} is given twice"
+                )
             opts["params"].append((kind, name, _parse_numbers(flag, values)))
         elif flag in ("--steps", "--threads", "--chunk-size"):
             # The most each takes: as the API's steps, threads and chunk_size.
@@ -206,8 +233,11 @@ def batch_command(args: List[str]) -> int:
         for drawn_kind, drawn_name in scenario._core.reset_params:
             if drawn_kind == kind and (drawn_name == name or not drawn_name or not name):
                 what = f"{kind} of '{drawn_name}'" if drawn_name else f"{kind} of everything"
-                return _fail(EXIT_USAGE, f"batch: --{kind}: the scenario's [[reset.param]] sets {what} at each "
-                                         "run's reset, which would override the grid: grid it or draw it, not both")
+                return _fail(
+                    EXIT_USAGE,
+                    f"batch: --{kind}: the scenario's [[reset.param]] sets {what} at each "
+                    "run's reset, which would override the grid: grid it or draw it, not both",
+                )
         for value in values:
             try:
                 _core.with_scene_params(scene, [(kind, name, value)])
@@ -216,16 +246,23 @@ def batch_command(args: List[str]) -> int:
         axes.append([(kind, name, value) for value in values])
     try:
         for t in opts["timesteps"]:
-            _core.check_scenario(scene, scenario._core, _core.ScenarioConfig(0, opts["rng"], t, opts["steps"],
-                                                                             opts["perturb"], _core.MAX_RECORD_EVERY))
+            _core.check_scenario(
+                scene,
+                scenario._core,
+                _core.ScenarioConfig(0, opts["rng"], t, opts["steps"], opts["perturb"], _core.MAX_RECORD_EVERY),
+            )
     except ValueError as e:
         return _fail(EXIT_USAGE, f"batch: {e}")
     count = math.prod([len(opts["seeds"]), len(opts["timesteps"]), *(len(axis) for axis in axes)])
     if count > MAX_BATCH_RUNS:
-        return _fail(EXIT_USAGE, f"batch: the seeds and the grid make {count} runs; a batch runs at most "
-                                 f"{MAX_BATCH_RUNS} (split it)")
-    runs = [(i, seed, t, tuple(params))
-            for i, (*params, t, seed) in enumerate(itertools.product(*axes, opts["timesteps"], opts["seeds"]))]
+        return _fail(
+            EXIT_USAGE,
+            f"batch: the seeds and the grid make {count} runs; a batch runs at most {MAX_BATCH_RUNS} (split it)",
+        )
+    runs = [
+        (i, seed, t, tuple(params))
+        for i, (*params, t, seed) in enumerate(itertools.product(*axes, opts["timesteps"], opts["seeds"]))
+    ]
 
     client = None
     if opts["scheduler"]:
@@ -239,16 +276,22 @@ def batch_command(args: List[str]) -> int:
             return _fail(EXIT_USAGE, f"batch: --scheduler {opts['scheduler']}: cannot connect ({e})")
     try:
         threads = opts["threads"] or (1 if client is not None else 0)
-        job = distributed.scenario_job(scenario, rng=opts["rng"], steps=opts["steps"], perturb=opts["perturb"],
-                                       threads=threads)
+        job = distributed.scenario_job(
+            scenario, rng=opts["rng"], steps=opts["steps"], perturb=opts["perturb"], threads=threads
+        )
         workers = distributed._Pool(client).workers()
         size = opts["chunk_size"] or distributed.default_chunk_size(len(runs), 4 if client is None else workers)
-        description = {"scenario": opts["scenario"] or "(the chapter's)", "seeds": len(opts["seeds"]),
-                       "timesteps": opts["timesteps"],
-                       "params": [tables.param_column(kind, name) for kind, name, _ in opts["params"]]}
+        description = {
+            "scenario": opts["scenario"] or "(the chapter's)",
+            "seeds": len(opts["seeds"]),
+            "timesteps": opts["timesteps"],
+            "params": [tables.param_column(kind, name) for kind, name, _ in opts["params"]],
+        }
         # The files the batch reads, as they are now: a part written while any was otherwise is refused.
-        inputs = {**input_files.digests([os.path.abspath(opts["scenario"])] if opts["scenario"] else []),
-                  **job["inputs"]}
+        inputs = {
+            **input_files.digests([os.path.abspath(opts["scenario"])] if opts["scenario"] else []),
+            **job["inputs"],
+        }
         batch = ParquetBatch(opts["out"], job, runs, size, description, inputs)
         if os.path.isdir(opts["out"]):
             return _fail(EXIT_USAGE, f"batch: --out: {opts['out']} is a directory (name the Parquet file)")
@@ -288,23 +331,33 @@ def _run_batch(batch: "ParquetBatch", client: Any, earlier: int, started: float)
         computed = batch.run(client, progress)
     except KeyboardInterrupt as e:
         name, code = _stopped_by(e)
-        return _fail(code, f"interrupted ({name}); {batch.out} not written; {batch.kept_runs()} of {total} runs kept "
-                           f"in {batch.parts}/ (add --resume to finish)")
+        return _fail(
+            code,
+            f"interrupted ({name}); {batch.out} not written; {batch.kept_runs()} of {total} runs kept "
+            f"in {batch.parts}/ (add --resume to finish)",
+        )
     except (VersionMismatch, InputMismatch) as e:
         return _fail(EXIT_RUN_FAILED, f"batch: {e}")
     except Exception as e:  # a worker's failure as it came back (dask's KilledWorker, a MujocoError, ...)
-        return _fail(EXIT_RUN_FAILED, f"batch: {type(e).__name__}: {e} ({batch.kept_runs()} of {total} runs kept in {batch.parts}/; "
-                                      "--resume continues)")
+        return _fail(
+            EXIT_RUN_FAILED,
+            f"batch: {type(e).__name__}: {e} ({batch.kept_runs()} of {total} runs kept in {batch.parts}/; "
+            "--resume continues)",
+        )
     finally:
         if bar is not None:
             bar.close()
     try:  # FILE is in place: a report that cannot be written says so, not that nothing was
-        print(f"batch: {total} runs ({computed} run now, {total - computed} from {batch.parts}/)"
-              if earlier else f"batch: {total} runs")
+        print(
+            f"batch: {total} runs ({computed} run now, {total - computed} from {batch.parts}/)"
+            if earlier
+            else f"batch: {total} runs"
+        )
         print(f"table: {batch.out}")
         print(f"wall-clock: {time.perf_counter() - started:.1f} s, peak memory: {_peak_memory_mib():.1f} MiB")
         sys.stdout.flush()
     except _ReportLost as e:
-        return _fail(EXIT_RUN_FAILED, f"batch: cannot write the report to standard output ({e}); {batch.out} was "
-                                      "written")
+        return _fail(
+            EXIT_RUN_FAILED, f"batch: cannot write the report to standard output ({e}); {batch.out} was written"
+        )
     return 0

@@ -129,8 +129,7 @@ def config_recording_id(config: _core.RunConfig, model: ModelLike = None) -> str
 def recording_name(result: _core.RunResult) -> str:
     """A name for people, shown in the viewer's list of recordings."""
     config = result.config
-    shove = (f"shove {result.shove.force_y:+.1f} N ({config.rng}, seed {config.seed})" if config.perturb
-             else "no shove")
+    shove = f"shove {result.shove.force_y:+.1f} N ({config.rng}, seed {config.seed})" if config.perturb else "no shove"
     return f"{result.metrics['steps']} steps of {result.timestep:g} s, {shove}"
 
 
@@ -159,24 +158,37 @@ class ChapterRecording(Recording):
         self._pusher, self._pusher_quat = _pusher_body(model)
         self._ranges: Dict[str, Tuple[float, float]] = {}  # each plotted series' (low, high), for the axes
         self._time_end = 0.0  # the last row's sim time: the plots' time axes run from 0 to it
-        super().__init__(model, target, config_recording_id(config, model_key), APPLICATION_ID,
-                         bodies=["box", self._pusher])
+        super().__init__(
+            model, target, config_recording_id(config, model_key), APPLICATION_ID, bodies=["box", self._pusher]
+        )
         try:
-            self._rec.log(f"{self._entity('box')}/shove", self._rr.Arrows3D.from_fields(
-                colors=[SHOVE_ARROW_COLOR], radii=[SHOVE_ARROW_RADIUS]), static=True)
+            self._rec.log(
+                f"{self._entity('box')}/shove",
+                self._rr.Arrows3D.from_fields(colors=[SHOVE_ARROW_COLOR], radii=[SHOVE_ARROW_RADIUS]),
+                static=True,
+            )
             # What the camera follows: rerun frames a tracked entity by its
             # bounds, and the box alone (10 cm) would fill the view; this
             # invisible frame around it keeps the pusher and the floor in view.
-            self._rec.log(f"{self._entity('box')}/camera_frame", self._rr.Boxes3D(
-                half_sizes=[[CAMERA_FRAME, CAMERA_FRAME, CAMERA_FRAME / 2]], colors=[[0, 0, 0, 0]],
-                fill_mode="majorwireframe", radii=[0.0]), static=True)
+            self._rec.log(
+                f"{self._entity('box')}/camera_frame",
+                self._rr.Boxes3D(
+                    half_sizes=[[CAMERA_FRAME, CAMERA_FRAME, CAMERA_FRAME / 2]],
+                    colors=[[0, 0, 0, 0]],
+                    fill_mode="majorwireframe",
+                    radii=[0.0],
+                ),
+                static=True,
+            )
         except BaseException:
             self.close()
             raise
 
     def columns(self, names: Sequence[str]) -> None:
         if list(names) != self._expected:  # the run and the recording disagree on what a row holds
-            raise ValueError(f"the chapter's recording draws the columns {self._expected}, the run records {list(names)}")
+            raise ValueError(
+                f"the chapter's recording draws the columns {self._expected}, the run records {list(names)}"
+            )
         self._names = list(names)
         # The chapter's series only (every column would more than double the file).
         self._plot([name for name in names if name in CHAPTER_LABELS or name in ENERGY_COLORS])
@@ -198,8 +210,9 @@ class ChapterRecording(Recording):
         if name in ENERGY_COLORS:
             return name + " (J)", ENERGY_COLORS[name]
         # box_* in the box's colour, pusher_* in the pusher's.
-        colour = {"box": self.colours.get("box"), "pusher": self.colours.get(self._pusher),
-                  "ncon": CONTACTS_COLOR}.get(name.split("_")[0])
+        colour = {"box": self.colours.get("box"), "pusher": self.colours.get(self._pusher), "ncon": CONTACTS_COLOR}.get(
+            name.split("_")[0]
+        )
         return CHAPTER_LABELS.get(name, name), colour
 
     def _send_more(self, times: list, cols: Mapping[str, Any]) -> None:
@@ -211,9 +224,13 @@ class ChapterRecording(Recording):
         shove = SHOVE_ARROW_SCALE * np.nan_to_num(np.column_stack([cols["shove_x"], cols["shove_y"], cols["shove_z"]]))
         quat = _box_quat(cols)
         above = np.tile([0.0, 0.0, SHOVE_ARROW_HEIGHT], (len(shove), 1))
-        self._rec.send_columns(f"{self._entity('box')}/shove", indexes=times,
-                               columns=self._rr.Arrows3D.columns(origins=_rotate_into_body(quat, above),
-                                                                 vectors=_rotate_into_body(quat, shove)))
+        self._rec.send_columns(
+            f"{self._entity('box')}/shove",
+            indexes=times,
+            columns=self._rr.Arrows3D.columns(
+                origins=_rotate_into_body(quat, above), vectors=_rotate_into_body(quat, shove)
+            ),
+        )
         for name, values in [("box_speed", speed), *((c, cols[c]) for c in PLOTTED)]:
             finite = values[np.isfinite(values)]
             if finite.size:
@@ -229,14 +246,23 @@ class ChapterRecording(Recording):
         # Time from 0 to the run's end (rerun opened Break It's on empty negative time); a legend only where a
         # panel has more than one series (its name says the rest), at the top left, where a run's x and energy
         # are not yet (at the bottom right it covered the z panel's 0.05 m rest line).
-        time_axis = rrb.TimeAxis(view_range=rrb.TimeRange(start=rrb.TimeRangeBoundary.absolute(seconds=0.0),
-                                                           end=rrb.TimeRangeBoundary.absolute(seconds=self._time_end)))
+        time_axis = rrb.TimeAxis(
+            view_range=rrb.TimeRange(
+                start=rrb.TimeRangeBoundary.absolute(seconds=0.0),
+                end=rrb.TimeRangeBoundary.absolute(seconds=self._time_end),
+            )
+        )
 
         def panel(name, columns, axis_range=None):
             axis_range = axis_range or value_axis_range([self._ranges[c] for c in columns if c in self._ranges])
-            return rrb.TimeSeriesView(name=name, origin="/plots", contents=["/plots/" + c for c in columns],
-                                      axis_x=time_axis, axis_y=rrb.ScalarAxis(range=axis_range) if axis_range else None,
-                                      plot_legend=rrb.PlotLegend(corner=rrb.Corner2D.LeftTop, visible=len(columns) > 1))
+            return rrb.TimeSeriesView(
+                name=name,
+                origin="/plots",
+                contents=["/plots/" + c for c in columns],
+                axis_x=time_axis,
+                axis_y=rrb.ScalarAxis(range=axis_range) if axis_range else None,
+                plot_legend=rrb.PlotLegend(corner=rrb.Corner2D.LeftTop, visible=len(columns) > 1),
+            )
 
         plots = [
             panel("box z (m): height of its centre", ["box_z"], z_axis_range(self._ranges.get("box_z"))),

@@ -68,10 +68,12 @@ def _check_versions(expected: Sequence[str]) -> None:
     if tuple(expected) != here:
         raise VersionMismatch(
             f"worker {socket.gethostname()} has simloop {here[0]} ({here[1]}), the client simloop {expected[0]} "
-            f"({expected[1]}): install the same simloop on every machine (a run's bits are those of one build)")
+            f"({expected[1]}): install the same simloop on every machine (a run's bits are those of one build)"
+        )
 
 
 # ---- The scene and scenario as plain data --------------------------------
+
 
 def scene_source(model: object) -> Tuple[str, str]:
     """How a model travels: ("chapter", "") or ("path", absolute MJCF path)."""
@@ -79,8 +81,10 @@ def scene_source(model: object) -> Tuple[str, str]:
         return ("chapter", "")
     if isinstance(model, (str, bytes, os.PathLike)):
         return ("path", os.path.abspath(_check_path("model", model, "an MJCF file")))
-    raise TypeError("model must be None (the chapter's scene) or an MJCF file's path when work goes to an executor "
-                    f"(a compiled simloop.Model does not travel to workers), got {type(model).__name__}")
+    raise TypeError(
+        "model must be None (the chapter's scene) or an MJCF file's path when work goes to an executor "
+        f"(a compiled simloop.Model does not travel to workers), got {type(model).__name__}"
+    )
 
 
 def scene_inputs(source: Tuple[str, str]) -> Dict[str, str]:
@@ -113,8 +117,10 @@ def _check_inputs(expected: Dict[str, str], here: Dict[str, str]) -> None:
     differ = input_files.changed(expected, here)
     if differ:
         more = f" (and {len(differ) - 1} more)" if len(differ) > 1 else ""
-        raise InputMismatch(f"worker {socket.gethostname()}: {differ[0]}{more} is not the file the batch started with "
-                            "(edited since, or another copy on this machine): every chunk must read the same files")
+        raise InputMismatch(
+            f"worker {socket.gethostname()}: {differ[0]}{more} is not the file the batch started with "
+            "(edited since, or another copy on this machine): every chunk must read the same files"
+        )
 
 
 def _made(source: Any, expected: Dict[str, str], make: Callable[[], Tuple[Made, List[str]]]) -> Made:
@@ -146,9 +152,13 @@ def _scene(source: Tuple[str, str], expected: Dict[str, str]) -> "_core.Model":
 def _scenario(source: Tuple[str, str, str, str], expected: Dict[str, str]) -> Tuple["_core.Scenario", "_core.Model"]:
     def make() -> Tuple[Tuple["_core.Scenario", "_core.Model"], List[str]]:
         kind, text, base, name = source
-        scenario = (_core.Scenario.chapter() if kind == "chapter"
-                    else _core.Scenario.from_toml(text, "scenario", base, default_name=name))
+        scenario = (
+            _core.Scenario.chapter()
+            if kind == "chapter"
+            else _core.Scenario.from_toml(text, "scenario", base, default_name=name)
+        )
         return (scenario, _core.load_scene(scenario)), input_files.scenario_files(scenario)
+
     return _made(source, expected, make)
 
 
@@ -158,6 +168,7 @@ def _with_params(model: "_core.Model", params: Tuple[SceneParam, ...]) -> "_core
 
 
 # ---- The chunk: runs on a worker, returns only metrics -------------------
+
 
 def run_chunk(job: Dict[str, Any], runs: Sequence[Run]) -> BatchTable[Any]:
     """Runs `runs` of `job` as a metrics-only C++ batch (job["threads"]
@@ -173,14 +184,27 @@ def run_chunk(job: Dict[str, Any], runs: Sequence[Run]) -> BatchTable[Any]:
         if job["kind"] == "chapter":
             model = _with_params(_scene(job["scene"], job["inputs"]), params)
             # cast: the chapter's runs always have a timestep (run_batch_on); RunConfig checks it anyway.
-            configs = [_core.RunConfig(runs[i][1], job["steps"], cast(float, runs[i][2]), job["perturb"], job["smoke"],
-                                       1, job["audit_energy"], job["rng"]) for i in members]
+            configs = [
+                _core.RunConfig(
+                    runs[i][1],
+                    job["steps"],
+                    cast(float, runs[i][2]),
+                    job["perturb"],
+                    job["smoke"],
+                    1,
+                    job["audit_energy"],
+                    job["rng"],
+                )
+                for i in members
+            ]
             out = _core.run_batch(model, configs, job["threads"], keep_rows=False)
         else:
             scenario, scene = _scenario(job["scenario"], job["inputs"])
             model = _with_params(scene, params)
-            scenario_configs = [_core.ScenarioConfig(runs[i][1], job["rng"], runs[i][2], job["steps"], job["perturb"],
-                                                     1) for i in members]
+            scenario_configs = [
+                _core.ScenarioConfig(runs[i][1], job["rng"], runs[i][2], job["steps"], job["perturb"], 1)
+                for i in members
+            ]
             out = _core.run_scenario_batch(model, scenario, scenario_configs, job["threads"], keep_rows=False)
         for i, result in zip(members, out):
             results[i] = result
@@ -204,6 +228,7 @@ def metrics_table(runs: Sequence[Run], results: Sequence[Any]) -> BatchTable[Any
 
 # ---- Executors -------------------------------------------------------------
 
+
 def _is_dask_client(executor: object) -> bool:
     return type(executor).__module__.split(".")[0] == "distributed" and hasattr(executor, "scheduler_info")
 
@@ -219,8 +244,10 @@ class _Pool:
         self.dask = _is_dask_client(executor)
         self.token = uuid.uuid4().hex  # dask keys: unique to this batch
         if executor is not None and not self.dask and not isinstance(executor, concurrent.futures.Executor):
-            raise TypeError("executor must be None, a dask.distributed Client or a concurrent.futures.Executor, "
-                            f"got {type(executor).__name__}")
+            raise TypeError(
+                "executor must be None, a dask.distributed Client or a concurrent.futures.Executor, "
+                f"got {type(executor).__name__}"
+            )
 
     def workers(self) -> int:
         if self.executor is None:
@@ -239,16 +266,21 @@ class _Pool:
         try:
             found = self.executor.run(_worker_versions)
         except Exception as e:  # a worker that cannot import simloop at all
-            raise VersionMismatch(f"a worker cannot run simloop ({type(e).__name__}: {e}); install simloop "
-                                  f"{_core.__version__} on every machine") from None
+            raise VersionMismatch(
+                f"a worker cannot run simloop ({type(e).__name__}: {e}); install simloop "
+                f"{_core.__version__} on every machine"
+            ) from None
         mine = versions()
         for address, theirs in found.items():
             if tuple(theirs) != mine:
-                raise VersionMismatch(f"worker {address} has simloop {theirs[0]} ({theirs[1]}), the client simloop "
-                                      f"{mine[0]} ({mine[1]}): install the same simloop on every machine")
+                raise VersionMismatch(
+                    f"worker {address} has simloop {theirs[0]} ({theirs[1]}), the client simloop "
+                    f"{mine[0]} ({mine[1]}): install the same simloop on every machine"
+                )
 
-    def map_unordered(self, fn: Callable[..., Any], tasks: Iterable[Tuple[int, Tuple[Any, ...]]],
-                      window: int) -> Iterator[Tuple[int, Any]]:
+    def map_unordered(
+        self, fn: Callable[..., Any], tasks: Iterable[Tuple[int, Tuple[Any, ...]]], window: int
+    ) -> Iterator[Tuple[int, Any]]:
         """Yields (key, fn(*args)) as tasks finish, with at most `window` in flight."""
         tasks = iter(tasks)
         if self.executor is None:
@@ -299,8 +331,14 @@ def chunk_ranges(total: int, chunk_size: int) -> List[Tuple[int, int]]:
     return [(start, min(total, start + chunk_size)) for start in range(0, total, chunk_size)]
 
 
-def iter_chunks(job: Dict[str, Any], runs: Sequence[Run], executor: object, *, chunk_size: Optional[int] = None,
-                skip: Iterable[int] = ()) -> Iterator[Tuple[int, BatchTable[Any]]]:
+def iter_chunks(
+    job: Dict[str, Any],
+    runs: Sequence[Run],
+    executor: object,
+    *,
+    chunk_size: Optional[int] = None,
+    skip: Iterable[int] = (),
+) -> Iterator[Tuple[int, BatchTable[Any]]]:
     """Runs `runs` in chunks on `executor` and yields (chunk index, columns)
     as chunks finish (not in order). Chunks whose index is in `skip` are
     not run."""
@@ -308,13 +346,18 @@ def iter_chunks(job: Dict[str, Any], runs: Sequence[Run], executor: object, *, c
     pool.check_workers()
     size = chunk_size or default_chunk_size(len(runs), pool.workers())
     skipped = set(skip)
-    tasks = ((k, (job, list(runs[a:b]))) for k, (a, b) in enumerate(chunk_ranges(len(runs), size))
-             if k not in skipped)
+    tasks = ((k, (job, list(runs[a:b]))) for k, (a, b) in enumerate(chunk_ranges(len(runs), size)) if k not in skipped)
     yield from pool.map_unordered(run_chunk, tasks, window=max(8, 4 * pool.workers()))
 
 
-def run_table(job: Dict[str, Any], runs: Sequence[Run], executor: object, *, chunk_size: Optional[int] = None,
-              progress: Optional[Callable[[int, int], object]] = None) -> BatchTable[Any]:
+def run_table(
+    job: Dict[str, Any],
+    runs: Sequence[Run],
+    executor: object,
+    *,
+    chunk_size: Optional[int] = None,
+    progress: Optional[Callable[[int, int], object]] = None,
+) -> BatchTable[Any]:
     """Every run's metrics, in the order of `runs`. progress(runs_done, runs_total) after each chunk."""
     chunks: Dict[int, BatchTable[Any]] = {}
     done = 0
@@ -337,46 +380,89 @@ def _chunk_size(chunk_size: Optional[int]) -> Optional[int]:
 
 # ---- The API's executor= paths (arguments already checked by the callers) --
 
-def run_batch_on(executor: object, configs: Sequence["_core.RunConfig"], model: object, threads: Optional[int],
-                 chunk_size: Optional[int],
-                 progress: Optional[Callable[[int, int], object]]) -> BatchTable["_core.RunResult"]:
+
+def run_batch_on(
+    executor: object,
+    configs: Sequence["_core.RunConfig"],
+    model: object,
+    threads: Optional[int],
+    chunk_size: Optional[int],
+    progress: Optional[Callable[[int, int], object]],
+) -> BatchTable["_core.RunResult"]:
     """simloop.run_batch(..., executor=...): configs as run_batch built them."""
     first = configs[0] if configs else None
     source = scene_source(model)
-    job = {"kind": "chapter", "scene": source, "inputs": scene_inputs(source), "versions": versions(),
-           "threads": _threads(threads),
-           "steps": first.steps if first else 2000, "perturb": first.perturb if first else True,
-           "smoke": first.smoke if first else False, "audit_energy": first.audit_energy if first else False,
-           "rng": first.rng if first else "mt19937_64"}
+    job = {
+        "kind": "chapter",
+        "scene": source,
+        "inputs": scene_inputs(source),
+        "versions": versions(),
+        "threads": _threads(threads),
+        "steps": first.steps if first else 2000,
+        "perturb": first.perturb if first else True,
+        "smoke": first.smoke if first else False,
+        "audit_energy": first.audit_energy if first else False,
+        "rng": first.rng if first else "mt19937_64",
+    }
     runs = [(i, c.seed, c.timestep, ()) for i, c in enumerate(configs)]
     return run_table(job, runs, executor, chunk_size=_chunk_size(chunk_size), progress=progress)
 
 
-def run_scenario_batch_on(executor: object, scenario: Any, seeds: Sequence[int], timesteps: Sequence[Optional[float]],
-                          *, rng: str, steps: Optional[int], perturb: bool, threads: Optional[int],
-                          chunk_size: Optional[int], progress: Optional[Callable[[int, int], object]]
-                          ) -> BatchTable["_core.ScenarioResult"]:
+def run_scenario_batch_on(
+    executor: object,
+    scenario: Any,
+    seeds: Sequence[int],
+    timesteps: Sequence[Optional[float]],
+    *,
+    rng: str,
+    steps: Optional[int],
+    perturb: bool,
+    threads: Optional[int],
+    chunk_size: Optional[int],
+    progress: Optional[Callable[[int, int], object]],
+) -> BatchTable["_core.ScenarioResult"]:
     """simloop.run_scenario_batch(..., executor=...)."""
     job = scenario_job(scenario, rng=rng, steps=steps, perturb=perturb, threads=_threads(threads))
     runs = [(i, s, t, ()) for i, (s, t) in enumerate(itertools.product(seeds, timesteps))]
     return run_table(job, runs, executor, chunk_size=_chunk_size(chunk_size), progress=progress)
 
 
-def scenario_job(scenario: Any, *, rng: str = "mt19937_64", steps: Optional[int] = None, perturb: bool = True,
-                 threads: int = 1) -> Dict[str, Any]:
-    return {"kind": "scenario", "scenario": scenario_source(scenario),
-            "inputs": input_files.digests(input_files.scenario_files(scenario._core)), "versions": versions(),
-            "threads": threads, "rng": rng, "steps": steps, "perturb": perturb}
+def scenario_job(
+    scenario: Any, *, rng: str = "mt19937_64", steps: Optional[int] = None, perturb: bool = True, threads: int = 1
+) -> Dict[str, Any]:
+    return {
+        "kind": "scenario",
+        "scenario": scenario_source(scenario),
+        "inputs": input_files.digests(input_files.scenario_files(scenario._core)),
+        "versions": versions(),
+        "threads": threads,
+        "rng": rng,
+        "steps": steps,
+        "perturb": perturb,
+    }
 
 
-def _sweep_chunk(scene: Tuple[str, str], inputs: Dict[str, str], versions_expected: Sequence[str],
-                 timesteps: Sequence[float], duration: float, threads: int) -> "_core.SweepResult":
+def _sweep_chunk(
+    scene: Tuple[str, str],
+    inputs: Dict[str, str],
+    versions_expected: Sequence[str],
+    timesteps: Sequence[float],
+    duration: float,
+    threads: int,
+) -> "_core.SweepResult":
     _check_versions(versions_expected)
     return _core.sweep(_scene(scene, inputs), list(timesteps), duration, threads)  # pickles as bytes, bits unchanged
 
 
-def sweep_on(executor: object, timesteps: Sequence[float], duration: float, model: object, threads: Optional[int],
-             chunk_size: Optional[int], progress: Optional[Callable[[int, int], object]]) -> "_core.SweepResult":
+def sweep_on(
+    executor: object,
+    timesteps: Sequence[float],
+    duration: float,
+    model: object,
+    threads: Optional[int],
+    chunk_size: Optional[int],
+    progress: Optional[Callable[[int, int], object]],
+) -> "_core.SweepResult":
     """simloop.sweep(..., executor=...): the same SweepResult as a local sweep,
     its timesteps run in chunks on the executor's workers."""
     ordered = sorted(set(timesteps))  # as the C++ sweep orders them: ascending, duplicates dropped

@@ -72,18 +72,39 @@ from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from . import _core, _gym_registry
+from . import _gym_registry
 from ._checks import ModelLike, _check_int, _check_threads, _describe
-from ._gym_setup import (_TERMINAL_ENDS, Rendering, Reward, Terminate, _check_max_episode_steps, _check_options, _ended_by,
-                         _episode_seed, _Setup, _start, batched)
+from ._gym_setup import (
+    _TERMINAL_ENDS,
+    Rendering,
+    Reward,
+    Terminate,
+    _check_max_episode_steps,
+    _check_options,
+    _ended_by,
+    _episode_seed,
+    _Setup,
+    _start,
+    batched,
+)
 from .render import RENDER_MODES
 from .scenario import RESET_KEYS, Scenario, ScenarioLike
 
-__all__ = ["PUSHT_SCENARIO", "ScenarioEnv", "ScenarioVectorEnv", "batched", "chapter_env", "chapter_vector_env", "pusht_env",
-           "pusht_vector_env", "register_envs"]
+__all__ = [
+    "PUSHT_SCENARIO",
+    "ScenarioEnv",
+    "ScenarioVectorEnv",
+    "batched",
+    "chapter_env",
+    "chapter_vector_env",
+    "pusht_env",
+    "pusht_vector_env",
+    "register_envs",
+]
 
 _CHAPTER_VIEW = {"track": "box", "distance": 1.5}
 PUSHT_SCENARIO = os.path.join(os.path.dirname(os.path.abspath(__file__)), "scenes", "pusht.toml")
+
 
 class ScenarioEnv(gymnasium.Env):
     """A Gymnasium environment over a scenario (a simloop.Scenario or a
@@ -107,13 +128,37 @@ class ScenarioEnv(gymnasium.Env):
 
     metadata = {"render_modes": list(RENDER_MODES)}
 
-    def __init__(self, scenario: ScenarioLike, *, control_every: int = 1, reward: Optional[Reward] = None,
-                 terminate: Optional[Terminate] = None, max_episode_steps: Optional[int] = None,
-                 rng: str = "mt19937_64", timestep: Optional[float] = None, steps: Optional[int] = None,
-                 perturb: bool = True, model: ModelLike = None, render_mode: Optional[str] = None,
-                 width: int = 480, height: int = 480, view: Optional[Dict[str, Any]] = None) -> None:
-        self._setup = _Setup(scenario, 1, control_every, reward, terminate, rng, timestep, steps, perturb, model,
-                             Rendering(render_mode, width, height, view))
+    def __init__(
+        self,
+        scenario: ScenarioLike,
+        *,
+        control_every: int = 1,
+        reward: Optional[Reward] = None,
+        terminate: Optional[Terminate] = None,
+        max_episode_steps: Optional[int] = None,
+        rng: str = "mt19937_64",
+        timestep: Optional[float] = None,
+        steps: Optional[int] = None,
+        perturb: bool = True,
+        model: ModelLike = None,
+        render_mode: Optional[str] = None,
+        width: int = 480,
+        height: int = 480,
+        view: Optional[Dict[str, Any]] = None,
+    ) -> None:
+        self._setup = _Setup(
+            scenario,
+            1,
+            control_every,
+            reward,
+            terminate,
+            rng,
+            timestep,
+            steps,
+            perturb,
+            model,
+            Rendering(render_mode, width, height, view),
+        )
         self.render_mode = render_mode
         self.metadata = {**type(self).metadata, "render_fps": self._setup.render_fps}
         self.action_space = self._setup.action_space
@@ -126,8 +171,9 @@ class ScenarioEnv(gymnasium.Env):
         self._decisions = 0
         self._ended = True  # no episode yet
 
-    def reset(self, *, seed: Optional[int] = None,
-              options: Optional[Dict[str, Any]] = None) -> Tuple[np.ndarray, Dict[str, Any]]:
+    def reset(
+        self, *, seed: Optional[int] = None, options: Optional[Dict[str, Any]] = None
+    ) -> Tuple[np.ndarray, Dict[str, Any]]:
         start = _start(_check_options(options, RESET_KEYS))
         previous = copy.deepcopy(self._np_random), self._np_random_seed
         super().reset(seed=seed)
@@ -144,8 +190,11 @@ class ScenarioEnv(gymnasium.Env):
 
     def step(self, action: object) -> Tuple[np.ndarray, float, bool, bool, Dict[str, Any]]:
         if self._ended:
-            raise ValueError("reset() the environment before step()" if self._obs is None else
-                             "the episode has ended: reset() it first")
+            raise ValueError(
+                "reset() the environment before step()"
+                if self._obs is None
+                else "the episode has ended: reset() it first"
+            )
         setup = self._setup
         action = setup.actions(action, self._action_shape)
         obs, terminated, truncated = setup.episodes.step(action, self.control_every)
@@ -200,24 +249,51 @@ class ScenarioVectorEnv(VectorEnv):
 
     metadata = {"render_modes": list(RENDER_MODES), "autoreset_mode": AutoresetMode.NEXT_STEP}
 
-    def __init__(self, scenario: ScenarioLike, num_envs: int = 1, *, control_every: int = 1,
-                 reward: Optional[Reward] = None, terminate: Optional[Terminate] = None,
-                 max_episode_steps: Optional[int] = None,
-                 autoreset_mode: Union[AutoresetMode, str] = AutoresetMode.NEXT_STEP, threads: Optional[int] = None,
-                 rng: str = "mt19937_64", timestep: Optional[float] = None, steps: Optional[int] = None,
-                 perturb: bool = True, model: ModelLike = None, render_mode: Optional[str] = None,
-                 width: int = 480, height: int = 480, view: Optional[Dict[str, Any]] = None) -> None:
+    def __init__(
+        self,
+        scenario: ScenarioLike,
+        num_envs: int = 1,
+        *,
+        control_every: int = 1,
+        reward: Optional[Reward] = None,
+        terminate: Optional[Terminate] = None,
+        max_episode_steps: Optional[int] = None,
+        autoreset_mode: Union[AutoresetMode, str] = AutoresetMode.NEXT_STEP,
+        threads: Optional[int] = None,
+        rng: str = "mt19937_64",
+        timestep: Optional[float] = None,
+        steps: Optional[int] = None,
+        perturb: bool = True,
+        model: ModelLike = None,
+        render_mode: Optional[str] = None,
+        width: int = 480,
+        height: int = 480,
+        view: Optional[Dict[str, Any]] = None,
+    ) -> None:
         try:
             mode = AutoresetMode(autoreset_mode)
         except ValueError:
-            raise ValueError(f"autoreset_mode must be one of {', '.join(repr(m.value) for m in AutoresetMode)}, "
-                             f"got {_describe(autoreset_mode)}") from None
+            raise ValueError(
+                f"autoreset_mode must be one of {', '.join(repr(m.value) for m in AutoresetMode)}, "
+                f"got {_describe(autoreset_mode)}"
+            ) from None
         self.metadata = {**type(self).metadata, "autoreset_mode": mode}
         self.autoreset_mode = mode
         self.num_envs = _check_int("num_envs", num_envs, 1, 1 << 20)
         self._threads = _check_threads(threads)
-        self._setup = _Setup(scenario, self.num_envs, control_every, reward, terminate, rng, timestep, steps,
-                             perturb, model, Rendering(render_mode, width, height, view))
+        self._setup = _Setup(
+            scenario,
+            self.num_envs,
+            control_every,
+            reward,
+            terminate,
+            rng,
+            timestep,
+            steps,
+            perturb,
+            model,
+            Rendering(render_mode, width, height, view),
+        )
         self.render_mode = render_mode
         self.metadata["render_fps"] = self._setup.render_fps
         self.single_action_space = self._setup.action_space
@@ -247,8 +323,9 @@ class ScenarioVectorEnv(VectorEnv):
         self._add_info(infos, info, i)
         return obs
 
-    def reset(self, *, seed: Union[int, Sequence[Optional[int]], None] = None,
-              options: Optional[Dict[str, Any]] = None) -> Tuple[np.ndarray, Dict[str, Any]]:
+    def reset(
+        self, *, seed: Union[int, Sequence[Optional[int]], None] = None, options: Optional[Dict[str, Any]] = None
+    ) -> Tuple[np.ndarray, Dict[str, Any]]:
         """seed: None, an int (env i gets seed + i, as Gymnasium's vector
         environments do), or one seed (or None) per env. options: as for
         ScenarioEnv.reset (the same start for every env reset, each drawn
@@ -269,8 +346,10 @@ class ScenarioVectorEnv(VectorEnv):
         if "reset_mask" in options:
             mask = options["reset_mask"]
             if not isinstance(mask, np.ndarray) or mask.dtype != np.bool_ or mask.shape != (self.num_envs,):
-                raise ValueError(f"options['reset_mask'] must be a numpy bool array of shape ({self.num_envs},), "
-                                 f"got {_describe(mask)}")
+                raise ValueError(
+                    f"options['reset_mask'] must be a numpy bool array of shape ({self.num_envs},), "
+                    f"got {_describe(mask)}"
+                )
             if not mask.any():
                 raise ValueError("options['reset_mask'] resets no env: give at least one True")
             if self._obs is None and not mask.all():
@@ -291,8 +370,10 @@ class ScenarioVectorEnv(VectorEnv):
             raise ValueError(f"env {env}: action {index} is not finite, got {float(values[env, index])!r}")
         infos: Dict[str, Any] = {}
         if self.autoreset_mode == AutoresetMode.DISABLED and self._ended.any():
-            raise ValueError(f"env {int(np.flatnonzero(self._ended)[0])} has ended: reset it first "
-                             "(reset(options={'reset_mask': mask}); autoreset_mode is Disabled)")
+            raise ValueError(
+                f"env {int(np.flatnonzero(self._ended)[0])} has ended: reset it first "
+                "(reset(options={'reset_mask': mask}); autoreset_mode is Disabled)"
+            )
         resetting = self._ended.copy() if self.autoreset_mode == AutoresetMode.NEXT_STEP else np.zeros_like(self._ended)
         for i in np.flatnonzero(resetting):
             self._obs[i] = self._reset_one(int(i), None, infos)
@@ -320,8 +401,13 @@ class ScenarioVectorEnv(VectorEnv):
         if self.max_episode_steps is not None:
             ending |= active & (self._decisions >= self.max_episode_steps)
         for i in np.flatnonzero(ending):  # each ended episode's info says why
-            ended_by = _ended_by(bool(terminated[i]), bool(truncated[i]), int(self._decisions[i]),
-                                 self.max_episode_steps, bool(hooked[i]))
+            ended_by = _ended_by(
+                bool(terminated[i]),
+                bool(truncated[i]),
+                int(self._decisions[i]),
+                self.max_episode_steps,
+                bool(hooked[i]),
+            )
             info = setup.info(int(i), ended_by, bool(terminated[i]))
             terminated[i] = ended_by in _TERMINAL_ENDS
             truncated[i] = not terminated[i]

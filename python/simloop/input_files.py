@@ -83,8 +83,11 @@ def _scan(path: str, folders: List[str]) -> Tuple[List[str], List[str]]:
                     seen_folders.append(value)
                 if not key.startswith("file") or not value or "\0" in value:
                     continue
-                candidates = ([value] if os.path.isabs(value) else
-                              [os.path.normpath(os.path.join(base, folder, value)) for base in bases for folder in folders])
+                candidates = (
+                    [value]
+                    if os.path.isabs(value)
+                    else [os.path.normpath(os.path.join(base, folder, value)) for base in bases for folder in folders]
+                )
                 for candidate in candidates:
                     if candidate in seen:
                         continue

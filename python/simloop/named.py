@@ -32,7 +32,6 @@ from . import _core
 from ._checks import _describe, _did_you_mean
 
 if TYPE_CHECKING:
-    import numpy as np
     from numpy.typing import NDArray
 
 # mjData's arrays a Sim lets a caller write (its views, Sim.qpos and the like).
@@ -45,8 +44,9 @@ class NamedArray:
 
     __slots__ = ("name", "_view", "_rows", "_write")
 
-    def __init__(self, name: str, view: "NDArray[Any]", rows: Mapping[str, Union[int, slice]],
-                 write: Optional[Any] = None) -> None:
+    def __init__(
+        self, name: str, view: "NDArray[Any]", rows: Mapping[str, Union[int, slice]], write: Optional[Any] = None
+    ) -> None:
         self.name = name
         self._view = view
         self._rows = rows  # a row's name -> its index (or its slice of nq / nv rows)
@@ -144,8 +144,7 @@ def _rows_by_name(model: _core.Model, rows_count: str, kind: str) -> Dict[str, U
 class _Owner:
     """sim.named.model or sim.named.data: its arrays as attributes."""
 
-    def __init__(self, sim: "_core.Sim", views: Mapping[str, "NDArray[Any]"], owner: str,
-                 names: Sequence[str]) -> None:
+    def __init__(self, sim: "_core.Sim", views: Mapping[str, "NDArray[Any]"], owner: str, names: Sequence[str]) -> None:
         self._sim = sim
         self._views = views
         self._owner = owner
@@ -157,8 +156,9 @@ class _Owner:
 
     def __getattr__(self, name: str) -> NamedArray:
         if name.startswith("_") or name not in self._names:
-            raise AttributeError(f"mj{self._owner.capitalize()} has no array named {name!r}"
-                                 f"{_did_you_mean(name, self._names)}")
+            raise AttributeError(
+                f"mj{self._owner.capitalize()} has no array named {name!r}{_did_you_mean(name, self._names)}"
+            )
         sim = self._sim
         if name not in self._rows:
             rows_count, kind = sim.field_rows(self._owner, name)
@@ -169,8 +169,9 @@ class _Owner:
                 return NamedArray(name, self._views[name], rows, lambda: self._views[name])
             return NamedArray(name, sim.data_field(name), rows)
         writable = name in _core.WRITABLE_MODEL_FIELDS
-        return NamedArray(name, sim.model_field(name, False), rows,
-                          (lambda: sim.model_field(name, True)) if writable else None)
+        return NamedArray(
+            name, sim.model_field(name, False), rows, (lambda: sim.model_field(name, True)) if writable else None
+        )
 
 
 class Named:

@@ -6,6 +6,7 @@ resumable: the chunks done are kept in FILE.parts/ until FILE is whole.
 from __future__ import annotations
 
 import contextlib
+import functools
 import hashlib
 import json
 import os
@@ -43,8 +44,15 @@ class ParquetBatch:
     of a resumed batch is the manifest's.
     """
 
-    def __init__(self, out: "os.PathLike[str] | str", job: Dict[str, Any], runs: Sequence[Run],
-                 chunk_size: int, description: Dict[str, Any], inputs: Dict[str, str]) -> None:
+    def __init__(
+        self,
+        out: "os.PathLike[str] | str",
+        job: Dict[str, Any],
+        runs: Sequence[Run],
+        chunk_size: int,
+        description: Dict[str, Any],
+        inputs: Dict[str, str],
+    ) -> None:
         self.out = os.fspath(out)
         self.parts = self.out + ".parts"
         self.job, self.runs = job, runs
@@ -55,8 +63,14 @@ class ParquetBatch:
         digest = hasher.hexdigest()
         self.digest = digest  # stamped on every part file
         self.inputs = inputs  # {file: digest} of every file the batch reads (input_files)
-        self.manifest = {"format": 1, "batch": digest, "runs": len(runs), "chunk_size": chunk_size,
-                         "description": description, "inputs": inputs}
+        self.manifest = {
+            "format": 1,
+            "batch": digest,
+            "runs": len(runs),
+            "chunk_size": chunk_size,
+            "description": description,
+            "inputs": inputs,
+        }
         self.chunk_size = chunk_size
         self.done: List[int] = []
 
@@ -69,25 +83,35 @@ class ParquetBatch:
             return 0
         manifest_path = os.path.join(self.parts, "manifest.json")
         if not resume:
-            raise ResumeError(f"{self.parts}/ holds an interrupted batch: add --resume to finish it, or remove the "
-                              "folder to start again")
+            raise ResumeError(
+                f"{self.parts}/ holds an interrupted batch: add --resume to finish it, or remove the "
+                "folder to start again"
+            )
         try:
             theirs = json.loads(_read_regular_file(manifest_path, MAX_MANIFEST_BYTES))
         except (OSError, ValueError, RecursionError) as e:
-            raise ResumeError(f"--resume: {manifest_path}: unreadable ({e}); remove {self.parts}/ to start again")
+            raise ResumeError(
+                f"--resume: {manifest_path}: unreadable ({e}); remove {self.parts}/ to start again"
+            ) from None
         size = theirs.get("chunk_size") if isinstance(theirs, dict) else None
         if isinstance(size, bool) or not isinstance(size, int) or not 1 <= size <= MAX_CHUNK_RUNS:
-            raise ResumeError(f"--resume: {manifest_path}: not a batch's manifest (a JSON object whose chunk_size is a "
-                              f"whole number from 1 to {MAX_CHUNK_RUNS}); remove {self.parts}/ to start again")
+            raise ResumeError(
+                f"--resume: {manifest_path}: not a batch's manifest (a JSON object whose chunk_size is a "
+                f"whole number from 1 to {MAX_CHUNK_RUNS}); remove {self.parts}/ to start again"
+            )
         recorded = theirs.get("inputs")  # a manifest without it is another batch's: its digest differs below
         differ = input_files.changed(recorded, self.inputs) if isinstance(recorded, dict) else []
         if differ:
-            raise ResumeError(f"--resume: {differ[0]} is not the file it was when {self.parts}/ was written (edited, "
-                              f"replaced or removed): its chunks ran on the file as it was; restore it, or remove "
-                              f"{self.parts}/ to start again")
+            raise ResumeError(
+                f"--resume: {differ[0]} is not the file it was when {self.parts}/ was written (edited, "
+                f"replaced or removed): its chunks ran on the file as it was; restore it, or remove "
+                f"{self.parts}/ to start again"
+            )
         if theirs.get("batch") != self.manifest["batch"]:
-            raise ResumeError(f"--resume: {self.parts}/ was written by another batch (other scenario, seeds, grid or "
-                              f"simloop version); remove it, or resume with that batch's arguments")
+            raise ResumeError(
+                f"--resume: {self.parts}/ was written by another batch (other scenario, seeds, grid or "
+                f"simloop version); remove it, or resume with that batch's arguments"
+            )
         self.chunk_size = size
         self.manifest["chunk_size"] = self.chunk_size
         ranges = chunk_ranges(len(self.runs), self.chunk_size)
@@ -98,14 +122,17 @@ class ParquetBatch:
             if not (name.startswith("chunk-") and name.endswith(".parquet")):
                 continue
             path = os.path.join(self.parts, name)
-            index = name[len("chunk-"):-len(".parquet")]
+            index = name[len("chunk-") : -len(".parquet")]
             if not (index.isascii() and index.isdigit()) or int(index) >= len(ranges) or path != self._part(int(index)):
-                raise ResumeError(f"--resume: {path}: not a chunk of this batch (it has {len(ranges)} chunks); "
-                                  f"remove it, or {self.parts}/ to start again")
+                raise ResumeError(
+                    f"--resume: {path}: not a chunk of this batch (it has {len(ranges)} chunks); "
+                    f"remove it, or {self.parts}/ to start again"
+                )
             problem = self._chunk_problem(path, int(index), ranges[int(index)][1] - ranges[int(index)][0])
             if problem:
-                raise ResumeError(f"--resume: {path}: {problem}; remove it to run that chunk again, or {self.parts}/ "
-                                  "to start again")
+                raise ResumeError(
+                    f"--resume: {path}: {problem}; remove it to run that chunk again, or {self.parts}/ to start again"
+                )
         self.done = [k for k in range(len(ranges)) if os.path.isfile(self._part(k))]
         return sum(ranges[k][1] - ranges[k][0] for k in self.done)
 
@@ -124,8 +151,10 @@ class ParquetBatch:
         if stamp.get(_STAMP_BATCH) != self.digest.encode():
             return "written for another batch (other parameters, or another simloop or MuJoCo version)"
         if stamp.get(_STAMP_CHUNK) != str(index).encode() or meta.num_rows != rows:
-            return (f"not chunk {index} of this batch (it holds {meta.num_rows} rows, stamped chunk "
-                    f"{stamp.get(_STAMP_CHUNK, b'?').decode(errors='replace')}; chunk {index} has {rows})")
+            return (
+                f"not chunk {index} of this batch (it holds {meta.num_rows} rows, stamped chunk "
+                f"{stamp.get(_STAMP_CHUNK, b'?').decode(errors='replace')}; chunk {index} has {rows})"
+            )
         try:  # what it holds, against the checksum it was written with (a flipped byte, an edited value)
             held = _content_digest(_unstamped(pq.read_table(path)))
         except (OSError, ValueError, pa.ArrowException) as e:
@@ -155,6 +184,7 @@ class ParquetBatch:
         written = 0  # chunks appended to the temporary file, in order
         file: Optional[BinaryIO] = None  # the temporary file the writer writes
         try:
+
             def flush() -> None:
                 nonlocal writer, written, file
                 while written in ready:
@@ -172,11 +202,15 @@ class ParquetBatch:
                 # Stamped with the batch and its place in it (checked by --resume,
                 # taken off again in FILE).
                 table = chunk.to_arrow()
-                table = table.replace_schema_metadata({**(table.schema.metadata or {}),
-                                                       _STAMP_BATCH: self.digest.encode(),
-                                                       _STAMP_CHUNK: str(index).encode(),
-                                                       _STAMP_CONTENT: _content_digest(table)})
-                _write_atomically(self._part(index), lambda out: pq.write_table(table, out))
+                table = table.replace_schema_metadata(
+                    {
+                        **(table.schema.metadata or {}),
+                        _STAMP_BATCH: self.digest.encode(),
+                        _STAMP_CHUNK: str(index).encode(),
+                        _STAMP_CONTENT: _content_digest(table),
+                    }
+                )
+                _write_atomically(self._part(index), functools.partial(pq.write_table, table))
                 ready.add(index)
                 count = ranges[index][1] - ranges[index][0]
                 done_runs += count
@@ -218,8 +252,9 @@ MAX_MANIFEST_BYTES = 16 << 20
 
 def _unstamped(table: Any) -> Any:
     """A part file's table without the stamp (FILE has the bytes it always had)."""
-    kept = {k: v for k, v in (table.schema.metadata or {}).items()
-            if k not in (_STAMP_BATCH, _STAMP_CHUNK, _STAMP_CONTENT)}
+    kept = {
+        k: v for k, v in (table.schema.metadata or {}).items() if k not in (_STAMP_BATCH, _STAMP_CHUNK, _STAMP_CONTENT)
+    }
     return table.replace_schema_metadata(kept or None)
 
 

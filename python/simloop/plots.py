@@ -16,7 +16,7 @@ from typing import Iterable, Optional, Tuple, Union
 
 PathLike = Union[str, "os.PathLike[str]"]
 
-BOX_COLOR = "#d94c40"     # the scene's colours
+BOX_COLOR = "#d94c40"  # the scene's colours
 PUSHER_COLOR = "#4073d9"
 CONTACT_COLOR = "#555555"
 # Runs after the first, when comparing: one colour per run.
@@ -25,7 +25,7 @@ RUN_COLORS = ["#d94c40", "#1b7f79", "#8a4fbf", "#c98a00"]
 # after the first, when comparing, one line style each.
 BODY_COLORS = ["#d94c40", "#4073d9", "#1b7f79", "#8a4fbf", "#c98a00", "#555555", "#e377c2", "#17becf"]
 RUN_STYLES = ["-", "--", ":", "-."]
-REST_Z = 0.05             # the box's centre at rest, m
+REST_Z = 0.05  # the box's centre at rest, m
 # The z axis a sound run and Break It share: fixed, widened only if a run
 # leaves it (autoscaled, 3 mm of contact softness looks as wild as a hop).
 Z_RANGE = (0.04, 0.12)
@@ -160,8 +160,9 @@ def trajectory_figure(csv: PathLike, compare: Iterable[PathLike] = (), x: str = 
     comparing = len(runs) > 1
     x, timesteps = _x_axis(runs, x)
     plt = _pyplot()
-    fig, (ax_x, ax_y, ax_z, ax_c) = plt.subplots(4, 1, sharex=True, figsize=(9, 9),
-                                                 gridspec_kw={"height_ratios": [1.1, 1, 1.2, 0.7]})
+    fig, (ax_x, ax_y, ax_z, ax_c) = plt.subplots(
+        4, 1, sharex=True, figsize=(9, 9), gridspec_kw={"height_ratios": [1.1, 1, 1.2, 0.7]}
+    )
     legend: list = []  # one legend for the figure, above the axes: never on the data
     z_low, z_high = Z_RANGE
     for k, (cols, name) in enumerate(runs):
@@ -173,8 +174,14 @@ def trajectory_figure(csv: PathLike, compare: Iterable[PathLike] = (), x: str = 
         ax_x.plot(t, cols["pusher_x"], color=pusher_color, lw=1.2, ls="--")
         ax_y.plot(t, cols["box_y"], color=box_color, lw=1.4)
         ax_z.plot(t, cols["box_z"], color=box_color, lw=1.2)
-        ax_c.step(t, cols["ncon"], where="post", color=box_color if comparing else CONTACT_COLOR, lw=1.0,
-                  alpha=0.8 if comparing else 1.0)
+        ax_c.step(
+            t,
+            cols["ncon"],
+            where="post",
+            color=box_color if comparing else CONTACT_COLOR,
+            lw=1.0,
+            alpha=0.8 if comparing else 1.0,
+        )
         if comparing:
             legend.append((Line2D([], [], color=box_color, lw=2), describe_run(cols, name)))
         window = _shove_window(cols)
@@ -182,8 +189,12 @@ def trajectory_figure(csv: PathLike, compare: Iterable[PathLike] = (), x: str = 
             first, last, force = window
             for ax in (ax_x, ax_y, ax_z, ax_c):
                 ax.axvspan(t[first], t[last], color=shade, alpha=0.15)
-            legend.append((Patch(color=shade, alpha=0.3), (f"{name}: " if comparing else "") +
-                           f"shove {force:+.1f} N in y, steps {first} to {last - 1}"))
+            legend.append(
+                (
+                    Patch(color=shade, alpha=0.3),
+                    (f"{name}: " if comparing else "") + f"shove {force:+.1f} N in y, steps {first} to {last - 1}",
+                )
+            )
         z = cols["box_z"]
         finite = z[np.isfinite(z)]
         if finite.size:
@@ -191,14 +202,22 @@ def trajectory_figure(csv: PathLike, compare: Iterable[PathLike] = (), x: str = 
             peak = int(np.nanargmax(z))
             ax_z.plot(t[peak], z[peak], "o", color=box_color, ms=5)
             right_half = t[peak] > (t[0] + t[-1]) / 2  # label towards the middle, inside the axes
-            ax_z.annotate(f"peak {z[peak]:.4f} m, step {int(cols['step'][peak])}", (t[peak], z[peak]),
-                          xytext=(-6 if right_half else 6, 6 + 12 * k), textcoords="offset points", fontsize=8,
-                          color=box_color, ha="right" if right_half else "left")
+            ax_z.annotate(
+                f"peak {z[peak]:.4f} m, step {int(cols['step'][peak])}",
+                (t[peak], z[peak]),
+                xytext=(-6 if right_half else 6, 6 + 12 * k),
+                textcoords="offset points",
+                fontsize=8,
+                color=box_color,
+                ha="right" if right_half else "left",
+            )
     if comparing:
         legend += [(Line2D([], [], color="black", lw=1.4), "box"), (Line2D([], [], color="black", ls="--"), "pusher")]
     else:
-        legend = [(Line2D([], [], color=BOX_COLOR, lw=1.4), "box"),
-                  (Line2D([], [], color=PUSHER_COLOR, ls="--"), "pusher")] + legend
+        legend = [
+            (Line2D([], [], color=BOX_COLOR, lw=1.4), "box"),
+            (Line2D([], [], color=PUSHER_COLOR, ls="--"), "pusher"),
+        ] + legend
     legend.append((Line2D([], [], color="grey", lw=0.8, ls=":"), "box at rest (z 0.05 m)"))
     ax_z.axhline(REST_Z, color="grey", lw=0.8, ls=":")
     ax_z.set_ylim(z_low, z_high)
@@ -212,8 +231,7 @@ def trajectory_figure(csv: PathLike, compare: Iterable[PathLike] = (), x: str = 
     ax_c.set_xlabel(_x_label(x, timesteps))
     for ax in (ax_x, ax_y, ax_z, ax_c):
         ax.grid(alpha=0.3)
-    title = "ch0.1-sim-loop: " + (" against ".join(name for _, name in runs) if comparing
-                                  else describe_run(runs[0][0]))
+    title = "ch0.1-sim-loop: " + (" against ".join(name for _, name in runs) if comparing else describe_run(runs[0][0]))
     return _titled(fig, title, legend, anchor=0.955, row_height=0.022)
 
 
@@ -234,8 +252,13 @@ def scenario_trajectory_figure(runs, x: str = "auto"):
     x, timesteps = _x_axis(runs, x)
     bodies: list = []  # in the first run's column order; a body any run recorded
     for cols, _, metrics in runs:
-        bodies += [b for b in sorted(metrics["bodies"], key=lambda b: list(cols).index(f"{b}_x")
-                                     if f"{b}_x" in cols else len(cols)) if b not in bodies]
+        bodies += [
+            b
+            for b in sorted(
+                metrics["bodies"], key=lambda b: list(cols).index(f"{b}_x") if f"{b}_x" in cols else len(cols)
+            )
+            if b not in bodies
+        ]
     if not bodies:
         raise ValueError("the run recorded no bodies ([record] bodies = [...] in the scenario): no positions to draw")
     palette = BODY_COLORS if len(bodies) <= len(BODY_COLORS) else _many_colours(len(bodies))
@@ -243,8 +266,9 @@ def scenario_trajectory_figure(runs, x: str = "auto"):
     contacts = any("ncon" in cols for cols, _, _ in runs)
     plt = _pyplot()
     ratios = [1, 1, 1, 1] + ([0.6] if contacts else [])
-    fig, axes = plt.subplots(len(ratios), 1, sharex=True, figsize=(10, 2.0 * sum(ratios) + 1.6),
-                             gridspec_kw={"height_ratios": ratios})
+    fig, axes = plt.subplots(
+        len(ratios), 1, sharex=True, figsize=(10, 2.0 * sum(ratios) + 1.6), gridspec_kw={"height_ratios": ratios}
+    )
     ax_pos, ax_v = axes[:3], axes[3]
     legend: list = []
     for k, (cols, name, metrics) in enumerate(runs):
@@ -273,8 +297,13 @@ def scenario_trajectory_figure(runs, x: str = "auto"):
             force = ", ".join(f"{v:+.2f}" for v in d["force"])
             torque = ", ".join(f"{v:+.2f}" for v in d["torque"])
             torque = f", [{torque}] N m" if any(d["torque"]) else ""
-            legend.append((Patch(color=shade, alpha=0.3), (f"{name}: " if len(runs) > 1 else "") +
-                           f"disturbance on {d['body']}: [{force}] N{torque}, steps {first} to {last - 1}"))
+            legend.append(
+                (
+                    Patch(color=shade, alpha=0.3),
+                    (f"{name}: " if len(runs) > 1 else "")
+                    + f"disturbance on {d['body']}: [{force}] N{torque}, steps {first} to {last - 1}",
+                )
+            )
     legend = [(Line2D([], [], color=colour[b], lw=2), b) for b in bodies] + legend
     for ax, axis in zip(ax_pos, "xyz"):
         ax.set_ylabel(f"{axis} (m)")
@@ -286,8 +315,9 @@ def scenario_trajectory_figure(runs, x: str = "auto"):
     for ax in axes:
         ax.grid(alpha=0.3)
     cols, name, metrics = runs[0]
-    title = (f"scenario {metrics.get('scenario', name)}: " +
-             (" against ".join(n for _, n, _ in runs) if len(runs) > 1 else _describe_scenario(cols, metrics)))
+    title = f"scenario {metrics.get('scenario', name)}: " + (
+        " against ".join(n for _, n, _ in runs) if len(runs) > 1 else _describe_scenario(cols, metrics)
+    )
     return _titled(fig, title, legend, anchor=0.96, row_height=0.018)
 
 
@@ -297,7 +327,7 @@ def _many_colours(count: int) -> list:
     from matplotlib import colormaps
 
     colours = [colormaps[name](i) for name in ("tab20", "tab20b", "tab20c") for i in range(20)]
-    return colours[:max(count, 1)]
+    return colours[: max(count, 1)]
 
 
 def _describe_scenario(cols, metrics) -> str:
@@ -333,8 +363,17 @@ def _mark_off_scale(ax, xs, values, low, high, color):
         above = v > high
         edge = high if above else low
         ax.plot(x, edge, "^" if above else "v", color=color, ms=7, clip_on=False, zorder=5)
-        ax.annotate(f"{v:.3g}", (x, edge), xytext=(0, -9 if above else 9), textcoords="offset points",
-                    rotation=90, fontsize=7, color=color, ha="center", va="top" if above else "bottom")
+        ax.annotate(
+            f"{v:.3g}",
+            (x, edge),
+            xytext=(0, -9 if above else 9),
+            textcoords="offset points",
+            rotation=90,
+            fontsize=7,
+            color=color,
+            ha="center",
+            va="top" if above else "bottom",
+        )
 
 
 def sweep_png(csv: PathLike, png: PathLike) -> Path:
@@ -391,8 +430,17 @@ def sweep_figure(csv: PathLike):
             if len(steps) and steps[0] != CHAPTER_STEPS:
                 name += f"\n{steps[0]:.0f} steps, not {CHAPTER_STEPS}"
             if ax is ax_z:  # named above the panel, clear of the off-scale values
-                ax.annotate(name, (x, 1.0), xycoords=("data", "axes fraction"), xytext=(0, 3),
-                            textcoords="offset points", fontsize=8, color="#2a6f2a", ha="center", va="bottom")
+                ax.annotate(
+                    name,
+                    (x, 1.0),
+                    xycoords=("data", "axes fraction"),
+                    xytext=(0, 3),
+                    textcoords="offset points",
+                    fontsize=8,
+                    color="#2a6f2a",
+                    ha="center",
+                    va="bottom",
+                )
     ax_z.plot([], [], color="#2a6f2a", ls="-.", label="the chapter's\ntimesteps")
     ax_z.plot([], [], color=BOX_COLOR, alpha=0.25, lw=6, label="unstable")
     for ax in axes:  # legends beside the axes, never on the data
@@ -415,19 +463,23 @@ def scenario_sweep_figure(cols):
     blew_up = cols["blew_up"] == 1
     edge = dt[np.flatnonzero(np.cumprod(~blew_up))[-1]] if not blew_up[0] else None
     warned = (cols["mujoco_warnings"] > 0) | (cols["diverged"] > 0)
-    bodies = [name[:-len("_offset")] for name in cols if name.endswith("_offset") and name != "max_offset"]
+    bodies = [name[: -len("_offset")] for name in cols if name.endswith("_offset") and name != "max_offset"]
     fig, (ax_off, ax_v) = plt.subplots(2, 1, sharex=True, figsize=(10, 7), gridspec_kw={"height_ratios": [1.4, 1]})
     floor = cols["tolerance"][0] * 1e-3  # the reference's own zero, drawn at the bottom of the log axis
     for i, body in enumerate(bodies):
         offset = np.where(np.isfinite(cols[body + "_offset"]), cols[body + "_offset"], np.nan)
-        ax_off.plot(dt[1:], np.maximum(offset[1:], floor), "o-", ms=4, color=RUN_COLORS[i % len(RUN_COLORS)],
-                    label=body)
-    ax_off.axhline(cols["tolerance"][0], color="black", lw=1.0, ls="--",
-                   label=f"tolerance\n({cols['tolerance'][0]:.3g} m)")
+        ax_off.plot(
+            dt[1:], np.maximum(offset[1:], floor), "o-", ms=4, color=RUN_COLORS[i % len(RUN_COLORS)], label=body
+        )
+    ax_off.axhline(
+        cols["tolerance"][0], color="black", lw=1.0, ls="--", label=f"tolerance\n({cols['tolerance'][0]:.3g} m)"
+    )
     ax_off.set_yscale("log")
     ax_off.set_ylabel("final position's distance\nfrom the finest timestep's (m)")
     ax_v.plot(dt, cols["peak_speed"], "o-", ms=4, color=CONTACT_COLOR, label="largest speed\nof a recorded body")
-    ax_v.plot(dt[warned], cols["peak_speed"][warned], "x", ms=9, color=BOX_COLOR, label="warned (MuJoCo or\nsimloop_DIVERGED)")
+    ax_v.plot(
+        dt[warned], cols["peak_speed"][warned], "x", ms=9, color=BOX_COLOR, label="warned (MuJoCo or\nsimloop_DIVERGED)"
+    )
     ax_v.set_yscale("log")
     ax_v.set_ylabel("largest speed (m/s)")
     ax_v.set_xlabel("timestep (s, log scale)")
@@ -438,13 +490,21 @@ def scenario_sweep_figure(cols):
             ax.axvline(x, color=BOX_COLOR, alpha=0.07, lw=6)
         if edge is not None:
             ax.axvline(edge, color="black", lw=1.2, ls=":", label=f"edge: {edge:.4g} s" if ax is ax_off else None)
-        ax.axvline(dt[0], color="#2a6f2a", lw=1.0, ls="-.",
-                   label=f"reference: {dt[0]:.4g} s\n(the finest)" if ax is ax_off else None)
+        ax.axvline(
+            dt[0],
+            color="#2a6f2a",
+            lw=1.0,
+            ls="-.",
+            label=f"reference: {dt[0]:.4g} s\n(the finest)" if ax is ax_off else None,
+        )
     ax_off.plot([], [], color=BOX_COLOR, alpha=0.25, lw=6, label="blew up")
     for ax in (ax_off, ax_v):  # legends beside the axes, never on the data
         ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
-    title = (f"scenario swept: largest timestep before any blew up {edge:.4g} s" if edge is not None
-             else "scenario swept: even the finest timestep blew up")
+    title = (
+        f"scenario swept: largest timestep before any blew up {edge:.4g} s"
+        if edge is not None
+        else "scenario swept: even the finest timestep blew up"
+    )
     fig.suptitle(title)
     fig.tight_layout()
     return fig

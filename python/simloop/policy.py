@@ -43,8 +43,10 @@ class Observation:
 
     def __getitem__(self, name: str) -> float:
         if name not in self._index:
-            raise KeyError(f"no observed quantity named {name!r}{_did_you_mean(str(name), self._index)}; "
-                           f"the observation has: {', '.join(self._index)}")
+            raise KeyError(
+                f"no observed quantity named {name!r}{_did_you_mean(str(name), self._index)}; "
+                f"the observation has: {', '.join(self._index)}"
+            )
         return float(self.values[self._index[name]])
 
     def __repr__(self) -> str:
@@ -86,8 +88,9 @@ def _ctrl(value: object, nu: int, step: int) -> "np.ndarray":
     return ctrl
 
 
-def _decider(policy: object, control_every: object, scene: _core.Model, scenario: Scenario,
-             config: "_core.ScenarioConfig") -> Tuple[Callable[[int, np.ndarray], np.ndarray], int]:
+def _decider(
+    policy: object, control_every: object, scene: _core.Model, scenario: Scenario, config: "_core.ScenarioConfig"
+) -> Tuple[Callable[[int, np.ndarray], np.ndarray], int]:
     """The C++ loop's decide(step, row) around the user's policy(obs), and K."""
     if not callable(policy):
         raise TypeError(f"policy must be None or a callable policy(observation) -> ctrl, got {_describe(policy)}")
@@ -114,5 +117,7 @@ def _check_no_control_every(control_every: object) -> None:
     """control_every without a policy: there is nothing to decide, so a value
     other than the default would be silently ignored."""
     if _check_int("control_every", control_every) != 1:
-        raise ValueError(f"control_every={_show(control_every)} needs a policy (policy=f): without one the run "
-                         "follows the scenario's controls")
+        raise ValueError(
+            f"control_every={_show(control_every)} needs a policy (policy=f): without one the run "
+            "follows the scenario's controls"
+        )

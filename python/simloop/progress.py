@@ -37,8 +37,9 @@ def wants_bar(stream: Optional[TextIO]) -> bool:
 
 
 @contextlib.contextmanager
-def progress_bar(description: str, unit: str = "step", stream: Optional[TextIO] = None,
-                 unit_scale: bool = True) -> Iterator[Progress]:
+def progress_bar(
+    description: str, unit: str = "step", stream: Optional[TextIO] = None, unit_scale: bool = True
+) -> Iterator[Progress]:
     """A progress(done, total) callable drawing a bar on `stream` (sys.stderr by default) while the
     block runs, if wants_bar(stream); a callable that does nothing otherwise. `unit`: what done and
     total count ("step", "run"); unit_scale: counts as 1.20M rather than 1200000."""
@@ -55,9 +56,18 @@ def progress_bar(description: str, unit: str = "step", stream: Optional[TextIO] 
         sized = size.columns > 0 and size.lines > 0
     except (AttributeError, ValueError, OSError):
         sized = False
-    bar = tqdm(desc=description, unit=unit, unit_scale=unit_scale, file=out, leave=False, delay=DELAY,
-               mininterval=REDRAW_INTERVAL, dynamic_ncols=sized, ncols=None if sized else 80,
-               nrows=None if sized else 24)
+    bar = tqdm(
+        desc=description,
+        unit=unit,
+        unit_scale=unit_scale,
+        file=out,
+        leave=False,
+        delay=DELAY,
+        mininterval=REDRAW_INTERVAL,
+        dynamic_ncols=sized,
+        ncols=None if sized else 80,
+        nrows=None if sized else 24,
+    )
 
     def progress(done: int, total: int) -> None:
         if total != bar.total:

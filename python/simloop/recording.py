@@ -78,7 +78,6 @@ PLANE_THICKNESS = 0.01
 PLANE_MARGIN = 0.5  # how far a plane reaches beyond where the bodies start
 
 
-
 def mujoco_build() -> str:
     """The MuJoCo a run steps on, in its recording id: the same run on another
     MuJoCo (2.2.2 and the PyPI build's 4.0.0) moves otherwise, so it is
@@ -148,9 +147,13 @@ def _layout(plots: Any, eye: Any = None) -> Any:
     the right, on the sim_time timeline."""
     import rerun.blueprint as rrb
 
-    return rrb.Blueprint(rrb.Horizontal(rrb.Spatial3DView(name="the scene", origin="/world", eye_controls=eye), plots,
-                                        column_shares=[3, 2]),
-                         rrb.TimePanel(timeline="sim_time"), collapse_panels=False)
+    return rrb.Blueprint(
+        rrb.Horizontal(
+            rrb.Spatial3DView(name="the scene", origin="/world", eye_controls=eye), plots, column_shares=[3, 2]
+        ),
+        rrb.TimePanel(timeline="sim_time"),
+        collapse_panels=False,
+    )
 
 
 def _eye(low: Any, high: Any, tracking: Optional[str] = None) -> Any:
@@ -170,7 +173,7 @@ def _eye(low: Any, high: Any, tracking: Optional[str] = None) -> Any:
 
 # A scenario's panels: each column's quantity, by its name and unit, in this order.
 QUANTITIES = [
-    ("positions (m)", lambda name, unit: unit == "m" and not name[-3:] in ("_qw", "_qx", "_qy", "_qz")),
+    ("positions (m)", lambda name, unit: unit == "m" and name[-3:] not in ("_qw", "_qx", "_qy", "_qz")),
     ("orientations (quaternion w x y z)", lambda name, unit: name[-3:] in ("_qw", "_qx", "_qy", "_qz")),
     ("velocities (m/s, rad/s)", lambda name, unit: unit.startswith(("m/s", "rad/s"))),
     ("forces (N, N m)", lambda name, unit: unit.startswith("N")),
@@ -252,8 +255,7 @@ class RrdFile:
         self.rec.disconnect()  # rerun closes its end: the end of the stream
         self.rec = None
         if not self.piped.wait(self.FINISH_TIMEOUT):
-            raise OSError(f"{self.target}: rerun did not finish writing the recording within "
-                          f"{self.FINISH_TIMEOUT:g} s")
+            raise OSError(f"{self.target}: rerun did not finish writing the recording within {self.FINISH_TIMEOUT:g} s")
         self.piped.finish()
 
     def close(self) -> None:
@@ -278,8 +280,14 @@ class Recording:
     are where a kind of run says what its rows hold and where it draws them;
     chapter_recording.ChapterRecording is the one other."""
 
-    def __init__(self, model: _core.Model, path: Union[str, "os.PathLike[str]"], recording_id: str,
-                 application_id: str = SCENARIO_APPLICATION_ID, bodies: Optional[Sequence[str]] = None) -> None:
+    def __init__(
+        self,
+        model: _core.Model,
+        path: Union[str, "os.PathLike[str]"],
+        recording_id: str,
+        application_id: str = SCENARIO_APPLICATION_ID,
+        bodies: Optional[Sequence[str]] = None,
+    ) -> None:
         import rerun as rr
 
         self._rr = rr
@@ -321,7 +329,7 @@ class Recording:
     # The drawing sink's three calls.
     def columns(self, names: Sequence[str]) -> None:
         """The trajectory's columns, then x y z qw qx qy qz per moving body, then qpos."""
-        self._names = list(names[:len(names) - len(POSE) * len(self.moving_bodies) - self._nq])
+        self._names = list(names[: len(names) - len(POSE) * len(self.moving_bodies) - self._nq])
         self._plot([name for name in self._names if name not in ("step", "time")])
 
     def rows(self, block: Any) -> None:
@@ -340,8 +348,11 @@ class Recording:
             centre, half = _plane_slab(plane, self._low, self._high)
             entity = f"world/static/{plane['name']}"
             self._rec.log(entity, _pose(rr, plane), static=True)
-            self._rec.log(entity, rr.Boxes3D(centers=[centre], half_sizes=[half], colors=[_rgba(plane["rgba"])],
-                                             fill_mode="solid"), static=True)
+            self._rec.log(
+                entity,
+                rr.Boxes3D(centers=[centre], half_sizes=[half], colors=[_rgba(plane["rgba"])], fill_mode="solid"),
+                static=True,
+            )
         with _signals_wait():  # rerun's blueprint passes through a MemorySink that warns if dropped full
             self._rec.send_blueprint(self._blueprint(), make_active=False, make_default=True)
         self._rec.send_recording_name(self._name(result))
@@ -364,8 +375,11 @@ class Recording:
 
     def _log_style(self, name: str) -> None:
         label, colour = self._style(name)
-        self._rec.log(f"plots/{name}", self._rr.SeriesLines(names=[label], colors=None if colour is None else [colour]),
-                      static=True)
+        self._rec.log(
+            f"plots/{name}",
+            self._rr.SeriesLines(names=[label], colors=None if colour is None else [colour]),
+            static=True,
+        )
 
     def _send(self) -> None:
         import numpy as np
@@ -376,15 +390,21 @@ class Recording:
         block = np.concatenate(self._pending)
         self._pending, self._pending_rows = [], 0
         cols = {name: block[:, c] for c, name in enumerate(self._names)}
-        times = [rr.TimeColumn("sim_time", duration=cols["time"]),
-                 rr.TimeColumn("step", sequence=cols["step"].astype(np.int64))]
+        times = [
+            rr.TimeColumn("sim_time", duration=cols["time"]),
+            rr.TimeColumn("step", sequence=cols["step"].astype(np.int64)),
+        ]
         starts = []  # where the bodies are in the run's first row
         for body, (position, quat_wxyz) in self._poses(block, cols).items():
             if self._low is None and len(position) and np.all(np.isfinite(position[0])):
                 starts.append(position[0])
-            self._rec.send_columns(self._entity(body), indexes=times,  # rerun's quaternions are x y z w
-                                   columns=rr.Transform3D.columns(translation=np.ascontiguousarray(position),
-                                                                  quaternion=quat_wxyz[:, [1, 2, 3, 0]]))
+            self._rec.send_columns(
+                self._entity(body),
+                indexes=times,  # rerun's quaternions are x y z w
+                columns=rr.Transform3D.columns(
+                    translation=np.ascontiguousarray(position), quaternion=quat_wxyz[:, [1, 2, 3, 0]]
+                ),
+            )
         if starts:
             self._low, self._high = np.min(starts, axis=0), np.max(starts, axis=0)
         for name in self._series:
@@ -398,8 +418,9 @@ class Recording:
     def _send_series(self, name: str, times: list, values: Any) -> None:
         import numpy as np
 
-        self._rec.send_columns(f"plots/{name}", indexes=times,
-                               columns=self._rr.Scalars.columns(scalars=np.ascontiguousarray(values)))
+        self._rec.send_columns(
+            f"plots/{name}", indexes=times, columns=self._rr.Scalars.columns(scalars=np.ascontiguousarray(values))
+        )
 
     # What a kind of run says about its rows; these are a scenario's.
     def _entity(self, body: str) -> str:
@@ -409,8 +430,10 @@ class Recording:
     def _poses(self, block: Any, cols: Mapping[str, Any]) -> Dict[str, Tuple[Any, Any]]:
         """{body: (positions, w x y z quaternions)}, a row each: here the poses after the trajectory's columns."""
         at = len(self._names)
-        return {body: (block[:, at + 7 * i:at + 7 * i + 3], block[:, at + 7 * i + 3:at + 7 * (i + 1)])
-                for i, body in enumerate(self.moving_bodies)}
+        return {
+            body: (block[:, at + 7 * i : at + 7 * i + 3], block[:, at + 7 * i + 3 : at + 7 * (i + 1)])
+            for i, body in enumerate(self.moving_bodies)
+        }
 
     def _style(self, name: str) -> Tuple[str, Optional[Sequence[int]]]:
         """(label, colour) of the series plots/<name>; a colour of None is rerun's choice."""
@@ -428,11 +451,20 @@ class Recording:
             unit = self._units.get(name, "")
             title = next(title for title, holds in QUANTITIES if holds(name, unit))
             panels.setdefault(title, []).append(name)
-        views = [rrb.TimeSeriesView(name=title, origin="/plots", contents=[f"/plots/{c}" for c in panels[title]],
-                                    plot_legend=rrb.PlotLegend(corner=rrb.Corner2D.LeftTop, visible=True))
-                 for title, _ in QUANTITIES if title in panels]
-        return _layout(rrb.Vertical(*views) if views else rrb.TimeSeriesView(name="what was recorded", origin="/plots"),
-                       _eye(self._low, self._high))
+        views = [
+            rrb.TimeSeriesView(
+                name=title,
+                origin="/plots",
+                contents=[f"/plots/{c}" for c in panels[title]],
+                plot_legend=rrb.PlotLegend(corner=rrb.Corner2D.LeftTop, visible=True),
+            )
+            for title, _ in QUANTITIES
+            if title in panels
+        ]
+        return _layout(
+            rrb.Vertical(*views) if views else rrb.TimeSeriesView(name="what was recorded", origin="/plots"),
+            _eye(self._low, self._high),
+        )
 
     def _name(self, result: Any) -> str:
         """A name for people, shown in the viewer's list of recordings."""

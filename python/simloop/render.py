@@ -30,8 +30,7 @@ if TYPE_CHECKING:
     from numpy.typing import NDArray
 
 from . import _core
-from ._checks import (ModelLike, _check_bool, _check_int, _check_keys, _check_real, _check_str, _describe,
-                      load_model)
+from ._checks import ModelLike, _check_bool, _check_int, _check_keys, _check_real, _check_str, _describe, load_model
 from .sim import Sim
 
 MAX_PICTURE_SIZE: int = _core.MAX_PICTURE_SIZE
@@ -41,8 +40,14 @@ class CameraSettings:
     """Where pictures are taken from (see the module's documentation),
     checked once: the types here, the names and ranges by the renderer."""
 
-    def __init__(self, camera: Optional[str] = None, track: Optional[str] = None, distance: Optional[float] = None,
-                 azimuth: Optional[float] = None, elevation: Optional[float] = None) -> None:
+    def __init__(
+        self,
+        camera: Optional[str] = None,
+        track: Optional[str] = None,
+        distance: Optional[float] = None,
+        azimuth: Optional[float] = None,
+        elevation: Optional[float] = None,
+    ) -> None:
         self.camera = None if camera is None else _check_str("camera", camera)
         self.track = None if track is None else _check_str("track", track)
         self.distance = None if distance is None else _check_real("distance", distance)
@@ -69,12 +74,21 @@ class Renderer:
     def __init__(self, model: Union[ModelLike, Sim] = None, width: int = 640, height: int = 480) -> None:
         scene = model.model if isinstance(model, Sim) else load_model(model)
         self._renderer: Optional[_core.Renderer] = _core.Renderer(
-            scene, _check_int("width", width, 1, MAX_PICTURE_SIZE), _check_int("height", height, 1, MAX_PICTURE_SIZE))
+            scene, _check_int("width", width, 1, MAX_PICTURE_SIZE), _check_int("height", height, 1, MAX_PICTURE_SIZE)
+        )
         self.width, self.height = width, height
 
-    def render(self, sim: Sim, *, camera: Optional[str] = None, track: Optional[str] = None,
-               distance: Optional[float] = None, azimuth: Optional[float] = None, elevation: Optional[float] = None,
-               depth: bool = False) -> "NDArray[np.generic]":
+    def render(
+        self,
+        sim: Sim,
+        *,
+        camera: Optional[str] = None,
+        track: Optional[str] = None,
+        distance: Optional[float] = None,
+        azimuth: Optional[float] = None,
+        elevation: Optional[float] = None,
+        depth: bool = False,
+    ) -> "NDArray[np.generic]":
         """A picture of sim's state: (height, width, 3) uint8 RGB, rows from
         the top; with depth=True, (height, width) float32 distances in metres
         from the camera's plane. ValueError for a camera or body the scene
@@ -116,11 +130,13 @@ class EpisodePictures:
     OpenGL context made at the first picture (an env that never renders
     never loads EGL)."""
 
-    def __init__(self, model: _core.Model, render_mode: Optional[str], width: int, height: int,
-                 view: Optional[Mapping[str, Any]]) -> None:
+    def __init__(
+        self, model: _core.Model, render_mode: Optional[str], width: int, height: int, view: Optional[Mapping[str, Any]]
+    ) -> None:
         if render_mode is not None and render_mode not in RENDER_MODES:
-            raise ValueError(f"render_mode must be None or one of {', '.join(map(repr, RENDER_MODES))}, "
-                             f"got {_describe(render_mode)}")
+            raise ValueError(
+                f"render_mode must be None or one of {', '.join(map(repr, RENDER_MODES))}, got {_describe(render_mode)}"
+            )
         if view is not None and not isinstance(view, Mapping):
             raise TypeError(f"view must be a dict of {', '.join(VIEW_KEYS)}, or None, got {_describe(view)}")
         _check_keys("view", view or {}, VIEW_KEYS)

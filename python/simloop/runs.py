@@ -14,8 +14,20 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Callable, Iterable, List, Optional, Union, overload
 
 from . import _core
-from ._checks import (ModelLike, Progress, _check_bool, _check_int, _check_progress, _check_real, _check_seed,
-                      _check_str, _check_threads, _pusher_scene, _sequence, load_model)
+from ._checks import (
+    ModelLike,
+    Progress,
+    _check_bool,
+    _check_int,
+    _check_progress,
+    _check_real,
+    _check_seed,
+    _check_str,
+    _check_threads,
+    _pusher_scene,
+    _sequence,
+    load_model,
+)
 from ._core import RunResult
 from .policy import _check_no_control_every
 from .scenario import Scenario
@@ -25,8 +37,16 @@ if TYPE_CHECKING:
     from .tables import BatchTable
 
 
-def _config(seed: object, steps: object, timestep: object, perturb: object, smoke: object,
-            record_every: object, audit_energy: object = False, rng: object = "mt19937_64") -> _core.RunConfig:
+def _config(
+    seed: object,
+    steps: object,
+    timestep: object,
+    perturb: object,
+    smoke: object,
+    record_every: object,
+    audit_energy: object = False,
+    rng: object = "mt19937_64",
+) -> _core.RunConfig:
     """A run's config: the types checked here; the values by the C++ side
     (RunConfig an unknown rng, the run the timestep, steps and record_every)."""
     return _core.RunConfig(
@@ -42,23 +62,56 @@ def _config(seed: object, steps: object, timestep: object, perturb: object, smok
 
 
 @overload
-def run(seed: int = 0, steps: int = 2000, timestep: float = 0.002, perturb: bool = True, smoke: bool = False,
-        model: ModelLike = None, record_every: int = 1, audit_energy: bool = False,
-        rng: str = "mt19937_64", *, progress: Progress = None, policy: None = None,
-        control_every: int = 1) -> RunResult: ...
+def run(
+    seed: int = 0,
+    steps: int = 2000,
+    timestep: float = 0.002,
+    perturb: bool = True,
+    smoke: bool = False,
+    model: ModelLike = None,
+    record_every: int = 1,
+    audit_energy: bool = False,
+    rng: str = "mt19937_64",
+    *,
+    progress: Progress = None,
+    policy: None = None,
+    control_every: int = 1,
+) -> RunResult: ...
 
 
 @overload
-def run(seed: int = 0, steps: int = 2000, timestep: float = 0.002, perturb: bool = True, smoke: bool = False,
-        model: ModelLike = None, record_every: int = 1, audit_energy: bool = False,
-        rng: str = "mt19937_64", *, progress: Progress = None, policy: Callable[..., object],
-        control_every: int = 1) -> "_core.ScenarioResult": ...
+def run(
+    seed: int = 0,
+    steps: int = 2000,
+    timestep: float = 0.002,
+    perturb: bool = True,
+    smoke: bool = False,
+    model: ModelLike = None,
+    record_every: int = 1,
+    audit_energy: bool = False,
+    rng: str = "mt19937_64",
+    *,
+    progress: Progress = None,
+    policy: Callable[..., object],
+    control_every: int = 1,
+) -> "_core.ScenarioResult": ...
 
 
-def run(seed: int = 0, steps: int = 2000, timestep: float = 0.002, perturb: bool = True, smoke: bool = False,
-        model: ModelLike = None, record_every: int = 1, audit_energy: bool = False,
-        rng: str = "mt19937_64", *, progress: Progress = None, policy: Optional[Callable[..., object]] = None,
-        control_every: int = 1) -> "Union[RunResult, _core.ScenarioResult]":
+def run(
+    seed: int = 0,
+    steps: int = 2000,
+    timestep: float = 0.002,
+    perturb: bool = True,
+    smoke: bool = False,
+    model: ModelLike = None,
+    record_every: int = 1,
+    audit_energy: bool = False,
+    rng: str = "mt19937_64",
+    *,
+    progress: Progress = None,
+    policy: Optional[Callable[..., object]] = None,
+    control_every: int = 1,
+) -> "Union[RunResult, _core.ScenarioResult]":
     """Runs the chapter's loop once and returns what happened.
 
     seed: seeds the shove (0 to 2**64-1), and nothing else.
@@ -97,15 +150,27 @@ def run(seed: int = 0, steps: int = 2000, timestep: float = 0.002, perturb: bool
     return _core.run(load_model(model), config, progress=_check_progress(progress))
 
 
-def _run_chapter_with_policy(config: "_core.RunConfig", model: ModelLike, progress: Progress,
-                             policy: Callable[..., object], control_every: int) -> "_core.ScenarioResult":
+def _run_chapter_with_policy(
+    config: "_core.RunConfig", model: ModelLike, progress: Progress, policy: Callable[..., object], control_every: int
+) -> "_core.ScenarioResult":
     if config.audit_energy:
-        raise ValueError("audit_energy=True is not available with a policy (the audit is the chapter's open "
-                         "loop's); leave one of them out")
-    return run_scenario(Scenario.chapter(), seed=config.seed, rng=config.rng, timestep=config.timestep,
-                        steps=_core.SMOKE_STEPS if config.smoke else config.steps, perturb=config.perturb,
-                        record_every=config.record_every, model=load_model(model), progress=progress,
-                        policy=policy, control_every=control_every)
+        raise ValueError(
+            "audit_energy=True is not available with a policy (the audit is the chapter's open "
+            "loop's); leave one of them out"
+        )
+    return run_scenario(
+        Scenario.chapter(),
+        seed=config.seed,
+        rng=config.rng,
+        timestep=config.timestep,
+        steps=_core.SMOKE_STEPS if config.smoke else config.steps,
+        perturb=config.perturb,
+        record_every=config.record_every,
+        model=load_model(model),
+        progress=progress,
+        policy=policy,
+        control_every=control_every,
+    )
 
 
 def draw_shove(seed: int = 0, steps: int = 2000, rng: str = "mt19937_64") -> "_core.Shove":
@@ -118,11 +183,23 @@ def draw_shove(seed: int = 0, steps: int = 2000, rng: str = "mt19937_64") -> "_c
     return _core.draw_shove(_check_seed("seed", seed), _check_int("steps", steps, 1), _check_str("rng", rng))
 
 
-def run_batch(seeds: Iterable[int] = (0,), timesteps: Iterable[float] = (0.002,), *, steps: int = 2000,
-              perturb: bool = True, smoke: bool = False, model: ModelLike = None, record_every: int = 1,
-              audit_energy: bool = False, threads: Optional[int] = None, rng: str = "mt19937_64",
-              progress: Progress = None, metrics_only: bool = False, executor: object = None,
-              chunk_size: Optional[int] = None) -> "BatchTable[RunResult]":
+def run_batch(
+    seeds: Iterable[int] = (0,),
+    timesteps: Iterable[float] = (0.002,),
+    *,
+    steps: int = 2000,
+    perturb: bool = True,
+    smoke: bool = False,
+    model: ModelLike = None,
+    record_every: int = 1,
+    audit_energy: bool = False,
+    threads: Optional[int] = None,
+    rng: str = "mt19937_64",
+    progress: Progress = None,
+    metrics_only: bool = False,
+    executor: object = None,
+    chunk_size: Optional[int] = None,
+) -> "BatchTable[RunResult]":
     """Runs every (seed, timestep) pair over one compiled model, in parallel,
     and returns a simloop.BatchTable: one row per run.
 
@@ -153,8 +230,9 @@ def run_batch(seeds: Iterable[int] = (0,), timesteps: Iterable[float] = (0.002,)
     seed_list = [_check_seed("seeds[%d]" % i, s) for i, s in enumerate(_sequence("seeds", seeds))]
     timestep_list = [_check_real("timesteps[%d]" % i, t) for i, t in enumerate(_sequence("timesteps", timesteps))]
     workers = _check_threads(threads)
-    configs = [_config(s, steps, t, perturb, smoke, record_every, audit_energy, rng)
-               for s in seed_list for t in timestep_list]
+    configs = [
+        _config(s, steps, t, perturb, smoke, record_every, audit_energy, rng) for s in seed_list for t in timestep_list
+    ]
     metrics_only = _check_bool("metrics_only", metrics_only)
     if executor is not None:
         from .distributed import run_batch_on  # numpy: `import simloop` does not load it
@@ -163,8 +241,9 @@ def run_batch(seeds: Iterable[int] = (0,), timesteps: Iterable[float] = (0.002,)
         return run_batch_on(executor, configs, model, threads, chunk_size, _check_progress(progress))
     from .tables import _table  # numpy: `import simloop` does not load it
 
-    results = _core.run_batch(load_model(model), configs, workers, keep_rows=not metrics_only,
-                              progress=_check_progress(progress))
+    results = _core.run_batch(
+        load_model(model), configs, workers, keep_rows=not metrics_only, progress=_check_progress(progress)
+    )
     return _table(results, keep_results=not metrics_only)
 
 
@@ -176,5 +255,8 @@ def _check_before_sending(configs: List[_core.RunConfig]) -> None:
     chapter = Scenario.chapter()._core
     for config in {c.timestep: c for c in configs}.values():
         steps = _core.SMOKE_STEPS if config.smoke else config.steps
-        _core.check_scenario(_pusher_scene(), chapter, _core.ScenarioConfig(0, config.rng, config.timestep, steps,
-                                                                            config.perturb, config.record_every))
+        _core.check_scenario(
+            _pusher_scene(),
+            chapter,
+            _core.ScenarioConfig(0, config.rng, config.timestep, steps, config.perturb, config.record_every),
+        )

@@ -23,8 +23,18 @@ import os
 from typing import Any, Dict, Iterable, Mapping, Optional, Sequence, Tuple, Union
 
 from . import _core
-from ._checks import (ModelLike, _check_bool, _check_int, _check_keys, _check_path, _check_real, _check_seed, _check_str,
-                      _describe, load_model)
+from ._checks import (
+    ModelLike,
+    _check_bool,
+    _check_int,
+    _check_keys,
+    _check_path,
+    _check_real,
+    _check_seed,
+    _check_str,
+    _describe,
+    load_model,
+)
 
 ScenarioResult = _core.ScenarioResult
 ScenarioLike = Union["Scenario", str, "os.PathLike[str]"]
@@ -67,8 +77,10 @@ def _control_entry(actuator: object, value: object) -> Dict[str, object]:
         return {"actuator": actuator, "csv": value}  # a value per step, one row each
     if isinstance(value, Mapping):
         return {"actuator": actuator, **value}
-    shape = (f"{name} must be a number, a list of (seconds, value) pairs, a path object naming a CSV file, "
-             f"or {{'csv': ..., 'column': ...}}, got {_describe(value)}")
+    shape = (
+        f"{name} must be a number, a list of (seconds, value) pairs, a path object naming a CSV file, "
+        f"or {{'csv': ..., 'column': ...}}, got {_describe(value)}"
+    )
     if isinstance(value, (str, bytes)) or not isinstance(value, Iterable):
         raise TypeError(shape)
     pairs = []
@@ -161,18 +173,27 @@ class Scenario:
     "gravity", name, and value or uniform = [low, high]).
     """
 
-    def __init__(self, scene: Union[str, "os.PathLike[str]", None] = None, *, name: str = "",
-                 timestep: Optional[float] = None, steps: Optional[int] = None, duration: Optional[float] = None,
-                 controls: Optional[Mapping[Union[str, int], Any]] = None,
-                 disturbances: Iterable[Mapping[str, Any]] = (),
-                 record: Optional[Mapping[str, Any]] = None, reset: Optional[Mapping[str, Any]] = None) -> None:
+    def __init__(
+        self,
+        scene: Union[str, "os.PathLike[str]", None] = None,
+        *,
+        name: str = "",
+        timestep: Optional[float] = None,
+        steps: Optional[int] = None,
+        duration: Optional[float] = None,
+        controls: Optional[Mapping[Union[str, int], Any]] = None,
+        disturbances: Iterable[Mapping[str, Any]] = (),
+        record: Optional[Mapping[str, Any]] = None,
+        reset: Optional[Mapping[str, Any]] = None,
+    ) -> None:
         for what, given in (("controls", controls), ("record", record)):
             if given is not None and not isinstance(given, Mapping):
                 raise TypeError(f"{what} must be a dict or None, got {_describe(given)}")
         if isinstance(disturbances, (str, bytes, Mapping)) or not isinstance(disturbances, Iterable):
             raise TypeError(f"disturbances must be a list of dicts, got {_describe(disturbances)}")
-        text = _toml_table("", {"name": name or None, "scene": scene, "timestep": timestep, "steps": steps,
-                                "duration": duration})
+        text = _toml_table(
+            "", {"name": name or None, "scene": scene, "timestep": timestep, "steps": steps, "duration": duration}
+        )
         for actuator, value in (controls or {}).items():
             text += "\n" + _toml_table("[[control]]", _control_entry(actuator, value))
         for d in disturbances:
@@ -186,8 +207,9 @@ class Scenario:
         base = os.getcwd()  # where its relative paths resolve (sent along to workers)
         self._made(_core.Scenario.from_toml(text, "Scenario(...)", base), base, text, (_from_toml, (text, base)))
 
-    def _made(self, core: _core.Scenario, base: str, toml: str, remake: Tuple[Any, ...],
-              chapter: bool = False) -> "Scenario":
+    def _made(
+        self, core: _core.Scenario, base: str, toml: str, remake: Tuple[Any, ...], chapter: bool = False
+    ) -> "Scenario":
         """Every way of making a Scenario ends here: its compiled form, the
         folder its relative paths resolve against, its TOML ("" for the
         chapter's, and for an empty file's), how a pickle makes it again, and
@@ -245,8 +267,9 @@ class Scenario:
 
 def _from_toml(text: str, base: str) -> Scenario:
     """A keyword Scenario made again (for pickling)."""
-    return Scenario.__new__(Scenario)._made(_core.Scenario.from_toml(text, "Scenario(...)", base), base, text,
-                                            (_from_toml, (text, base)))
+    return Scenario.__new__(Scenario)._made(
+        _core.Scenario.from_toml(text, "Scenario(...)", base), base, text, (_from_toml, (text, base))
+    )
 
 
 def _scenario_and_scene(scenario: ScenarioLike, model: ModelLike) -> Tuple[Scenario, _core.Model]:
@@ -258,12 +281,17 @@ def _scenario_and_scene(scenario: ScenarioLike, model: ModelLike) -> Tuple[Scena
     return scenario, scenario.model() if model is None else load_model(model)
 
 
-def scenario_config(seed: object, rng: object, timestep: object, steps: object, perturb: object,
-                    record_every: object) -> _core.ScenarioConfig:
+def scenario_config(
+    seed: object, rng: object, timestep: object, steps: object, perturb: object, record_every: object
+) -> _core.ScenarioConfig:
     """A scenario run's config: the types checked here; the values by the C++
     side (ScenarioConfig an unknown rng, the run the timestep, steps and
     record_every)."""
-    return _core.ScenarioConfig(_check_seed("seed", seed), _check_str("rng", rng),
-                                None if timestep is None else _check_real("timestep", timestep),
-                                None if steps is None else _check_int("steps", steps), _check_bool("perturb", perturb),
-                                _check_int("record_every", record_every))
+    return _core.ScenarioConfig(
+        _check_seed("seed", seed),
+        _check_str("rng", rng),
+        None if timestep is None else _check_real("timestep", timestep),
+        None if steps is None else _check_int("steps", steps),
+        _check_bool("perturb", perturb),
+        _check_int("record_every", record_every),
+    )

@@ -8,8 +8,19 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any, Iterable, Optional
 
 from . import _core
-from ._checks import (ModelLike, Progress, _check_bool, _check_int, _check_progress, _check_real, _check_seed,
-                      _check_str, _check_threads, _describe, _sequence)
+from ._checks import (
+    ModelLike,
+    Progress,
+    _check_bool,
+    _check_int,
+    _check_progress,
+    _check_real,
+    _check_seed,
+    _check_str,
+    _check_threads,
+    _describe,
+    _sequence,
+)
 from .policy import Policy, _check_no_control_every, _decider
 from .scenario import ScenarioLike, ScenarioResult, _scenario_and_scene, scenario_config
 
@@ -38,11 +49,22 @@ def _inputs_array(name: str, value: object, described: str) -> Optional[np.ndarr
     return np.ascontiguousarray(array, dtype=np.float64)
 
 
-def run_scenario(scenario: ScenarioLike, *, seed: int = 0, rng: str = "mt19937_64",
-                 timestep: Optional[float] = None, steps: Optional[int] = None, perturb: bool = True,
-                 record_every: int = 1, model: ModelLike = None,
-                 progress: Progress = None, controls: Any = None, initial_state: Any = None,
-                 policy: Optional[Policy] = None, control_every: int = 1) -> ScenarioResult:
+def run_scenario(
+    scenario: ScenarioLike,
+    *,
+    seed: int = 0,
+    rng: str = "mt19937_64",
+    timestep: Optional[float] = None,
+    steps: Optional[int] = None,
+    perturb: bool = True,
+    record_every: int = 1,
+    model: ModelLike = None,
+    progress: Progress = None,
+    controls: Any = None,
+    initial_state: Any = None,
+    policy: Optional[Policy] = None,
+    control_every: int = 1,
+) -> ScenarioResult:
     """Runs a scenario (a Scenario or a scenario file's path) once.
 
     seed draws its random disturbances and nothing else; rng is "mt19937_64"
@@ -88,23 +110,40 @@ def run_scenario(scenario: ScenarioLike, *, seed: int = 0, rng: str = "mt19937_6
     start = _inputs_array("initial_state", initial_state, "shaped (state_size,)")
     if policy is not None:
         if own is not None or start is not None:
-            raise ValueError("policy with controls or initial_state is not supported: the policy decides ctrl, "
-                             "and its runs start from the scene's reset pose")
+            raise ValueError(
+                "policy with controls or initial_state is not supported: the policy decides ctrl, "
+                "and its runs start from the scene's reset pose"
+            )
         decide, every = _decider(policy, control_every, scene, scenario, config)
-        return _core.run_scenario(scene, scenario._core, config, decide=decide, control_every=every,
-                                  progress=_check_progress(progress))
+        return _core.run_scenario(
+            scene, scenario._core, config, decide=decide, control_every=every, progress=_check_progress(progress)
+        )
     _check_no_control_every(control_every)
-    return _core.run_scenario(scene, scenario._core, config, controls=own, initial_state=start,
-                              progress=_check_progress(progress))
+    return _core.run_scenario(
+        scene, scenario._core, config, controls=own, initial_state=start, progress=_check_progress(progress)
+    )
 
 
-def run_scenario_batch(scenario: ScenarioLike, seeds: Iterable[int] = (0,),
-                       timesteps: Iterable[Optional[float]] = (None,), *, rng: str = "mt19937_64",
-                       steps: Optional[int] = None, perturb: bool = True, record_every: int = 1,
-                       model: ModelLike = None, threads: Optional[int] = None,
-                       progress: Progress = None, controls: Any = None, initial_state: Any = None,
-                       metrics_only: bool = False, executor: object = None, chunk_size: Optional[int] = None,
-                       policy: Optional[Policy] = None, control_every: int = 1) -> BatchTable[ScenarioResult]:
+def run_scenario_batch(
+    scenario: ScenarioLike,
+    seeds: Iterable[int] = (0,),
+    timesteps: Iterable[Optional[float]] = (None,),
+    *,
+    rng: str = "mt19937_64",
+    steps: Optional[int] = None,
+    perturb: bool = True,
+    record_every: int = 1,
+    model: ModelLike = None,
+    threads: Optional[int] = None,
+    progress: Progress = None,
+    controls: Any = None,
+    initial_state: Any = None,
+    metrics_only: bool = False,
+    executor: object = None,
+    chunk_size: Optional[int] = None,
+    policy: Optional[Policy] = None,
+    control_every: int = 1,
+) -> BatchTable[ScenarioResult]:
     """Runs a scenario once per (seed, timestep) pair, in parallel over one
     scene, and returns a simloop.BatchTable: one row per run.
 
@@ -145,12 +184,13 @@ def run_scenario_batch(scenario: ScenarioLike, seeds: Iterable[int] = (0,),
         if model is not None:
             raise TypeError("model must be None with executor= (the scenario's scene is compiled on each worker)")
         if controls is not None or initial_state is not None or policy is not None:
-            raise ValueError("controls, initial_state and policy are not sent to an executor: run such batches "
-                             "locally")
+            raise ValueError("controls, initial_state and policy are not sent to an executor: run such batches locally")
     scenario, scene = _scenario_and_scene(scenario, model)  # with executor=, compiled here too: see below
     seed_list = [_check_seed("seeds[%d]" % i, s) for i, s in enumerate(_sequence("seeds", seeds))]
-    timestep_list = [None if t is None else _check_real("timesteps[%d]" % i, t)
-                     for i, t in enumerate(_sequence("timesteps", timesteps))]
+    timestep_list = [
+        None if t is None else _check_real("timesteps[%d]" % i, t)
+        for i, t in enumerate(_sequence("timesteps", timesteps))
+    ]
     workers = _check_threads(threads)
     rng, step_count = _check_str("rng", rng), None if steps is None else _check_int("steps", steps)
     perturb, every = _check_bool("perturb", perturb), _check_int("record_every", record_every)
@@ -161,26 +201,54 @@ def run_scenario_batch(scenario: ScenarioLike, seeds: Iterable[int] = (0,),
         # here, once per timestep, before any work goes out.
         for t in dict.fromkeys(timestep_list):
             _core.check_scenario(scene, scenario._core, _core.ScenarioConfig(0, rng, t, step_count, perturb, every))
-        return run_scenario_batch_on(executor, scenario, seed_list, timestep_list, rng=rng, steps=step_count,
-                                     perturb=perturb, threads=threads, chunk_size=chunk_size,
-                                     progress=_check_progress(progress))
+        return run_scenario_batch_on(
+            executor,
+            scenario,
+            seed_list,
+            timestep_list,
+            rng=rng,
+            steps=step_count,
+            perturb=perturb,
+            threads=threads,
+            chunk_size=chunk_size,
+            progress=_check_progress(progress),
+        )
     configs = [_core.ScenarioConfig(s, rng, t, step_count, perturb, every) for s in seed_list for t in timestep_list]
     metrics_only = _check_bool("metrics_only", metrics_only)
     from .tables import _table  # numpy: `import simloop` does not load it
 
     if policy is not None:
         if controls is not None or initial_state is not None or metrics_only:
-            raise ValueError("policy with controls, initial_state or metrics_only is not supported: give the "
-                             "policy alone (its runs keep their trajectories and start from the reset pose)")
+            raise ValueError(
+                "policy with controls, initial_state or metrics_only is not supported: give the "
+                "policy alone (its runs keep their trajectories and start from the reset pose)"
+            )
         if not configs:
             return _table([], keep_results=True)
         decide, decide_every = _decider(policy, control_every, scene, scenario, configs[0])
-        return _table(_core.run_scenario_batch(scene, scenario._core, configs, workers, decide=decide,
-                                               control_every=decide_every, progress=_check_progress(progress)),
-                      keep_results=True)
+        return _table(
+            _core.run_scenario_batch(
+                scene,
+                scenario._core,
+                configs,
+                workers,
+                decide=decide,
+                control_every=decide_every,
+                progress=_check_progress(progress),
+            ),
+            keep_results=True,
+        )
     _check_no_control_every(control_every)
     own = _inputs_array("controls", controls, "shaped (runs, steps, nu) or (steps, nu)")
     start = _inputs_array("initial_state", initial_state, "shaped (runs, state_size) or (state_size,)")
-    results = _core.run_scenario_batch(scene, scenario._core, configs, workers, controls=own, initial_state=start,
-                                       keep_rows=not metrics_only, progress=_check_progress(progress))
+    results = _core.run_scenario_batch(
+        scene,
+        scenario._core,
+        configs,
+        workers,
+        controls=own,
+        initial_state=start,
+        keep_rows=not metrics_only,
+        progress=_check_progress(progress),
+    )
     return _table(results, keep_results=not metrics_only)

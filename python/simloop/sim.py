@@ -13,8 +13,20 @@ if TYPE_CHECKING:  # (importing numpy would cost every `import simloop` ~50 ms)
     from numpy.typing import NDArray
 
 from . import _core
-from ._checks import (ModelLike, Progress, _check_int, _check_progress, _check_real, _check_text,
-                      _describe, _finite_vector, _float_array, _sequence, _show, load_model)
+from ._checks import (
+    ModelLike,
+    Progress,
+    _check_int,
+    _check_progress,
+    _check_real,
+    _check_text,
+    _describe,
+    _finite_vector,
+    _float_array,
+    _sequence,
+    _show,
+    load_model,
+)
 from ._core import Model
 from ._views import ActuatorView, BodyView, JointView, SensorView
 from .named import Named
@@ -23,6 +35,7 @@ from .scenario import Scenario
 
 def _view_property(name: str, doc: str, settable: bool = False) -> property:
     """A Sim property giving its view `name`; settable: assigning writes into the view (checked)."""
+
     def get(self: "Sim") -> NDArray[np.float64]:
         return self._views[name]
 
@@ -32,8 +45,20 @@ def _view_property(name: str, doc: str, settable: bool = False) -> property:
     return property(get, set if settable else None, doc=doc)
 
 
-_ARRAYS = ("qpos", "qvel", "ctrl", "act", "qfrc_applied", "xfrc_applied", "mocap_pos", "mocap_quat", "sensordata",
-           "actuator_force", "xpos", "xquat")
+_ARRAYS = (
+    "qpos",
+    "qvel",
+    "ctrl",
+    "act",
+    "qfrc_applied",
+    "xfrc_applied",
+    "mocap_pos",
+    "mocap_quat",
+    "sensordata",
+    "actuator_force",
+    "xpos",
+    "xquat",
+)
 
 
 class Sim:
@@ -152,8 +177,10 @@ class Sim:
         if isinstance(value, numbers.Real) and not isinstance(value, bool):
             nu = self.model.nu
             if nu != 1:  # one number for several actuators would set only the first
-                raise ValueError(f"ctrl must be {nu} numbers, one per actuator (a single number is for a scene "
-                                 f"with one actuator, as the chapter's), got {_show(value)}")
+                raise ValueError(
+                    f"ctrl must be {nu} numbers, one per actuator (a single number is for a scene "
+                    f"with one actuator, as the chapter's), got {_show(value)}"
+                )
             self._sim.set_ctrl(_check_real("ctrl", value))
         else:
             self._sim.set_ctrl_vector(self._vector("ctrl", value, self.model.nu, "one per actuator"))
@@ -161,13 +188,18 @@ class Sim:
     ctrl_array = _view_property("ctrl", "Every actuator's ctrl (nu), a writable view, on any scene.")
     act = _view_property("act", "Actuator activations (na), a writable view.")
     qfrc_applied = _view_property("qfrc_applied", "Generalized forces applied (nv), a writable view; it persists.")
-    xfrc_applied = _view_property("xfrc_applied", "Force and torque on each body, world frame (nbody x 6), a "
-                                                  "writable view; it persists.")
-    mocap_pos = _view_property("mocap_pos", "Where each mocap body is (nmocap x 3; row i is the body whose "
-                                            "body_mocapid is i), a writable view: MuJoCo moves it there, no force.")
+    xfrc_applied = _view_property(
+        "xfrc_applied", "Force and torque on each body, world frame (nbody x 6), a writable view; it persists."
+    )
+    mocap_pos = _view_property(
+        "mocap_pos",
+        "Where each mocap body is (nmocap x 3; row i is the body whose "
+        "body_mocapid is i), a writable view: MuJoCo moves it there, no force.",
+    )
     mocap_quat = _view_property("mocap_quat", "Each mocap body's orientation (nmocap x 4, w x y z), a writable view.")
-    sensordata = _view_property("sensordata", "Every sensor's reading (nsensordata), a read-only view, as of the "
-                                              "last step.")
+    sensordata = _view_property(
+        "sensordata", "Every sensor's reading (nsensordata), a read-only view, as of the last step."
+    )
 
     # --- Named access.
 
@@ -189,10 +221,12 @@ class Sim:
             index = self._sim.id(kind, name)  # type: ignore[arg-type]
         elif isinstance(key, numbers.Integral) and not isinstance(key, bool):
             number = int(key)
-            if not -2**63 <= number < 2**63:
+            if not -(2**63) <= number < 2**63:
                 plural = "bodies" if kind == "body" else kind + "s"
-                raise ValueError(f"{kind} index {_show(number)} is out of range: the scene has "
-                                 f"{len(self.model.names(kind))} {plural}")
+                raise ValueError(
+                    f"{kind} index {_show(number)} is out of range: the scene has "
+                    f"{len(self.model.names(kind))} {plural}"
+                )
             index = self._sim.checked_index(kind, number)
         else:
             raise TypeError(f"{kind} must be a name (str) or an index (int), got {_describe(key)}")
@@ -236,8 +270,13 @@ class Sim:
 
     # --- Forces.
 
-    def apply_force(self, force: Optional[Sequence[float]] = None, *, body: Union[str, int, None] = None,
-                    torque: Optional[Sequence[float]] = None) -> None:
+    def apply_force(
+        self,
+        force: Optional[Sequence[float]] = None,
+        *,
+        body: Union[str, int, None] = None,
+        torque: Optional[Sequence[float]] = None,
+    ) -> None:
         """Pushes with (fx, fy, fz) newtons and/or twists with (tx, ty, tz) N m, world
         frame, at the body's origin, from now on.
 
@@ -256,8 +295,11 @@ class Sim:
         index, _ = self._lookup("body", body)
         if force is None and torque is None:
             raise ValueError("apply_force needs force=..., torque=... or both")
-        self._sim.apply_wrench(index, None if force is None else self._force_components("force", force),
-                               None if torque is None else self._force_components("torque", torque))
+        self._sim.apply_wrench(
+            index,
+            None if force is None else self._force_components("force", force),
+            None if torque is None else self._force_components("torque", torque),
+        )
 
     @staticmethod
     def _force_components(name: str, value: object) -> "list[float]":
@@ -385,5 +427,7 @@ class Sim:
     def __repr__(self) -> str:
         model = self.model
         scene = repr(model.name) if model.name else "(unnamed)"
-        return (f"<simloop.Sim {scene} t={self.time!r} steps_taken={self.steps_taken} timestep={self.timestep!r} "
-                f"nq={model.nq} nv={model.nv} nu={model.nu} nbody={model.nbody}>")
+        return (
+            f"<simloop.Sim {scene} t={self.time!r} steps_taken={self.steps_taken} timestep={self.timestep!r} "
+            f"nq={model.nq} nv={model.nv} nu={model.nu} nbody={model.nbody}>"
+        )

@@ -8,31 +8,71 @@ from __future__ import annotations
 from typing import Any, Iterable, List, Optional, Union, overload
 
 from . import _core
-from ._checks import (ModelLike, Progress, _check_bool, _check_progress, _check_real, _check_seed,
-                      _check_str, _check_threads, _reals, load_model)
+from ._checks import (
+    ModelLike,
+    Progress,
+    _check_bool,
+    _check_progress,
+    _check_real,
+    _check_seed,
+    _check_str,
+    _check_threads,
+    _reals,
+    load_model,
+)
 from ._core import SweepResult
 from .scenario import _scenario_and_scene
 
 
 # Typed for the checker: the chapter's SweepResult, or a ScenarioSweepResult for scenario=.
 @overload
-def sweep(timesteps: Optional[Iterable[float]] = None, duration: Optional[float] = None,
-          threads: Optional[int] = None, model: ModelLike = None, *, scenario: None = None, seed: int = 0,
-          rng: str = "mt19937_64", perturb: bool = True, progress: Progress = None, executor: object = None,
-          chunk_size: Optional[int] = None) -> SweepResult: ...
+def sweep(
+    timesteps: Optional[Iterable[float]] = None,
+    duration: Optional[float] = None,
+    threads: Optional[int] = None,
+    model: ModelLike = None,
+    *,
+    scenario: None = None,
+    seed: int = 0,
+    rng: str = "mt19937_64",
+    perturb: bool = True,
+    progress: Progress = None,
+    executor: object = None,
+    chunk_size: Optional[int] = None,
+) -> SweepResult: ...
 
 
 @overload
-def sweep(timesteps: Optional[Iterable[float]] = None, duration: Optional[float] = None,
-          threads: Optional[int] = None, model: ModelLike = None, *, scenario: object, seed: int = 0,
-          rng: str = "mt19937_64", perturb: bool = True, progress: Progress = None, executor: object = None,
-          chunk_size: Optional[int] = None) -> "_core.ScenarioSweepResult": ...
+def sweep(
+    timesteps: Optional[Iterable[float]] = None,
+    duration: Optional[float] = None,
+    threads: Optional[int] = None,
+    model: ModelLike = None,
+    *,
+    scenario: object,
+    seed: int = 0,
+    rng: str = "mt19937_64",
+    perturb: bool = True,
+    progress: Progress = None,
+    executor: object = None,
+    chunk_size: Optional[int] = None,
+) -> "_core.ScenarioSweepResult": ...
 
 
-def sweep(timesteps: Optional[Iterable[float]] = None, duration: Optional[float] = None,
-          threads: Optional[int] = None, model: ModelLike = None, *, scenario: Any = None, seed: int = 0,
-          rng: str = "mt19937_64", perturb: bool = True, progress: Progress = None, executor: object = None,
-          chunk_size: Optional[int] = None) -> "Union[SweepResult, _core.ScenarioSweepResult]":
+def sweep(
+    timesteps: Optional[Iterable[float]] = None,
+    duration: Optional[float] = None,
+    threads: Optional[int] = None,
+    model: ModelLike = None,
+    *,
+    scenario: Any = None,
+    seed: int = 0,
+    rng: str = "mt19937_64",
+    perturb: bool = True,
+    progress: Progress = None,
+    executor: object = None,
+    chunk_size: Optional[int] = None,
+) -> "Union[SweepResult, _core.ScenarioSweepResult]":
     """The baseline (no shove) at many timesteps over the same span of sim time.
 
     timesteps: None for the default: 25 round timesteps (1, 2, 3, 4, 5, 6 and
@@ -67,31 +107,55 @@ def sweep(timesteps: Optional[Iterable[float]] = None, duration: Optional[float]
     span = None if duration is None else _check_real("duration", duration)
     if executor is not None:
         if scenario is not None:
-            raise ValueError("sweep(scenario=..., executor=...) is not supported: a scenario sweep runs locally "
-                             "(use run_scenario_batch(..., timesteps=..., executor=...) for its runs on a cluster)")
+            raise ValueError(
+                "sweep(scenario=..., executor=...) is not supported: a scenario sweep runs locally "
+                "(use run_scenario_batch(..., timesteps=..., executor=...) for its runs on a cluster)"
+            )
         from .distributed import sweep_on  # numpy: `import simloop` does not load it
 
-        return sweep_on(executor, _core.default_sweep_timesteps() if values is None else values,
-                        4.0 if span is None else span, model, threads, chunk_size, _check_progress(progress))
+        return sweep_on(
+            executor,
+            _core.default_sweep_timesteps() if values is None else values,
+            4.0 if span is None else span,
+            model,
+            threads,
+            chunk_size,
+            _check_progress(progress),
+        )
     workers = _check_threads(threads)
     if scenario is not None:
         return _sweep_scenario(scenario, values, span, workers, model, seed, rng, perturb, progress)
-    return _core.sweep(load_model(model), _core.default_sweep_timesteps() if values is None else values,
-                       4.0 if span is None else span, workers, progress=_check_progress(progress))
+    return _core.sweep(
+        load_model(model),
+        _core.default_sweep_timesteps() if values is None else values,
+        4.0 if span is None else span,
+        workers,
+        progress=_check_progress(progress),
+    )
 
 
-def _sweep_scenario(scenario: Any, timesteps: Optional[List[float]], duration: Optional[float], workers: int,
-                    model: Any, seed: object, rng: object, perturb: object,
-                    progress: Progress) -> "_core.ScenarioSweepResult":
+def _sweep_scenario(
+    scenario: Any,
+    timesteps: Optional[List[float]],
+    duration: Optional[float],
+    workers: int,
+    model: Any,
+    seed: object,
+    rng: object,
+    perturb: object,
+    progress: Progress,
+) -> "_core.ScenarioSweepResult":
     """sweep(scenario=...): the arguments' types checked, then the C++ sweep."""
     scenario, scene = _scenario_and_scene(scenario, model)
-    config = _core.ScenarioConfig(_check_seed("seed", seed), _check_str("rng", rng), None, None,
-                                  _check_bool("perturb", perturb), 1)
+    config = _core.ScenarioConfig(
+        _check_seed("seed", seed), _check_str("rng", rng), None, None, _check_bool("perturb", perturb), 1
+    )
     span = _core.scenario_duration(scene, scenario._core) if duration is None else duration
     values = _core.default_scenario_sweep_timesteps(span) if timesteps is None else timesteps
     if timesteps is None and not values:
         # No default timestep gives a run of 4 steps: the C++ check of the
         # finest one says why (or that the duration is not a duration).
         _core.sweep_steps(span, min(_core.default_sweep_timesteps()))
-    return _core.sweep_scenario(scene, scenario._core, values, span, config, workers,
-                                progress=_check_progress(progress))
+    return _core.sweep_scenario(
+        scene, scenario._core, values, span, config, workers, progress=_check_progress(progress)
+    )

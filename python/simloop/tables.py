@@ -47,16 +47,25 @@ from ._checks import _check_int, _describe
 WARNING_NAMES = tuple(_core.WARNING_NAMES)
 # The warnings that mean the run's state blew up or was reset by MuJoCo.
 DIVERGENCE_WARNINGS = ("mjWARN_BADQPOS", "mjWARN_BADQVEL", "mjWARN_BADQACC", "simloop_DIVERGED")
-_ENERGY = ("energy_start", "energy_end", "work_actuator", "work_shove", "work_passive", "work_constraint",
-           "work_constraint_positive", "unexplained")
+_ENERGY = (
+    "energy_start",
+    "energy_end",
+    "work_actuator",
+    "work_shove",
+    "work_passive",
+    "work_constraint",
+    "work_constraint_positive",
+    "unexplained",
+)
 
 
 def _need(module: str) -> Any:
     try:
         return __import__(module)
     except ImportError:
-        raise ImportError(f"this conversion needs {module}, which comes with simloop's 'tables' extra: "
-                          f"pip install 'simloop[tables]'") from None
+        raise ImportError(
+            f"this conversion needs {module}, which comes with simloop's 'tables' extra: pip install 'simloop[tables]'"
+        ) from None
 
 
 # The kind of result a table's rows come from: RunResult (run_batch,
@@ -64,8 +73,10 @@ def _need(module: str) -> Any:
 Result = TypeVar("Result", covariant=True)
 _Kind = TypeVar("_Kind")
 
-_NO_RESULTS = ("this BatchTable holds no results, only its columns: metrics_only=True and executor= batches "
-               "keep none (run the batch locally without them to keep each run's result)")
+_NO_RESULTS = (
+    "this BatchTable holds no results, only its columns: metrics_only=True and executor= batches "
+    "keep none (run the batch locally without them to keep each run's result)"
+)
 
 
 class BatchTable(Generic[Result]):
@@ -138,8 +149,10 @@ class BatchTable(Generic[Result]):
         i = _check_int("index", index)
         if not -self._rows <= i < self._rows:
             raise IndexError(f"index {i} is out of range for a table of {self._rows} rows")
-        return {name: values[i].item() if isinstance(values[i], np.generic) else values[i]
-                for name, values in self._columns.items()}
+        return {
+            name: values[i].item() if isinstance(values[i], np.generic) else values[i]
+            for name, values in self._columns.items()
+        }
 
     def __len__(self) -> int:
         return self._rows
@@ -151,8 +164,10 @@ class BatchTable(Generic[Result]):
     def __getitem__(self, name: str) -> np.ndarray:
         if not isinstance(name, str):
             shown = _describe(name)
-            raise TypeError(f"a BatchTable is indexed by column name, got {shown}: table.row(i) is run i's row as "
-                            "a dict, table.results[i] its result (when the batch kept them)")
+            raise TypeError(
+                f"a BatchTable is indexed by column name, got {shown}: table.row(i) is run i's row as "
+                "a dict, table.results[i] its result (when the batch kept them)"
+            )
         if name not in self._columns:
             raise KeyError(f"no column named {name!r}; see table.column_names")
         return self._columns[name]
@@ -165,7 +180,8 @@ class BatchTable(Generic[Result]):
             return NotImplemented
         return self.column_names == other.column_names and all(
             a.dtype == b.dtype and a.tobytes() == b.tobytes() if a.dtype != object else list(a) == list(b)
-            for a, b in zip(self._columns.values(), other._columns.values()))
+            for a, b in zip(self._columns.values(), other._columns.values())
+        )
 
     __hash__ = None  # type: ignore[assignment]
 
@@ -185,8 +201,12 @@ class BatchTable(Generic[Result]):
     def to_arrow(self) -> Any:
         """A pyarrow.Table: one row per run (strings as string, the rest as their numpy types)."""
         pa = _need("pyarrow")
-        return pa.table({name: pa.array(values.tolist() if values.dtype == object else values)
-                         for name, values in self._columns.items()})
+        return pa.table(
+            {
+                name: pa.array(values.tolist() if values.dtype == object else values)
+                for name, values in self._columns.items()
+            }
+        )
 
     @staticmethod
     def concat(tables: Iterable["BatchTable[_Kind]"]) -> "BatchTable[_Kind]":
@@ -225,8 +245,13 @@ def _run_row(r: Any) -> Dict[str, Any]:
     config = r.config
     metrics = r.unrounded_metrics
     row: Dict[str, Any] = {
-        "seed": np.uint64(config.seed), "rng": config.rng, "timestep": r.timestep, "steps": metrics["steps"],
-        "perturb": config.perturb, "record_every": config.record_every, "audit_energy": config.audit_energy,
+        "seed": np.uint64(config.seed),
+        "rng": config.rng,
+        "timestep": r.timestep,
+        "steps": metrics["steps"],
+        "perturb": config.perturb,
+        "record_every": config.record_every,
+        "audit_energy": config.audit_energy,
     }
     for axis, value in zip("xyz", metrics["box_final_pos"]):
         row["box_final_pos_" + axis] = value
@@ -251,13 +276,20 @@ def param_column(kind: str, name: str) -> str:
 
 
 def _scenario_row(r: Any) -> Dict[str, Any]:
-    row: Dict[str, Any] = {"scenario": r.name, "seed": np.uint64(r.seed), "rng": r.rng, "timestep": r.timestep,
-                           "steps": r.steps, "perturb": r.perturb, "sim_time": r.sim_time}
+    row: Dict[str, Any] = {
+        "scenario": r.name,
+        "seed": np.uint64(r.seed),
+        "rng": r.rng,
+        "timestep": r.timestep,
+        "steps": r.steps,
+        "perturb": r.perturb,
+        "sim_time": r.sim_time,
+    }
     final = r.final_row
     for body, c in sorted(r.bodies.items()):
         for i, axis in enumerate("xyz"):
             row[f"{body}_final_pos_{axis}"] = float(final[c + i])
-        row[f"{body}_final_speed"] = _speed([float(v) for v in final[c + 7:c + 10]])
+        row[f"{body}_final_speed"] = _speed([float(v) for v in final[c + 7 : c + 10]])
     for i, d in enumerate(r.disturbances):
         for axis, value in zip(("fx", "fy", "fz"), d["force"]):
             row[f"disturbance{i}_{axis}"] = float(value)
@@ -275,7 +307,7 @@ def _speed(velocity: List[float]) -> float:
     """|v|, as sqrt of the sum of squares (the bits every table has had); a square past float's range (a run
     that blew up) would raise OverflowError, so such a speed is hypot's (or inf)."""
     try:
-        return math.sqrt(sum(v ** 2 for v in velocity))
+        return math.sqrt(sum(v**2 for v in velocity))
     except OverflowError:
         return math.hypot(*velocity)
 
@@ -359,8 +391,9 @@ def _table(results: Iterable[Any], keep_results: bool) -> BatchTable[Any]:
         rows = [_scenario_row(r) for r in items]
     else:
         kinds = {type(r).__name__ for r in items}
-        raise TypeError("results must be a list of RunResult or of ScenarioResult, not a mix, got "
-                        + ", ".join(sorted(kinds)))
+        raise TypeError(
+            "results must be a list of RunResult or of ScenarioResult, not a mix, got " + ", ".join(sorted(kinds))
+        )
     columns = _from_rows(rows).columns
     if items:  # an empty list has no columns at all, not even `run`
         columns = {"run": np.arange(len(items), dtype=np.int64), **columns}
@@ -382,12 +415,23 @@ def sweep_table(result: Any) -> BatchTable[Any]:
     edge = result.edge
     rows = []
     for p in result.points:
-        rows.append({
-            "timestep": p.timestep, "steps": p.steps, "duration": result.duration, "stable": p.stable,
-            "edge": edge is not None and p.timestep == edge, "peak_box_z": p.peak_box_z,
-            "max_abs_box_y": p.max_abs_box_y, "final_box_x": p.final_box_x, "final_box_y": p.final_box_y,
-            "final_box_z": p.final_box_z, "final_pusher_x": p.final_pusher_x, "warnings": p.warnings,
-            "energy_change": p.energy_change, "energy_unexplained": p.energy_unexplained,
-            "work_constraint_positive": p.work_constraint_positive,
-        })
+        rows.append(
+            {
+                "timestep": p.timestep,
+                "steps": p.steps,
+                "duration": result.duration,
+                "stable": p.stable,
+                "edge": edge is not None and p.timestep == edge,
+                "peak_box_z": p.peak_box_z,
+                "max_abs_box_y": p.max_abs_box_y,
+                "final_box_x": p.final_box_x,
+                "final_box_y": p.final_box_y,
+                "final_box_z": p.final_box_z,
+                "final_pusher_x": p.final_pusher_x,
+                "warnings": p.warnings,
+                "energy_change": p.energy_change,
+                "energy_unexplained": p.energy_unexplained,
+                "work_constraint_positive": p.work_constraint_positive,
+            }
+        )
     return _from_rows(rows)

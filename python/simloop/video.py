@@ -125,8 +125,10 @@ class VideoRecording:
         if mp4 and not self.ffmpeg:
             self.note = " (an animated PNG: ffmpeg, which .mp4 needs, is not on PATH)"
         elif suffix not in (".mp4", ".png"):  # asked for a GIF, say, or no format at all
-            self.note = (f" (an animated PNG: {suffix or 'a name without a suffix'} is not a format --video writes; "
-                         "FILE.mp4 is an MP4, with ffmpeg)")
+            self.note = (
+                f" (an animated PNG: {suffix or 'a name without a suffix'} is not a format --video writes; "
+                "FILE.mp4 is an MP4, with ffmpeg)"
+            )
         else:
             self.note = ""
         self.piped: Any = _core.PipedFile(self.target)
@@ -237,10 +239,33 @@ class VideoRecording:
         writer = os.open(self.piped.writer_path, os.O_WRONLY)
         try:
             encoder = subprocess.Popen(
-                [self.ffmpeg, "-nostdin", "-loglevel", "error", "-f", "rawvideo", "-pix_fmt", "rgb24",
-                 "-s", f"{WIDTH}x{HEIGHT}", "-framerate", f"{rate.numerator}/{rate.denominator}", "-i", "pipe:0",
-                 "-pix_fmt", "yuv420p", "-movflags", "frag_keyframe+empty_moov", "-f", "mp4", "pipe:1"],
-                stdin=subprocess.PIPE, stdout=writer, stderr=subprocess.PIPE)
+                [
+                    self.ffmpeg,
+                    "-nostdin",
+                    "-loglevel",
+                    "error",
+                    "-f",
+                    "rawvideo",
+                    "-pix_fmt",
+                    "rgb24",
+                    "-s",
+                    f"{WIDTH}x{HEIGHT}",
+                    "-framerate",
+                    f"{rate.numerator}/{rate.denominator}",
+                    "-i",
+                    "pipe:0",
+                    "-pix_fmt",
+                    "yuv420p",
+                    "-movflags",
+                    "frag_keyframe+empty_moov",
+                    "-f",
+                    "mp4",
+                    "pipe:1",
+                ],
+                stdin=subprocess.PIPE,
+                stdout=writer,
+                stderr=subprocess.PIPE,
+            )
         finally:
             os.close(writer)
             self.piped.close_writer()  # ffmpeg holds the only write end now: its exit ends the stream

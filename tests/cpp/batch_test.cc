@@ -1,5 +1,7 @@
 // run_batch: many runs of the chapter's over one model, the same bits as
 // running each alone, whatever the thread count.
+#include "simloop/batch.hpp"
+
 #include <gtest/gtest.h>
 
 #include <array>
@@ -12,10 +14,9 @@
 #include <vector>
 
 #include "simloop/chapter_scene.hpp"
-#include "worker_pool.hpp"
-#include "simloop/batch.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/output.hpp"
+#include "worker_pool.hpp"
 
 namespace {
 
@@ -28,7 +29,8 @@ const simloop::Model& scene() {
 
 bool same_bits(const Trajectory& a, const Trajectory& b) {
   return a.rows() == b.rows() && a.columns() == b.columns() &&
-         std::memcmp(a.data(), b.data(), sizeof(double) * static_cast<size_t>(a.rows()) * static_cast<size_t>(a.columns())) == 0;
+         std::memcmp(a.data(), b.data(),
+                     sizeof(double) * static_cast<size_t>(a.rows()) * static_cast<size_t>(a.columns())) == 0;
 }
 
 std::vector<simloop::RunConfig> mixed_configs() {

@@ -1,9 +1,10 @@
+#include "cli_options.hpp"
+
 #include <gtest/gtest.h>
 
 #include <initializer_list>
 #include <vector>
 
-#include "cli_options.hpp"
 #include "simloop/errors.hpp"
 
 namespace {
@@ -65,8 +66,8 @@ TEST(CliOptions, VideoNamesAFileForARun) {
 }
 
 TEST(CliOptions, ParsesEveryFlagInBothSpellings) {
-  const auto o = parse({"--seed", "18446744073709551615", "--steps=10", "--timestep", "0.05", "--smoke",
-                        "--out=o", "--no-perturb", "--no-rerun", "--record-every", "5", "--model", "m.xml"});
+  const auto o = parse({"--seed", "18446744073709551615", "--steps=10", "--timestep", "0.05", "--smoke", "--out=o",
+                        "--no-perturb", "--no-rerun", "--record-every", "5", "--model", "m.xml"});
   EXPECT_EQ(o.run.seed, 18446744073709551615u);
   EXPECT_EQ(o.run.steps, 10);
   EXPECT_EQ(o.run.num_steps(), 300);  // --smoke wins
@@ -97,8 +98,7 @@ TEST(CliOptions, BadValuesNameTheFlagAndTheValue) {
   EXPECT_EQ(usage_error({"--steps", "0"}), "--steps must be a whole number from 1 to 4611686018427387903, got '0'");
   EXPECT_EQ(usage_error({"--steps", "-5"}), "--steps must be a whole number from 1 to 4611686018427387903, got '-5'");
   EXPECT_EQ(usage_error({"--steps", "2.5"}), "--steps must be a whole number from 1 to 4611686018427387903, got '2.5'");
-  EXPECT_EQ(usage_error({"--seed", "-1"}),
-            "--seed must be a whole number from 0 to 18446744073709551615, got '-1'");
+  EXPECT_EQ(usage_error({"--seed", "-1"}), "--seed must be a whole number from 0 to 18446744073709551615, got '-1'");
   EXPECT_EQ(usage_error({"--seed", "18446744073709551616"}),
             "--seed must be a whole number from 0 to 18446744073709551615, got '18446744073709551616'");
   EXPECT_EQ(usage_error({"--seed", "abc"}), "--seed must be a whole number from 0 to 18446744073709551615, got 'abc'");
@@ -106,8 +106,9 @@ TEST(CliOptions, BadValuesNameTheFlagAndTheValue) {
             "--record-every must be a whole number from 1 to 4611686018427387903, got '0'");
   EXPECT_EQ(usage_error({"--seed"}), "--seed needs a value");
   // A forgotten value does not swallow the next flag; --out=--x is a folder named so.
-  EXPECT_EQ(usage_error({"--out", "--no-perturb"}),
-            "--out needs a value, got the flag --no-perturb (write --out=--no-perturb for a value that begins with --)");
+  EXPECT_EQ(
+      usage_error({"--out", "--no-perturb"}),
+      "--out needs a value, got the flag --no-perturb (write --out=--no-perturb for a value that begins with --)");
   EXPECT_EQ(usage_error({"--out", "--seed", "3"}),
             "--out needs a value, got the flag --seed (write --out=--seed for a value that begins with --)");
   EXPECT_EQ(parse({"--out=--x"}).out, std::filesystem::path("--x"));
@@ -149,7 +150,8 @@ TEST(CliOptions, FlagsWithoutValuesRefuseOne) {
 }
 
 TEST(CliOptions, EchoedValuesAreEscapedOntoOneLine) {
-  EXPECT_EQ(usage_error({"--steps", "x'y"}), "--steps must be a whole number from 1 to 4611686018427387903, got 'x\\'y'");
+  EXPECT_EQ(usage_error({"--steps", "x'y"}),
+            "--steps must be a whole number from 1 to 4611686018427387903, got 'x\\'y'");
   EXPECT_EQ(usage_error({"--timestep", "a\nb\\c"}),
             "--timestep must be a positive, finite number of seconds, got 'a\\x0ab\\\\c'");
   EXPECT_EQ(usage_error({"--bogus\r"}), "unknown option '--bogus\\x0d' (see --help)");
@@ -160,15 +162,17 @@ TEST(CliOptions, SweepPointsMustBeRunnableAsAsked) {
   EXPECT_EQ(usage_error({"sweep", "--duration", "1e300", "--timesteps", "0.01"}),
             "--timesteps/--duration: duration 1e+300 s at timestep 0.01 s is 1e+302 steps; a sweep point needs 4 to "
             "4611686018427387903 steps (duration / timestep, rounded)");
-  EXPECT_EQ(usage_error({"sweep", "--timesteps", "1e-300,0.002"}).rfind("--timesteps/--duration: duration 4.0 s at "
-                                                                       "timestep 1e-300 s is 4e+300 steps",
-                                                                       0),
+  EXPECT_EQ(usage_error({"sweep", "--timesteps", "1e-300,0.002"})
+                .rfind("--timesteps/--duration: duration 4.0 s at "
+                       "timestep 1e-300 s is 4e+300 steps",
+                       0),
             0u);
   EXPECT_EQ(usage_error({"sweep", "--duration", "9e18"}).rfind("--duration: duration 9e+18 s at timestep 0.0005 s", 0),
             0u);
-  EXPECT_EQ(usage_error({"sweep", "--range", "0.5:2:3", "--duration", "4"}).rfind("--range/--duration: duration 4.0 s "
-                                                                                "at timestep 2.0 s is 2 steps",
-                                                                                0),
+  EXPECT_EQ(usage_error({"sweep", "--range", "0.5:2:3", "--duration", "4"})
+                .rfind("--range/--duration: duration 4.0 s "
+                       "at timestep 2.0 s is 2 steps",
+                       0),
             0u);
   EXPECT_NO_THROW((void)parse({"sweep"}));
   EXPECT_TRUE(parse({"sweep", "--duration", "1e300", "--help"}).help);

@@ -3,7 +3,6 @@
 // failing or stopped --plot, no memory. Always one line, and the earlier
 // outputs kept whole.
 #include <gtest/gtest.h>
-
 #include <signal.h>
 #include <sys/mount.h>
 
@@ -131,8 +130,7 @@ TEST(Command, AFullDiskLeavesTheEarlierOutputsAndNoTemporaryFiles) {
   for (int attempt = 0; attempt < 7; ++attempt) {
     const Outcome o = sim_loop(dir.path(), {"--steps", "2000", "--out", "small"});
     EXPECT_EQ(o.exit_code, 1) << o.err;
-    EXPECT_NE(o.err.find("small/trajectory.csv: cannot write (No space left on device)"), std::string::npos)
-        << o.err;
+    EXPECT_NE(o.err.find("small/trajectory.csv: cannot write (No space left on device)"), std::string::npos) << o.err;
     EXPECT_EQ(names_in(small), std::set<std::string>{}) << "attempt " << attempt;
   }
   EXPECT_EQ(sim_loop(dir.path(), {"--smoke", "--out", "small"}).exit_code, 0) << "a run that fits";
@@ -197,8 +195,8 @@ TEST(Command, APlotFailureIsOneLine) {
                    "echo \"ModuleNotFoundError: No module named 'matplotlib'\" >&2\n"
                    "exit 1\n");
   fs::permissions(fake, fs::perms::owner_all);
-  const Outcome o = sim_loop(dir.path(), {"--smoke", "--plot", "--out", "out"},
-                             "SIMLOOP_PYTHON=" + shell_quote(fake.string()));
+  const Outcome o =
+      sim_loop(dir.path(), {"--smoke", "--plot", "--out", "out"}, "SIMLOOP_PYTHON=" + shell_quote(fake.string()));
   EXPECT_EQ(o.exit_code, 1);
   EXPECT_EQ(std::count(o.err.begin(), o.err.end(), '\n'), 1) << o.err;
   EXPECT_EQ(o.err.rfind("sim_loop: --plot: ", 0), 0u) << o.err;
@@ -238,7 +236,7 @@ TEST(Command, OutOfMemorySaysWhatWasBeingDone) {
   xml.insert(xml.find('>') + 1, "<size nstack=\"60000000\"/>");
   test::write_text(dir.path() / "big.xml", xml);
   for (const std::vector<std::string>& args : {std::vector<std::string>{"--model", "big.xml", "--out", "s"},
-                                              std::vector<std::string>{"sweep", "--model", "big.xml", "--out", "s"}}) {
+                                               std::vector<std::string>{"sweep", "--model", "big.xml", "--out", "s"}}) {
     const Outcome o = sim_loop(dir.path(), args, "ulimit -v 300000 &&");
     EXPECT_EQ(o.exit_code, 2);
     EXPECT_EQ(o.err, "sim_loop: --model: big.xml: Error: engine error: Could not allocate memory\n");

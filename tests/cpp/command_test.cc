@@ -164,7 +164,9 @@ TEST(Command, BadInputGetsOneLineAndChangesNothing) {
       {{"sweep", "--duration", "0"}, 2, "--duration must be a positive, finite number of seconds, got '0'"},
       {{"sweep", "--threads", "0"}, 2, "--threads must be a whole number from 1 to 4096, got '0'"},
       {{"sweep", "--timesteps", "0.001,x"}, 2, "--timesteps must be a positive, finite number of seconds, got 'x'"},
-      {{"sweep", "--range", "0.1:0.001:5"}, 2, "--range: timestep range must run from a positive timestep up to a larger one"},
+      {{"sweep", "--range", "0.1:0.001:5"},
+       2,
+       "--range: timestep range must run from a positive timestep up to a larger one"},
       {{"sweep", "--range", "0.001:0.1"}, 2, "--range must be FROM:TO:COUNT, got '0.001:0.1'"},
       {{"sweep", "--seed", "1"}, 2, "--seed is not a sweep option"},
       {{"--threads", "2"}, 2, "--threads belongs to the sweep command"},
@@ -173,7 +175,8 @@ TEST(Command, BadInputGetsOneLineAndChangesNothing) {
     std::vector<std::string> args = c.args;
     if (std::find(args.begin(), args.end(), "--out") == args.end()) args.insert(args.end(), {"--out", "out"});
     const Outcome o = sim_loop(dir.path(), args);
-    SCOPED_TRACE(c.args.front() + " " + (c.args.size() > 1 ? c.args[1] : "") + " " + (c.args.size() > 2 ? c.args[2] : ""));
+    SCOPED_TRACE(c.args.front() + " " + (c.args.size() > 1 ? c.args[1] : "") + " " +
+                 (c.args.size() > 2 ? c.args[2] : ""));
     EXPECT_EQ(o.exit_code, c.exit_code);
     EXPECT_EQ(o.err.rfind("sim_loop: ", 0), 0u) << o.err;
     EXPECT_NE(o.err.find(c.message_part), std::string::npos) << o.err;

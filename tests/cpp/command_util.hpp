@@ -46,10 +46,10 @@ inline std::string shell_quote(const std::string& s) {
 // `shell_prefix` runs first in the same shell (a ulimit, say); `stdout_to`
 // replaces the redirection of stdout (then o.out stays empty).
 inline Outcome sim_loop(const fs::path& cwd, const std::vector<std::string>& args, const std::string& shell_prefix = "",
-                 const std::string& stdout_to = "") {
+                        const std::string& stdout_to = "") {
   const fs::path out = cwd / ".stdout", err = cwd / ".stderr";
-  std::string cmd = "cd " + shell_quote(cwd.string()) + " && " + shell_prefix + " timeout 60 " +
-                    shell_quote(SIM_LOOP_EXE);
+  std::string cmd =
+      "cd " + shell_quote(cwd.string()) + " && " + shell_prefix + " timeout 60 " + shell_quote(SIM_LOOP_EXE);
   for (const auto& a : args) cmd += " " + shell_quote(a);
   cmd += " < /dev/null " + (stdout_to.empty() ? "> " + shell_quote(out.string()) : stdout_to) + " 2> " +
          shell_quote(err.string());
@@ -94,8 +94,8 @@ inline std::map<std::string, std::string> snapshot(const fs::path& dir) {
   for (const auto& e : fs::recursive_directory_iterator(dir)) {
     struct stat st {};
     ::stat(e.path().c_str(), &st);
-    files[e.path().string()] = test::read_text(e.path()) + "@" + std::to_string(st.st_mtim.tv_sec) + "." +
-                               std::to_string(st.st_mtim.tv_nsec);
+    files[e.path().string()] =
+        test::read_text(e.path()) + "@" + std::to_string(st.st_mtim.tv_sec) + "." + std::to_string(st.st_mtim.tv_nsec);
   }
   return files;
 }

@@ -1,11 +1,12 @@
 // Stopping and watching long work (RunControl), and rows streamed to a sink.
+#include "simloop/control.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cstring>
 #include <vector>
 
 #include "simloop/batch.hpp"
-#include "simloop/control.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/run.hpp"
 #include "simloop/sim.hpp"

@@ -41,7 +41,8 @@ TEST(EnergyAudit, ChangesNoPhysics) {
   ASSERT_EQ(a.trajectory.columns(), ChapterColumns::kNumBaseColumns);
   ASSERT_EQ(b.trajectory.columns(), ChapterColumns::kNumColumns);
   for (std::int64_t r = 0; r < a.trajectory.rows(); ++r) {
-    ASSERT_EQ(std::memcmp(a.trajectory.row(r), b.trajectory.row(r), sizeof(double) * ChapterColumns::kNumBaseColumns), 0)
+    ASSERT_EQ(std::memcmp(a.trajectory.row(r), b.trajectory.row(r), sizeof(double) * ChapterColumns::kNumBaseColumns),
+              0)
         << "row " << r;
   }
   EXPECT_EQ(simloop::metrics_json(a.metrics), simloop::metrics_json(b.metrics));

@@ -1,7 +1,11 @@
 // A policy in the loop (run_schedule's Policy hook) and episodes stepped
 // from outside (Episodes): the same bits as the open-loop run when they
 // write the same ctrl, and as each other whatever the thread count.
+#include "simloop/episode.hpp"
+
 #include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -13,21 +17,18 @@
 #include <string>
 #include <vector>
 
-#include <sys/wait.h>
-#include <unistd.h>
-
-#include "simloop/episode.hpp"
+#include "run_detail.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/scenario_run.hpp"
 #include "simloop/state.hpp"
-#include "run_detail.hpp"
 
 namespace {
 
 // PushT with constant controls (so a policy can write exactly what they do)
 // and a drawn disturbance.
 simloop::Scenario constant_pusht(const char* length = "steps = 700") {
-  return simloop::Scenario::from_toml_string(std::string("name = \"pusht-constant\"\nscene = \"pusht.xml\"\n") + length +
+  return simloop::Scenario::from_toml_string(std::string("name = \"pusht-constant\"\nscene = \"pusht.xml\"\n") +
+                                                 length +
                                                  "\n[[control]]\nactuator = \"push_x\"\nvalue = 0.8\n"
                                                  "[[control]]\nactuator = \"push_y\"\nvalue = 0.3\n"
                                                  "[[disturbance]]\nbody = \"tblock\"\nnewtons = [0.5, 1.5]\n"
@@ -93,12 +94,14 @@ TEST(Policy, WritingTheScheduledCtrlGivesTheOpenLoopRunsBits) {
     const simloop::RunRecord open = simloop::run_scenario(scene, scenario, config);
     for (std::int64_t every : {1, 7, 50, 5000}) {
       Constant policy(every, {0.8, 0.3});
-      const simloop::RunRecord closed = simloop::run_scenario(scene, scenario, config, nullptr, nullptr, nullptr, simloop::RunInputs::deciding(policy));
+      const simloop::RunRecord closed = simloop::run_scenario(scene, scenario, config, nullptr, nullptr, nullptr,
+                                                              simloop::RunInputs::deciding(policy));
       EXPECT_TRUE(same_run(open, closed)) << "seed " << seed << ", every " << every;
     }
     // And the hook does decide: other values, other bits.
     Constant other(50, {0.8, 0.31});
-    EXPECT_FALSE(same_run(open, simloop::run_scenario(scene, scenario, config, nullptr, nullptr, nullptr, simloop::RunInputs::deciding(other))));
+    EXPECT_FALSE(same_run(open, simloop::run_scenario(scene, scenario, config, nullptr, nullptr, nullptr,
+                                                      simloop::RunInputs::deciding(other))));
   }
 }
 
@@ -109,7 +112,8 @@ TEST(Policy, DecidesEveryKStepsOnTheRecordersRowAndItsCtrlWinsOverTheSchedules) 
   config.record_every = 1;
   const simloop::RunRecord probe = simloop::run_scenario(scene, scenario, config);
   Steering policy(50, column(probe.columns, "tblock_x"));
-  const simloop::RunRecord r = simloop::run_scenario(scene, scenario, config, nullptr, nullptr, nullptr, simloop::RunInputs::deciding(policy));
+  const simloop::RunRecord r =
+      simloop::run_scenario(scene, scenario, config, nullptr, nullptr, nullptr, simloop::RunInputs::deciding(policy));
   EXPECT_EQ(policy.steps, (std::vector<std::int64_t>{0, 50, 100, 150, 200}));
   const int ctrl_x = column(r.columns, "push_x_ctrl");
   for (std::size_t k = 0; k < policy.steps.size(); ++k) {
@@ -120,8 +124,8 @@ TEST(Policy, DecidesEveryKStepsOnTheRecordersRowAndItsCtrlWinsOverTheSchedules) 
     // has the new decision's, the observation the one before's.
     for (std::size_t c = 0; c < r.columns.size(); ++c) {
       const std::string& name = r.columns[c].name;
-      if (name.size() > 6 && (name.compare(name.size() - 5, 5, "_ctrl") == 0 ||
-                              name.compare(name.size() - 6, 6, "_force") == 0)) {
+      if (name.size() > 6 &&
+          (name.compare(name.size() - 5, 5, "_ctrl") == 0 || name.compare(name.size() - 6, 6, "_force") == 0)) {
         continue;
       }
       EXPECT_TRUE(same_bits(&row[c], &policy.observations[k][c], 1)) << r.columns[c].name << " at step " << step;
@@ -160,7 +164,9 @@ TEST(Policy, AnExceptionStopsTheRunAndReachesTheCaller) {
   const simloop::Scenario scenario = constant_pusht();
   const simloop::Model scene = simloop::load_scene(scenario);
   simloop::RunControl control;
-  EXPECT_THROW((void)simloop::run_scenario(scene, scenario, {}, nullptr, nullptr, &control, simloop::RunInputs::deciding(policy)), std::runtime_error);
+  EXPECT_THROW((void)simloop::run_scenario(scene, scenario, {}, nullptr, nullptr, &control,
+                                           simloop::RunInputs::deciding(policy)),
+               std::runtime_error);
   EXPECT_EQ(control.steps_done(), 30);
 }
 
@@ -185,10 +191,13 @@ TEST(Policy, BatchesEqualSequentialRunsAtAnyThreadCount) {
     }
   } policy;
   std::vector<simloop::RunRecord> alone;
-  for (const auto& c : configs) alone.push_back(simloop::run_scenario(scene, scenario, c, nullptr, nullptr, nullptr, simloop::RunInputs::deciding(policy)));
+  for (const auto& c : configs)
+    alone.push_back(
+        simloop::run_scenario(scene, scenario, c, nullptr, nullptr, nullptr, simloop::RunInputs::deciding(policy)));
   for (int threads : {1, 2}) {
-    const auto batch = simloop::run_scenario_batch(scene, scenario, configs, threads, nullptr,
-                                              std::vector<simloop::RunInputs>(configs.size(), simloop::RunInputs::deciding(policy)));
+    const auto batch = simloop::run_scenario_batch(
+        scene, scenario, configs, threads, nullptr,
+        std::vector<simloop::RunInputs>(configs.size(), simloop::RunInputs::deciding(policy)));
     for (std::size_t i = 0; i < configs.size(); ++i) EXPECT_TRUE(same_run(batch[i], alone[i])) << i << ", " << threads;
   }
 }
@@ -201,7 +210,8 @@ TEST(Episodes, FollowTheBitsOfAPolicyRunGivenItsActions) {
   simloop::Episodes episodes(scene, scenario, config, 1);
   ASSERT_EQ(episodes.steps(), 230);
   Steering policy(50, column(episodes.columns(), "tblock_x"));
-  const simloop::RunRecord r = simloop::run_scenario(scene, scenario, config, nullptr, nullptr, nullptr, simloop::RunInputs::deciding(policy));
+  const simloop::RunRecord r =
+      simloop::run_scenario(scene, scenario, config, nullptr, nullptr, nullptr, simloop::RunInputs::deciding(policy));
   const auto width = static_cast<std::size_t>(episodes.width());
   ASSERT_EQ(width, r.columns.size());
   std::vector<double> observation(width);
@@ -238,7 +248,8 @@ TEST(Episodes, ManyAtOnceEqualEachAloneWhateverTheThreadCount) {
     std::vector<double> o(static_cast<std::size_t>(one.width()));
     std::uint8_t term = 0, trunc = 0;
     one.reset(0, 100 + i, o.data());
-    for (std::size_t call = 0; call < 5; ++call) one.step(actions_at(call, i).data(), 2, 37, nullptr, 0, o.data(), &term, &trunc);
+    for (std::size_t call = 0; call < 5; ++call)
+      one.step(actions_at(call, i).data(), 2, 37, nullptr, 0, o.data(), &term, &trunc);
     alone_obs.push_back(o);
   }
   for (int threads : {1, 2, 4}) {
@@ -339,7 +350,8 @@ TEST(Episodes, BadInputIsRefusedBeforeAnyStep) {
   std::uint8_t term[2], trunc[2];
   std::vector<double> actions = {0.5, 0.5, 0.5, 0.5};
   e.reset(0, 1, obs.data());
-  EXPECT_THROW(e.step(actions.data(), 4, 10, nullptr, 0, obs.data(), term, trunc), simloop::InvalidArgument);  // 1 not reset
+  EXPECT_THROW(e.step(actions.data(), 4, 10, nullptr, 0, obs.data(), term, trunc),
+               simloop::InvalidArgument);  // 1 not reset
   e.reset(1, 1, obs.data());
   actions[3] = std::numeric_limits<double>::quiet_NaN();
   EXPECT_THROW(e.step(actions.data(), 4, 10, nullptr, 0, obs.data(), term, trunc), simloop::InvalidArgument);

@@ -5,12 +5,11 @@
 #pragma once
 
 #include <mujoco/mujoco.h>
+#include <toml++/toml.h>
 
 #include <optional>
 #include <string>
 #include <string_view>
-
-#include <toml++/toml.h>
 
 namespace test {
 
@@ -44,7 +43,7 @@ inline std::string no_expected_figure(std::string_view key) {
 }  // namespace test
 
 // Declares `const type name` from the table, or skips the test saying why.
-#define SIMLOOP_EXPECTED(type, name, key)                                     \
-  const std::optional<type> name##_expected = ::test::expected<type>(key);   \
-  if (!name##_expected) GTEST_SKIP() << ::test::no_expected_figure(key);      \
+#define SIMLOOP_EXPECTED(type, name, key)                                  \
+  const std::optional<type> name##_expected = ::test::expected<type>(key); \
+  if (!name##_expected) GTEST_SKIP() << ::test::no_expected_figure(key);   \
   const type name = *name##_expected

@@ -1,13 +1,14 @@
 // fields.hpp: every array of mjModel and mjData by name, its rows and what
 // they are, the constraint arrays' rows in use, and the model parameters a
 // Sim lets a caller write (in a model of its own).
+#include "simloop/fields.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <string>
 
 #include "simloop/chapter_scene.hpp"
-#include "simloop/fields.hpp"
 #include "simloop/sim.hpp"
 #include "test_util.hpp"
 
@@ -79,7 +80,7 @@ TEST(Fields, AWritableParameterIsTheSimsOwnAndChangesItsRun) {
   const simloop::FieldView mass = sim.writable_model_field("body_mass");
   EXPECT_NE(sim.model().get(), before);  // a copy of its own
   static_cast<double*>(mass.data)[1] = 2.0;
-  EXPECT_EQ(shared.get()->body_mass[1], 0.5);  // the shared model is as it was
+  EXPECT_EQ(shared.get()->body_mass[1], 0.5);                        // the shared model is as it was
   EXPECT_EQ(sim.writable_model_field("body_mass").data, mass.data);  // and copied once only
   sim.set_timestep(0.001);
   EXPECT_EQ(sim.model().get()->body_mass[1], 2.0);  // a timestep keeps the written mass

@@ -2,6 +2,8 @@
 // of the next mj_step where it can be, a whole forward pass where not; either
 // way the bits of a forward pass kept aside (forward_keeping_state) then
 // mj_step, in the observation and in the run.
+#include "loop.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -14,7 +16,6 @@
 #include <string>
 #include <vector>
 
-#include "loop.hpp"
 #include "mujoco_compat.hpp"
 #include "simloop/model.hpp"
 #include "simloop/recorder.hpp"
@@ -136,9 +137,9 @@ TEST(DecisionStep, TakesAWholeForwardPassForWhatTheFirstHalfCannotGive) {
 TEST(DecisionStep, LeavesABadStateAndACallbackToTheWholeStep) {
   const simloop::Model scene = pusht();
   const mjModel* m = scene.get();
-  const simloop::Scenario scenario =
-      simloop::Scenario::from_toml_string("name = \"t\"\nscene = \"pusht.xml\"\nsteps = 10\n[record]\njoints = [\"slide_x\"]\n",
-                                          "test", SIMLOOP_TEST_SCENES);
+  const simloop::Scenario scenario = simloop::Scenario::from_toml_string(
+      "name = \"t\"\nscene = \"pusht.xml\"\nsteps = 10\n[record]\njoints = [\"slide_x\"]\n", "test",
+      SIMLOOP_TEST_SCENES);
   const simloop::ResolvedScenario resolved = simloop::resolve(scenario, m);
   const auto draws = simloop::make_draws(0);
   const simloop::Recorder recorder(m, resolved, simloop::build_schedule(resolved, scenario, m->opt.timestep, *draws));
@@ -201,10 +202,10 @@ TEST(DecisionStep, FollowsTreesThatFallAsleep) {
 // A row holds one state: under RK4 too, whose later stages would leave the
 // poses of another (its last stage's) for a read after the step.
 TEST(Loop, EveryColumnOfARowIsOfTheRowsStateUnderEveryIntegrator) {
-  const simloop::Scenario scenario = simloop::Scenario::from_toml_string(
-      std::string("name = \"t\"\nscene = \"pusht.xml\"\nsteps = 200\n") + kPushtRecord +
-          "[reset]\nqvel = [0.5, 0.3, 0, 0, 0, 2, 0, 0]\n",
-      "test", SIMLOOP_TEST_SCENES);
+  const simloop::Scenario scenario =
+      simloop::Scenario::from_toml_string(std::string("name = \"t\"\nscene = \"pusht.xml\"\nsteps = 200\n") +
+                                              kPushtRecord + "[reset]\nqvel = [0.5, 0.3, 0, 0, 0, 2, 0, 0]\n",
+                                          "test", SIMLOOP_TEST_SCENES);
   for (const char* integrator : {"Euler", "implicit", "RK4"}) {
     const simloop::RunRecord r = simloop::run_scenario(pusht_integrated_by(integrator), scenario, {});
     const auto column = [&](const std::string& name) {
@@ -215,8 +216,9 @@ TEST(Loop, EveryColumnOfARowIsOfTheRowsStateUnderEveryIntegrator) {
       return std::int64_t{0};
     };
     double moved = 0.0;
-    for (const auto& [body, joint] : {std::pair{"tblock_x", "tblock_free_pos0"}, std::pair{"tblock_y", "tblock_free_pos1"},
-                                      std::pair{"tblock_z", "tblock_free_pos2"}}) {
+    for (const auto& [body, joint] :
+         {std::pair{"tblock_x", "tblock_free_pos0"}, std::pair{"tblock_y", "tblock_free_pos1"},
+          std::pair{"tblock_z", "tblock_free_pos2"}}) {
       const std::int64_t b = column(body), j = column(joint);
       for (std::int64_t row = 0; row < r.trajectory.rows(); ++row) {
         // A free joint's body sits at its qpos: bit for bit, when both are of one state.

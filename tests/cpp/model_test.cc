@@ -1,3 +1,5 @@
+#include "simloop/model.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -7,9 +9,8 @@
 
 #include "expected.hpp"
 #include "simloop/errors.hpp"
-#include "simloop/model.hpp"
-#include "simloop/sim.hpp"
 #include "simloop/run.hpp"
+#include "simloop/sim.hpp"
 #include "test_util.hpp"
 
 namespace fs = std::filesystem;
@@ -67,8 +68,8 @@ TEST(Model, DataFitsModelsOfTheSameStructureOnly) {
   const simloop::Model model = simloop::pusher_scene();
   const simloop::Data data(model);
   EXPECT_TRUE(data.fits(model.with_timestep(0.05)));
-  const simloop::Model bigger = simloop::Model::from_xml_string(
-      scene_with("</worldbody>", "<body name=\"extra\" pos=\"1 1 1\"><freejoint/><geom size=\"0.1\"/></body></worldbody>"));
+  const simloop::Model bigger = simloop::Model::from_xml_string(scene_with(
+      "</worldbody>", "<body name=\"extra\" pos=\"1 1 1\"><freejoint/><geom size=\"0.1\"/></body></worldbody>"));
   EXPECT_FALSE(data.fits(bigger));
   simloop::Data mismatched(bigger);
   EXPECT_THROW((void)simloop::run(model, simloop::RunConfig{}, mismatched), simloop::InvalidArgument);
@@ -78,26 +79,30 @@ TEST(Model, MissingPiecesAreNamed) {
   // Any scene loads (scenarios run on any scene); the chapter's loop, which
   // reads the box and the pusher, refuses one without them, naming what is
   // missing (once at load: layout(); again in run()).
-  const simloop::Model crate = simloop::Model::from_xml_string(scene_with("name=\"box\"", "name=\"crate\""), "test.xml");
+  const simloop::Model crate =
+      simloop::Model::from_xml_string(scene_with("name=\"box\"", "name=\"crate\""), "test.xml");
   EXPECT_NE(simloop::chapter_layout_missing(crate), "");
-  EXPECT_NE(message_of<simloop::InvalidArgument>([&] { (void)simloop::chapter_layout(crate); })
-                .find("test.xml: the model has no body named \"box\""),
+  EXPECT_NE(message_of<simloop::InvalidArgument>([&] {
+              (void)simloop::chapter_layout(crate);
+            }).find("test.xml: the model has no body named \"box\""),
             std::string::npos);
   EXPECT_EQ(message_of<simloop::InvalidArgument>([&] { (void)simloop::run(crate, simloop::RunConfig{}); }),
             simloop::chapter_layout_missing(crate));
   EXPECT_NE(message_of<simloop::InvalidArgument>([] {
-              (void)simloop::chapter_layout(simloop::Model::from_xml_string(scene_with("<freejoint/>", "<joint type=\"slide\"/>")));
+              (void)simloop::chapter_layout(
+                  simloop::Model::from_xml_string(scene_with("<freejoint/>", "<joint type=\"slide\"/>")));
             }).find("body \"box\" must have exactly one joint, a free joint"),
             std::string::npos);
-  const std::string no_actuator = scene_with(
-      "<motor name=\"push_motor\" joint=\"pusher_slide\" gear=\"10\" ctrlrange=\"-1 1\"/>", "");
+  const std::string no_actuator =
+      scene_with("<motor name=\"push_motor\" joint=\"pusher_slide\" gear=\"10\" ctrlrange=\"-1 1\"/>", "");
   EXPECT_NE(message_of<simloop::InvalidArgument>([&] {
               (void)simloop::chapter_layout(simloop::Model::from_xml_string(no_actuator));
             }).find("no actuator"),
             std::string::npos);
   const std::string ball = scene_with("type=\"slide\" axis=\"1 0 0\"", "type=\"ball\"");
-  EXPECT_NE(message_of<simloop::InvalidArgument>([&] { (void)simloop::chapter_layout(simloop::Model::from_xml_string(ball)); })
-                .find("slide or hinge"),
+  EXPECT_NE(message_of<simloop::InvalidArgument>([&] {
+              (void)simloop::chapter_layout(simloop::Model::from_xml_string(ball));
+            }).find("slide or hinge"),
             std::string::npos);
   EXPECT_EQ(simloop::chapter_layout_missing(simloop::pusher_scene()), "");
 }
@@ -105,8 +110,9 @@ TEST(Model, MissingPiecesAreNamed) {
 TEST(Model, AFileThatIsNotXmlSaysSoNotWhatTheXmlParserMadeOfIt) {
   const std::string scenario = std::string(SIMLOOP_TEST_SCENES) + "/pusht.toml";
   EXPECT_EQ(message_of<simloop::MujocoError>([&] { (void)simloop::Model::from_file(scenario); }),
-            scenario + ": not an MJCF scene (its text begins with '#', not '<'); a scenario file (TOML) runs as a "
-                       "scenario (--scenario, simloop.Scenario.from_file)");
+            scenario +
+                ": not an MJCF scene (its text begins with '#', not '<'); a scenario file (TOML) runs as a "
+                "scenario (--scenario, simloop.Scenario.from_file)");
 }
 
 TEST(Model, InvalidXmlRaisesMujocosOwnMessageAndWritesNoLog) {
@@ -119,8 +125,7 @@ TEST(Model, InvalidXmlRaisesMujocosOwnMessageAndWritesNoLog) {
     // Schema errors go through MuJoCo's parser too: an attribute no
     // MuJoCo knows.
     const std::string unknown = scene_with("<light pos=\"0 0 3\"", "<light shine=\"1\" pos=\"0 0 3\"");
-    const std::string msg2 =
-        message_of<simloop::MujocoError>([&] { (void)simloop::Model::from_xml_string(unknown); });
+    const std::string msg2 = message_of<simloop::MujocoError>([&] { (void)simloop::Model::from_xml_string(unknown); });
     EXPECT_NE(msg2.find("shine"), std::string::npos) << msg2;
   });
   EXPECT_FALSE(fs::exists(dir.path() / "MUJOCO_LOG.TXT"));
@@ -136,9 +141,11 @@ TEST(Model, ASceneForNewerMujocoSaysHowToGetIt) {
     EXPECT_NE(simloop::Model::from_xml_string(xml, "new.xml").get(), nullptr);
     return;
   }
-  const std::string msg = message_of<simloop::MujocoError>([&] { (void)simloop::Model::from_xml_string(xml, "new.xml"); });
+  const std::string msg =
+      message_of<simloop::MujocoError>([&] { (void)simloop::Model::from_xml_string(xml, "new.xml"); });
   EXPECT_NE(msg.find("implicitfast"), std::string::npos) << msg;
-  EXPECT_NE(msg.find(std::string("this simloop runs MuJoCo ") + mj_versionString() + "; for a scene written for newer "
+  EXPECT_NE(msg.find(std::string("this simloop runs MuJoCo ") + mj_versionString() +
+                     "; for a scene written for newer "
                      "MuJoCo, build it on the mujoco package: SIMLOOP_MUJOCO=pypi scripts/run.sh)"),
             std::string::npos)
       << msg;
@@ -194,11 +201,11 @@ TEST(Model, ReportsTheLinkedMujocoVersion) {
   // As MuJoCo spells it, whatever the version's number encoding (222 for
   // 2.2.2, 3017000 for 3.17.0).
   EXPECT_EQ(simloop::mujoco_version(), std::string("MuJoCo ") + mj_versionString());
-  EXPECT_EQ(mj_version() >= 3000000 ? std::to_string(mj_version() / 1000000) + "." +
-                                          std::to_string(mj_version() / 1000 % 1000) + "." +
-                                          std::to_string(mj_version() % 1000)
-                                    : std::to_string(mj_version() / 100) + "." + std::to_string(mj_version() / 10 % 10) +
-                                          "." + std::to_string(mj_version() % 10),
+  EXPECT_EQ(mj_version() >= 3000000
+                ? std::to_string(mj_version() / 1000000) + "." + std::to_string(mj_version() / 1000 % 1000) + "." +
+                      std::to_string(mj_version() % 1000)
+                : std::to_string(mj_version() / 100) + "." + std::to_string(mj_version() / 10 % 10) + "." +
+                      std::to_string(mj_version() % 10),
             mj_versionString());
 }
 

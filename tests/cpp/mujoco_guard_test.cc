@@ -6,7 +6,10 @@
 // each test runs in a fresh process of its own (gtest's "threadsafe" death
 // test style re-executes this binary for the test alone) and exits 0 when
 // everything held, or 1 after printing to stderr what did not.
+#include "mujoco_guard.hpp"
+
 #include <gtest/gtest.h>
+#include <mujoco/mujoco.h>
 
 #include <cmath>
 #include <csetjmp>
@@ -18,9 +21,6 @@
 #include <string>
 #include <vector>
 
-#include <mujoco/mujoco.h>
-
-#include "mujoco_guard.hpp"
 #include "simloop/chapter_scene.hpp"
 #include "simloop/sim.hpp"
 #include "test_util.hpp"

@@ -1,6 +1,8 @@
 // Number formatting must match Python's exactly: metrics.json is compared
 // byte for byte with what the chapter's json.dumps writes. Expected strings
 // were produced by CPython 3.11's repr() and round().
+#include "simloop/number_format.hpp"
+
 #include <gtest/gtest.h>
 
 #include <charconv>
@@ -10,8 +12,6 @@
 #include <limits>
 #include <random>
 #include <string>
-
-#include "simloop/number_format.hpp"
 
 namespace {
 
@@ -54,10 +54,18 @@ TEST(PythonFloatRepr, MatchesCPython) {
 
 TEST(Round6, MatchesPythonRound) {
   const std::pair<double, double> cases[] = {
-      {0.1234565, 0.123456},   {5e-07, 0.0},           {1.5e-06, 2e-06},
-      {2.5e-06, 3e-06},        {-1e-07, -0.0},         {2.675, 2.675},
-      {1.0000005, 1.000001},   {123.4567895, 123.456789}, {4.849876402547829, 4.849876},
-      {0.049897127410617, 0.049897}, {-5e-07, -0.0},   {1e+300, 1e+300},
+      {0.1234565, 0.123456},
+      {5e-07, 0.0},
+      {1.5e-06, 2e-06},
+      {2.5e-06, 3e-06},
+      {-1e-07, -0.0},
+      {2.675, 2.675},
+      {1.0000005, 1.000001},
+      {123.4567895, 123.456789},
+      {4.849876402547829, 4.849876},
+      {0.049897127410617, 0.049897},
+      {-5e-07, -0.0},
+      {1e+300, 1e+300},
       {3.0517578125e-05, 3.1e-05},
   };
   for (const auto& [value, rounded] : cases) {
@@ -118,7 +126,8 @@ TEST(WriteShortest, WritesStdToCharsBytes) {
   for (int exponent = -42; exponent <= 17; ++exponent) {
     for (int digits = 1; digits <= 17; ++digits) {
       for (int i = 0; i < 20; ++i) {
-        const std::string mantissa = std::to_string(gen() % 100000000000000000ull).substr(0, static_cast<size_t>(digits));
+        const std::string mantissa =
+            std::to_string(gen() % 100000000000000000ull).substr(0, static_cast<size_t>(digits));
         expect_to_chars_bytes(std::strtod((mantissa + "e" + std::to_string(exponent)).c_str(), nullptr));
       }
     }
@@ -130,9 +139,22 @@ TEST(WriteShortest, WritesStdToCharsBytes) {
   }
   // Anything at all, and the edges.
   for (int i = 0; i < 100000; ++i) expect_to_chars_bytes(from_bits(gen()));
-  const double edges[] = {0.0, -0.0, 5e-324, -2.2250738585072014e-308, 1.7976931348623157e308,
-                          0x1p-130, 0x1p-131, 0x1p53, 0x1p53 - 1, 0x1p52 + 0.5, 1e15, 1e16, 0.0001, 1e-05,
-                          std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity(),
+  const double edges[] = {0.0,
+                          -0.0,
+                          5e-324,
+                          -2.2250738585072014e-308,
+                          1.7976931348623157e308,
+                          0x1p-130,
+                          0x1p-131,
+                          0x1p53,
+                          0x1p53 - 1,
+                          0x1p52 + 0.5,
+                          1e15,
+                          1e16,
+                          0.0001,
+                          1e-05,
+                          std::numeric_limits<double>::infinity(),
+                          -std::numeric_limits<double>::infinity(),
                           std::numeric_limits<double>::quiet_NaN()};
   for (const double x : edges) expect_to_chars_bytes(x);
 }

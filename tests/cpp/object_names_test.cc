@@ -1,12 +1,13 @@
 // object_names.hpp: the one wording of every lookup's error (what the scene
 // has, by name and by index) and the one rule for a likely typo.
+#include "simloop/object_names.hpp"
+
 #include <gtest/gtest.h>
 
 #include <string>
 
 #include "simloop/errors.hpp"
 #include "simloop/model.hpp"
-#include "simloop/object_names.hpp"
 
 namespace {
 
@@ -34,16 +35,16 @@ TEST(ObjectNames, AnUnknownNameListsTheNamesAndTheUnnamedByIndexInRuns) {
             "no actuator named 'motor'; the scene has no actuators");
   EXPECT_EQ(simloop::unknown_name_message(m, mjOBJ_BODY, "zz", {"bodies that can move", moves}),
             "no body named 'zz'; the scene's bodies that can move: a");
-  EXPECT_EQ(simloop::unknown_name_message(m, mjOBJ_BODY, "zz", {"bodies that can fly", [](const mjModel*, int) {
-              return false;
-            }}),
+  EXPECT_EQ(simloop::unknown_name_message(m, mjOBJ_BODY, "zz",
+                                          {"bodies that can fly", [](const mjModel*, int) { return false; }}),
             "no body named 'zz'; the scene has no bodies that can fly");
 }
 
 TEST(ObjectNames, AnIndexOutOfRangeSaysHowManyTheSceneHas) {
   const mjModel* m = scene();
-  EXPECT_EQ(simloop::index_out_of_range_message(m, mjOBJ_GEOM, "3"),
-            "geom index 3 is out of range: the scene has 3 geoms (0 to 2); the scene's geoms: unnamed, by index: 0 to 2");
+  EXPECT_EQ(
+      simloop::index_out_of_range_message(m, mjOBJ_GEOM, "3"),
+      "geom index 3 is out of range: the scene has 3 geoms (0 to 2); the scene's geoms: unnamed, by index: 0 to 2");
   EXPECT_EQ(simloop::index_out_of_range_message(m, mjOBJ_ACTUATOR, "0"),
             "actuator index 0 is out of range: the scene has no actuators");
   EXPECT_EQ(simloop::checked_object_index(m, mjOBJ_BODY, 8), 8);
@@ -62,7 +63,7 @@ TEST(DidYouMean, SuggestsOnlyLikelyTypos) {
   EXPECT_EQ(simloop::did_you_mean("PUSHER", {"tblock", "pusher"}), "pusher");
   EXPECT_EQ(simloop::did_you_mean("floor", {"tblock", "pusher"}), "");
   EXPECT_EQ(simloop::did_you_mean("bodys", {"bodies", "joints"}), "bodies");  // two edits in six letters
-  EXPECT_EQ(simloop::did_you_mean("box", {"bar", "pusher"}), "");               // not two in three
+  EXPECT_EQ(simloop::did_you_mean("box", {"bar", "pusher"}), "");             // not two in three
   EXPECT_EQ(simloop::did_you_mean("x", {}), "");
 }
 

@@ -1,7 +1,8 @@
 // OutputLock: one run at a time in a folder; another process is refused,
 // naming the holder.
-#include <gtest/gtest.h>
+#include "simloop/output_lock.hpp"
 
+#include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -9,7 +10,6 @@
 
 #include "simloop/errors.hpp"
 #include "simloop/output.hpp"
-#include "simloop/output_lock.hpp"
 #include "test_util.hpp"
 
 namespace fs = std::filesystem;

@@ -1,23 +1,22 @@
-#include <gtest/gtest.h>
+#include "simloop/output.hpp"
 
+#include <gtest/gtest.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
 
-#include <csignal>
-#include <set>
-
 #include <cmath>
+#include <csignal>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <set>
 #include <sstream>
 
 #include "simloop/control.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/model.hpp"
-#include "simloop/output.hpp"
 #include "simloop/run.hpp"
 #include "test_util.hpp"
 
@@ -207,8 +206,7 @@ TEST(Summary, ACutShortShoveSaysHowManyStepsItActed) {
   simloop::RunConfig config;
   config.steps = 60;  // the shove starts at step 30, so the run ends 30 steps into it
   const std::string text = simloop::summary_text(simloop::run(model, config));
-  EXPECT_NE(text.find("shove: +7.0 N in y for 30 steps (of 50: the run ended first) -> "), std::string::npos)
-      << text;
+  EXPECT_NE(text.find("shove: +7.0 N in y for 30 steps (of 50: the run ended first) -> "), std::string::npos) << text;
   config.steps = 1;
   const std::string one = simloop::summary_text(simloop::run(model, config));
   EXPECT_NE(one.find(" for 1 step (of 50: the run ended first) -> "), std::string::npos) << one;
@@ -390,8 +388,7 @@ TEST(Outputs, AnInterruptedWriterLeavesTheOldFilesAndNoTemporaryOnes) {
     simloop::RunControl control;
     simloop::OutputWriter writer(dir.path());
     control.request_stop();
-    EXPECT_THROW((void)simloop::run(model, config, workspace, &writer.trajectory(), &control),
-                 simloop::Interrupted);
+    EXPECT_THROW((void)simloop::run(model, config, workspace, &writer.trajectory(), &control), simloop::Interrupted);
   }
   expect_old_outputs_only(dir.path(), {"metrics.json", "trajectory.csv"});
   {

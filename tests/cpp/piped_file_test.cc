@@ -1,9 +1,10 @@
 // PipedFile: a file another library writes through a pipe, written and
 // checked here; every byte put in place, a write error kept for finish(), a
 // writer never blocked.
-#include <gtest/gtest.h>
+#include "simloop/piped_file.hpp"
 
 #include <fcntl.h>
+#include <gtest/gtest.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -14,7 +15,6 @@
 
 #include "simloop/errors.hpp"
 #include "simloop/output.hpp"
-#include "simloop/piped_file.hpp"
 #include "test_util.hpp"
 
 namespace fs = std::filesystem;
@@ -45,7 +45,9 @@ TEST(PipedFile, AWriteErrorIsKeptForFinishAndTheWriterIsNeverBlocked) {
   test::TempDir dir;
   const pid_t pid = ::fork();
   if (pid == 0) {
-    struct rlimit limit {64 * 1024, RLIM_INFINITY};
+    struct rlimit limit {
+      64 * 1024, RLIM_INFINITY
+    };
     ::setrlimit(RLIMIT_FSIZE, &limit);
     ::signal(SIGXFSZ, SIG_IGN);
     int code = 0;
@@ -99,4 +101,3 @@ TEST(PipedFile, DestroyedBeforeTheWriterClosedItLeavesNoFileAndTheWriterGoesOn) 
 }
 
 }  // namespace
-

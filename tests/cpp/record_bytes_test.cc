@@ -1,6 +1,8 @@
 // Results as bytes and back (what Python's pickle and a cluster's workers
 // carry): every field with the same bits, and bad bytes refused by name
 // without asking for the memory their counts claim.
+#include "simloop/record_bytes.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cstdint>
@@ -13,7 +15,6 @@
 #include "simloop/chapter_scene.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/output.hpp"
-#include "simloop/record_bytes.hpp"
 #include "simloop/scenario_run.hpp"
 #include "simloop/sweep.hpp"
 
@@ -61,7 +62,8 @@ TEST(RecordBytes, TheChaptersRunComesBackBitForBit) {
   EXPECT_EQ(simloop::to_bytes(back), bytes);  // every field the writer writes, read back
   EXPECT_TRUE(same_trajectory(back.trajectory, result.trajectory));
   ASSERT_EQ(back.final_state.size(), result.final_state.size());
-  EXPECT_EQ(std::memcmp(back.final_state.data(), result.final_state.data(), sizeof(double) * back.final_state.size()), 0);
+  EXPECT_EQ(std::memcmp(back.final_state.data(), result.final_state.data(), sizeof(double) * back.final_state.size()),
+            0);
   EXPECT_EQ(simloop::metrics_json(back), simloop::metrics_json(result));
   EXPECT_EQ(simloop::summary_text(back), simloop::summary_text(result));
   EXPECT_EQ(back.config.rng, simloop::ShoveRng::kNumpy);
@@ -94,8 +96,7 @@ TEST(RecordBytes, AScenarioRunComesBackBitForBit) {
 }
 
 TEST(RecordBytes, ASweepComesBackJudgedAsItWas) {
-  const simloop::SweepResult sweep =
-      simloop::sweep(simloop::pusher_scene(), {0.002, 0.005, 0.02}, 1.0, 1);
+  const simloop::SweepResult sweep = simloop::sweep(simloop::pusher_scene(), {0.002, 0.005, 0.02}, 1.0, 1);
   const simloop::SweepResult back = simloop::sweep_result_from_bytes(simloop::to_bytes(sweep));
   EXPECT_EQ(simloop::sweep_csv(back), simloop::sweep_csv(sweep));
   EXPECT_EQ(simloop::sweep_summary(back), simloop::sweep_summary(sweep));
@@ -111,11 +112,15 @@ TEST(RecordBytes, ChunksOfASweepJoinAsTheWholeSweep) {
   const simloop::SweepResult joined = simloop::join_sweeps(parts);
   EXPECT_EQ(simloop::sweep_csv(joined), simloop::sweep_csv(whole));
   EXPECT_EQ(joined.edge_index, whole.edge_index);
-  EXPECT_NE(refusal([&] { (void)simloop::join_sweeps({parts[1], parts[0]}); }).find("do not ascend at 0.002"),
+  EXPECT_NE(refusal([&] {
+              (void)simloop::join_sweeps({parts[1], parts[0]});
+            }).find("do not ascend at 0.002"),
             std::string::npos);
   simloop::SweepResult longer = parts[1];
   longer.duration = 2.0;
-  EXPECT_NE(refusal([&] { (void)simloop::join_sweeps({parts[0], longer}); }).find("durations differ, 1.0 and 2.0"),
+  EXPECT_NE(refusal([&] {
+              (void)simloop::join_sweeps({parts[0], longer});
+            }).find("durations differ, 1.0 and 2.0"),
             std::string::npos);
   EXPECT_NE(refusal([] { (void)simloop::join_sweeps({}); }), "");
 }

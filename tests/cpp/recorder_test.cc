@@ -1,5 +1,7 @@
 // run_schedule, the scenario loop with its recorder, on scenes that are not
 // the chapter's: PushT, a walker, an arm and a puck.
+#include "simloop/recorder.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -11,7 +13,6 @@
 #include "simloop/chapter_scene.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/model.hpp"
-#include "simloop/recorder.hpp"
 #include "simloop/scenario.hpp"
 #include "simloop/scenario_run.hpp"
 #include "test_util.hpp"
@@ -72,14 +73,13 @@ TEST(ScenarioRun, ColumnsAreNamedFromTheScene) {
   std::vector<std::string> names;
   for (const simloop::Column& c : r.result.columns) names.push_back(c.name);
   const std::vector<std::string> expected = {
-      "step", "time", "push_x_ctrl", "push_y_ctrl",
-      "tblock_fx", "tblock_fy", "tblock_fz", "tblock_tx", "tblock_ty", "tblock_tz",
-      "tblock_x", "tblock_y", "tblock_z", "tblock_qw", "tblock_qx", "tblock_qy", "tblock_qz",
-      "tblock_vx", "tblock_vy", "tblock_vz", "tblock_wx", "tblock_wy", "tblock_wz",
-      "pusher_x", "pusher_y", "pusher_z", "pusher_qw", "pusher_qx", "pusher_qy", "pusher_qz",
-      "pusher_vx", "pusher_vy", "pusher_vz", "pusher_wx", "pusher_wy", "pusher_wz",
-      "slide_x_pos", "slide_x_vel", "slide_y_pos", "slide_y_vel",
-      "push_x_force", "push_y_force", "tblock_pos0", "tblock_pos1", "tblock_pos2", "tip_x", "ncon"};
+      "step",        "time",        "push_x_ctrl", "push_y_ctrl", "tblock_fx",   "tblock_fy",    "tblock_fz",
+      "tblock_tx",   "tblock_ty",   "tblock_tz",   "tblock_x",    "tblock_y",    "tblock_z",     "tblock_qw",
+      "tblock_qx",   "tblock_qy",   "tblock_qz",   "tblock_vx",   "tblock_vy",   "tblock_vz",    "tblock_wx",
+      "tblock_wy",   "tblock_wz",   "pusher_x",    "pusher_y",    "pusher_z",    "pusher_qw",    "pusher_qx",
+      "pusher_qy",   "pusher_qz",   "pusher_vx",   "pusher_vy",   "pusher_vz",   "pusher_wx",    "pusher_wy",
+      "pusher_wz",   "slide_x_pos", "slide_x_vel", "slide_y_pos", "slide_y_vel", "push_x_force", "push_y_force",
+      "tblock_pos0", "tblock_pos1", "tblock_pos2", "tip_x",       "ncon"};
   EXPECT_EQ(names, expected);
   EXPECT_EQ(r.result.rows, 1001);  // 2.0 s of 0.002 s steps, plus the final state
   EXPECT_EQ(r.result.trajectory.rows(), 1001);
@@ -115,8 +115,8 @@ TEST(ScenarioRun, DerivedQuantitiesDoNotLagTheStateTheyBelongTo) {
   // would differ by a step's worth of motion.
   const PushtRun r = run_pusht(3);
   for (std::int64_t row : {0, 1, 300, 650, 1000}) {
-    EXPECT_EQ(r.at(row, "tip_x"), r.at(row, "slide_x_pos")) << row;      // jointpos sensor vs qpos
-    EXPECT_EQ(r.at(row, "tblock_pos0"), r.at(row, "tblock_x")) << row;     // framepos sensor vs xpos
+    EXPECT_EQ(r.at(row, "tip_x"), r.at(row, "slide_x_pos")) << row;     // jointpos sensor vs qpos
+    EXPECT_EQ(r.at(row, "tblock_pos0"), r.at(row, "tblock_x")) << row;  // framepos sensor vs xpos
     EXPECT_EQ(r.at(row, "tblock_pos2"), r.at(row, "tblock_z")) << row;
   }
   EXPECT_NE(r.at(300, "slide_x_pos"), r.at(301, "slide_x_pos"));  // it does move each step
@@ -152,10 +152,10 @@ TEST(ScenarioRun, AWalkerUnderATorqueScheduleRecordsTheDefaults) {
   EXPECT_EQ(r.at(0, "hip_left_ctrl"), 0.5);
   EXPECT_EQ(r.at(130, "hip_left_ctrl"), -0.5);  // 0.5 s at 0.004 s a step is step 125
   EXPECT_EQ(r.at(400, "knee_left_ctrl"), 0.2);
-  EXPECT_EQ(r.at(10, "knee_right_ctrl"), -0.3);   // actuator 3, by index
-  EXPECT_EQ(r.at(250, "torso_tz"), 2.0);          // the twist, 1.0 s to 1.05 s
+  EXPECT_EQ(r.at(10, "knee_right_ctrl"), -0.3);  // actuator 3, by index
+  EXPECT_EQ(r.at(250, "torso_tz"), 2.0);         // the twist, 1.0 s to 1.05 s
   EXPECT_EQ(r.at(262, "torso_tz"), 0.0);
-  EXPECT_LT(r.at(750, "torso_z"), 0.8);           // it fell
+  EXPECT_LT(r.at(750, "torso_z"), 0.8);  // it fell
   EXPECT_NE(r.at(300, "knee_right_force"), 0.0);
 }
 
@@ -166,8 +166,8 @@ TEST(ScenarioRun, AnArmPushesAPuckOnTwoSlides) {
   EXPECT_GT(most_contacts, 0);
   const std::int64_t last = r.result.rows - 1;
   EXPECT_GT(std::hypot(r.at(last, "puck_x_pos"), r.at(last, "puck_y_pos")), 0.01);  // the puck moved
-  EXPECT_NEAR(r.at(last, "puck_x_pos"), r.at(last, "puck_x") - 0.3, 1e-12);  // joint vs body: the same motion
-  EXPECT_EQ(r.at(420, "puck_fy"), -0.5);  // 2.0 s to 2.2 s: steps 400 to 439
+  EXPECT_NEAR(r.at(last, "puck_x_pos"), r.at(last, "puck_x") - 0.3, 1e-12);         // joint vs body: the same motion
+  EXPECT_EQ(r.at(420, "puck_fy"), -0.5);                                            // 2.0 s to 2.2 s: steps 400 to 439
   EXPECT_EQ(r.at(440, "puck_fy"), 0.0);
 }
 
@@ -190,14 +190,15 @@ TEST(ScenarioRun, ATendonsLengthAndRateAreRecordedForTheRowsState) {
   std::vector<std::string> names;
   for (const simloop::Column& c : r.columns) names.push_back(c.name);
   EXPECT_EQ(names, (std::vector<std::string>{"step", "time", "push_ctrl", "a_pos", "a_vel", "b_pos", "b_vel",
-                                              "sum_length", "sum_vel", "ncon"}));
+                                             "sum_length", "sum_vel", "ncon"}));
   for (std::int64_t row = 0; row < r.trajectory.rows(); ++row) {
     EXPECT_EQ(r.trajectory.at(row, 7), r.trajectory.at(row, 3) + r.trajectory.at(row, 5)) << row;
     EXPECT_EQ(r.trajectory.at(row, 8), r.trajectory.at(row, 4) + r.trajectory.at(row, 6)) << row;
   }
   EXPECT_GT(r.trajectory.at(50, 7), 0.05);  // the slides moved
   EXPECT_EQ(test::error_of([&] {
-              (void)simloop::run_scenario(scene, simloop::Scenario::from_toml_string("[record]\ntendons = [\"summ\"]\n"), {});
+              (void)simloop::run_scenario(scene,
+                                          simloop::Scenario::from_toml_string("[record]\ntendons = [\"summ\"]\n"), {});
             }),
             "record.tendons: no tendon named 'summ' (did you mean 'sum'?); the scene's tendons: sum");
 }

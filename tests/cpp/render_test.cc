@@ -1,5 +1,7 @@
 // Renderer: pictures of the chapter's scene put each body where it is, the
 // depth is in metres, and every bad view or size is refused naming it.
+#include "simloop/render.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cstdint>
@@ -10,7 +12,6 @@
 
 #include "simloop/chapter_scene.hpp"
 #include "simloop/errors.hpp"
-#include "simloop/render.hpp"
 #include "simloop/sim.hpp"
 #include "test_util.hpp"
 

@@ -70,7 +70,8 @@ TEST(Robustness, OutOfMemoryWhileCompilingIsAnErrorNamingTheModel) {
   // A scene whose compile runs out of memory under a 1 GB address space
   // (per version: tests/expected), in a child so the cap stays there.
   SIMLOOP_EXPECTED(std::string, scene, "errors.out_of_memory_scene");
-  const toml::array* says = test::expected_figures() ? test::expected_figures()->at_path("errors.out_of_memory_says").as_array() : nullptr;
+  const toml::array* says =
+      test::expected_figures() ? test::expected_figures()->at_path("errors.out_of_memory_says").as_array() : nullptr;
   if (says == nullptr) GTEST_SKIP() << test::no_expected_figure("errors.out_of_memory_says");
   std::string xml(simloop::pusher_scene_xml());
   const std::string compiler = "<compiler autolimits=\"true\"/>";
@@ -165,7 +166,7 @@ TEST(Robustness, UnderAProcessLimitABatchAndASweepStillFinishIdentically) {
   ASSERT_GE(pid, 0);
   if (pid == 0) {
     if (geteuid() == 0 && (setgid(65534) != 0 || setuid(65534) != 0)) _exit(3);
-    const struct rlimit one {1, 1};
+    const struct rlimit one { 1, 1 };
     if (setrlimit(RLIMIT_NPROC, &one) != 0) _exit(3);
     // Check that threads really cannot start here.
     bool started = true;

@@ -19,10 +19,10 @@
 #include "run_detail.hpp"
 #include "simloop/batch.hpp"
 #include "simloop/errors.hpp"
-#include "test_util.hpp"
 #include "simloop/output.hpp"
 #include "simloop/run.hpp"
 #include "simloop/sweep.hpp"
+#include "test_util.hpp"
 
 namespace {
 
@@ -59,7 +59,9 @@ TEST(Robustness, ValidateEnforcesTheDocumentedRanges) {
 
 TEST(Robustness, AKeptTrajectoryTooLargeIsRefusedSayingHowMuchAndWhatToChange) {
   const std::string message = test::error_of([] { (void)simloop::run(scene(), config_with(10'000'000'000)); });
-  EXPECT_EQ(message.rfind("steps 10000000000 with record_every 1 would keep 1.6 TiB of trajectory (22 columns) in memory", 0), 0u)
+  EXPECT_EQ(
+      message.rfind("steps 10000000000 with record_every 1 would keep 1.6 TiB of trajectory (22 columns) in memory", 0),
+      0u)
       << message;
   EXPECT_NE(message.find("raise record_every"), std::string::npos) << message;
   // The same run with a coarser record fits.
@@ -149,8 +151,7 @@ TEST(Robustness, MujocoErrorsSayWhatWasBeingDoneOnOneLine) {
 TEST(Robustness, XmlSizesOutsideWhatMujocoTakesAreNamed) {
   using simloop::detail::check_xml_size;
   EXPECT_EQ(test::error_of([] { check_xml_size(0, "<string>"); }), "<string>: the XML is empty (0 bytes)");
-  EXPECT_EQ(test::error_of([] { (void)simloop::Model::from_xml_string(""); }),
-            "<string>: the XML is empty (0 bytes)");
+  EXPECT_EQ(test::error_of([] { (void)simloop::Model::from_xml_string(""); }), "<string>: the XML is empty (0 bytes)");
   EXPECT_EQ(test::error_of([] { check_xml_size(std::size_t{1} << 31, "big"); }),
             "big: the XML is 2147483648 bytes; MuJoCo's in-memory loader takes at most 2147483647 (write it to a "
             "file and load that)");

@@ -47,9 +47,9 @@ TEST(RunRecord, TheChaptersRunIsLabelledAsTheChaptersScenarioAndEndsInTheSameSta
   EXPECT_EQ(chapter.rows, chapter.trajectory.rows());
   ASSERT_EQ(chapter.columns.size(), static_cast<size_t>(chapter.trajectory.columns()));
   EXPECT_EQ(chapter.columns[simloop::ChapterColumns::kBoxZ].name, "box_z");
-  EXPECT_TRUE(same_doubles(chapter.final_row, std::vector<double>(chapter.trajectory.row(chapter.rows - 1),
-                                                                   chapter.trajectory.row(chapter.rows - 1) +
-                                                                       chapter.trajectory.columns())));
+  EXPECT_TRUE(same_doubles(
+      chapter.final_row, std::vector<double>(chapter.trajectory.row(chapter.rows - 1),
+                                             chapter.trajectory.row(chapter.rows - 1) + chapter.trajectory.columns())));
 }
 
 TEST(RunRecord, TheBaselineHasNoDisturbanceInItsRecord) {

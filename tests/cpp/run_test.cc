@@ -1,3 +1,5 @@
+#include "simloop/run.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -9,7 +11,6 @@
 #include "simloop/errors.hpp"
 #include "simloop/number_format.hpp"
 #include "simloop/output.hpp"
-#include "simloop/run.hpp"
 
 namespace {
 
@@ -33,7 +34,8 @@ simloop::RunConfig config_with(std::int64_t steps, double timestep = 0.002, bool
 
 bool same_bits(const Trajectory& a, const Trajectory& b) {
   if (a.rows() != b.rows() || a.columns() != b.columns()) return false;
-  return std::memcmp(a.data(), b.data(), sizeof(double) * static_cast<size_t>(a.rows()) * static_cast<size_t>(a.columns())) == 0;
+  return std::memcmp(a.data(), b.data(),
+                     sizeof(double) * static_cast<size_t>(a.rows()) * static_cast<size_t>(a.columns())) == 0;
 }
 
 double column_max(const Trajectory& t, int column, bool absolute = false) {
@@ -92,9 +94,11 @@ TEST(Run, TrajectoryStartsAtRestAndEndsAtTheMetrics) {
   EXPECT_EQ(t.at(last, ChapterColumns::kStep), 2000);
   EXPECT_NEAR(t.at(last, ChapterColumns::kTime), 4.0, 1e-9);
   for (int c = ChapterColumns::kCtrl; c <= ChapterColumns::kShoveZ; ++c) EXPECT_TRUE(std::isnan(t.at(last, c)));
-  for (int i = 0; i < 3; ++i) EXPECT_EQ(simloop::round6(t.at(last, ChapterColumns::kBoxX + i)), r.metrics.box_final_pos[i]);
+  for (int i = 0; i < 3; ++i)
+    EXPECT_EQ(simloop::round6(t.at(last, ChapterColumns::kBoxX + i)), r.metrics.box_final_pos[i]);
   EXPECT_EQ(simloop::round6(t.at(last, ChapterColumns::kPusherX)), r.metrics.pusher_final_x);
-  const double vx = t.at(last, ChapterColumns::kBoxVx), vy = t.at(last, ChapterColumns::kBoxVy), vz = t.at(last, ChapterColumns::kBoxVz);
+  const double vx = t.at(last, ChapterColumns::kBoxVx), vy = t.at(last, ChapterColumns::kBoxVy),
+               vz = t.at(last, ChapterColumns::kBoxVz);
   EXPECT_EQ(simloop::round6(std::sqrt(vx * vx + vy * vy + vz * vz)), r.metrics.box_final_speed);
   // The pusher reaches the box and shoves it along x.
   EXPECT_GT(r.metrics.box_final_pos[0], 1.0);

@@ -12,9 +12,9 @@
 #include "simloop/episode.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/output.hpp"
-#include "test_util.hpp"
 #include "simloop/scenario_run.hpp"
 #include "simloop/scene_params.hpp"
+#include "test_util.hpp"
 
 namespace {
 
@@ -23,14 +23,15 @@ using simloop::Scenario;
 
 // PushT with a drawn disturbance and, after it, `reset` (a [reset] table's body).
 Scenario pusht(const std::string& reset = "") {
-  return Scenario::from_toml_string("name = \"pusht-reset\"\nscene = \"pusht.xml\"\nsteps = 300\n"
-                                    "[[control]]\nactuator = \"push_x\"\nvalue = 0.8\n"
-                                    "[[disturbance]]\nbody = \"tblock\"\nnewtons = [0.5, 1.5]\n"
-                                    "direction = [0, 1, 0]\nrandom_sign = true\nstart_step = 100\nsteps = 50\n"
-                                    "[record]\nbodies = [\"tblock\"]\njoints = [\"slide_x\"]\n"
-                                    "actuators = [\"push_x\", \"push_y\"]\n" +
-                                        (reset.empty() ? "" : "[reset]\n" + reset),
-                                    "pusht-reset", SIMLOOP_TEST_SCENES);
+  return Scenario::from_toml_string(
+      "name = \"pusht-reset\"\nscene = \"pusht.xml\"\nsteps = 300\n"
+      "[[control]]\nactuator = \"push_x\"\nvalue = 0.8\n"
+      "[[disturbance]]\nbody = \"tblock\"\nnewtons = [0.5, 1.5]\n"
+      "direction = [0, 1, 0]\nrandom_sign = true\nstart_step = 100\nsteps = 50\n"
+      "[record]\nbodies = [\"tblock\"]\njoints = [\"slide_x\"]\n"
+      "actuators = [\"push_x\", \"push_y\"]\n" +
+          (reset.empty() ? "" : "[reset]\n" + reset),
+      "pusht-reset", SIMLOOP_TEST_SCENES);
 }
 
 const simloop::Model& scene() {
@@ -92,7 +93,8 @@ TEST(ScenarioReset, ParamsAreTheRunsOwnSceneCopy) {
   // A [reset] param's value runs the very bits of a model with that
   // parameter (every geom's friction: MuJoCo takes the larger of two).
   const simloop::RunRecord drawn = run(pusht("[[reset.param]]\nkind = \"friction\"\nvalue = 0.3\n"), 3);
-  const simloop::Model low_friction = simloop::with_scene_params(scene(), {{simloop::SceneParam::Kind::kFriction, "", 0.3}});
+  const simloop::Model low_friction =
+      simloop::with_scene_params(scene(), {{simloop::SceneParam::Kind::kFriction, "", 0.3}});
   EXPECT_TRUE(same_bits(drawn, run(pusht(), 3, low_friction)));
   EXPECT_FALSE(same_bits(drawn, run(pusht(), 3)));
   EXPECT_EQ(scene().get()->geom_friction[0], 1.0);  // the shared scene is untouched
@@ -108,7 +110,8 @@ TEST(ScenarioReset, ParamsAreTheRunsOwnSceneCopy) {
   char value[32];
   std::snprintf(value, sizeof value, "%.6f", v1);
   EXPECT_NE(metrics.find("\"params\": [\n    {\n      \"kind\": \"gravity\",\n      \"name\": \"\",\n      "
-                         "\"value\": " + std::string(value)),
+                         "\"value\": " +
+                         std::string(value)),
             std::string::npos)
       << metrics;
   std::snprintf(value, sizeof value, "%.4g", v1);
@@ -119,12 +122,14 @@ TEST(ScenarioReset, ParamsAreTheRunsOwnSceneCopy) {
 }
 
 TEST(ScenarioReset, ABatchAndAnEpisodeStartAsARunDoes) {
-  const Scenario s = pusht("qpos_noise = 0.02\n[[reset.param]]\nkind = \"mass\"\nname = \"tblock\"\nuniform = [0.2, 0.6]\n");
+  const Scenario s =
+      pusht("qpos_noise = 0.02\n[[reset.param]]\nkind = \"mass\"\nname = \"tblock\"\nuniform = [0.2, 0.6]\n");
   std::vector<simloop::ScenarioConfig> configs(4);
   for (std::size_t i = 0; i < configs.size(); ++i) configs[i].seed = 10 + i;
   for (const int threads : {1, 2}) {
     const std::vector<simloop::RunRecord> batch = simloop::run_scenario_batch(scene(), s, configs, threads);
-    for (std::size_t i = 0; i < configs.size(); ++i) EXPECT_TRUE(same_bits(batch[i], run(s, 10 + i))) << i << " " << threads;
+    for (std::size_t i = 0; i < configs.size(); ++i)
+      EXPECT_TRUE(same_bits(batch[i], run(s, 10 + i))) << i << " " << threads;
   }
   // An episode's first observation is the run's row 0 (after step and time).
   simloop::Episodes episodes(scene(), pusht(), simloop::ScenarioConfig{}, 1);
@@ -161,7 +166,8 @@ TEST(ScenarioReset, BadResetsNameTheKey) {
   const auto run_error = [](const std::string& reset) { return error_of([&] { (void)run(pusht(reset), 0); }); };
   EXPECT_EQ(run_error("qpos = [1, 2, 3]\n"), "reset.qpos must hold the scene's nq = 9 values, got 3");
   EXPECT_EQ(run_error("[[reset.param]]\nkind = \"friction\"\nname = \"flor\"\nvalue = 0.5\n"),
-            "reset.param[0]: friction of 'flor' = 0.5: no geom named 'flor' (did you mean 'floor'?); the scene's geoms: floor, "
+            "reset.param[0]: friction of 'flor' = 0.5: no geom named 'flor' (did you mean 'floor'?); the scene's "
+            "geoms: floor, "
             "goal, t_bar, t_stem, tip");
   EXPECT_EQ(run_error("[[reset.param]]\nkind = \"gravity\"\nname = \"floor\"\nvalue = 9\n"),
             "reset.param[0]: gravity of 'floor' = 9.0: gravity is the whole scene's: give no name");
@@ -171,7 +177,8 @@ TEST(ScenarioReset, BadResetsNameTheKey) {
   episodes.reset(0, 1, obs.data());
   simloop::ResetSpec bad;
   bad.qvel = {1.0};
-  EXPECT_EQ(error_of([&] { episodes.reset(0, 2, again.data(), &bad); }), "reset.qvel must hold the scene's nv = 8 values, got 1");
+  EXPECT_EQ(error_of([&] { episodes.reset(0, 2, again.data(), &bad); }),
+            "reset.qvel must hold the scene's nv = 8 values, got 1");
   EXPECT_EQ(episodes.steps_taken(0), 0);
 }
 

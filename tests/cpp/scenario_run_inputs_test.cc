@@ -11,9 +11,9 @@
 #include <string>
 #include <vector>
 
+#include "simloop/errors.hpp"
 #include "simloop/output.hpp"
 #include "simloop/recorder.hpp"
-#include "simloop/errors.hpp"
 #include "simloop/scenario_run.hpp"
 #include "simloop/state.hpp"
 
@@ -58,9 +58,8 @@ TEST(BatchControls, OwnControlsGiveTheBitsOfAHandWrittenLoop) {
   const int nu = scene.get()->nu;
   const std::int64_t steps = 300;
   const std::vector<double> u = random_controls(7, steps, nu);
-  const simloop::RunRecord r =
-      simloop::run_scenario(scene, scenario, config(0, steps, false), nullptr, nullptr, nullptr,
-                            controls_input(u, steps, nu));
+  const simloop::RunRecord r = simloop::run_scenario(scene, scenario, config(0, steps, false), nullptr, nullptr,
+                                                     nullptr, controls_input(u, steps, nu));
 
   // The loop as a user writes it with MuJoCo alone.
   simloop::Data data(scene);
@@ -76,7 +75,8 @@ TEST(BatchControls, OwnControlsGiveTheBitsOfAHandWrittenLoop) {
   // The recorded ctrl is what MuJoCo applied: the caller's, clamped.
   const auto& cols = r.columns;
   for (size_t c = 0; c < cols.size(); ++c) {
-    if (cols[c].name == "push_x_ctrl") EXPECT_EQ(r.trajectory.at(5, static_cast<int>(c)), std::clamp(u[5 * nu], -1.0, 1.0));
+    if (cols[c].name == "push_x_ctrl")
+      EXPECT_EQ(r.trajectory.at(5, static_cast<int>(c)), std::clamp(u[5 * nu], -1.0, 1.0));
   }
 }
 
@@ -205,13 +205,23 @@ TEST(BatchControls, WholeArraysSplitIntoRunsOrAreSharedAndWrongShapesAreNamed) {
   };
   refused([&] { (void)simloop::split_inputs(1, false, per_run, std::nullopt); },
           "controls must be shaped (steps, nu), got shape (3, 4, 2)");
-  refused([&] { (void)simloop::split_inputs(2, true, simloop::InputArray{values.data(), {24}}, std::nullopt); },
-          "controls must be shaped (runs, steps, nu) or (steps, nu), got shape (24,)");
-  refused([&] { (void)simloop::split_inputs(4, true, per_run, std::nullopt); }, "controls: 3 runs' controls for 4 runs");
-  refused([&] { (void)simloop::split_inputs(1, false, std::nullopt, simloop::InputArray{values.data(), {}}); },
-          "initial_state must be shaped (state_size,), got shape ()");
-  refused([&] { (void)simloop::split_inputs(2, true, std::nullopt, simloop::InputArray{values.data(), {3, 8}}); },
-          "initial_state: 3 states for 2 runs");
+  refused(
+      [&] {
+        (void)simloop::split_inputs(2, true, simloop::InputArray{values.data(), {24}}, std::nullopt);
+      },
+      "controls must be shaped (runs, steps, nu) or (steps, nu), got shape (24,)");
+  refused([&] { (void)simloop::split_inputs(4, true, per_run, std::nullopt); },
+          "controls: 3 runs' controls for 4 runs");
+  refused(
+      [&] {
+        (void)simloop::split_inputs(1, false, std::nullopt, simloop::InputArray{values.data(), {}});
+      },
+      "initial_state must be shaped (state_size,), got shape ()");
+  refused(
+      [&] {
+        (void)simloop::split_inputs(2, true, std::nullopt, simloop::InputArray{values.data(), {3, 8}});
+      },
+      "initial_state: 3 states for 2 runs");
 }
 
 }  // namespace

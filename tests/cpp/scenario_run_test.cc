@@ -1,6 +1,8 @@
 // run_scenario's batches (one scene, one Data per worker, the same bits as
 // running each config alone) and a scenario run drawn (every moving body's
 // pose beside the trajectory's rows).
+#include "simloop/scenario_run.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -11,9 +13,8 @@
 #include <vector>
 
 #include "run_detail.hpp"
-#include "simloop/output.hpp"
 #include "simloop/errors.hpp"
-#include "simloop/scenario_run.hpp"
+#include "simloop/output.hpp"
 
 namespace {
 
@@ -27,7 +28,8 @@ bool same_bits(const simloop::RunRecord& a, const simloop::RunRecord& b) {
   // memcmp, not ==: the final row's input columns hold NaN.
   return x.rows() == y.rows() && x.columns() == y.columns() && a.final_row.size() == b.final_row.size() &&
          std::memcmp(a.final_row.data(), b.final_row.data(), sizeof(double) * a.final_row.size()) == 0 &&
-         std::memcmp(x.data(), y.data(), sizeof(double) * static_cast<size_t>(x.rows()) * static_cast<size_t>(x.columns())) == 0;
+         std::memcmp(x.data(), y.data(),
+                     sizeof(double) * static_cast<size_t>(x.rows()) * static_cast<size_t>(x.columns())) == 0;
 }
 
 // Seeds and timesteps, as Python's itertools.product(seeds, timesteps).
@@ -89,8 +91,7 @@ TEST(ScenarioBatch, RefusesBadConfigsBeforeRunningAny) {
   } catch (const simloop::InvalidArgument& e) {
     EXPECT_EQ(std::string(e.what()).rfind("run 1: record_every must be from 1 to ", 0), 0u) << e.what();
   }
-  EXPECT_THROW((void)simloop::run_scenario_batch(scene, scenario, configs({0}, {0.002}), -1),
-               simloop::InvalidArgument);
+  EXPECT_THROW((void)simloop::run_scenario_batch(scene, scenario, configs({0}, {0.002}), -1), simloop::InvalidArgument);
   EXPECT_TRUE(simloop::run_scenario_batch(scene, scenario, {}, 2).empty());
 }
 
@@ -163,7 +164,7 @@ TEST(ScenarioBatch, AFailingRunStopsTheOthersAtTheirNextChunk) {
     bool fail_;
   } runs_on(false), fails(true);
   const std::vector<simloop::RunInputs> inputs = {simloop::RunInputs::deciding(runs_on),
-                                                   simloop::RunInputs::deciding(fails)};
+                                                  simloop::RunInputs::deciding(fails)};
   simloop::RunControl control;
   const auto started = std::chrono::steady_clock::now();
   try {
@@ -186,7 +187,9 @@ class Collect final : public simloop::RowSink {
     width = columns;
     expected_rows = rows;
   }
-  void write(const double* rows, std::int64_t count) override { values.insert(values.end(), rows, rows + count * width); }
+  void write(const double* rows, std::int64_t count) override {
+    values.insert(values.end(), rows, rows + count * width);
+  }
   std::vector<simloop::Column> names;
   int width = 0;
   std::int64_t expected_rows = 0;
@@ -221,7 +224,8 @@ TEST(ScenarioDrawn, TheTrajectoryIsUnchangedAndEveryMovingBodyHasItsPoseAndEvery
   EXPECT_EQ(drawing.names[static_cast<size_t>(width)].name, moving[0] + "_x");
   const std::size_t torso = simloop::recorded_bodies(kept).at("torso");
   const std::size_t torso_pose =
-      static_cast<size_t>(width) + 7 * static_cast<size_t>(std::find(moving.begin(), moving.end(), "torso") - moving.begin());
+      static_cast<size_t>(width) +
+      7 * static_cast<size_t>(std::find(moving.begin(), moving.end(), "torso") - moving.begin());
   const mjModel* m = scene.get();
   for (std::int64_t r = 0; r < kept.trajectory.rows(); ++r) {
     const double* row = drawing.values.data() + r * drawing.width;
@@ -237,7 +241,7 @@ TEST(ScenarioDrawn, TheTrajectoryIsUnchangedAndEveryMovingBodyHasItsPoseAndEvery
   const int qpos = width + 7 * static_cast<int>(moving.size());
   EXPECT_EQ(drawing.names[static_cast<size_t>(qpos)].name, simloop::joint_position_columns(scene.get(), 0)[0]);
   for (int i = 0; i < nq; ++i) {
-    EXPECT_EQ(first[qpos + i], scene.get()->qpos0[i]) << i;        // the start...
+    EXPECT_EQ(first[qpos + i], scene.get()->qpos0[i]) << i;                         // the start...
     EXPECT_EQ(last[qpos + i], drawn.final_state[1 + static_cast<size_t>(i)]) << i;  // ...and the end (after time)
   }
   // A leg moves relative to the torso over the run (its hinge turns).

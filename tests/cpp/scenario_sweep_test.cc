@@ -4,9 +4,9 @@
 
 #include <algorithm>
 #include <array>
-#include <map>
 #include <cmath>
 #include <cstring>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -23,8 +23,7 @@ simloop::Scenario scene_file(const char* name) {
 bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
 
 // The run a sweep point stands for, kept in memory.
-simloop::RunRecord alone(const simloop::Model& scene, const simloop::Scenario& scenario, double dt,
-                                 double duration) {
+simloop::RunRecord alone(const simloop::Model& scene, const simloop::Scenario& scenario, double dt, double duration) {
   simloop::ScenarioConfig c;
   c.timestep = dt;
   c.steps = simloop::sweep_steps(duration, dt);

@@ -1,5 +1,7 @@
 // Scenarios as data: TOML files, names resolved against the scene with
 // errors that say what the scene has, and the schedule drawn up front.
+#include "simloop/scenario.hpp"
+
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -8,7 +10,6 @@
 #include "simloop/errors.hpp"
 #include "simloop/model.hpp"
 #include "simloop/run.hpp"
-#include "simloop/scenario.hpp"
 #include "simloop/shove.hpp"
 #include "test_util.hpp"
 
@@ -91,8 +92,10 @@ TEST(Scenario, BadFilesNameTheKeyAndWhatIsWrong) {
             "s.toml: setps: unknown key (did you mean 'steps'?); known keys: name, scene, timestep, steps, duration, "
             "control, disturbance, record, reset");
   EXPECT_EQ(error("steps = 5\nduration = 1.0"), "s.toml: give only one of duration, steps");
-  EXPECT_EQ(error("[[control]]\nvalue = 1"), "s.toml: control[0].actuator: missing: name the actuator (or give its index)");
-  EXPECT_EQ(error("[[control]]\nactuator = 'a'\nvalue = 'x'"), "s.toml: control[0].value: expected a number, got a string");
+  EXPECT_EQ(error("[[control]]\nvalue = 1"),
+            "s.toml: control[0].actuator: missing: name the actuator (or give its index)");
+  EXPECT_EQ(error("[[control]]\nactuator = 'a'\nvalue = 'x'"),
+            "s.toml: control[0].value: expected a number, got a string");
   EXPECT_EQ(error("[[control]]\nactuator = 'a'\nschedule = [[1.0, 0], [0.5, 1]]"),
             "s.toml: control[0].schedule: times must increase, got 1.0 then 0.5");
   EXPECT_EQ(error("[[disturbance]]\nbody = 'b'\nnewtons = [6, 12]"),
@@ -110,15 +113,17 @@ TEST(Scenario, BadFilesNameTheKeyAndWhatIsWrong) {
 TEST(Scenario, UnknownNamesListWhatTheSceneHasWithADidYouMean) {
   Scenario s = Scenario::chapter();
   s.disturbances[0].body = "bx";
-  EXPECT_EQ(error_of([&] { (void)simloop::resolve(s, chapter_model()); }),
-            "disturbance[0]: no body named 'bx' (did you mean 'box'?); the scene's bodies a force can move: box, pusher");
+  EXPECT_EQ(
+      error_of([&] { (void)simloop::resolve(s, chapter_model()); }),
+      "disturbance[0]: no body named 'bx' (did you mean 'box'?); the scene's bodies a force can move: box, pusher");
   s = Scenario::chapter();
   s.controls[0].actuator = "motor";
   EXPECT_EQ(error_of([&] { (void)simloop::resolve(s, chapter_model()); }),
             "control[0]: no actuator named 'motor'; the scene's actuators: push_motor");
   s.controls[0].actuator = "3";
   EXPECT_EQ(error_of([&] { (void)simloop::resolve(s, chapter_model()); }),
-            "control[0]: actuator index 3 is out of range: the scene has 1 actuator (0 to 0); the scene's actuators: push_motor");
+            "control[0]: actuator index 3 is out of range: the scene has 1 actuator (0 to 0); the scene's actuators: "
+            "push_motor");
   s = Scenario::chapter();
   s.controls.push_back({"0", {{When::steps(0), 0.5}}, {}});  // push_motor again, by index
   EXPECT_EQ(error_of([&] { (void)simloop::resolve(s, chapter_model()); }),
@@ -126,9 +131,10 @@ TEST(Scenario, UnknownNamesListWhatTheSceneHasWithADidYouMean) {
             "for changes)");
   s = Scenario::chapter();
   s.record.joints = {"pusher_slid"};
-  EXPECT_EQ(error_of([&] { (void)simloop::resolve(s, chapter_model()); }),
-            "record.joints: no joint named 'pusher_slid' (did you mean 'pusher_slide'?); the scene's joints: pusher_slide; "
-            "unnamed, by index: 0");
+  EXPECT_EQ(
+      error_of([&] { (void)simloop::resolve(s, chapter_model()); }),
+      "record.joints: no joint named 'pusher_slid' (did you mean 'pusher_slide'?); the scene's joints: pusher_slide; "
+      "unnamed, by index: 0");
   // A scene whose moving bodies are unnamed (MuJoCo's tendon_arm/arm26.xml):
   // they are listed, and taken, by index.
   const simloop::Model arm = simloop::Model::from_xml_string(
@@ -143,13 +149,13 @@ TEST(Scenario, UnknownNamesListWhatTheSceneHasWithADidYouMean) {
             "disturbance[0]: no body named 'upper'; the scene's bodies a force can move: unnamed, by index: 1, 2");
   s.disturbances[0].body = "3";
   EXPECT_EQ(error_of([&] { (void)simloop::resolve(s, arm.get()); }),
-            "disturbance[0]: body index 3 is out of range: the scene has 3 bodies (0 to 2); the scene's bodies a force can move: unnamed, "
+            "disturbance[0]: body index 3 is out of range: the scene has 3 bodies (0 to 2); the scene's bodies a force "
+            "can move: unnamed, "
             "by index: 1, 2");
   s.disturbances[0].body = "2";
   EXPECT_EQ(simloop::resolve(s, arm.get()).disturbances.at(0).body, 2);
   s.disturbances[0].body = "0";
-  EXPECT_EQ(error_of([&] { (void)simloop::resolve(s, arm.get()); }),
-            "disturbance[0]: the world body cannot be pushed");
+  EXPECT_EQ(error_of([&] { (void)simloop::resolve(s, arm.get()); }), "disturbance[0]: the world body cannot be pushed");
 }
 
 TEST(Scenario, ResolvesNamesAndIndicesAndDefaultsToFreeBodiesAndActuators) {
@@ -196,16 +202,17 @@ TEST(Scenario, BodiesFixedToAMovingOneOrMocapMoveAndOnlyJointedOnesArePushed) {
   EXPECT_EQ(all.bodies, (std::vector<int>{1, 2, 4}));  // arm, hand, target; not base
   const auto pushing = [&](const char* body) {
     return error_of([&] {
-      (void)simloop::resolve(Scenario::from_toml_string(std::string("[[disturbance]]\nbody = \"") + body +
-                                                        "\"\nforce = [1, 0, 0]\n"),
-                             m);
+      (void)simloop::resolve(
+          Scenario::from_toml_string(std::string("[[disturbance]]\nbody = \"") + body + "\"\nforce = [1, 0, 0]\n"), m);
     });
   };
   EXPECT_EQ(pushing("hand"), test::kNoInvalidArgument);
-  EXPECT_EQ(pushing("base"), "disturbance[0]: a force on body 'base' moves nothing: it is fixed to the world; the "
-                             "scene's bodies a force can move: arm, hand");
-  EXPECT_EQ(pushing("target"), "disturbance[0]: a force on body 'target' moves nothing: it is a mocap body or fixed "
-                               "to one (moved by mocap_pos); the scene's bodies a force can move: arm, hand");
+  EXPECT_EQ(pushing("base"),
+            "disturbance[0]: a force on body 'base' moves nothing: it is fixed to the world; the "
+            "scene's bodies a force can move: arm, hand");
+  EXPECT_EQ(pushing("target"),
+            "disturbance[0]: a force on body 'target' moves nothing: it is a mocap body or fixed "
+            "to one (moved by mocap_pos); the scene's bodies a force can move: arm, hand");
 }
 
 TEST(Schedule, TheChaptersShoveIsOneDisturbanceDrawnAsBefore) {
@@ -219,7 +226,7 @@ TEST(Schedule, TheChaptersShoveIsOneDisturbanceDrawnAsBefore) {
     ASSERT_EQ(schedule.forces.size(), 1u);
     const simloop::Schedule::Force& f = schedule.forces[0];
     EXPECT_EQ(f.wrench[1], shove.force_y()) << seed;  // the same bits
-    EXPECT_FALSE(std::signbit(f.wrench[0]));           // +0.0, never -0.0
+    EXPECT_FALSE(std::signbit(f.wrench[0]));          // +0.0, never -0.0
     EXPECT_EQ(f.wrench[0], 0.0);
     EXPECT_EQ(f.start, shove.start_step);
     EXPECT_EQ(f.end, shove.start_step + shove.num_steps);
@@ -247,11 +254,19 @@ TEST(Schedule, SecondsBecomeStepsAndAWindowCutShortIsReportedAsCut) {
   s.disturbances[0].duration = When::seconds(0.001);
   const simloop::Schedule kick = simloop::build_schedule(simloop::resolve(s, m), s, 0.002, *draws);
   EXPECT_EQ(kick.forces[0].end - kick.forces[0].start, 1);
-  EXPECT_EQ(error_of([] { (void)Scenario::from_toml_string("[[disturbance]]\nbody = 'b'\nforce = [1, 0, 0]\n"
-                                                           "duration = 0.0\n", "s.toml"); }),
+  EXPECT_EQ(error_of([] {
+              (void)Scenario::from_toml_string(
+                  "[[disturbance]]\nbody = 'b'\nforce = [1, 0, 0]\n"
+                  "duration = 0.0\n",
+                  "s.toml");
+            }),
             "s.toml: disturbance[0].duration: must be positive (leave it out for one step, a kick)");
-  EXPECT_EQ(error_of([] { (void)Scenario::from_toml_string("[[disturbance]]\nbody = 'b'\nforce = [1, 0, 0]\n"
-                                                           "steps = 0\n", "s.toml"); }),
+  EXPECT_EQ(error_of([] {
+              (void)Scenario::from_toml_string(
+                  "[[disturbance]]\nbody = 'b'\nforce = [1, 0, 0]\n"
+                  "steps = 0\n",
+                  "s.toml");
+            }),
             "s.toml: disturbance[0].steps: must be positive (leave it out for one step, a kick)");
   s.length = When::seconds(0.0009);
   EXPECT_EQ(error_of([&] { (void)simloop::build_schedule(r, s, 0.002, *draws); }),
@@ -308,7 +323,7 @@ TEST(Scenario, AControlMayComeFromACsvWithARowPerStep) {
   const simloop::Scenario s = Scenario::from_toml_string(toml, "s.toml", dir.path());
   ASSERT_EQ(s.controls.size(), 1u);
   EXPECT_EQ(s.controls[0].csv, dir.path() / "drive.csv");  // what a cache of the scenario checks for changes
-  const auto& schedule = s.controls[0].schedule;  // only where the value changes
+  const auto& schedule = s.controls[0].schedule;           // only where the value changes
   ASSERT_EQ(schedule.size(), 3u);
   EXPECT_EQ(schedule[0].first.to_steps(0.002, 6), 0);
   EXPECT_EQ(schedule[0].second, 0.5);
@@ -323,7 +338,9 @@ TEST(Scenario, AControlMayComeFromACsvWithARowPerStep) {
   EXPECT_EQ(built.control_changes[2].step, 3);
 
   EXPECT_EQ(Scenario::from_toml_string("[[control]]\nactuator = 0\ncsv = 'one.csv'\n", "s.toml", dir.path())
-                .controls[0].schedule.size(), 2u);
+                .controls[0]
+                .schedule.size(),
+            2u);
   EXPECT_TRUE(Scenario::from_toml_string("[[control]]\nactuator = 0\nvalue = 1.0\n").controls[0].csv.empty());
   const auto error = [&](const std::string& text) {
     return error_of([&] { (void)Scenario::from_toml_string(text, "s.toml", dir.path()); });
@@ -332,7 +349,8 @@ TEST(Scenario, AControlMayComeFromACsvWithARowPerStep) {
             "s.toml: control[0].csv: " + (dir.path() / "drive.csv").string() +
                 " has 2 columns: name the one to use (column = \"...\")");
   EXPECT_EQ(error("[[control]]\nactuator = 0\ncsv = 'drive.csv'\ncolumn = 'y'\n"),
-            "s.toml: control[0].csv: " + (dir.path() / "drive.csv").string() + " has no column 'y'; its columns: push_x, other");
+            "s.toml: control[0].csv: " + (dir.path() / "drive.csv").string() +
+                " has no column 'y'; its columns: push_x, other");
   test::write_text(dir.path() / "bad.csv", "u\n1\n 2\n");
   EXPECT_EQ(error("[[control]]\nactuator = 0\ncsv = 'bad.csv'\n"),
             "s.toml: control[0].csv: " + (dir.path() / "bad.csv").string() + ":3: expected a finite number, got ' 2'");

@@ -1,5 +1,7 @@
 // scene_geometry: the scene's own shapes, for the recording: every visible
 // geom with its shape and colour, meshes as their bounding boxes.
+#include "simloop/scene_geometry.hpp"
+
 #include <gtest/gtest.h>
 
 #include <array>
@@ -9,7 +11,6 @@
 
 #include "simloop/chapter_scene.hpp"
 #include "simloop/model.hpp"
-#include "simloop/scene_geometry.hpp"
 
 namespace {
 
@@ -68,4 +69,3 @@ TEST(SceneGeometry, MeshesAreTheirBoundingBoxesAndMaterialsGiveColour) {
 }
 
 }  // namespace
-

@@ -1,6 +1,8 @@
 // Scene parameters applied to a copy of the model: the copy changes what a
 // run does, the original does not change, and the scene's own value changes
 // nothing at all (bit for bit).
+#include "simloop/scene_params.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -11,7 +13,6 @@
 
 #include "simloop/errors.hpp"
 #include "simloop/run.hpp"
-#include "simloop/scene_params.hpp"
 
 namespace {
 
@@ -27,7 +28,8 @@ bool same_bits(const simloop::RunResult& a, const simloop::RunResult& b) {
   const simloop::Trajectory& x = a.trajectory;
   const simloop::Trajectory& y = b.trajectory;
   return x.rows() == y.rows() && x.columns() == y.columns() &&
-         std::memcmp(x.data(), y.data(), sizeof(double) * static_cast<size_t>(x.rows()) * static_cast<size_t>(x.columns())) == 0;
+         std::memcmp(x.data(), y.data(),
+                     sizeof(double) * static_cast<size_t>(x.rows()) * static_cast<size_t>(x.columns())) == 0;
 }
 
 std::string error_of(const simloop::Model& model, const std::vector<simloop::SceneParam>& params) {
@@ -54,7 +56,8 @@ TEST(SceneParams, TheScenesOwnValuesChangeNoBit) {
     const simloop::Model copy = simloop::with_scene_params(scene, params);
     EXPECT_NE(copy.get(), scene.get());
     EXPECT_EQ(std::memcmp(copy.get()->body_invweight0, scene.get()->body_invweight0,
-                          sizeof(double) * 2 * static_cast<size_t>(scene.get()->nbody)), 0);
+                          sizeof(double) * 2 * static_cast<size_t>(scene.get()->nbody)),
+              0);
     EXPECT_TRUE(same_bits(run_on(copy), original)) << params.front().name;
   }
 }
@@ -65,7 +68,8 @@ TEST(SceneParams, OtherValuesChangeTheRunAndLeaveTheOriginalAlone) {
   for (const simloop::SceneParam& p : std::vector<simloop::SceneParam>{
            {Kind::kFriction, "", 0.3}, {Kind::kMass, "box", 2.0}, {Kind::kDamping, "pusher_slide", 20.0}}) {
     const simloop::Model copy = simloop::with_scene_params(scene, {p});
-    EXPECT_NE(run_on(copy).trajectory.at(600, simloop::ChapterColumns::kBoxX), box_x) << simloop::scene_param_kind_name(p.kind);
+    EXPECT_NE(run_on(copy).trajectory.at(600, simloop::ChapterColumns::kBoxX), box_x)
+        << simloop::scene_param_kind_name(p.kind);
   }
   EXPECT_EQ(run_on(scene).trajectory.at(600, simloop::ChapterColumns::kBoxX), box_x);
   EXPECT_EQ(scene.get()->body_mass[1], 0.5);
@@ -108,12 +112,16 @@ TEST(SceneParams, BadNamesAndValuesAreRefusedByName) {
   const simloop::Model scene = simloop::pusher_scene();
   EXPECT_EQ(error_of(scene, {{Kind::kMass, "bx", 1.0}}),
             "mass of 'bx' = 1.0: no body named 'bx' (did you mean 'box'?); the scene's bodies: world, box, pusher");
-  EXPECT_EQ(error_of(scene, {{Kind::kFriction, "box_gem", 1.0}}),
-            "friction of 'box_gem' = 1.0: no geom named 'box_gem' (did you mean 'box_geom'?); the scene's geoms: floor, "
-            "box_geom, pusher_geom");
-  EXPECT_EQ(error_of(scene, {{Kind::kDamping, "slide", 1.0}}).rfind("damping of 'slide' = 1.0: no joint named 'slide'", 0), 0u);
+  EXPECT_EQ(
+      error_of(scene, {{Kind::kFriction, "box_gem", 1.0}}),
+      "friction of 'box_gem' = 1.0: no geom named 'box_gem' (did you mean 'box_geom'?); the scene's geoms: floor, "
+      "box_geom, pusher_geom");
+  EXPECT_EQ(
+      error_of(scene, {{Kind::kDamping, "slide", 1.0}}).rfind("damping of 'slide' = 1.0: no joint named 'slide'", 0),
+      0u);
   EXPECT_EQ(error_of(scene, {{Kind::kFriction, "", -0.1}}), "friction = -0.1: friction must be a finite number >= 0");
-  EXPECT_EQ(error_of(scene, {{Kind::kDamping, "", std::nan("")}}), "damping = nan: damping must be a finite number >= 0");
+  EXPECT_EQ(error_of(scene, {{Kind::kDamping, "", std::nan("")}}),
+            "damping = nan: damping must be a finite number >= 0");
   EXPECT_EQ(error_of(scene, {{Kind::kMass, "box", 0.0}}), "mass of 'box' = 0.0: mass must be a finite number > 0");
   EXPECT_EQ(error_of(scene, {{Kind::kMass, "box", std::numeric_limits<double>::infinity()}}),
             "mass of 'box' = inf: mass must be a finite number > 0");

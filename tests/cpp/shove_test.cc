@@ -1,8 +1,8 @@
+#include "simloop/shove.hpp"
+
 #include <gtest/gtest.h>
 
 #include <limits>
-
-#include "simloop/shove.hpp"
 
 namespace {
 

@@ -2,6 +2,8 @@
 // scene (its box and pusher found through the layout); and Sim on any scene:
 // names, arrays, inputs, forces, state, keyframes, copies, and a model saved
 // as bytes and loaded back.
+#include "simloop/sim.hpp"
+
 #include <gtest/gtest.h>
 
 #include <array>
@@ -11,16 +13,15 @@
 #include <vector>
 
 #include "simloop/errors.hpp"
-#include "test_util.hpp"
 #include "simloop/model.hpp"
 #include "simloop/run.hpp"
-#include "simloop/sim.hpp"
+#include "test_util.hpp"
 
 namespace {
 
+using simloop::ChapterColumns;
 using simloop::Model;
 using simloop::Sim;
-using simloop::ChapterColumns;
 using simloop::Trajectory;
 
 // The chapter's scene, loaded once.
@@ -148,9 +149,11 @@ TEST(SimAny, UnknownNamesListWhatTheSceneHasWithALikelyFix) {
   EXPECT_EQ(test::error_of([&] { (void)sim.id(mjOBJ_BODY, "torsoo"); }),
             "no body named 'torsoo' (did you mean 'torso'?); the scene's bodies: world, torso, thigh_left, "
             "shin_left, thigh_right, shin_right");
-  EXPECT_EQ(test::error_of([&] { (void)sim.id(mjOBJ_KEY, "stand"); }), "no keyframe named 'stand'; the scene has no keyframes");
-  EXPECT_NE(test::error_of([&] { (void)sim.checked_index(mjOBJ_ACTUATOR, 4); })
-                .find("actuator index 4 is out of range: the scene has 4 actuators (0 to 3)"),
+  EXPECT_EQ(test::error_of([&] { (void)sim.id(mjOBJ_KEY, "stand"); }),
+            "no keyframe named 'stand'; the scene has no keyframes");
+  EXPECT_NE(test::error_of([&] {
+              (void)sim.checked_index(mjOBJ_ACTUATOR, 4);
+            }).find("actuator index 4 is out of range: the scene has 4 actuators (0 to 3)"),
             std::string::npos);
 }
 
@@ -172,7 +175,7 @@ TEST(SimAny, AWrenchOnAnyBodyPersistsUntilCleared) {
   const double* slot = sim.data()->xfrc_applied + 6 * block;
   sim.step(100);
   EXPECT_EQ(slot[5], 0.05);
-  EXPECT_EQ(slot[0], 0.0);  // the force part, not given, left alone
+  EXPECT_EQ(slot[0], 0.0);                    // the force part, not given, left alone
   const double turned = sim.data()->qvel[5];  // the free joint's angular z
   EXPECT_GT(turned, 0.0);
   const std::array<double, 3> nan_force{std::nan(""), 0.0, 0.0};
@@ -194,8 +197,9 @@ TEST(SimAny, AStateRestoredIntoAnotherSimGoesOnBitForBit) {
     b.set_state(saved.data(), saved.size());
     drive(b, 200);
     EXPECT_TRUE(same_bits(a.state(), b.state())) << file;
-    EXPECT_NE(test::error_of([&] { b.set_state(saved.data(), saved.size() - 1); })
-                  .find("state must have " + std::to_string(saved.size()) + " values"),
+    EXPECT_NE(test::error_of([&] {
+                b.set_state(saved.data(), saved.size() - 1);
+              }).find("state must have " + std::to_string(saved.size()) + " values"),
               std::string::npos);
   }
 }
@@ -223,7 +227,9 @@ TEST(SimAny, ResetsToAKeyframe) {
   EXPECT_EQ(sim.data()->qpos[2], 3.0);
   EXPECT_EQ(sim.time(), 0.0);
   EXPECT_EQ(sim.steps_taken(), 0);
-  EXPECT_NE(test::error_of([&] { sim.reset_to_keyframe(1); }).find("keyframe index 1 is out of range: the scene has 1 keyframe (0 to 0); the scene's keyframes: high"),
+  EXPECT_NE(test::error_of([&] {
+              sim.reset_to_keyframe(1);
+            }).find("keyframe index 1 is out of range: the scene has 1 keyframe (0 to 0); the scene's keyframes: high"),
             std::string::npos);
 }
 

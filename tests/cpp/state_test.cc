@@ -1,5 +1,7 @@
 // The flat state: saved mid-run and restored into another data, the run
 // goes on to the same bits.
+#include "simloop/state.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cstring>
@@ -8,7 +10,6 @@
 
 #include "expected.hpp"
 #include "simloop/model.hpp"
-#include "simloop/state.hpp"
 
 namespace {
 
@@ -31,10 +32,17 @@ TEST(State, LayoutCoversEveryPartInOrder) {
   // The parts every MuJoCo's state has, in this order (3.x's mj_getState
   // adds history, eq_active, plugin and plastic parts, and calls the
   // warmstart "warmstart").
-  const std::vector<std::pair<std::string, std::size_t>> common = {
-      {"time", 1}, {"qpos", m->nq}, {"qvel", m->nv}, {"act", m->na}, {"warmstart", m->nv}, {"ctrl", m->nu},
-      {"qfrc_applied", m->nv}, {"xfrc_applied", 6 * m->nbody}, {"mocap_pos", 3 * m->nmocap},
-      {"mocap_quat", 4 * m->nmocap}, {"userdata", m->nuserdata}};
+  const std::vector<std::pair<std::string, std::size_t>> common = {{"time", 1},
+                                                                   {"qpos", m->nq},
+                                                                   {"qvel", m->nv},
+                                                                   {"act", m->na},
+                                                                   {"warmstart", m->nv},
+                                                                   {"ctrl", m->nu},
+                                                                   {"qfrc_applied", m->nv},
+                                                                   {"xfrc_applied", 6 * m->nbody},
+                                                                   {"mocap_pos", 3 * m->nmocap},
+                                                                   {"mocap_quat", 4 * m->nmocap},
+                                                                   {"userdata", m->nuserdata}};
   std::size_t next = 0, total = 0;
   for (const auto& part : layout) {
     total += part.second;
@@ -76,7 +84,8 @@ TEST(State, RestoredRunGoesOnBitForBit) {
   std::vector<double> cold = saved;
   std::size_t at = 0;
   for (const auto& [name, size] : simloop::state_layout(m)) {
-    if (name.find("warmstart") != std::string::npos) std::fill_n(cold.begin() + static_cast<std::ptrdiff_t>(at), size, 0.0);
+    if (name.find("warmstart") != std::string::npos)
+      std::fill_n(cold.begin() + static_cast<std::ptrdiff_t>(at), size, 0.0);
     at += size;
   }
   Data without(model);

@@ -1,5 +1,7 @@
 // sweep: the chapter's baseline at many timesteps, where Break It begins;
 // its table, its default timesteps, its thread count, its bad input.
+#include "simloop/sweep.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -14,7 +16,6 @@
 #include "simloop/errors.hpp"
 #include "simloop/output.hpp"
 #include "simloop/run.hpp"
-#include "simloop/sweep.hpp"
 
 namespace {
 
@@ -75,8 +76,8 @@ TEST(Sweep, TheTableStaysAlignedWhateverTheNumbers) {
   EXPECT_NE(lines[3].find("0.00094201"), std::string::npos) << summary;
   // Every cell is right-aligned under its header's last character; the
   // stable column starts where its header does.
-  for (const char* label : {"timestep (s)", "steps", "peak z (m)", "max |y| (m)", "final z (m)",
-                            "contacts +work (J)", "unexplained (J)", "warnings"}) {
+  for (const char* label : {"timestep (s)", "steps", "peak z (m)", "max |y| (m)", "final z (m)", "contacts +work (J)",
+                            "unexplained (J)", "warnings"}) {
     const size_t end = header.find(label) + std::string(label).size();
     for (size_t row = 2; row < 6; ++row) {
       ASSERT_GT(lines[row].size(), end) << summary;
@@ -113,7 +114,8 @@ TEST(Sweep, TheDefaultTimestepsAreRound) {
 
 TEST(Sweep, IsTheSameWhateverTheThreadCount) {
   const std::vector<double> dts = simloop::log_spaced(0.001, 0.1, 9);
-  EXPECT_EQ(simloop::sweep_csv(simloop::sweep(scene(), dts, 2.0, 1)), simloop::sweep_csv(simloop::sweep(scene(), dts, 2.0, 2)));
+  EXPECT_EQ(simloop::sweep_csv(simloop::sweep(scene(), dts, 2.0, 1)),
+            simloop::sweep_csv(simloop::sweep(scene(), dts, 2.0, 2)));
 }
 
 TEST(Sweep, LogSpacingAndBadInput) {

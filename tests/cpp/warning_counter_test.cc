@@ -1,5 +1,7 @@
 // Counting MuJoCo's warnings past 2^31 (detail::WarningCounter), and the
 // counts' text, which must read as it did when they were ints.
+#include "warning_counter.hpp"
+
 #include <gtest/gtest.h>
 
 #include <climits>
@@ -7,7 +9,6 @@
 #include <memory>
 
 #include "simloop/output.hpp"
-#include "warning_counter.hpp"
 
 namespace {
 

@@ -58,5 +58,10 @@ def snapshot(directory: Path) -> dict:
 
 def run_python(code: str, timeout: float = 120) -> subprocess.CompletedProcess:
     """`python -c CODE` (dedented) in a child process, so a crash is a result, not the end of pytest."""
-    return subprocess.run([sys.executable, "-c", textwrap.dedent(code)], capture_output=True, text=True,
-                          stdin=subprocess.DEVNULL, timeout=timeout)
+    return subprocess.run(
+        [sys.executable, "-c", textwrap.dedent(code)],
+        capture_output=True,
+        text=True,
+        stdin=subprocess.DEVNULL,
+        timeout=timeout,
+    )

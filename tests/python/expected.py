@@ -8,13 +8,12 @@ lacks it, on a version without one.
 
 from __future__ import annotations
 
-import tomllib
 from pathlib import Path
 from typing import Any
 
 import pytest
-
 import simloop
+import tomllib
 
 TABLES = Path(__file__).resolve().parents[1] / "expected"
 VERSION = simloop.MUJOCO_VERSION.removeprefix("MuJoCo ")  # "2.2.2", "4.0.0"
@@ -42,7 +41,8 @@ def stepping_error_scene(model: str = "falls") -> tuple[str, str]:
     error while stepping, once they land (step ~100 of 0.004 s). Returns the
     scene's XML and what the error says."""
     size = expected("errors.stepping_error_size")
-    return (f"""<mujoco model="{model}">
+    return (
+        f"""<mujoco model="{model}">
   <option timestep="0.004"/>
   {size}
   <worldbody>
@@ -51,4 +51,6 @@ def stepping_error_scene(model: str = "falls") -> tuple[str, str]:
     <body name="b2" pos="0.3 0 0.5"><freejoint/><geom type="box" size="0.05 0.05 0.05"/></body>
   </worldbody>
 </mujoco>
-""", expected("errors.stepping_error_says"))
+""",
+        expected("errors.stepping_error_says"),
+    )

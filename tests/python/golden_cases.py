@@ -45,6 +45,7 @@ def sim_loop_mujoco(exe: Path) -> str:
 class CommandRun:
     """One command line, run by sim_loop and by python -m simloop in an empty
     scratch folder (scratch()), writing to --out out."""
+
     name: str
     args: Tuple[str, ...]  # without --out
     outputs: Tuple[str, ...] = ("metrics.json", "trajectory.csv")
@@ -78,26 +79,31 @@ class CommandRun:
 
 def _smoke(seed: int, rng: str) -> CommandRun:
     args = ("--smoke", "--seed", str(seed)) + (("--rng", rng) if rng != "mt19937_64" else ())
-    return CommandRun(f"smoke-seed{seed}-{rng}", args, whole=True,
-                      api=("run", dict(smoke=True, seed=seed, rng=rng)))
+    return CommandRun(f"smoke-seed{seed}-{rng}", args, whole=True, api=("run", dict(smoke=True, seed=seed, rng=rng)))
 
 
 def _scenario(scene: str, perturb: bool) -> CommandRun:
     path = f"tests/scenes/{scene}.toml"
-    return CommandRun(f"scenario-{scene}" + ("" if perturb else "-no-perturb"),
-                      ("--scenario", path) + (() if perturb else ("--no-perturb",)),
-                      # With its recording python -m simloop writes a scenario's CSV by another path
-                      # (run_scenario_drawn): pinned once, for PushT.
-                      python_extra=() if scene == "pusht" else ("--no-rerun",),
-                      api=("run_scenario", dict(scenario=path, perturb=perturb)))
+    return CommandRun(
+        f"scenario-{scene}" + ("" if perturb else "-no-perturb"),
+        ("--scenario", path) + (() if perturb else ("--no-perturb",)),
+        # With its recording python -m simloop writes a scenario's CSV by another path
+        # (run_scenario_drawn): pinned once, for PushT.
+        python_extra=() if scene == "pusht" else ("--no-rerun",),
+        api=("run_scenario", dict(scenario=path, perturb=perturb)),
+    )
 
 
 COMMAND_RUNS: List[CommandRun] = [
     *(_smoke(seed, rng) for rng in ("mt19937_64", "numpy") for seed in range(4)),
     CommandRun("seed0", ("--seed", "0"), stdout_text=True, python_extra=(), api=("run", dict(seed=0))),
     CommandRun("no-perturb", ("--no-perturb",), api=("run", dict(perturb=False))),
-    CommandRun("break-it", ("--timestep", "0.05", "--no-perturb"), stdout_text=True,
-               api=("run", dict(timestep=0.05, perturb=False))),
+    CommandRun(
+        "break-it",
+        ("--timestep", "0.05", "--no-perturb"),
+        stdout_text=True,
+        api=("run", dict(timestep=0.05, perturb=False)),
+    ),
     CommandRun("energy-audit", ("--energy-audit",), api=("run", dict(audit_energy=True))),
     CommandRun("record-every-7", ("--record-every", "7"), api=("run", dict(record_every=7))),
     CommandRun("steps-1", ("--steps", "1"), api=("run", dict(steps=1))),
@@ -121,8 +127,9 @@ def run_command(run: CommandRun, program: List[str], cwd: Path, python: bool) ->
     argv = run.python_argv() if python else run.argv()
     done = subprocess.run([*program, *argv], cwd=cwd, capture_output=True, stdin=subprocess.DEVNULL, timeout=300)
     if done.returncode != 0:
-        raise RuntimeError(f"`{shlex.join(program + argv)}` exited {done.returncode}: "
-                           f"{done.stderr.decode(errors='replace').strip()}")
+        raise RuntimeError(
+            f"`{shlex.join(program + argv)}` exited {done.returncode}: {done.stderr.decode(errors='replace').strip()}"
+        )
     return done.stdout.decode(), {name: (cwd / OUT / name).read_bytes() for name in run.outputs}
 
 
@@ -167,8 +174,7 @@ def _policy_run() -> Dict[str, Any]:
     import simloop
 
     result = simloop.run_scenario(str(ROOT / PUSHT), seed=0, policy=pusht_policy, control_every=7)
-    return {"column_names": list(result.column_names), "trajectory": result.trajectory,
-            "metrics": result.metrics}
+    return {"column_names": list(result.column_names), "trajectory": result.trajectory, "metrics": result.metrics}
 
 
 def _gym_episodes() -> Dict[str, Any]:
@@ -201,9 +207,15 @@ def _gym_episodes() -> Dict[str, Any]:
             if terminated or truncated:
                 break
     env.close()
-    return {"observation_names": list(env.observation_names), "episode_seeds": np.array(seeds, dtype=np.uint64),
-            "observations": np.stack(obs), "rewards": np.array(rewards), "terminated_truncated": np.array(flags),
-            "steps": np.array(steps, dtype=np.int64), "times": np.array(times)}
+    return {
+        "observation_names": list(env.observation_names),
+        "episode_seeds": np.array(seeds, dtype=np.uint64),
+        "observations": np.stack(obs),
+        "rewards": np.array(rewards),
+        "terminated_truncated": np.array(flags),
+        "steps": np.array(steps, dtype=np.int64),
+        "times": np.array(times),
+    }
 
 
 def _table(table: Any) -> Dict[str, Any]:
@@ -230,15 +242,25 @@ class ApiCase:
 
 
 API_CASES: List[ApiCase] = [
-    ApiCase("policy-pusht", f"simloop.run_scenario({PUSHT!r}, seed=0, policy=golden_cases.pusht_policy, "
-                            "control_every=7)", _policy_run),
-    ApiCase("gym-pusht", f"simloop.gym.ScenarioEnv({PUSHT!r}, control_every=10, reward=...): reset(seed=5), "
-                         "golden_cases.ACTIONS cycled to truncation, reset(), 20 more steps (golden_cases._gym_episodes)",
-            _gym_episodes),
-    ApiCase("batch-table-chapter", "simloop.run_batch(seeds=range(4), metrics_only=True): every column",
-            _batch_chapter),
-    ApiCase("batch-table-pusht", f"simloop.run_scenario_batch({PUSHT!r}, seeds=range(3), metrics_only=True): "
-                                 "every column", _batch_pusht),
+    ApiCase(
+        "policy-pusht",
+        f"simloop.run_scenario({PUSHT!r}, seed=0, policy=golden_cases.pusht_policy, control_every=7)",
+        _policy_run,
+    ),
+    ApiCase(
+        "gym-pusht",
+        f"simloop.gym.ScenarioEnv({PUSHT!r}, control_every=10, reward=...): reset(seed=5), "
+        "golden_cases.ACTIONS cycled to truncation, reset(), 20 more steps (golden_cases._gym_episodes)",
+        _gym_episodes,
+    ),
+    ApiCase(
+        "batch-table-chapter", "simloop.run_batch(seeds=range(4), metrics_only=True): every column", _batch_chapter
+    ),
+    ApiCase(
+        "batch-table-pusht",
+        f"simloop.run_scenario_batch({PUSHT!r}, seeds=range(3), metrics_only=True): every column",
+        _batch_pusht,
+    ),
 ]
 
 

@@ -8,12 +8,13 @@ from __future__ import annotations
 import ast
 import inspect
 import re
+from pathlib import Path
 from typing import Dict, List, Optional, Tuple
 
 from simloop import _core
 
-
 # ---- pybind11's signatures against the stub's --------------------------------
+
 
 def _split_top(text: str, sep: str = ",") -> List[str]:
     """text split at `sep` outside brackets and quotes."""
@@ -56,8 +57,9 @@ def _pybind_signatures(name: str, doc: Optional[str], method: bool) -> List[Sign
         heads = lines[:1]
     signatures = []
     for head in heads:
-        match = re.match(r"^\s*" + re.escape(name) + r"\((.*)\) -> (.*)$", head) or \
-                re.match(r"^\s*\((.*)\) -> (.*)$", head)  # a property's getter: "(arg0: X) -> T"
+        match = re.match(r"^\s*" + re.escape(name) + r"\((.*)\) -> (.*)$", head) or re.match(
+            r"^\s*\((.*)\) -> (.*)$", head
+        )  # a property's getter: "(arg0: X) -> T"
         if not match:
             raise AssertionError(f"cannot read pybind11's signature of {name}: {head!r}")
         params: List[Param] = []
@@ -100,22 +102,38 @@ class _Stub:
             kind, signatures, _ = self.entries[key]
             self.entries[key] = (kind, signatures, True)
             return
-        kind = "property" if "property" in decorators else "staticmethod" if "staticmethod" in decorators else (
-            "method" if method else "function")
+        kind = (
+            "property"
+            if "property" in decorators
+            else "staticmethod"
+            if "staticmethod" in decorators
+            else ("method" if method else "function")
+        )
         args = f.args
         positional = args.posonlyargs + args.args
         defaults = [None] * (len(positional) - len(args.defaults)) + list(args.defaults)
         params: List[Param] = []
         for i, (a, d) in enumerate(zip(positional, defaults)):
-            params.append((a.arg, i < len(args.posonlyargs) or a.arg.startswith("__"),
-                           ast.unparse(a.annotation) if a.annotation else "object",
-                           None if d is None else ast.unparse(d)))
+            params.append(
+                (
+                    a.arg,
+                    i < len(args.posonlyargs) or a.arg.startswith("__"),
+                    ast.unparse(a.annotation) if a.annotation else "object",
+                    None if d is None else ast.unparse(d),
+                )
+            )
         if args.vararg:  # pybind11's py::args: "*args: object"; a stub may say Never (none may be given)
             annotation = ast.unparse(args.vararg.annotation) if args.vararg.annotation else "object"
             params.append(("*" + args.vararg.arg, False, "object" if annotation == "Never" else annotation, None))
         for a, d in zip(args.kwonlyargs, args.kw_defaults):
-            params.append((a.arg, False, ast.unparse(a.annotation) if a.annotation else "object",
-                           None if d is None else ast.unparse(d)))
+            params.append(
+                (
+                    a.arg,
+                    False,
+                    ast.unparse(a.annotation) if a.annotation else "object",
+                    None if d is None else ast.unparse(d),
+                )
+            )
         if method and kind != "staticmethod":
             params = params[1:]
         signature = (params, ast.unparse(f.returns) if f.returns else "None")
@@ -130,10 +148,18 @@ class _Stub:
 def _canonical(expr: ast.expr, stub: Optional[_Stub]):
     def name_of(node: ast.expr) -> str:
         text = ast.unparse(node)
-        for prefix in ("typing.", "collections.abc.", "simloop._core.", "numpy.typing.", "pathlib.", "os.", "np.",
-                       "numpy."):
+        for prefix in (
+            "typing.",
+            "collections.abc.",
+            "simloop._core.",
+            "numpy.typing.",
+            "pathlib.",
+            "os.",
+            "np.",
+            "numpy.",
+        ):
             if text.startswith(prefix):
-                text = text[len(prefix):]
+                text = text[len(prefix) :]
         return text
 
     def go(node: ast.expr):
@@ -177,7 +203,10 @@ def _canonical(expr: ast.expr, stub: Optional[_Stub]):
             return "*"
         names = {m[0] for m in flat}
         # pybind11's spellings of what Python's int, float and os.PathLike arguments accept
-        for supports, plain in (({"SupportsInt", "SupportsIndex"}, "int"), ({"SupportsFloat", "SupportsIndex"}, "float")):
+        for supports, plain in (
+            ({"SupportsInt", "SupportsIndex"}, "int"),
+            ({"SupportsFloat", "SupportsIndex"}, "float"),
+        ):
             if supports <= names:
                 flat = {m for m in flat if m[0] not in supports} | {(plain, ())}
                 names = {m[0] for m in flat}
@@ -199,7 +228,9 @@ def _same(a, b) -> bool:
     if isinstance(a, frozenset) or isinstance(b, frozenset):
         a_set = a if isinstance(a, frozenset) else frozenset([a])
         b_set = b if isinstance(b, frozenset) else frozenset([b])
-        return all(any(_same(x, y) for y in b_set) for x in a_set) and all(any(_same(y, x) for x in a_set) for y in b_set)
+        return all(any(_same(x, y) for y in b_set) for x in a_set) and all(
+            any(_same(y, x) for x in a_set) for y in b_set
+        )
     if a[0] != b[0]:
         return False
     if not a[1] or not b[1]:
@@ -221,7 +252,7 @@ def _suggest(name: str, kind: str, signatures: List[Signature]) -> str:
     out = []
     for params, returns in signatures:
         args = ["self"] if kind in ("method", "property") else []
-        for pname, positional_only, ptype, default in params:
+        for pname, _positional_only, ptype, default in params:
             args.append(f"{pname}: {_stub_text(ptype)}" + (f" = {default}" if default is not None else ""))
         last_positional_only = max((i for i, p in enumerate(params) if p[1]), default=None)
         if last_positional_only is not None:  # pybind11's unnamed arguments (arg0, ...)
@@ -234,6 +265,7 @@ def _suggest(name: str, kind: str, signatures: List[Signature]) -> str:
 
 def _runtime_entries():
     """(qualified name, kind, pybind11 signatures, writable) of every compiled function, method, property."""
+
     def compiled(f: object) -> bool:
         return type(f).__name__ == "builtin_function_or_method"
 
@@ -252,8 +284,12 @@ def _runtime_entries():
                 key = f"{name}.{attr}"
                 if isinstance(member, property):
                     if compiled(member.fget):
-                        yield key, "property", _pybind_signatures(attr, member.fget.__doc__, True), \
-                            member.fset is not None
+                        yield (
+                            key,
+                            "property",
+                            _pybind_signatures(attr, member.fget.__doc__, True),
+                            member.fset is not None,
+                        )
                 elif isinstance(member, staticmethod):
                     if compiled(member.__func__):
                         yield key, "staticmethod", _pybind_signatures(attr, member.__func__.__doc__, False), False
@@ -282,19 +318,26 @@ def _compare(stub: _Stub) -> List[str]:
             problems.append(f"{key}: a {kind} in the module, a {stub_kind} in the stub; the module has: {want}")
             continue
         if writable != stub_writable:
-            problems.append(f"{key}: {'writable' if writable else 'read-only'} in the module, "
-                            f"{'writable' if stub_writable else 'read-only'} in the stub"
-                            + (" (add a @" + key.split('.')[-1] + ".setter)" if writable else ""))
+            problems.append(
+                f"{key}: {'writable' if writable else 'read-only'} in the module, "
+                f"{'writable' if stub_writable else 'read-only'} in the stub"
+                + (" (add a @" + key.split(".")[-1] + ".setter)" if writable else "")
+            )
         if len(signatures) != len(stub_signatures):
-            problems.append(f"{key}: {len(signatures)} overload(s) in the module, {len(stub_signatures)} in the stub; "
-                            f"the module has: {want}")
+            problems.append(
+                f"{key}: {len(signatures)} overload(s) in the module, {len(stub_signatures)} in the stub; "
+                f"the module has: {want}"
+            )
             continue
         for (params, returns), (stub_params, stub_returns) in zip(signatures, stub_signatures):
             differences = []
-            if [p[0] for p in params if not p[1]] != [p[0] for p in stub_params if not p[1]] or \
-                    [p[1] for p in params] != [p[1] for p in stub_params]:
-                differences.append(f"parameters ({', '.join(p[0] for p in params)}) in the module, "
-                                   f"({', '.join(p[0] for p in stub_params)}) in the stub")
+            if [p[0] for p in params if not p[1]] != [p[0] for p in stub_params if not p[1]] or [
+                p[1] for p in params
+            ] != [p[1] for p in stub_params]:
+                differences.append(
+                    f"parameters ({', '.join(p[0] for p in params)}) in the module, "
+                    f"({', '.join(p[0] for p in stub_params)}) in the stub"
+                )
             else:
                 for (pname, _, ptype, default), (_, _, stype, sdefault) in zip(params, stub_params):
                     if default == "None" and not re.search(r"\bNone\b", ptype):

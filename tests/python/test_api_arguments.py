@@ -11,7 +11,6 @@ import sys
 
 import numpy as np
 import pytest
-
 import simloop
 from conftest import ROOT
 
@@ -21,12 +20,16 @@ PUSHT = ROOT / "tests" / "scenes" / "pusht.xml"
 @pytest.mark.parametrize("kind", [np.float64, np.float32])
 def test_a_scenario_of_numpy_numbers_is_the_scenario_of_python_numbers(kind):
     def made(number, whole):
-        return simloop.Scenario(scene=PUSHT, steps=whole(60), timestep=number(0.002),
-                                controls={"push_x": number(0.5), "push_y": [(number(0), number(0.25))]},
-                                disturbances=[dict(body="tblock", force=[number(0), number(2), number(0)],
-                                                   start=number(0.04), duration=number(0.02))],
-                                reset={"qpos_noise": number(0.001),
-                                       "params": [dict(kind="friction", uniform=[number(0.5), number(1)])]})
+        return simloop.Scenario(
+            scene=PUSHT,
+            steps=whole(60),
+            timestep=number(0.002),
+            controls={"push_x": number(0.5), "push_y": [(number(0), number(0.25))]},
+            disturbances=[
+                dict(body="tblock", force=[number(0), number(2), number(0)], start=number(0.04), duration=number(0.02))
+            ],
+            reset={"qpos_noise": number(0.001), "params": [dict(kind="friction", uniform=[number(0.5), number(1)])]},
+        )
 
     plain = made(lambda v: float(kind(v)), int)
     first, second = simloop.run_scenario(plain, seed=3), simloop.run_scenario(made(kind, np.int64), seed=3)
@@ -49,27 +52,45 @@ def test_plot_of_a_csv_without_rows_is_one_line(tmp_path):
     out = tmp_path / "run"
     out.mkdir()
     (out / "trajectory.csv").write_text("step,time,pusher_x,box_x,box_y,box_z,contacts,shove_y\n")
-    done = subprocess.run([sys.executable, "-m", "simloop", "plot", "trajectory", "--out", str(out)],
-                          capture_output=True, text=True, stdin=subprocess.DEVNULL, timeout=120)
+    done = subprocess.run(
+        [sys.executable, "-m", "simloop", "plot", "trajectory", "--out", str(out)],
+        capture_output=True,
+        text=True,
+        stdin=subprocess.DEVNULL,
+        timeout=120,
+    )
     assert done.returncode == 1, done.stderr
     assert done.stderr.count("\n") == 1 and "no rows after the header" in done.stderr, done.stderr
     assert not any(p.name.endswith(".png") or ".tmp" in p.name for p in out.iterdir())
 
 
-@pytest.mark.parametrize("call, words", [
-    (lambda: simloop.Scenario(scene=PUSHT, controls=[1, 2]), r"^controls must be a dict or None, got \[1, 2\] \(list\)$"),
-    (lambda: simloop.Scenario(scene=PUSHT, record="all"), r"^record must be a dict or None, got 'all' \(str\)$"),
-    (lambda: simloop.Scenario(scene=PUSHT, disturbances=5), r"^disturbances must be a list of dicts, got 5 \(int\)$"),
-    (lambda: simloop.Scenario(scene=PUSHT, name=collections.UserString("x")),
-     r"^name must be a number, a string or a list of them, got .*UserString"),
-    (lambda: simloop.Scenario(scene=PUSHT, record={"bodies": [collections.UserString("tblock")]}),
-     r"^bodies must be a number, a string or a list of them, got .*UserString"),
-    (lambda: simloop.Scenario.from_file(5), r"^path must be a path .*got 5 \(int\)$"),
-    (lambda: simloop.BatchTable.concat(5), r"^tables must be a list of BatchTable, got int$"),
-    (lambda: simloop.Model.pusher_scene().names(5), r"^kind must be a str or bytes, got 5 \(int\)$"),
-    (lambda: simloop.Model.pusher_scene().object_info("body", "x"), r"^id must be an int, got 'x' \(str\)$"),
-    (lambda: simloop.Model.pusher_scene().object_info(b"body", 1.0), r"^id must be an int, got 1.0 \(float\)$"),
-])
+@pytest.mark.parametrize(
+    "call, words",
+    [
+        (
+            lambda: simloop.Scenario(scene=PUSHT, controls=[1, 2]),
+            r"^controls must be a dict or None, got \[1, 2\] \(list\)$",
+        ),
+        (lambda: simloop.Scenario(scene=PUSHT, record="all"), r"^record must be a dict or None, got 'all' \(str\)$"),
+        (
+            lambda: simloop.Scenario(scene=PUSHT, disturbances=5),
+            r"^disturbances must be a list of dicts, got 5 \(int\)$",
+        ),
+        (
+            lambda: simloop.Scenario(scene=PUSHT, name=collections.UserString("x")),
+            r"^name must be a number, a string or a list of them, got .*UserString",
+        ),
+        (
+            lambda: simloop.Scenario(scene=PUSHT, record={"bodies": [collections.UserString("tblock")]}),
+            r"^bodies must be a number, a string or a list of them, got .*UserString",
+        ),
+        (lambda: simloop.Scenario.from_file(5), r"^path must be a path .*got 5 \(int\)$"),
+        (lambda: simloop.BatchTable.concat(5), r"^tables must be a list of BatchTable, got int$"),
+        (lambda: simloop.Model.pusher_scene().names(5), r"^kind must be a str or bytes, got 5 \(int\)$"),
+        (lambda: simloop.Model.pusher_scene().object_info("body", "x"), r"^id must be an int, got 'x' \(str\)$"),
+        (lambda: simloop.Model.pusher_scene().object_info(b"body", 1.0), r"^id must be an int, got 1.0 \(float\)$"),
+    ],
+)
 def test_a_wrong_type_is_one_line_naming_the_argument(call, words):
     with pytest.raises(TypeError, match=words) as error:
         call()

@@ -14,20 +14,22 @@ from pathlib import Path
 import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
-
 from test_batch_resume import batch, interrupted
 
 ARGS = ["--seeds", "0:300", "--steps", "300", "--chunk-size", "10", "--threads", "1"]
 
 
-@pytest.mark.parametrize("args, words", [
-    (["--seeds", "\u00b2"], "--seeds: '\u00b2' is not seeds"),
-    (["--steps", "\u00b2"], "--steps: '\u00b2' is not a whole number from 1 to "),
-    (["--chunk-size", "\u00b3"], "--chunk-size: '\u00b3' is not a whole number from 1 to "),
-    (["--threads", "4611686018427387903"], "--threads: '4611686018427387903' is not a whole number from 1 to 4096"),
-    (["--seeds", "0:10000000000"], "--seeds: '0:10000000000' is 10000000000 seeds; a batch runs at most 10000000"),
-    (["--seeds", "0:100000", "--friction", ",".join(["1"] * 101)], "make 10100000 runs; a batch runs at most"),
-])
+@pytest.mark.parametrize(
+    "args, words",
+    [
+        (["--seeds", "\u00b2"], "--seeds: '\u00b2' is not seeds"),
+        (["--steps", "\u00b2"], "--steps: '\u00b2' is not a whole number from 1 to "),
+        (["--chunk-size", "\u00b3"], "--chunk-size: '\u00b3' is not a whole number from 1 to "),
+        (["--threads", "4611686018427387903"], "--threads: '4611686018427387903' is not a whole number from 1 to 4096"),
+        (["--seeds", "0:10000000000"], "--seeds: '0:10000000000' is 10000000000 seeds; a batch runs at most 10000000"),
+        (["--seeds", "0:100000", "--friction", ",".join(["1"] * 101)], "make 10100000 runs; a batch runs at most"),
+    ],
+)
 def test_a_value_the_batch_cannot_run_is_refused_before_any_run(tmp_path, args, words):
     done = batch([*args, "--out", "out/b.parquet"], tmp_path)
     assert done.returncode == 2, done.stderr
@@ -86,8 +88,9 @@ def test_a_part_damaged_or_edited_under_its_stamp_or_not_a_file_is_refused(stopp
         table = pq.read_table(first)
         column = table.column_names.index("seed") if "seed" in table.column_names else 1
         values = table.column(column).to_pylist()
-        edited = table.set_column(column, table.field(column), pa.array([values[1]] + values[1:],
-                                                                        table.field(column).type))
+        edited = table.set_column(
+            column, table.field(column), pa.array([values[1]] + values[1:], table.field(column).type)
+        )
         pq.write_table(edited, first)  # the stamp kept, a value changed
         refused(folder, parts, "chunk-000000000.parquet: damaged or edited")
         # A byte flipped a third of the way in: in the column data the checksum finds it; where a build's file
@@ -113,9 +116,15 @@ def test_a_full_file_leaves_no_temporary_and_resume_finishes_the_same_file(stopp
     def limit_files():  # the parts fit, the whole file does not
         resource.setrlimit(resource.RLIMIT_FSIZE, (size // 2, resource.RLIM_INFINITY))
 
-    full = subprocess.run([sys.executable, "-m", "simloop", "batch", *ARGS, "--out", "cut.parquet", "--resume"],
-                          cwd=folder, capture_output=True, text=True, stdin=subprocess.DEVNULL, timeout=300,
-                          preexec_fn=limit_files)
+    full = subprocess.run(
+        [sys.executable, "-m", "simloop", "batch", *ARGS, "--out", "cut.parquet", "--resume"],
+        cwd=folder,
+        capture_output=True,
+        text=True,
+        stdin=subprocess.DEVNULL,
+        timeout=300,
+        preexec_fn=limit_files,
+    )
     assert full.returncode == 1, full.stderr
     assert full.stderr.count("\n") == 1, full.stderr
     assert not [p.name for p in folder.iterdir() if ".tmp." in p.name]
@@ -131,9 +140,15 @@ def test_a_full_file_leaves_no_temporary_and_resume_finishes_the_same_file(stopp
 
 def test_a_report_that_cannot_be_written_says_the_file_was(tmp_path):
     with open("/dev/full", "w") as full:
-        done = subprocess.run([sys.executable, "-m", "simloop", "batch", "--seeds", "0:4", "--steps", "50",
-                               "--out", "b.parquet"], cwd=tmp_path, stdout=full, stderr=subprocess.PIPE, text=True,
-                              stdin=subprocess.DEVNULL, timeout=120)
+        done = subprocess.run(
+            [sys.executable, "-m", "simloop", "batch", "--seeds", "0:4", "--steps", "50", "--out", "b.parquet"],
+            cwd=tmp_path,
+            stdout=full,
+            stderr=subprocess.PIPE,
+            text=True,
+            stdin=subprocess.DEVNULL,
+            timeout=120,
+        )
     assert done.returncode == 1, done.stderr
     assert done.stderr.count("\n") == 1, done.stderr
     assert "cannot write the report to standard output" in done.stderr and "b.parquet was written" in done.stderr

@@ -5,7 +5,6 @@ shapes and values refused by name before any step."""
 
 import numpy as np
 import pytest
-
 import simloop
 from conftest import ROOT
 
@@ -19,8 +18,12 @@ def controls(seed, steps, nu=2, runs=None):
 
 
 def same(a, b):
-    return (a.column_names == b.column_names and a.trajectory.tobytes() == b.trajectory.tobytes()
-            and a.final_state.tobytes() == b.final_state.tobytes() and a.metrics_json() == b.metrics_json())
+    return (
+        a.column_names == b.column_names
+        and a.trajectory.tobytes() == b.trajectory.tobytes()
+        and a.final_state.tobytes() == b.final_state.tobytes()
+        and a.metrics_json() == b.metrics_json()
+    )
 
 
 def test_own_controls_are_the_scenarios_per_step_controls_bit_for_bit(tmp_path):
@@ -29,11 +32,17 @@ def test_own_controls_are_the_scenarios_per_step_controls_bit_for_bit(tmp_path):
     u = controls(0, 120)
     for a, name in enumerate(("push_x", "push_y")):
         (tmp_path / f"{name}.csv").write_text(name + "\n" + "".join(f"{float(v)!r}\n" for v in u[:, a]))
-    from_files = simloop.Scenario(scene=SCENES / "pusht.xml", steps=120, record={"bodies": ["tblock", "pusher"],
-                                  "actuators": ["push_x", "push_y"]},
-                                  controls={n: tmp_path / f"{n}.csv" for n in ("push_x", "push_y")})
-    bare = simloop.Scenario(scene=SCENES / "pusht.xml", steps=120, record={"bodies": ["tblock", "pusher"],
-                            "actuators": ["push_x", "push_y"]})
+    from_files = simloop.Scenario(
+        scene=SCENES / "pusht.xml",
+        steps=120,
+        record={"bodies": ["tblock", "pusher"], "actuators": ["push_x", "push_y"]},
+        controls={n: tmp_path / f"{n}.csv" for n in ("push_x", "push_y")},
+    )
+    bare = simloop.Scenario(
+        scene=SCENES / "pusht.xml",
+        steps=120,
+        record={"bodies": ["tblock", "pusher"], "actuators": ["push_x", "push_y"]},
+    )
     expected = simloop.run_scenario(from_files)
     got = simloop.run_scenario(bare, controls=u)
     assert same(got, expected)
@@ -58,17 +67,21 @@ def test_a_batch_of_own_controls_and_states_is_each_run_alone(threads):
     start = simloop.run_scenario(PUSHT, steps=50, perturb=False).final_state
     starts = np.stack([start] * 6)
     starts[1::2, 0] += 0.25  # some runs start later in time (the state carries the time)
-    alone = [simloop.run_scenario(PUSHT, seed=s, timestep=t, steps=steps, controls=u[i], initial_state=starts[i])
-             for i, (s, t) in enumerate((s, t) for s in seeds for t in (0.002, 0.004))]
-    batch = simloop.run_scenario_batch(PUSHT, seeds=seeds, timesteps=[0.002, 0.004], steps=steps, controls=u,
-                                       initial_state=starts, threads=threads)
+    alone = [
+        simloop.run_scenario(PUSHT, seed=s, timestep=t, steps=steps, controls=u[i], initial_state=starts[i])
+        for i, (s, t) in enumerate((s, t) for s in seeds for t in (0.002, 0.004))
+    ]
+    batch = simloop.run_scenario_batch(
+        PUSHT, seeds=seeds, timesteps=[0.002, 0.004], steps=steps, controls=u, initial_state=starts, threads=threads
+    )
     assert len(batch) == 6
     for i, (a, b) in enumerate(zip(batch.results, alone)):
         assert same(a, b), f"run {i}"
     assert batch.results[0].final_state.tobytes() != batch.results[2].final_state.tobytes()
     # One (steps, nu) array and one state for every run: broadcast.
-    shared = simloop.run_scenario_batch(PUSHT, seeds=seeds, steps=steps, controls=u[0], initial_state=start,
-                                        threads=threads)
+    shared = simloop.run_scenario_batch(
+        PUSHT, seeds=seeds, steps=steps, controls=u[0], initial_state=start, threads=threads
+    )
     for s, r in zip(seeds, shared.results):
         assert same(r, simloop.run_scenario(PUSHT, seed=s, steps=steps, controls=u[0], initial_state=start))
 
@@ -89,26 +102,43 @@ def test_the_controls_array_is_read_in_place_and_left_unchanged():
     simloop.run_scenario(PUSHT, steps=100, controls=u)
     assert u.tobytes() == before.tobytes()
     # Other layouts and integer arrays are converted, with the same result.
-    assert same(simloop.run_scenario(PUSHT, steps=100, controls=np.asfortranarray(u)),
-                simloop.run_scenario(PUSHT, steps=100, controls=u))
+    assert same(
+        simloop.run_scenario(PUSHT, steps=100, controls=np.asfortranarray(u)),
+        simloop.run_scenario(PUSHT, steps=100, controls=u),
+    )
     ints = np.zeros((100, 2), dtype=np.int32)
-    assert same(simloop.run_scenario(PUSHT, steps=100, controls=ints),
-                simloop.run_scenario(PUSHT, steps=100, controls=ints.astype(float)))
+    assert same(
+        simloop.run_scenario(PUSHT, steps=100, controls=ints),
+        simloop.run_scenario(PUSHT, steps=100, controls=ints.astype(float)),
+    )
 
 
-@pytest.mark.parametrize("kwargs, error, words", [
-    (dict(controls=np.zeros((99, 2))), ValueError,
-     "controls must have one row per step and one column per actuator, (100, 2) for this run, got (99, 2)"),
-    (dict(controls=np.zeros((100, 3))), ValueError, "got (100, 3)"),
-    (dict(controls=np.zeros(100)), ValueError, "controls must be shaped (steps, nu), got shape (100,)"),
-    (dict(controls="fast"), TypeError, "controls must be an array of numbers shaped (steps, nu), got 'fast'"),
-    (dict(controls=[[1, 2], [3]]), TypeError, "controls must be an array of numbers"),
-    (dict(controls=np.zeros((100, 2), dtype=bool)), TypeError, "got an array of dtype bool"),
-    (dict(controls=np.where(np.arange(200).reshape(100, 2) == 75, np.nan, 0.0)), ValueError,
-     "controls must be finite, got nan at step 37, actuator 1"),
-    (dict(initial_state=np.zeros(3)), ValueError, "initial_state must hold state_size = "),
-    (dict(initial_state=np.zeros((1, 3))), ValueError, "initial_state must be shaped (state_size,), got shape (1, 3)"),
-])
+@pytest.mark.parametrize(
+    "kwargs, error, words",
+    [
+        (
+            dict(controls=np.zeros((99, 2))),
+            ValueError,
+            "controls must have one row per step and one column per actuator, (100, 2) for this run, got (99, 2)",
+        ),
+        (dict(controls=np.zeros((100, 3))), ValueError, "got (100, 3)"),
+        (dict(controls=np.zeros(100)), ValueError, "controls must be shaped (steps, nu), got shape (100,)"),
+        (dict(controls="fast"), TypeError, "controls must be an array of numbers shaped (steps, nu), got 'fast'"),
+        (dict(controls=[[1, 2], [3]]), TypeError, "controls must be an array of numbers"),
+        (dict(controls=np.zeros((100, 2), dtype=bool)), TypeError, "got an array of dtype bool"),
+        (
+            dict(controls=np.where(np.arange(200).reshape(100, 2) == 75, np.nan, 0.0)),
+            ValueError,
+            "controls must be finite, got nan at step 37, actuator 1",
+        ),
+        (dict(initial_state=np.zeros(3)), ValueError, "initial_state must hold state_size = "),
+        (
+            dict(initial_state=np.zeros((1, 3))),
+            ValueError,
+            "initial_state must be shaped (state_size,), got shape (1, 3)",
+        ),
+    ],
+)
 def test_bad_inputs_are_refused_by_name(kwargs, error, words):
     with pytest.raises(error) as raised:
         simloop.run_scenario(PUSHT, steps=100, **kwargs)
@@ -136,8 +166,14 @@ def test_batch_inputs_must_have_one_entry_per_run():
 
 def test_progress_counts_every_run_of_a_batch_with_inputs():
     seen = []
-    table = simloop.run_scenario_batch(PUSHT, seeds=[0, 1, 2], steps=300, controls=controls(5, 300),
-                                       metrics_only=True, progress=lambda done, total: seen.append((done, total)))
+    table = simloop.run_scenario_batch(
+        PUSHT,
+        seeds=[0, 1, 2],
+        steps=300,
+        controls=controls(5, 300),
+        metrics_only=True,
+        progress=lambda done, total: seen.append((done, total)),
+    )
     assert len(table) == 3
     assert seen[-1] == (900, 900) and all(total == 900 for _, total in seen)
     with pytest.raises(ZeroDivisionError):

@@ -13,7 +13,6 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import pytest
-
 import simloop
 from conftest import ROOT
 
@@ -25,8 +24,11 @@ TBLOCK = SCENES.joinpath("pusht.xml").read_text().split('<body name="tblock"')[1
 
 def write_scene(folder: Path) -> dict:
     """PushT with its T-block in an included file and push_x from a CSV file: {what: the file that holds it}."""
-    scene = SCENES.joinpath("pusht.xml").read_text().replace(f'<body name="tblock"{TBLOCK}</body>',
-                                                             '<include file="tblock.xml"/>')
+    scene = (
+        SCENES.joinpath("pusht.xml")
+        .read_text()
+        .replace(f'<body name="tblock"{TBLOCK}</body>', '<include file="tblock.xml"/>')
+    )
     assert "tblock.xml" in scene
     (folder / "pusht.xml").write_text(scene)
     (folder / "tblock.xml").write_text(f'<mujoco>\n<body name="tblock"{TBLOCK}</body>\n</mujoco>\n')
@@ -34,13 +36,21 @@ def write_scene(folder: Path) -> dict:
     toml = SCENES.joinpath("pusht.toml").read_text().replace("value = 0.8", 'csv = "push_x.csv"')
     assert 'csv = "push_x.csv"' in toml
     (folder / "pusht.toml").write_text(toml)
-    return {"scene": folder / "pusht.xml", "include": folder / "tblock.xml", "csv": folder / "push_x.csv",
-            "scenario": folder / "pusht.toml"}
+    return {
+        "scene": folder / "pusht.xml",
+        "include": folder / "tblock.xml",
+        "csv": folder / "push_x.csv",
+        "scenario": folder / "pusht.toml",
+    }
 
 
 # An edit of each file that changes the runs' numbers.
-EDITS = {"scene": ('damping="5"', 'damping="3"'), "include": ('mass="0.2"', 'mass="0.5"'),
-         "csv": ("0.6\n", "-0.4\n"), "scenario": ("newtons = [0.5, 1.5]", "newtons = [2.5, 3.5]")}
+EDITS = {
+    "scene": ('damping="5"', 'damping="3"'),
+    "include": ('mass="0.2"', 'mass="0.5"'),
+    "csv": ("0.6\n", "-0.4\n"),
+    "scenario": ("newtons = [0.5, 1.5]", "newtons = [2.5, 3.5]"),
+}
 
 
 def edit(path: Path, what: str) -> None:
@@ -58,8 +68,7 @@ def test_an_executor_batch_after_an_edit_is_the_local_batch_of_the_edited_files(
     def both():
         local = simloop.run_scenario_batch(str(scenario), seeds=range(4), steps=200, metrics_only=True, threads=2)
         with ThreadPoolExecutor(2) as pool:
-            remote = simloop.run_scenario_batch(str(scenario), seeds=range(4), steps=200, executor=pool,
-                                                chunk_size=2)
+            remote = simloop.run_scenario_batch(str(scenario), seeds=range(4), steps=200, executor=pool, chunk_size=2)
         return local, remote
 
     before, before_remote = both()
@@ -82,8 +91,14 @@ def test_a_worker_refuses_a_scene_edited_since_the_batch_started(tmp_path):
 
 
 def batch(args, cwd: Path) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "simloop", "batch", *args], cwd=cwd, capture_output=True, text=True,
-                          stdin=subprocess.DEVNULL, timeout=300)
+    return subprocess.run(
+        [sys.executable, "-m", "simloop", "batch", *args],
+        cwd=cwd,
+        capture_output=True,
+        text=True,
+        stdin=subprocess.DEVNULL,
+        timeout=300,
+    )
 
 
 @pytest.mark.parametrize("what", ["scene", "include", "csv", "scenario"])
@@ -91,16 +106,16 @@ def test_resume_refuses_parts_written_before_an_edit_naming_the_file(tmp_path, w
     from test_batch_resume import interrupted
 
     files = write_scene(tmp_path)
-    args = ["--scenario", "pusht.toml", "--seeds", "0:300", "--steps", "300", "--chunk-size", "10",
-            "--threads", "1"]
+    args = ["--scenario", "pusht.toml", "--seeds", "0:300", "--steps", "300", "--chunk-size", "10", "--threads", "1"]
     parts = interrupted(args, tmp_path, "cut.parquet", 2)
     before = {p.name: p.read_bytes() for p in parts.iterdir()}
     edit(files[what], what)
     refused = batch([*args, "--out", "cut.parquet", "--resume"], tmp_path)
     assert refused.returncode == 2, refused.stderr
     assert refused.stderr.count("\n") == 1, refused.stderr
-    assert refused.stderr.startswith(f"sim-loop: batch: --resume: {files[what]} is not the file it was when "), \
+    assert refused.stderr.startswith(f"sim-loop: batch: --resume: {files[what]} is not the file it was when "), (
         refused.stderr
+    )
     assert not (tmp_path / "cut.parquet").exists()
     assert {p.name: p.read_bytes() for p in parts.iterdir()} == before, "the parts folder changed"
 
@@ -110,9 +125,14 @@ def test_a_second_batch_on_the_same_out_is_refused_and_the_first_finishes_whole(
     alone = batch([*args, "--out", "alone.parquet"], tmp_path)
     assert alone.returncode == 0, alone.stderr
     parts = tmp_path / "out" / "b.parquet.parts"
-    with subprocess.Popen([sys.executable, "-m", "simloop", "batch", *args, "--out", "out/b.parquet"], cwd=tmp_path,
-                          stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                          text=True) as first:
+    with subprocess.Popen(
+        [sys.executable, "-m", "simloop", "batch", *args, "--out", "out/b.parquet"],
+        cwd=tmp_path,
+        stdin=subprocess.DEVNULL,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    ) as first:
         deadline = time.monotonic() + 120
         while not any(parts.glob("chunk-*.parquet")):  # it is writing: it holds the folder by then
             assert first.poll() is None and time.monotonic() < deadline, "the first batch ended before it was paused"
@@ -126,7 +146,8 @@ def test_a_second_batch_on_the_same_out_is_refused_and_the_first_finishes_whole(
     assert first.returncode == 0, err
     assert second.returncode == 2, second.stderr
     assert second.stderr.count("\n") == 1, second.stderr
-    assert second.stderr.startswith("sim-loop: batch: --out: ") and "another simloop run (pid " in second.stderr, \
+    assert second.stderr.startswith("sim-loop: batch: --out: ") and "another simloop run (pid " in second.stderr, (
         second.stderr
+    )
     assert (tmp_path / "out" / "b.parquet").read_bytes() == (tmp_path / "alone.parquet").read_bytes()
     assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["b.parquet"]

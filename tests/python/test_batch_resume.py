@@ -19,8 +19,14 @@ ARGS = ["--seeds", "0:300", "--steps", "300", "--chunk-size", "10", "--threads",
 
 
 def batch(args, cwd) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "simloop", "batch", *args], cwd=cwd, capture_output=True, text=True,
-                          stdin=subprocess.DEVNULL, timeout=300)
+    return subprocess.run(
+        [sys.executable, "-m", "simloop", "batch", *args],
+        cwd=cwd,
+        capture_output=True,
+        text=True,
+        stdin=subprocess.DEVNULL,
+        timeout=300,
+    )
 
 
 def interrupted(args, cwd: Path, out: str, chunks: int) -> Path:
@@ -28,9 +34,15 @@ def interrupted(args, cwd: Path, out: str, chunks: int) -> Path:
     parts = cwd / f"{out}.parts"
     with contextlib.ExitStack() as stack:
         # SIGINT at its default in the child, even when the tests run as a background job.
-        runner = subprocess.Popen([sys.executable, "-m", "simloop", "batch", *args, "--out", out], cwd=cwd,
-                                  stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                                  preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+        runner = subprocess.Popen(
+            [sys.executable, "-m", "simloop", "batch", *args, "--out", out],
+            cwd=cwd,
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+        )
         stack.callback(lambda: runner.poll() is None and (runner.kill(), runner.wait()))
         deadline = time.monotonic() + 120
         while not (parts.is_dir() and len(list(parts.glob("chunk-*.parquet"))) >= chunks):

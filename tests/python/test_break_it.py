@@ -5,7 +5,6 @@ import sys
 
 import numpy as np
 import pytest
-
 import simloop
 from conftest import run_command, sim_loop_exe
 from expected import expected
@@ -67,7 +66,7 @@ def test_both_sweep_commands_plot_when_asked(tmp_path):
         assert proc.returncode == 0, proc.stderr
         png = tmp_path / name / "o" / "sweep.png"
         assert png.read_bytes()[:4] == b"\x89PNG"
-        assert f"plot: o/sweep.png" in proc.stdout
+        assert "plot: o/sweep.png" in proc.stdout
 
 
 def test_the_default_sweep_is_round_and_the_same_in_both_front_ends():
@@ -85,9 +84,13 @@ def test_plots_are_pictures(tmp_path):
     png = tmp_path / "o" / "trajectory.png"
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 20_000
     # sim_loop --plot hands the drawing to this Python.
-    cpp = subprocess.run([str(sim_loop_exe()), "sweep", "--timesteps", "0.002,0.05", "--plot", "--out", "s"],
-                         cwd=tmp_path, capture_output=True, text=True, env={"SIMLOOP_PYTHON": sys.executable,
-                                                                              "PATH": "/usr/bin:/bin"})
+    cpp = subprocess.run(
+        [str(sim_loop_exe()), "sweep", "--timesteps", "0.002,0.05", "--plot", "--out", "s"],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        env={"SIMLOOP_PYTHON": sys.executable, "PATH": "/usr/bin:/bin"},
+    )
     assert cpp.returncode == 0, cpp.stderr
     assert (tmp_path / "s" / "sweep.png").read_bytes()[:4] == b"\x89PNG"
 
@@ -95,8 +98,11 @@ def test_plots_are_pictures(tmp_path):
 @pytest.fixture(scope="module")
 def baseline_and_break_it(tmp_path_factory):
     root = tmp_path_factory.mktemp("runs")
-    for name, kwargs in (("baseline", {"perturb": False}), ("shoved", {}),
-                         ("break-it", {"timestep": 0.05, "perturb": False})):
+    for name, kwargs in (
+        ("baseline", {"perturb": False}),
+        ("shoved", {}),
+        ("break-it", {"timestep": 0.05, "perturb": False}),
+    ):
         simloop.run(**kwargs).write(root / name)
     return root
 
@@ -133,8 +139,9 @@ def test_trajectory_picture_shows_the_pusher_the_contacts_and_a_fixed_z(baseline
 
 def test_two_runs_on_the_same_axes(baseline_and_break_it, tmp_path):
     root = baseline_and_break_it
-    proc = run_command(["plot", "trajectory", "--out", str(root / "baseline"), "--compare", str(root / "break-it")],
-                       tmp_path)
+    proc = run_command(
+        ["plot", "trajectory", "--out", str(root / "baseline"), "--compare", str(root / "break-it")], tmp_path
+    )
     assert proc.returncode == 0, proc.stderr
     png = root / "baseline" / "trajectory_vs_break-it.png"
     assert proc.stdout == f"plot: {png}\n" and png.read_bytes()[:4] == b"\x89PNG"
@@ -158,13 +165,16 @@ def test_two_runs_on_the_same_axes(baseline_and_break_it, tmp_path):
         plots._pyplot().close(same)
 
 
-@pytest.mark.parametrize("args, message", [
-    (["plot", "trajectory", "--out", "nowhere"], "--out: nowhere/trajectory.csv: no such file"),
-    (["plot", "trajectory", "--compare", "nowhere"], "no such file"),
-    (["plot", "trajectory", "--x", "sideways"], "plot: --x must be auto, time or step, got 'sideways'"),
-    (["plot", "sweep", "--compare", "x"], "plot: --compare draws trajectories only"),
-    (["plot"], "plot needs 'trajectory' or 'sweep' first"),
-])
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["plot", "trajectory", "--out", "nowhere"], "--out: nowhere/trajectory.csv: no such file"),
+        (["plot", "trajectory", "--compare", "nowhere"], "no such file"),
+        (["plot", "trajectory", "--x", "sideways"], "plot: --x must be auto, time or step, got 'sideways'"),
+        (["plot", "sweep", "--compare", "x"], "plot: --compare draws trajectories only"),
+        (["plot"], "plot needs 'trajectory' or 'sweep' first"),
+    ],
+)
 def test_plot_refuses_bad_arguments(tmp_path, args, message):
     proc = run_command(args, tmp_path)
     assert proc.returncode == 2
@@ -186,7 +196,9 @@ def test_sweep_picture_zooms_on_the_band_and_marks_the_rest(tmp_path):
         # 0.04 s (0.0963 m) and the box under the floor at 0.5 s.
         assert f"{points[0.04].peak_box_z:.3g}" in labels and f"{points[0.5].final_box_z:.3g}" in labels
         # Named by what the sweep ran: Break It's timestep over 4 s is not Break It's 2000 steps.
-        assert "the chapter's 0.002 s" in labels and f"Break It's 0.05 s\n{points[0.05].steps} steps, not 2000" in labels
+        assert (
+            "the chapter's 0.002 s" in labels and f"Break It's 0.05 s\n{points[0.05].steps} steps, not 2000" in labels
+        )
         assert {line.get_xdata()[0] for line in ax_z.get_lines() if len(line.get_xdata()) == 2} >= {0.002, 0.05}
         for ax in fig.axes:  # every legend beside its axes
             legend = ax.get_legend()
@@ -196,19 +208,27 @@ def test_sweep_picture_zooms_on_the_band_and_marks_the_rest(tmp_path):
 
 
 def test_plot_needs_a_python_with_simloop(tmp_path):
-    cpp = subprocess.run([str(sim_loop_exe()), "--smoke", "--plot", "--out", "o"], cwd=tmp_path,
-                         capture_output=True, text=True, env={"SIMLOOP_PYTHON": "/nonexistent/python"})
+    cpp = subprocess.run(
+        [str(sim_loop_exe()), "--smoke", "--plot", "--out", "o"],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        env={"SIMLOOP_PYTHON": "/nonexistent/python"},
+    )
     assert cpp.returncode == 1
     assert "--plot: cannot start /nonexistent/python" in cpp.stderr
     assert (tmp_path / "o" / "metrics.json").exists()  # the run itself was written
 
 
-@pytest.mark.parametrize("kwargs, error, message", [
-    ({"timesteps": []}, ValueError, "timesteps must not be empty"),
-    ({"timesteps": [0.002, -1]}, ValueError, "timestep must be a positive, finite number of seconds, got -1.0"),
-    ({"duration": 0}, ValueError, "duration must be a positive, finite number of seconds, got 0.0"),
-    ({"threads": 0}, ValueError, "threads must be an integer from 1 to 4096, got 0"),
-])
+@pytest.mark.parametrize(
+    "kwargs, error, message",
+    [
+        ({"timesteps": []}, ValueError, "timesteps must not be empty"),
+        ({"timesteps": [0.002, -1]}, ValueError, "timestep must be a positive, finite number of seconds, got -1.0"),
+        ({"duration": 0}, ValueError, "duration must be a positive, finite number of seconds, got 0.0"),
+        ({"threads": 0}, ValueError, "threads must be an integer from 1 to 4096, got 0"),
+    ],
+)
 def test_sweep_refuses_bad_arguments(kwargs, error, message):
     with pytest.raises(error) as caught:
         simloop.sweep(**kwargs)

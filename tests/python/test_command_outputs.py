@@ -10,11 +10,8 @@ import subprocess
 import sys
 import textwrap
 import time
-from pathlib import Path
 
 import pytest
-
-import simloop
 import simloop.__main__ as command
 from conftest import snapshot
 
@@ -66,14 +63,20 @@ def _as_from_a_terminal():
         signal.signal(sig, signal.SIG_DFL)
 
 
-@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM, signal.SIGHUP, signal.SIGQUIT, signal.SIGUSR1,
-                                 signal.SIGALRM])
+@pytest.mark.parametrize(
+    "sig", [signal.SIGINT, signal.SIGTERM, signal.SIGHUP, signal.SIGQUIT, signal.SIGUSR1, signal.SIGALRM]
+)
 def test_a_signal_stops_the_command_at_once_with_one_line(earlier_outputs, sig):
     code = 128 + sig
     before = snapshot(earlier_outputs)
-    with subprocess.Popen([sys.executable, "-c", SLEEPING_COMMAND, "--no-rerun", "--out", str(earlier_outputs)],
-                          stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                          text=True, preexec_fn=_as_from_a_terminal) as proc:
+    with subprocess.Popen(
+        [sys.executable, "-c", SLEEPING_COMMAND, "--no-rerun", "--out", str(earlier_outputs)],
+        stdin=subprocess.DEVNULL,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        preexec_fn=_as_from_a_terminal,
+    ) as proc:
         try:
             # The banner says the command got as far as the run.
             assert proc.stdout.readline().startswith("ch0.1-sim-loop | tier: cpu")
@@ -99,8 +102,16 @@ def test_a_full_or_closed_stdout_exits_1_with_one_line(tmp_path, args):
         cmd += ["--out", str(tmp_path / "out")]
     for stdout in ("/dev/full", None):  # None: started with stdout closed
         with open(stdout or os.devnull, "w") as sink:
-            proc = subprocess.run(cmd, cwd=tmp_path, stdin=subprocess.DEVNULL, stdout=sink, stderr=subprocess.PIPE,
-                                  text=True, timeout=120, preexec_fn=None if stdout else (lambda: os.close(1)))
+            proc = subprocess.run(
+                cmd,
+                cwd=tmp_path,
+                stdin=subprocess.DEVNULL,
+                stdout=sink,
+                stderr=subprocess.PIPE,
+                text=True,
+                timeout=120,
+                preexec_fn=None if stdout else (lambda: os.close(1)),
+            )
         what = f"{args} > {stdout or 'closed'}"
         assert proc.returncode == 1, what
         assert proc.stderr.startswith("sim-loop: ") and "standard output" in proc.stderr, what
@@ -114,13 +125,28 @@ def test_a_plot_failure_is_one_line_after_the_outputs(tmp_path):
     (fake / "matplotlib").mkdir(parents=True)
     (fake / "matplotlib" / "__init__.py").write_text("raise ImportError(\"No module named 'matplotlib' (test)\")\n")
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(fake), os.environ.get("PYTHONPATH", "")]))
-    run = subprocess.run([sys.executable, "-m", "simloop", "--smoke", "--no-rerun", "--plot", "--out", "out"],
-                         cwd=tmp_path, env=env, capture_output=True, text=True, stdin=subprocess.DEVNULL, timeout=120)
+    run = subprocess.run(
+        [sys.executable, "-m", "simloop", "--smoke", "--no-rerun", "--plot", "--out", "out"],
+        cwd=tmp_path,
+        env=env,
+        capture_output=True,
+        text=True,
+        stdin=subprocess.DEVNULL,
+        timeout=120,
+    )
     assert run.returncode == 1
-    assert run.stderr == ("sim-loop: No module named 'matplotlib' (test) "
-                          "(metrics.json and trajectory.csv were written)\n")
+    assert run.stderr == (
+        "sim-loop: No module named 'matplotlib' (test) (metrics.json and trajectory.csv were written)\n"
+    )
     assert (tmp_path / "out" / "metrics.json").is_file() and (tmp_path / "out" / "trajectory.csv").is_file()
-    plot = subprocess.run([sys.executable, "-m", "simloop", "plot", "trajectory", "--out", "out"],
-                          cwd=tmp_path, env=env, capture_output=True, text=True, stdin=subprocess.DEVNULL, timeout=120)
+    plot = subprocess.run(
+        [sys.executable, "-m", "simloop", "plot", "trajectory", "--out", "out"],
+        cwd=tmp_path,
+        env=env,
+        capture_output=True,
+        text=True,
+        stdin=subprocess.DEVNULL,
+        timeout=120,
+    )
     assert plot.returncode == 1
     assert plot.stderr == "sim-loop: plot: out/trajectory.csv: No module named 'matplotlib' (test)\n"

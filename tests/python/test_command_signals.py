@@ -2,7 +2,6 @@
 ends as Ctrl-C ends it (exit 128 + the signal, one line), and the folder
 holds all the old outputs or all the new ones, never a temporary file."""
 
-import os
 import random
 import signal
 import subprocess
@@ -11,7 +10,6 @@ import time
 from pathlib import Path
 
 import pytest
-
 from conftest import sim_loop_exe
 
 OUTPUTS = {"metrics.json", "trajectory.csv"}
@@ -38,8 +36,12 @@ def state(out: Path) -> tuple:
     bytes differ between identical runs: rerun stamps time-based ids)."""
     names = {p.name for p in out.iterdir()}
     rrd = out / "sim_loop.rrd"
-    return (names, (out / "metrics.json").read_bytes(), (out / "trajectory.csv").read_bytes(),
-            rrd.stat().st_ino if rrd.exists() else None)
+    return (
+        names,
+        (out / "metrics.json").read_bytes(),
+        (out / "trajectory.csv").read_bytes(),
+        rrd.stat().st_ino if rrd.exists() else None,
+    )
 
 
 @pytest.mark.parametrize("which", ["sim_loop", "python"])
@@ -47,11 +49,19 @@ def test_each_signal_at_random_moments_leaves_all_old_or_all_new(tmp_path, which
     args = ["--steps", "20000"]
     new, old = tmp_path / "new", tmp_path / "old"
     started = time.perf_counter()
-    assert subprocess.run(command(which) + args + ["--seed", "2", "--out", str(new)], capture_output=True,
-                          timeout=120).returncode == 0
+    assert (
+        subprocess.run(
+            command(which) + args + ["--seed", "2", "--out", str(new)], capture_output=True, timeout=120
+        ).returncode
+        == 0
+    )
     seconds = time.perf_counter() - started
-    assert subprocess.run(command(which) + args + ["--seed", "1", "--out", str(old)], capture_output=True,
-                          timeout=120).returncode == 0
+    assert (
+        subprocess.run(
+            command(which) + args + ["--seed", "1", "--out", str(old)], capture_output=True, timeout=120
+        ).returncode
+        == 0
+    )
     expected = OUTPUTS | ({"sim_loop.rrd"} if which == "python" else set())
     random_moment = random.Random(20)  # the same moments every time
     tally = {"old": 0, "new": 0}
@@ -62,9 +72,14 @@ def test_each_signal_at_random_moments_leaves_all_old_or_all_new(tmp_path, which
             subprocess.run(["cp", "-a", str(old), str(out)], check=True)
             before = state(out)
             moment = random_moment.uniform(0.0, seconds * 1.2)
-            with subprocess.Popen(command(which) + args + ["--seed", "2", "--out", str(out)],
-                                  stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-                                  text=True, preexec_fn=_defaults) as proc:
+            with subprocess.Popen(
+                command(which) + args + ["--seed", "2", "--out", str(out)],
+                stdin=subprocess.DEVNULL,
+                stdout=subprocess.DEVNULL,
+                stderr=subprocess.PIPE,
+                text=True,
+                preexec_fn=_defaults,
+            ) as proc:
                 time.sleep(moment)
                 proc.send_signal(sig)
                 try:
@@ -85,9 +100,11 @@ def test_each_signal_at_random_moments_leaves_all_old_or_all_new(tmp_path, which
                 assert err.count("\n") == 1 and f"interrupted ({sig.name})" in err, what
             assert after[0] == expected, f"{what}: left {sorted(after[0] - expected)}"
             all_old = after == before
-            all_new = (after[1] == (new / "metrics.json").read_bytes()
-                       and after[2] == (new / "trajectory.csv").read_bytes()
-                       and (which == "sim_loop" or after[3] != before[3]))
+            all_new = (
+                after[1] == (new / "metrics.json").read_bytes()
+                and after[2] == (new / "trajectory.csv").read_bytes()
+                and (which == "sim_loop" or after[3] != before[3])
+            )
             assert all_old or all_new, f"{what}: a mix of old and new outputs"
             tally["old" if all_old else "new"] += 1
     print(f"{which}: {tally['old']} runs kept the old outputs, {tally['new']} wrote the new")
@@ -100,9 +117,14 @@ def test_a_signal_the_command_was_started_ignoring_stays_ignored(tmp_path, which
         _defaults()
         signal.signal(signal.SIGHUP, signal.SIG_IGN)
 
-    with subprocess.Popen(command(which) + ["--steps", "3000", "--no-rerun", "--out", str(tmp_path / "o")],
-                          stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                          preexec_fn=ignoring_hup) as proc:
+    with subprocess.Popen(
+        command(which) + ["--steps", "3000", "--no-rerun", "--out", str(tmp_path / "o")],
+        stdin=subprocess.DEVNULL,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        preexec_fn=ignoring_hup,
+    ) as proc:
         proc.stdout.readline()  # the banner
         proc.send_signal(signal.SIGHUP)
         _, err = proc.communicate(timeout=120)
@@ -140,11 +162,14 @@ sinks.create_in_memory_blueprint = create
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
 def test_a_signal_inside_rerun_ends_the_run_with_one_line(tmp_path, where, sig):
     pytest.importorskip("rerun")
-    script = (f"import runpy, signal, sys\nSIG = signal.{sig.name}\n{INSIDE_RERUN[where]}\n"
-              f"sys.argv = ['simloop', '--steps', '50', '--out', {str(tmp_path / 'out')!r}]\n"
-              "runpy.run_module('simloop', run_name='__main__')\n")
-    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120,
-                          preexec_fn=_defaults)
+    script = (
+        f"import runpy, signal, sys\nSIG = signal.{sig.name}\n{INSIDE_RERUN[where]}\n"
+        f"sys.argv = ['simloop', '--steps', '50', '--out', {str(tmp_path / 'out')!r}]\n"
+        "runpy.run_module('simloop', run_name='__main__')\n"
+    )
+    proc = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, timeout=120, preexec_fn=_defaults
+    )
     assert proc.returncode == 128 + sig, (where, proc.returncode, proc.stderr)
     assert proc.stderr == f"sim-loop: interrupted ({sig.name}); the earlier outputs were left as they were\n", where
     assert not (tmp_path / "out").exists() or not list((tmp_path / "out").iterdir()), where

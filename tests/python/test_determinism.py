@@ -5,7 +5,6 @@ import math
 
 import numpy as np
 import pytest
-
 import simloop
 from conftest import run_command, without_wall_clock
 
@@ -21,8 +20,15 @@ def test_smoke_twice_is_byte_identical(tmp_path):
     assert read_outputs(tmp_path / "a") == read_outputs(tmp_path / "b")
 
 
-@pytest.mark.parametrize("flags", [["--smoke"], ["--seed", "2", "--timestep", "0.01", "--record-every", "3"],
-                                   ["--no-perturb", "--steps", "777"], ["--seed", "3", "--rng", "numpy", "--smoke"]])
+@pytest.mark.parametrize(
+    "flags",
+    [
+        ["--smoke"],
+        ["--seed", "2", "--timestep", "0.01", "--record-every", "3"],
+        ["--no-perturb", "--steps", "777"],
+        ["--seed", "3", "--rng", "numpy", "--smoke"],
+    ],
+)
 def test_python_command_sim_loop_and_run_agree_byte_for_byte(tmp_path, flags):
     for name in ("py", "cpp"):
         (tmp_path / name).mkdir()
@@ -35,8 +41,13 @@ def test_python_command_sim_loop_and_run_agree_byte_for_byte(tmp_path, flags):
     assert without_wall_clock(py.stdout) == without_wall_clock(cpp.stdout)
     # And simloop.run with the same arguments writes the same bytes.
     kwargs = {"smoke": "--smoke" in flags, "perturb": "--no-perturb" not in flags}
-    for flag, key, cast in (("--seed", "seed", int), ("--timestep", "timestep", float), ("--rng", "rng", str),
-                            ("--record-every", "record_every", int), ("--steps", "steps", int)):
+    for flag, key, cast in (
+        ("--seed", "seed", int),
+        ("--timestep", "timestep", float),
+        ("--rng", "rng", str),
+        ("--record-every", "record_every", int),
+        ("--steps", "steps", int),
+    ):
         if flag in flags:
             kwargs[key] = cast(flags[flags.index(flag) + 1])
     simloop.run(**kwargs).write(tmp_path / "api")

@@ -22,11 +22,9 @@ import numpy as np
 import psutil
 import pyarrow.parquet as pq
 import pytest
-
 import simloop
-from simloop import _core, distributed
-
 from conftest import NO_WORKER_PROCESSES, ROOT, run_python
+from simloop import _core, distributed
 
 SEEDS = range(30)
 TIMESTEPS = [0.002, 0.004]
@@ -71,14 +69,21 @@ def assert_same_as_local(table, local) -> None:
     # The metric, rounded as metrics.json rounds it, agrees too (a second, independent route).
     assert np.array_equal(np.round(table["box_final_speed"], 6), [r.metrics["box_final_speed"] for r in runs])
     assert np.array_equal(table["shove_force_y"], [r.shove.force_y for r in runs])
-    assert table["warning_mjWARN_BADQACC"].sum() == sum(w.count for r in runs for w in r.warnings
-                                                         if w.name == "mjWARN_BADQACC")
+    assert table["warning_mjWARN_BADQACC"].sum() == sum(
+        w.count for r in runs for w in r.warnings if w.name == "mjWARN_BADQACC"
+    )
 
 
 def test_a_local_cluster_gives_the_bits_of_a_local_batch(client, local):
     seen = []
-    table = simloop.run_batch(SEEDS, TIMESTEPS, steps=STEPS, executor=client, chunk_size=7,
-                              progress=lambda done, total: seen.append((done, total)))
+    table = simloop.run_batch(
+        SEEDS,
+        TIMESTEPS,
+        steps=STEPS,
+        executor=client,
+        chunk_size=7,
+        progress=lambda done, total: seen.append((done, total)),
+    )
     assert isinstance(table, simloop.BatchTable)
     assert_same_as_local(table, local)
     assert seen[-1] == (60, 60) and len(seen) == 9  # one call per chunk of 7 (the last has 4)
@@ -95,8 +100,9 @@ def test_scenario_batches_and_sweeps_on_a_cluster_are_the_local_bits(client):
     assert table == local and not table.has_results  # the local batch's table, `run` and all
     for body in ("tblock", "pusher"):
         for axis in "xyz":
-            assert np.array_equal(table[f"{body}_final_pos_{axis}"],
-                                  [r.column(f"{body}_{axis}")[-1] for r in local.results])
+            assert np.array_equal(
+                table[f"{body}_final_pos_{axis}"], [r.column(f"{body}_{axis}")[-1] for r in local.results]
+            )
     assert np.array_equal(table["disturbance0_fy"], [r.disturbances[0]["force"][1] for r in local.results])
     assert np.array_equal(table["steps"], [r.steps for r in local.results])
 
@@ -128,8 +134,10 @@ def test_a_worker_killed_mid_batch_loses_nothing(client):
 def test_a_worker_of_another_version_is_refused_before_any_work(client, monkeypatch):
     # The workers report their real versions; this client now claims another.
     monkeypatch.setattr(distributed, "versions", lambda: ("9.9.9", _core.MUJOCO_VERSION))
-    with pytest.raises(distributed.VersionMismatch, match=r"^worker tcp://127\.0\.0\.1:\d+ has simloop "
-                                                          + _core.__version__ + r" .* the client simloop 9\.9\.9 "):
+    with pytest.raises(
+        distributed.VersionMismatch,
+        match=r"^worker tcp://127\.0\.0\.1:\d+ has simloop " + _core.__version__ + r" .* the client simloop 9\.9\.9 ",
+    ):
         simloop.run_batch(range(4), steps=50, executor=client)
     # A worker that joins later (after the check) refuses the chunk itself.
     monkeypatch.setattr(distributed._Pool, "check_workers", lambda self: None)
@@ -154,11 +162,15 @@ def test_a_scenario_file_travels_as_itself_named_for_its_file_and_empty_or_not(t
     unnamed.write_text(f'scene = "{ROOT / "python/simloop/scenes/pusht.xml"}"\nsteps = 50\n')
     empty = tmp_path / "empty.toml"
     empty.write_text("")
+
     class Mine(simloop.Scenario):
         pass
 
-    for scenario, name in [(simloop.Scenario.from_file(unnamed), "walk"), (simloop.Scenario.from_file(empty), "empty"),
-                           (Mine.chapter(), "ch0.1-sim-loop")]:
+    for scenario, name in [
+        (simloop.Scenario.from_file(unnamed), "walk"),
+        (simloop.Scenario.from_file(empty), "empty"),
+        (Mine.chapter(), "ch0.1-sim-loop"),
+    ]:
         local = simloop.run_scenario_batch(scenario, seeds=[0, 1], metrics_only=True)
         with ThreadPoolExecutor(2) as pool:
             remote = simloop.run_scenario_batch(scenario, seeds=[0, 1], executor=pool)
@@ -188,26 +200,44 @@ def test_what_cannot_travel_is_refused_in_one_line():
         with pytest.raises(ValueError, match="chunk_size must be"):
             simloop.run_batch(range(2), steps=50, executor=pool, chunk_size=0)
         with pytest.raises(ValueError, match="no body named 'tblok'"):
-            simloop.run_scenario_batch(simloop.Scenario(scene=str(ROOT / "tests/scenes/pusht.xml"), steps=10,
-                                                        record={"bodies": ["tblok"]}), executor=pool)
+            simloop.run_scenario_batch(
+                simloop.Scenario(scene=str(ROOT / "tests/scenes/pusht.xml"), steps=10, record={"bodies": ["tblok"]}),
+                executor=pool,
+            )
     job = distributed.scenario_job(simloop.Scenario.chapter())
     job["versions"] = ("0.0.1", "MuJoCo 9.9.9")
-    with pytest.raises(distributed.VersionMismatch, match=r"has simloop .* the client simloop 0.0.1 .*install the same"):
+    with pytest.raises(
+        distributed.VersionMismatch, match=r"has simloop .* the client simloop 0.0.1 .*install the same"
+    ):
         distributed.run_chunk(job, [(0, 0, None, ())])
 
 
 # ---- The command -----------------------------------------------------------
 
+
 def batch(args, cwd, **kwargs) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "simloop", "batch", *args], cwd=cwd, capture_output=True, text=True,
-                          stdin=subprocess.DEVNULL, timeout=180, **kwargs)
+    return subprocess.run(
+        [sys.executable, "-m", "simloop", "batch", *args],
+        cwd=cwd,
+        capture_output=True,
+        text=True,
+        stdin=subprocess.DEVNULL,
+        timeout=180,
+        **kwargs,
+    )
 
 
 @contextlib.contextmanager
 def running_batch(args, cwd):
     """`python -m simloop batch ARGS` started in the background; killed if still running at the end."""
-    runner = subprocess.Popen([sys.executable, "-m", "simloop", "batch", *args], cwd=cwd, stdin=subprocess.DEVNULL,
-                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    runner = subprocess.Popen(
+        [sys.executable, "-m", "simloop", "batch", *args],
+        cwd=cwd,
+        stdin=subprocess.DEVNULL,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     try:
         yield runner
     finally:
@@ -224,8 +254,20 @@ def wait_for_chunks(runner: subprocess.Popen, parts: Path, count: int) -> None:
         time.sleep(0.02)
 
 
-GRID = ["--seeds", "0:6,40", "--timestep", "0.002,0.004", "--friction", "0.5,1.0", "--mass", "box=0.5,2",
-        "--steps", "300", "--chunk-size", "5"]
+GRID = [
+    "--seeds",
+    "0:6,40",
+    "--timestep",
+    "0.002,0.004",
+    "--friction",
+    "0.5,1.0",
+    "--mass",
+    "box=0.5,2",
+    "--steps",
+    "300",
+    "--chunk-size",
+    "5",
+]
 
 
 def test_the_batch_command_writes_one_row_per_run_of_the_grid(tmp_path):
@@ -243,15 +285,18 @@ def test_the_batch_command_writes_one_row_per_run_of_the_grid(tmp_path):
     # Each row is run_scenario with that model: the chapter's scenario, the scene with those parameters.
     chapter = simloop.Scenario.chapter()
     for row in (0, 9, 20, 55):
-        model = _core.with_scene_params(chapter.model(), [("friction", "", table["friction"][row]),
-                                                          ("mass", "box", table["mass_box"][row])])
-        alone = simloop.run_scenario(chapter, seed=table["seed"][row], timestep=table["timestep"][row], steps=300,
-                                     model=model)
+        model = _core.with_scene_params(
+            chapter.model(), [("friction", "", table["friction"][row]), ("mass", "box", table["mass_box"][row])]
+        )
+        alone = simloop.run_scenario(
+            chapter, seed=table["seed"][row], timestep=table["timestep"][row], steps=300, model=model
+        )
         assert table["box_final_pos_x"][row] == alone.column("box_x")[-1]
         assert table["box_final_pos_y"][row] == alone.column("box_y")[-1]
     # Parameters equal to the scene's own (friction 1, the box's 0.5 kg) change no bit.
-    plain = batch(["--seeds", "0:6,40", "--timestep", "0.002,0.004", "--steps", "300", "--out", "plain.parquet"],
-                  tmp_path)
+    plain = batch(
+        ["--seeds", "0:6,40", "--timestep", "0.002,0.004", "--steps", "300", "--out", "plain.parquet"], tmp_path
+    )
     assert plain.returncode == 0, plain.stderr
     plain_table = pq.read_table(tmp_path / "plain.parquet").to_pydict()
     for name in ("box_final_pos_x", "box_final_pos_y", "box_final_speed", "disturbance0_fy"):
@@ -267,9 +312,27 @@ def test_a_progress_bar_on_a_terminal_only(tmp_path):
     leader, follower = pty.openpty()
     fcntl.ioctl(follower, termios.TIOCSWINSZ, struct.pack("HHHH", 24, 100, 0, 0))  # a terminal 100 columns wide
     try:
-        done = subprocess.run([sys.executable, "-m", "simloop", "batch", "--seeds", "0:20", "--steps", "100",
-                               "--chunk-size", "5", "--out", "t.parquet"], cwd=tmp_path, stdin=subprocess.DEVNULL,
-                              stdout=subprocess.PIPE, stderr=follower, timeout=120)
+        done = subprocess.run(
+            [
+                sys.executable,
+                "-m",
+                "simloop",
+                "batch",
+                "--seeds",
+                "0:20",
+                "--steps",
+                "100",
+                "--chunk-size",
+                "5",
+                "--out",
+                "t.parquet",
+            ],
+            cwd=tmp_path,
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.PIPE,
+            stderr=follower,
+            timeout=120,
+        )
         os.close(follower)
         follower = -1
         drawn = b""
@@ -290,14 +353,16 @@ def test_a_progress_bar_on_a_terminal_only(tmp_path):
 
 
 def test_bad_input_is_one_line_exit_2_and_nothing_written(tmp_path):
-    for args, words in [(["--mass", "bx=1"], "no body named 'bx' (did you mean 'box'?)"),
-                        (["--friction", "-1"], "friction must be a finite number >= 0"),
-                        (["--damping", "pusher_slid=2"], "did you mean 'pusher_slide'?"),
-                        (["--seeds", "9:3"], "--seeds: '9:3' is an empty range"),
-                        (["--timestep", "0.002,x"], "--timestep: 'x' is not a number"),
-                        (["--scenario", "missing.toml"], "--scenario: missing.toml"),
-                        (["--threads", "0"], "--threads: '0' is not a whole number from 1"),
-                        (["--bogus"], "unknown argument '--bogus'")]:
+    for args, words in [
+        (["--mass", "bx=1"], "no body named 'bx' (did you mean 'box'?)"),
+        (["--friction", "-1"], "friction must be a finite number >= 0"),
+        (["--damping", "pusher_slid=2"], "did you mean 'pusher_slide'?"),
+        (["--seeds", "9:3"], "--seeds: '9:3' is an empty range"),
+        (["--timestep", "0.002,x"], "--timestep: 'x' is not a number"),
+        (["--scenario", "missing.toml"], "--scenario: missing.toml"),
+        (["--threads", "0"], "--threads: '0' is not a whole number from 1"),
+        (["--bogus"], "unknown argument '--bogus'"),
+    ]:
         done = batch([*args, "--out", "sub/out.parquet"], tmp_path)
         assert done.returncode == 2, (args, done.stderr)
         assert done.stderr.count("\n") == 1 and words in done.stderr, done.stderr
@@ -311,13 +376,19 @@ def test_bad_input_is_one_line_exit_2_and_nothing_written(tmp_path):
 def test_a_grid_of_a_parameter_the_scenario_draws_is_refused(tmp_path):
     """The scenario's [[reset.param]] is applied at each reset, over the grid's value: the table would show
     values no run used."""
-    (tmp_path / "drawn.toml").write_text('steps = 10\n[[reset.param]]\nkind = "mass"\nname = "box"\n'
-                                         'uniform = [1.0, 2.0]\n[[reset.param]]\nkind = "friction"\n'
-                                         'name = "box_geom"\nuniform = [0.5, 1.0]\n')
-    for args, words in [(["--mass", "box=3,4"], "batch: --mass: the scenario's [[reset.param]] sets mass of 'box' "
-                                                 "at each run's reset, which would override the grid"),
-                        (["--friction", "0.3"], "batch: --friction: the scenario's [[reset.param]] sets friction of "
-                                                "'box_geom'")]:
+    (tmp_path / "drawn.toml").write_text(
+        'steps = 10\n[[reset.param]]\nkind = "mass"\nname = "box"\n'
+        'uniform = [1.0, 2.0]\n[[reset.param]]\nkind = "friction"\n'
+        'name = "box_geom"\nuniform = [0.5, 1.0]\n'
+    )
+    for args, words in [
+        (
+            ["--mass", "box=3,4"],
+            "batch: --mass: the scenario's [[reset.param]] sets mass of 'box' "
+            "at each run's reset, which would override the grid",
+        ),
+        (["--friction", "0.3"], "batch: --friction: the scenario's [[reset.param]] sets friction of 'box_geom'"),
+    ]:
         done = batch(["--scenario", "drawn.toml", *args, "--out", "out.parquet"], tmp_path)
         assert done.returncode == 2 and done.stderr.count("\n") == 1 and words in done.stderr, done.stderr
     assert not (tmp_path / "out.parquet").exists()
@@ -348,7 +419,7 @@ def test_resume_after_ctrl_c_gives_the_bytes_of_an_uninterrupted_batch(tmp_path)
 
     resumed = batch([*args, "--out", "cut.parquet", "--resume"], tmp_path)
     assert resumed.returncode == 0, resumed.stderr
-    assert f"from cut.parquet.parts/" in resumed.stdout
+    assert "from cut.parquet.parts/" in resumed.stdout
     ran_now = int(resumed.stdout.split("(")[1].split(" run now")[0])
     assert ran_now == 800 - 20 * kept  # what was written was not run again
     assert (tmp_path / "cut.parquet").read_bytes() == (tmp_path / "whole.parquet").read_bytes()
@@ -356,6 +427,7 @@ def test_resume_after_ctrl_c_gives_the_bytes_of_an_uninterrupted_batch(tmp_path)
 
 
 # ---- A real scheduler and workers, as on a cluster --------------------------
+
 
 def free_port() -> int:
     with socket.socket() as s:
@@ -387,8 +459,16 @@ def dask_cluster(tmp_path):
 
     def start(*args):
         log = open(tmp_path / f"dask-{len(processes)}.log", "w")
-        processes.append(subprocess.Popen([str(dask), *args], stdin=subprocess.DEVNULL, stdout=log, stderr=log,
-                                          cwd=tmp_path, start_new_session=True))
+        processes.append(
+            subprocess.Popen(
+                [str(dask), *args],
+                stdin=subprocess.DEVNULL,
+                stdout=log,
+                stderr=log,
+                cwd=tmp_path,
+                start_new_session=True,
+            )
+        )
         log.close()
         return processes[-1]
 
@@ -396,8 +476,10 @@ def dask_cluster(tmp_path):
     try:
         scheduler = start("scheduler", "--host", "127.0.0.1", "--port", str(port), "--no-dashboard")
         wait_for_port(port, scheduler)
-        workers = [start("worker", address, "--nthreads", "1", "--nworkers", "1", "--host", "127.0.0.1",
-                         "--no-dashboard") for _ in range(2)]
+        workers = [
+            start("worker", address, "--nthreads", "1", "--nworkers", "1", "--host", "127.0.0.1", "--no-dashboard")
+            for _ in range(2)
+        ]
         from distributed import Client
 
         with Client(address, timeout="30s") as c:
@@ -429,8 +511,18 @@ def dask_cluster(tmp_path):
 
 def test_a_real_scheduler_and_workers_with_one_killed_give_the_local_bytes(dask_cluster, tmp_path):
     address, workers = dask_cluster
-    args = ["--scenario", str(PUSHT), "--seeds", "0:60", "--timestep", "0.002,0.004", "--damping", "0,2",
-            "--chunk-size", "6"]
+    args = [
+        "--scenario",
+        str(PUSHT),
+        "--seeds",
+        "0:60",
+        "--timestep",
+        "0.002,0.004",
+        "--damping",
+        "0,2",
+        "--chunk-size",
+        "6",
+    ]
     local = batch([*args, "--threads", "2", "--out", "local.parquet"], tmp_path)
     assert local.returncode == 0, local.stderr
 

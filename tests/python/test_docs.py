@@ -27,9 +27,7 @@ from pathlib import Path
 from typing import Dict, List, Optional, Tuple
 
 import pytest
-
 from conftest import NO_WORKER_PROCESSES, ROOT, sim_loop_exe
-
 from simloop import _build
 
 PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
@@ -40,8 +38,9 @@ PYPI_ONLY = "run by tests only on the PyPI build"
 WORKERS_ONLY = "run by tests only where worker processes can start"
 # stable-baselines3 brings torch (gigabytes): not among the test extras.
 SB3_ONLY = "run by tests only where stable-baselines3 is installed"
-MARKER = re.compile(r"^<!--\s*(" + "|".join(map(re.escape, (NOT_RUN, PYPI_ONLY, WORKERS_ONLY, SB3_ONLY)))
-                    + r")\s*:\s*(\S.*?)\s*-->$")
+MARKER = re.compile(
+    r"^<!--\s*(" + "|".join(map(re.escape, (NOT_RUN, PYPI_ONLY, WORKERS_ONLY, SB3_ONLY))) + r")\s*:\s*(\S.*?)\s*-->$"
+)
 SHELL_SYNTAX = {"&&", "||", "|", ";", ">", ">>", "<", "2>", "2>&1", "&"}
 TIMEOUT = 120
 
@@ -71,8 +70,15 @@ def fenced_blocks(page: Path) -> List[Block]:
         assert end is not None, f"{page.relative_to(ROOT)}:{i + 1}: a ``` block that never closes"
         before = next((lines[j].strip() for j in range(i - 1, -1, -1) if lines[j].strip()), "")
         match = MARKER.match(before)
-        blocks.append(Block(page, i + 1, lang, "\n".join(lines[i + 1:end]) + "\n",
-                            (match.group(1), match.group(2)) if match else None))
+        blocks.append(
+            Block(
+                page,
+                i + 1,
+                lang,
+                "\n".join(lines[i + 1 : end]) + "\n",
+                (match.group(1), match.group(2)) if match else None,
+            )
+        )
         i = end + 1
     return blocks
 
@@ -117,8 +123,10 @@ def argv(command: str, where: str) -> List[str]:
         pytest.fail(f"{where}: cannot read {command!r} as a command ({e})")
     syntax = [w for w in words if w in SHELL_SYNTAX or "$(" in w or "`" in w]
     if syntax:
-        pytest.fail(f"{where}: {command!r} uses the shell ({' '.join(syntax)}): write plain commands, or mark "
-                    f"the block '<!-- {NOT_RUN}: WHY -->'")
+        pytest.fail(
+            f"{where}: {command!r} uses the shell ({' '.join(syntax)}): write plain commands, or mark "
+            f"the block '<!-- {NOT_RUN}: WHY -->'"
+        )
     program, rest = words[0], words[1:]
     if program in ("sim_loop", "build/sim_loop", "build-pypi/sim_loop", "scripts/run.sh"):
         return [str(sim_loop_exe()), *rest]
@@ -128,8 +136,10 @@ def argv(command: str, where: str) -> List[str]:
         return [sys.executable, "-m", "simloop", *rest]
     if program in ("rerun", ".venv/bin/rerun", ".venv-pypi/bin/rerun"):
         return [str(Path(sys.executable).with_name("rerun")), *rest]
-    pytest.fail(f"{where}: this test does not know how to run {program!r} (in {command!r}): use sim_loop, "
-                f"python -m simloop or the venv's rerun, or mark the block '<!-- {NOT_RUN}: WHY -->'")
+    pytest.fail(
+        f"{where}: this test does not know how to run {program!r} (in {command!r}): use sim_loop, "
+        f"python -m simloop or the venv's rerun, or mark the block '<!-- {NOT_RUN}: WHY -->'"
+    )
 
 
 @pytest.fixture(scope="session")
@@ -177,18 +187,33 @@ def test_the_block_runs(block: Block, page_folders, tmp_path_factory):
     if block.lang == "python":
         script = tmp_path_factory.mktemp("blocks") / f"{block.page.stem}_{block.line}.py"
         script.write_text(block.text, encoding="utf-8")
-        proc = subprocess.run([sys.executable, str(script)], cwd=folder, capture_output=True, text=True,
-                              stdin=subprocess.DEVNULL, timeout=TIMEOUT, env=environment())
+        proc = subprocess.run(
+            [sys.executable, str(script)],
+            cwd=folder,
+            capture_output=True,
+            text=True,
+            stdin=subprocess.DEVNULL,
+            timeout=TIMEOUT,
+            env=environment(),
+        )
         assert proc.returncode == 0, f"{block.where}: the python block failed:\n{proc.stderr[-3000:]}"
         return
     lines = commands(block)
     assert lines, f"{block.where}: a {block.lang} block with no command in it"
     for command in lines:
-        proc = subprocess.run(argv(command, block.where), cwd=folder, capture_output=True, text=True,
-                              stdin=subprocess.DEVNULL, timeout=TIMEOUT, env=environment())
+        proc = subprocess.run(
+            argv(command, block.where),
+            cwd=folder,
+            capture_output=True,
+            text=True,
+            stdin=subprocess.DEVNULL,
+            timeout=TIMEOUT,
+            env=environment(),
+        )
         want = expected_exit(command)
-        assert proc.returncode == want, (f"{block.where}: {command!r} exited {proc.returncode}, not {want}:\n"
-                                         f"{proc.stderr[-3000:]}")
+        assert proc.returncode == want, (
+            f"{block.where}: {command!r} exited {proc.returncode}, not {want}:\n{proc.stderr[-3000:]}"
+        )
 
 
 def test_every_marker_comes_right_before_a_block():
@@ -196,11 +221,13 @@ def test_every_marker_comes_right_before_a_block():
         lines = page.read_text(encoding="utf-8").splitlines()
         for i, line in enumerate(lines):
             if line.lstrip().startswith("<!--") and ("not run by tests" in line or "run by tests only" in line):
-                assert MARKER.match(line.strip()), f"{page.relative_to(ROOT)}:{i + 1}: a marker that does not read " \
-                                                   f"'<!-- {NOT_RUN}: WHY -->': {line!r}"
+                assert MARKER.match(line.strip()), (
+                    f"{page.relative_to(ROOT)}:{i + 1}: a marker that does not read '<!-- {NOT_RUN}: WHY -->': {line!r}"
+                )
                 following = next((lines[j] for j in range(i + 1, len(lines)) if lines[j].strip()), "")
-                assert following.startswith("```") and following[3:].strip() in RUNNABLE, \
+                assert following.startswith("```") and following[3:].strip() in RUNNABLE, (
                     f"{page.relative_to(ROOT)}:{i + 1}: a marker not followed by a python, sh or console block"
+                )
 
 
 # ---- links ------------------------------------------------------------------
@@ -271,6 +298,7 @@ def test_no_source_file_is_over_450_lines_and_no_binding_over_350():
 
 # ---- the layout ---------------------------------------------------------------
 
+
 def layout() -> List[Tuple[str, List[str]]]:
     """docs/developing.md's layout: (top-level path, [names listed under it])."""
     text = (ROOT / "docs" / "developing.md").read_text(encoding="utf-8")
@@ -292,7 +320,7 @@ def tracked_files(folder: str, recursive: bool = False) -> List[str]:
     except FileNotFoundError:  # no git on this machine (a source tree copied or cloned elsewhere)
         proc = None
     if proc is not None and proc.returncode == 0 and proc.stdout:
-        names = [p[len(folder):] for p in proc.stdout.splitlines()]
+        names = [p[len(folder) :] for p in proc.stdout.splitlines()]
     else:
         names = [] if recursive else [p.name for p in (ROOT / folder).iterdir() if p.is_file()]
         if recursive:

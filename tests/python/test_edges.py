@@ -7,7 +7,6 @@ import subprocess
 import sys
 
 import pytest
-
 import simloop
 from conftest import run_python, sim_loop_exe
 
@@ -15,11 +14,14 @@ I64_MAX = 2**63 - 1
 
 
 # The issue's three repros: a segfault, a double free, a segfault at GC.
-@pytest.mark.parametrize("call, where", [
-    ("simloop.run(steps=2, record_every=2**63-1)", ""),
-    ("simloop.run(steps=10, record_every=2**63-1)", ""),
-    ("simloop.run_batch(seeds=[0], steps=5, record_every=2**63-1)", "run 0: "),
-])
+@pytest.mark.parametrize(
+    "call, where",
+    [
+        ("simloop.run(steps=2, record_every=2**63-1)", ""),
+        ("simloop.run(steps=10, record_every=2**63-1)", ""),
+        ("simloop.run_batch(seeds=[0], steps=5, record_every=2**63-1)", "run 0: "),
+    ],
+)
 def test_record_every_past_the_range_is_refused_not_a_crash(call, where):
     proc = run_python(f"""
         import gc
@@ -47,8 +49,9 @@ def test_python_takes_the_commands_ranges():
         simloop.Sim().step(2**62)
     # The command draws the line at the same place.
     for flag in ("--steps", "--record-every"):
-        over = subprocess.run([str(sim_loop_exe()), flag, str(2**62), "--out", "unused"], capture_output=True,
-                              text=True)
+        over = subprocess.run(
+            [str(sim_loop_exe()), flag, str(2**62), "--out", "unused"], capture_output=True, text=True
+        )
         assert over.returncode == 2 and f"from 1 to {simloop.MAX_STEPS}," in over.stderr
 
 
@@ -60,17 +63,31 @@ def results():
 
 
 WRONG_TYPES = [
-    (lambda r, s: simloop.Model.from_file(3), TypeError, "path must be a path (str, bytes or os.PathLike), got 3 (int)"),
-    (lambda r, s: simloop.Model.from_file(None), TypeError, "path must be a path (str, bytes or os.PathLike), got None"),
+    (
+        lambda r, s: simloop.Model.from_file(3),
+        TypeError,
+        "path must be a path (str, bytes or os.PathLike), got 3 (int)",
+    ),
+    (
+        lambda r, s: simloop.Model.from_file(None),
+        TypeError,
+        "path must be a path (str, bytes or os.PathLike), got None",
+    ),
     (lambda r, s: simloop.Model.from_file(""), ValueError, "path must name an MJCF file, got ''"),
     (lambda r, s: simloop.Model.from_file("a\0b"), ValueError, "path must not contain a NUL character, got 'a\\x00b'"),
     (lambda r, s: simloop.Model.from_xml_string(None), TypeError, "xml must be a str or bytes, got None (NoneType)"),
     (lambda r, s: simloop.Model.from_xml_string("<mujoco/>", 5), TypeError, "source must be a str or bytes, got 5"),
     (lambda r, s: simloop.Model.from_xml_string("\udcfe"), ValueError, "xml must be text that UTF-8 can encode"),
-    (lambda r, s: simloop.Model.pusher_scene().with_timestep("0.1"), TypeError,
-     "timestep must be a number, got '0.1' (str)"),
-    (lambda r, s: simloop.Model.pusher_scene().with_timestep(0), ValueError,
-     "timestep must be a positive, finite number of seconds, got 0.0"),
+    (
+        lambda r, s: simloop.Model.pusher_scene().with_timestep("0.1"),
+        TypeError,
+        "timestep must be a number, got '0.1' (str)",
+    ),
+    (
+        lambda r, s: simloop.Model.pusher_scene().with_timestep(0),
+        ValueError,
+        "timestep must be a positive, finite number of seconds, got 0.0",
+    ),
     (lambda r, s: r.column(3), TypeError, "name must be a str (a column name), got 3 (int)"),
     (lambda r, s: r.column(b"box_z"), TypeError, "name must be a str (a column name), got b'box_z' (bytes)"),
     (lambda r, s: r.column("\udcfe"), KeyError, "no trajectory column named '\\udcfe'"),
@@ -80,11 +97,17 @@ WRONG_TYPES = [
     (lambda r, s: s.write(None), TypeError, "out must be a path (str, bytes or os.PathLike), got None"),
     (lambda r, s: r.summary(1), TypeError, "RunResult.summary() takes 1 positional argument but 2 were given"),
     (lambda r, s: s.csv(1), TypeError, "SweepResult.csv() takes 1 positional argument but 2 were given"),
-    (lambda r, s: simloop.run(seed=10**5000), ValueError, "seed must be an integer from 0 to 18446744073709551615, "
-                                                          "got an int of 16610 bits"),
+    (
+        lambda r, s: simloop.run(seed=10**5000),
+        ValueError,
+        "seed must be an integer from 0 to 18446744073709551615, got an int of 16610 bits",
+    ),
     (lambda r, s: simloop.run(timestep=2**1024), ValueError, "timestep must be a number a float can hold"),
-    (lambda r, s: simloop.Sim().apply_force(__import__("numpy").zeros((3, 1))), TypeError,
-     "force[0] must be a number, got array([0.]) (ndarray)"),
+    (
+        lambda r, s: simloop.Sim().apply_force(__import__("numpy").zeros((3, 1))),
+        TypeError,
+        "force[0] must be a number, got array([0.]) (ndarray)",
+    ),
     (lambda r, s: simloop.run(progress=3), TypeError, "progress must be None or a callable"),
 ]
 
@@ -125,15 +148,17 @@ def test_the_python_command_takes_paths_that_are_not_utf8(tmp_path, io_encoding)
         env["PYTHONIOENCODING"] = io_encoding
     (tmp_path / os.fsdecode(b"scene\xfe.xml")).write_text(simloop._core.PUSHER_SCENE_XML)
     args = [b"--smoke", b"--no-rerun", b"--model", b"scene\xfe.xml", b"--out", b"bad\xfe"]
-    python = subprocess.run([sys.executable.encode(), b"-m", b"simloop", *args], cwd=tmp_path, capture_output=True,
-                            env=env, timeout=120)
+    python = subprocess.run(
+        [sys.executable.encode(), b"-m", b"simloop", *args], cwd=tmp_path, capture_output=True, env=env, timeout=120
+    )
     assert python.returncode == 0, python.stderr
     assert python.stderr == b""
     assert b"metrics: bad\xfe/metrics.json\n" in python.stdout
     written = tmp_path / os.fsdecode(b"bad\xfe")
     # The same bytes sim_loop writes for the same flags.
-    cpp = subprocess.run([os.fsencode(sim_loop_exe()), *args[:-1], b"cpp\xfe"], cwd=tmp_path, capture_output=True,
-                         timeout=120)
+    cpp = subprocess.run(
+        [os.fsencode(sim_loop_exe()), *args[:-1], b"cpp\xfe"], cwd=tmp_path, capture_output=True, timeout=120
+    )
     assert cpp.returncode == 0, cpp.stderr
     theirs = tmp_path / os.fsdecode(b"cpp\xfe")
     for name in ("metrics.json", "trajectory.csv"):
@@ -141,8 +166,12 @@ def test_the_python_command_takes_paths_that_are_not_utf8(tmp_path, io_encoding)
 
 
 def test_a_bad_value_that_is_not_utf8_is_refused_in_one_line(tmp_path):
-    proc = subprocess.run([sys.executable.encode(), b"-m", b"simloop", b"--timestep", b"\xfe"], cwd=tmp_path,
-                          capture_output=True, timeout=120)
+    proc = subprocess.run(
+        [sys.executable.encode(), b"-m", b"simloop", b"--timestep", b"\xfe"],
+        cwd=tmp_path,
+        capture_output=True,
+        timeout=120,
+    )
     assert proc.returncode == 2
     assert proc.stderr.count(b"\n") == 1 and b"--timestep must be a positive, finite number" in proc.stderr
 

@@ -5,7 +5,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 import simloop
 from conftest import run_command, snapshot
 
@@ -26,8 +25,11 @@ BAD_RUN_ARGUMENTS = [
     ({"perturb": "yes"}, TypeError, "perturb must be a bool, got 'yes' (str)"),
     ({"smoke": 1}, TypeError, "smoke must be a bool, got 1 (int)"),
     ({"record_every": 0}, ValueError, "record_every must be at least 1, got 0"),
-    ({"model": 3}, TypeError,
-     "model must be None, a simloop.Model, a mujoco.MjModel or a path to an MJCF file, got 3 (int)"),
+    (
+        {"model": 3},
+        TypeError,
+        "model must be None, a simloop.Model, a mujoco.MjModel or a path to an MJCF file, got 3 (int)",
+    ),
     ({"steps": 4_000_000_000_000}, ValueError, "raise record_every"),
     ({"rng": "pcg64"}, ValueError, "rng must be 'mt19937_64' or 'numpy', got 'pcg64'"),
     ({"rng": None}, TypeError, "rng must be a str, got None (NoneType)"),
@@ -46,15 +48,22 @@ def test_numpy_scalars_are_fine():
     assert result.metrics["seed"] == 3 and result.metrics["steps"] == 20
 
 
-@pytest.mark.parametrize("kwargs, error, message", [
-    ({"seeds": [0, -1]}, ValueError, "seeds[1] must be an integer from 0 to"),
-    ({"seeds": 5}, TypeError, "seeds must be a sequence, got 5 (int)"),
-    ({"timesteps": [0.002, 0.0]}, ValueError, "run 1: timestep must be a positive, finite number of seconds, got 0.0"),
-    ({"timesteps": "0.002"}, TypeError, "timesteps must be a sequence, got '0.002' (str)"),
-    ({"threads": 0}, ValueError, "threads must be an integer from 1 to 4096, got 0"),
-    ({"threads": 1.5}, TypeError, "threads must be an int, got 1.5 (float)"),
-    ({"steps": 0}, ValueError, "steps must be at least 1, got 0"),
-])
+@pytest.mark.parametrize(
+    "kwargs, error, message",
+    [
+        ({"seeds": [0, -1]}, ValueError, "seeds[1] must be an integer from 0 to"),
+        ({"seeds": 5}, TypeError, "seeds must be a sequence, got 5 (int)"),
+        (
+            {"timesteps": [0.002, 0.0]},
+            ValueError,
+            "run 1: timestep must be a positive, finite number of seconds, got 0.0",
+        ),
+        ({"timesteps": "0.002"}, TypeError, "timesteps must be a sequence, got '0.002' (str)"),
+        ({"threads": 0}, ValueError, "threads must be an integer from 1 to 4096, got 0"),
+        ({"threads": 1.5}, TypeError, "threads must be an int, got 1.5 (float)"),
+        ({"steps": 0}, ValueError, "steps must be at least 1, got 0"),
+    ],
+)
 def test_run_batch_refuses_bad_arguments(kwargs, error, message):
     with pytest.raises(error) as caught:
         simloop.run_batch(**kwargs)
@@ -90,8 +99,10 @@ def test_a_refused_step_with_a_ctrl_writes_no_ctrl():
 
 
 def test_a_scenarios_steps_are_worded_as_the_chapters():
-    for steps, message in ((0, "steps must be at least 1, got 0"),
-                           (2**62, "steps must be at most 4611686018427387903, got 4611686018427387904")):
+    for steps, message in (
+        (0, "steps must be at least 1, got 0"),
+        (2**62, "steps must be at most 4611686018427387903, got 4611686018427387904"),
+    ):
         with pytest.raises(ValueError) as scenario_error:
             simloop.run_scenario(simloop.Scenario.chapter(), steps=steps)
         with pytest.raises(ValueError) as chapter_error:
@@ -170,8 +181,17 @@ def test_commands_refuse_bad_input_in_one_line_and_change_nothing(workdir, pytho
 def test_command_help_and_version(tmp_path):
     helped = run_command(["--help"], tmp_path)
     assert helped.returncode == 0 and helped.stdout.startswith("usage: python -m simloop")
-    for flag in ("--seed", "--steps", "--timestep", "--smoke", "--out", "--no-perturb", "--no-rerun",
-                 "--record-every", "--model"):
+    for flag in (
+        "--seed",
+        "--steps",
+        "--timestep",
+        "--smoke",
+        "--out",
+        "--no-perturb",
+        "--no-rerun",
+        "--record-every",
+        "--model",
+    ):
         assert flag in helped.stdout
     version = run_command(["--version"], tmp_path)
     assert version.stdout == f"simloop {simloop.__version__} ({simloop.MUJOCO_VERSION})\n"
@@ -194,6 +214,8 @@ def test_the_chapters_own_scene_xml_says_how_to_fix_it(tmp_path, python):
         return
     assert proc.returncode == 2
     assert "--model: chapter.xml: Error: actuator has `ctrlrange` but not `ctrllimited`" in proc.stderr, proc.stderr
-    assert ('(to fix it, put <compiler autolimits="true"/> inside <mujoco>, before <worldbody>: current MuJoCo does '
-            f"this by default, {simloop.MUJOCO_VERSION} does not)\n") in proc.stderr, proc.stderr
+    assert (
+        '(to fix it, put <compiler autolimits="true"/> inside <mujoco>, before <worldbody>: current MuJoCo does '
+        f"this by default, {simloop.MUJOCO_VERSION} does not)\n"
+    ) in proc.stderr, proc.stderr
     assert proc.stderr.count("\n") == 1

@@ -8,7 +8,6 @@ import sys
 from pathlib import Path
 
 import pytest
-
 from conftest import ROOT
 
 EXERCISES = ROOT / "exercises"
@@ -23,8 +22,13 @@ FIXED_LINES = """            sim.apply_force([0.0, shove.force_y, 0.0])
 def check(exercise, answer_text, tmp_path, *flags, check_py=CHECK, cwd=None):
     answer = tmp_path / "answer.txt"
     answer.write_text(answer_text)
-    return subprocess.run([sys.executable, str(check_py), str(exercise), "--answer", str(answer), *flags],
-                          capture_output=True, text=True, timeout=300, cwd=cwd)
+    return subprocess.run(
+        [sys.executable, str(check_py), str(exercise), "--answer", str(answer), *flags],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        cwd=cwd,
+    )
 
 
 def fix_loop(path, lines=FIXED_LINES):
@@ -34,12 +38,18 @@ def fix_loop(path, lines=FIXED_LINES):
     path.write_text(text.replace(buggy, lines))
 
 
-@pytest.mark.parametrize("exercise, right, wrong", [
-    (1, "# the edge\n0.003\n", "0.05\n"),                      # edge 0.004 s; 0.005 s hops 7.3 mm
-    (2, "1000\n", "50\n"),                                      # set once at step 1000, never cleared
-    (3, "stays_at_4N: yes\nslide_at_9N_cm: 6\n",                # measured: 1.25 mm, 5.9 cm
-     "stays_at_4N: no\nslide_at_9N_cm: 6\n"),
-])
+@pytest.mark.parametrize(
+    "exercise, right, wrong",
+    [
+        (1, "# the edge\n0.003\n", "0.05\n"),  # edge 0.004 s; 0.005 s hops 7.3 mm
+        (2, "1000\n", "50\n"),  # set once at step 1000, never cleared
+        (
+            3,
+            "stays_at_4N: yes\nslide_at_9N_cm: 6\n",  # measured: 1.25 mm, 5.9 cm
+            "stays_at_4N: no\nslide_at_9N_cm: 6\n",
+        ),
+    ],
+)
 def test_check_accepts_right_and_rejects_wrong(exercise, right, wrong, tmp_path):
     accepted = check(exercise, right, tmp_path)
     assert accepted.returncode == 0, accepted.stdout + accepted.stderr
@@ -49,25 +59,38 @@ def test_check_accepts_right_and_rejects_wrong(exercise, right, wrong, tmp_path)
     assert "It does not hold." in rejected.stdout
 
 
-@pytest.mark.parametrize("exercise, answer", [
-    (1, "0.004 s"), (1, "4ms"), (1, "4 ms"), (1, "0.004s"), (1, "  4e-3 s "),
-    (2, "1000 steps"), (2, "2 s"), (2, "2000 ms"),
-    (3, "stays_at_4N: yes\nslide_at_9N_cm: 6 cm\n"), (3, "stays_at_4N: yes\nslide_at_9N_cm: 0.06 m\n"),
-    (3, "stays_at_4N: Yes\nslide_at_9N_cm: 60mm\n"),
-])
+@pytest.mark.parametrize(
+    "exercise, answer",
+    [
+        (1, "0.004 s"),
+        (1, "4ms"),
+        (1, "4 ms"),
+        (1, "0.004s"),
+        (1, "  4e-3 s "),
+        (2, "1000 steps"),
+        (2, "2 s"),
+        (2, "2000 ms"),
+        (3, "stays_at_4N: yes\nslide_at_9N_cm: 6 cm\n"),
+        (3, "stays_at_4N: yes\nslide_at_9N_cm: 0.06 m\n"),
+        (3, "stays_at_4N: Yes\nslide_at_9N_cm: 60mm\n"),
+    ],
+)
 def test_answers_take_units_and_spacing(exercise, answer, tmp_path):
     proc = check(exercise, answer + "\n", tmp_path)
     assert proc.returncode == 0, proc.stdout + proc.stderr
 
 
-@pytest.mark.parametrize("exercise, answer, message", [
-    (1, "5 N", "the prediction is a time (s or ms), got '5 N' (a force (N))"),
-    (1, "fast", "the prediction must be a number with or without a unit"),
-    (1, "0.004 furlongs", "the prediction must be a number with or without a unit"),
-    (2, "7 cm", "the number of steps is a number of steps or a time (s or ms), got '7 cm'"),
-    (3, "stays_at_4N: yes\nslide_at_9N_cm: 9 N\n", "slide_at_9N_cm is a distance (m, cm or mm), got '9 N'"),
-    (3, "stays_at_4N: maybe\nslide_at_9N_cm: 6\n", "stays_at_4N must be yes or no, got 'maybe'"),
-])
+@pytest.mark.parametrize(
+    "exercise, answer, message",
+    [
+        (1, "5 N", "the prediction is a time (s or ms), got '5 N' (a force (N))"),
+        (1, "fast", "the prediction must be a number with or without a unit"),
+        (1, "0.004 furlongs", "the prediction must be a number with or without a unit"),
+        (2, "7 cm", "the number of steps is a number of steps or a time (s or ms), got '7 cm'"),
+        (3, "stays_at_4N: yes\nslide_at_9N_cm: 9 N\n", "slide_at_9N_cm is a distance (m, cm or mm), got '9 N'"),
+        (3, "stays_at_4N: maybe\nslide_at_9N_cm: 6\n", "stays_at_4N must be yes or no, got 'maybe'"),
+    ],
+)
 def test_an_unreadable_answer_is_named(exercise, answer, message, tmp_path):
     proc = check(exercise, answer + "\n", tmp_path)
     assert proc.returncode == 2
@@ -78,11 +101,14 @@ def test_a_wrong_slide_is_rejected(tmp_path):
     assert check(3, "stays_at_4N: yes\nslide_at_9N_cm: 40\n", tmp_path).returncode == 1
 
 
-@pytest.mark.parametrize("exercise, first, second, solution", [
-    (1, "0.05", "0.001", "largest stable timestep: 0.004 s"),
-    (2, "50", "1", "The shove pushed for 1000 steps"),
-    (3, "stays_at_4N: no\nslide_at_9N_cm: 30", "stays_at_4N: yes\nslide_at_9N_cm: 1", "it slid 5.9"),
-])
+@pytest.mark.parametrize(
+    "exercise, first, second, solution",
+    [
+        (1, "0.05", "0.001", "largest stable timestep: 0.004 s"),
+        (2, "50", "1", "The shove pushed for 1000 steps"),
+        (3, "stays_at_4N: no\nslide_at_9N_cm: 30", "stays_at_4N: yes\nslide_at_9N_cm: 1", "it slid 5.9"),
+    ],
+)
 def test_a_first_wrong_answer_gets_a_hint_not_the_solution(exercise, first, second, solution, tmp_path):
     one = check(exercise, first, tmp_path)
     assert one.returncode == 1 and "Hint: " in one.stdout and solution not in one.stdout, one.stdout
@@ -98,21 +124,24 @@ def test_a_first_wrong_answer_gets_a_hint_not_the_solution(exercise, first, seco
     assert solution in check(exercise, right, tmp_path / "fresh").stdout  # a right answer sees it too
 
 
-@pytest.mark.parametrize("exercise, answer, explanation", [
-    (1, "stable_past_the_edge", "is stable on its own, but it is past the edge"),
-    (1, "unstable_below_the_edge", "is unstable on its own, although the sweep's grid is stable up to"),
-    (1, "0.05", "At 0.05 s and beyond you are in Break It itself."),
-    (1, "0.001", "is stable, and so are timesteps well above it"),
-    (2, "50", "50 is how long the shove was meant to last"),
-    (2, "1", "1 would be right if MuJoCo cleared xfrc_applied after each step"),
-    (2, "5000", "cannot have pushed for more than the 1000 steps left"),
-    (2, "999", "Off by 1: you have the idea."),
-    (2, "forever", "the chapter's 'forever', cut short by the run's end"),
-    # Exercise 3 explains each part only beside a right answer or with the solution.
-    (3, "stays_at_4N: yes\nslide_at_9N_cm: 30", "30 cm is more than twice what MuJoCo did"),
-    (3, "stays_at_4N: yes\nslide_at_9N_cm: 1", "1 cm is less than half what MuJoCo did"),
-    (3, "stays_at_4N: no\nslide_at_9N_cm: 6", "4 N: you expected it to move more than 2 mm; it did not."),
-])
+@pytest.mark.parametrize(
+    "exercise, answer, explanation",
+    [
+        (1, "stable_past_the_edge", "is stable on its own, but it is past the edge"),
+        (1, "unstable_below_the_edge", "is unstable on its own, although the sweep's grid is stable up to"),
+        (1, "0.05", "At 0.05 s and beyond you are in Break It itself."),
+        (1, "0.001", "is stable, and so are timesteps well above it"),
+        (2, "50", "50 is how long the shove was meant to last"),
+        (2, "1", "1 would be right if MuJoCo cleared xfrc_applied after each step"),
+        (2, "5000", "cannot have pushed for more than the 1000 steps left"),
+        (2, "999", "Off by 1: you have the idea."),
+        (2, "forever", "the chapter's 'forever', cut short by the run's end"),
+        # Exercise 3 explains each part only beside a right answer or with the solution.
+        (3, "stays_at_4N: yes\nslide_at_9N_cm: 30", "30 cm is more than twice what MuJoCo did"),
+        (3, "stays_at_4N: yes\nslide_at_9N_cm: 1", "1 cm is less than half what MuJoCo did"),
+        (3, "stays_at_4N: no\nslide_at_9N_cm: 6", "4 N: you expected it to move more than 2 mm; it did not."),
+    ],
+)
 def test_the_explanation_answers_the_answer_given(exercise, answer, explanation, tmp_path):
     if answer in ("stable_past_the_edge", "unstable_below_the_edge"):  # which timestep depends on the MuJoCo version
         from expected import expected
@@ -131,8 +160,11 @@ def test_exercise_3s_first_wrong_answer_does_not_say_which_part_is_wrong(tmp_pat
         proc = check(3, f"stays_at_4N: {stays}\nslide_at_9N_cm: {slide}\n", folder)
         assert proc.returncode == 1 and "Hint: " in proc.stdout, proc.stdout
         said = "stays" if stays == "yes" else "moves"
-        outputs.append(proc.stdout.replace(f"you said it {said}.", "you said it X.")
-                       .replace(f"you said {slide} cm.", "you said Y cm."))
+        outputs.append(
+            proc.stdout.replace(f"you said it {said}.", "you said it X.").replace(
+                f"you said {slide} cm.", "you said Y cm."
+            )
+        )
     assert outputs[0] == outputs[1], outputs
 
 
@@ -144,15 +176,20 @@ def test_exercise_1_reports_what_the_learners_own_timestep_did(tmp_path):
     assert f"At 0.05 s the box rose {(point.peak_box_z - 0.05) * 1e3:.1f} mm above rest" in proc.stdout
 
 
-@pytest.mark.parametrize("answer, half, left_out", [
-    ("3.4", "coast", "the 4.1 cm it slides during the push itself"),  # the old hint, followed literally
-    ("4.1", "push", "the 3.4 cm it coasts after the push"),
-])
+@pytest.mark.parametrize(
+    "answer, half, left_out",
+    [
+        ("3.4", "coast", "the 4.1 cm it slides during the push itself"),  # the old hint, followed literally
+        ("4.1", "push", "the 3.4 cm it coasts after the push"),
+    ],
+)
 def test_exercise_3_tells_a_half_model_answer_why_it_is_short(answer, half, left_out, tmp_path):
     proc = check(3, f"stays_at_4N: yes\nslide_at_9N_cm: {answer}\n", tmp_path)
     assert proc.returncode == 0, proc.stdout  # within a factor of 2, as the exercise says it accepts
-    assert (f"9 N: {answer} cm is half the sum, the {half} alone: it leaves out {left_out}" in proc.stdout
-            and "short for that reason" in proc.stdout), proc.stdout
+    assert (
+        f"9 N: {answer} cm is half the sum, the {half} alone: it leaves out {left_out}" in proc.stdout
+        and "short for that reason" in proc.stdout
+    ), proc.stdout
 
 
 def test_exercise_3s_hint_and_solution_are_the_whole_model_and_what_mujoco_did(tmp_path):
@@ -193,6 +230,7 @@ def test_the_shipped_answer_files_are_blank(exercise, tmp_path):
 def test_every_file_the_exercise_names_exists(exercise):
     # 02's answer.txt asked about policy_loop.py after it became loop.py.
     import re
+
     folder = EXERCISES / FOLDERS[exercise]
     for text in ((folder / "answer.txt").read_text(), (folder / "README.md").read_text()):
         for name in re.findall(r"[\w./-]+\.py\b", text):
@@ -200,8 +238,9 @@ def test_every_file_the_exercise_names_exists(exercise):
 
 
 def test_the_pristine_copy_is_the_shipped_loop():
-    assert (EXERCISES / "_pristine" / FOLDERS[2] / "loop.py").read_bytes() == \
-           (EXERCISES / FOLDERS[2] / "loop.py").read_bytes()
+    assert (EXERCISES / "_pristine" / FOLDERS[2] / "loop.py").read_bytes() == (
+        EXERCISES / FOLDERS[2] / "loop.py"
+    ).read_bytes()
 
 
 def test_the_shipped_loop_sets_the_shove_once_and_it_persists():
@@ -224,15 +263,17 @@ def test_the_question_survives_the_learners_fix(tmp_path):
     copy = tmp_path / "exercises"
     shutil.copytree(EXERCISES, copy, ignore=shutil.ignore_patterns("__pycache__", ".check_attempts.json"))
     loop = copy / FOLDERS[2] / "loop.py"
-    still_buggy = subprocess.run([sys.executable, str(copy / "check.py"), "2", "--fix"], capture_output=True,
-                                 text=True, timeout=300)
+    still_buggy = subprocess.run(
+        [sys.executable, str(copy / "check.py"), "2", "--fix"], capture_output=True, text=True, timeout=300
+    )
     assert still_buggy.returncode == 1 and "still the shipped loop" in still_buggy.stdout
     fix_loop(loop)
     # The answer is graded from the pristine copy: still 1000, whatever loop.py now does.
     assert check(2, "1000", tmp_path, check_py=copy / "check.py").returncode == 0
     assert check(2, "50", tmp_path, check_py=copy / "check.py").returncode == 1
-    fixed = subprocess.run([sys.executable, str(copy / "check.py"), "2", "--fix"], capture_output=True, text=True,
-                           timeout=300)
+    fixed = subprocess.run(
+        [sys.executable, str(copy / "check.py"), "2", "--fix"], capture_output=True, text=True, timeout=300
+    )
     assert fixed.returncode == 0, fixed.stdout + fixed.stderr
     assert fixed.stdout.count("bit for bit") == 3 and "Your fix holds." in fixed.stdout
 
@@ -241,8 +282,9 @@ def test_a_fix_that_is_not_quite_right_is_refused(tmp_path):
     loop = tmp_path / "loop.py"
     shutil.copy(EXERCISES / FOLDERS[2] / "loop.py", loop)
     fix_loop(loop, FIXED_LINES.replace("shove.start_step + shove.steps", "shove.start_step + 60"))
-    proc = subprocess.run([sys.executable, str(CHECK), "2", "--fix", str(loop)], capture_output=True, text=True,
-                          timeout=300)
+    proc = subprocess.run(
+        [sys.executable, str(CHECK), "2", "--fix", str(loop)], capture_output=True, text=True, timeout=300
+    )
     assert proc.returncode == 1
     assert "the shove pushed for 60 steps (simloop.run: 50)" in proc.stdout
     assert "Your fix does not hold yet." in proc.stdout
@@ -278,31 +320,42 @@ def _edges():
 # status, said, never said); "EDGE" and "FIRST_UNSTABLE" are the sweep's, on
 # this MuJoCo. Near answers are wrong answers that deserve a pointed reply.
 LEARNER = {
-    "right": [(1, "EDGE", 0, "Right.", "past the edge"),
-              (2, "1000 steps", 0, "Right:", "Off by"),
-              (2, "forever", 0, "Right:", "Off by"),
-              (2, "until the end of the run", 0, "Right:", "Off by"),
-              (3, "stays_at_4N: y\nslide_at_9N_cm: 5 cm", 0, "4 N: right.", "Hint:")],
-    "near": [(1, "FIRST_UNSTABLE", 1, "already past the edge", "Right."),
-             (2, "1001", 1, "Off by 1", "Right:"),
-             (2, "998", 1, "Off by 2", "Right:"),
-             (3, "stays_at_4N: yes\nslide_at_9N_cm: 12.5", 1, "Hint: 4 N", "MuJoCo slid it")],
-    "wrong": [(1, "0.05", 1, "Break It itself", "Right."),
-              (1, "0.0005", 1, "the edge is higher", "Right."),
-              (2, "50", 1, "meant to last", "Right:"),
-              (2, "1", 1, "cleared xfrc_applied after each step", "Right:"),
-              (3, "stays_at_4N: no\nslide_at_9N_cm: 30", 1, "Hint: 4 N", "4 N: right.")],
-    "nonsense": [(1, "fast", 2, "", "It holds"),
-                 (1, "-0.01", 2, "", "It holds"),
-                 (2, "banana", 2, "", "It holds"),
-                 (2, "1000 N", 2, "", "It holds"),
-                 (3, "stays_at_4N: perhaps\nslide_at_9N_cm: 6", 2, "", "It holds"),
-                 (3, "slide_at_9N_cm: 6", 2, "", "It holds")],
+    "right": [
+        (1, "EDGE", 0, "Right.", "past the edge"),
+        (2, "1000 steps", 0, "Right:", "Off by"),
+        (2, "forever", 0, "Right:", "Off by"),
+        (2, "until the end of the run", 0, "Right:", "Off by"),
+        (3, "stays_at_4N: y\nslide_at_9N_cm: 5 cm", 0, "4 N: right.", "Hint:"),
+    ],
+    "near": [
+        (1, "FIRST_UNSTABLE", 1, "already past the edge", "Right."),
+        (2, "1001", 1, "Off by 1", "Right:"),
+        (2, "998", 1, "Off by 2", "Right:"),
+        (3, "stays_at_4N: yes\nslide_at_9N_cm: 12.5", 1, "Hint: 4 N", "MuJoCo slid it"),
+    ],
+    "wrong": [
+        (1, "0.05", 1, "Break It itself", "Right."),
+        (1, "0.0005", 1, "the edge is higher", "Right."),
+        (2, "50", 1, "meant to last", "Right:"),
+        (2, "1", 1, "cleared xfrc_applied after each step", "Right:"),
+        (3, "stays_at_4N: no\nslide_at_9N_cm: 30", 1, "Hint: 4 N", "4 N: right."),
+    ],
+    "nonsense": [
+        (1, "fast", 2, "", "It holds"),
+        (1, "-0.01", 2, "", "It holds"),
+        (2, "banana", 2, "", "It holds"),
+        (2, "1000 N", 2, "", "It holds"),
+        (3, "stays_at_4N: perhaps\nslide_at_9N_cm: 6", 2, "", "It holds"),
+        (3, "slide_at_9N_cm: 6", 2, "", "It holds"),
+    ],
 }
 
 
-@pytest.mark.parametrize("kind, play", [(kind, play) for kind, plays in LEARNER.items() for play in plays],
-                         ids=lambda v: v if isinstance(v, str) else repr(v[:2]))
+@pytest.mark.parametrize(
+    "kind, play",
+    [(kind, play) for kind, plays in LEARNER.items() for play in plays],
+    ids=lambda v: v if isinstance(v, str) else repr(v[:2]),
+)
 def test_a_learner_playing_every_class_of_answer(kind, play, tmp_path):
     exercise, answer, status, said, never = play
     if answer in ("EDGE", "FIRST_UNSTABLE"):
@@ -330,8 +383,11 @@ def test_every_command_a_check_prints_runs_as_printed(tmp_path):
         folder.mkdir()
         hint = check(exercise, wrong, folder, cwd=ROOT).stdout
         solution = check(exercise, wrong, folder, "--reveal", cwd=ROOT).stdout
-        printed += re.findall(r"(?:^ +|`)(\S*python3?) (-m simloop [^`(\n]*?|\S*check\.py [^`(\n]*?)\s*(?:`|\(|$)",
-                              hint + solution, re.MULTILINE)
+        printed += re.findall(
+            r"(?:^ +|`)(\S*python3?) (-m simloop [^`(\n]*?|\S*check\.py [^`(\n]*?)\s*(?:`|\(|$)",
+            hint + solution,
+            re.MULTILINE,
+        )
     commands = {" ".join(c) for c in printed}
     assert len(commands) == 3, commands  # exercise 1's hint and sweep, exercise 2's --fix
     for command in commands:
@@ -355,8 +411,10 @@ def test_exercise_1s_hint_command_runs_as_printed(tmp_path):
     assert command[0].endswith("python") and "/" in command[0], command
     timestep = 0.004
     runnable = [str(ROOT / command[0]) if not command[0].startswith("/") else command[0]] + [
-        {"T": str(timestep), "N": str(round(4 / timestep))}.get(arg, arg) for arg in command[1:] if arg != "--plot"]
-    run = subprocess.run(runnable + ["--no-rerun", "--out", str(tmp_path / "o")], capture_output=True, text=True,
-                         timeout=120, cwd=ROOT)
+        {"T": str(timestep), "N": str(round(4 / timestep))}.get(arg, arg) for arg in command[1:] if arg != "--plot"
+    ]
+    run = subprocess.run(
+        runnable + ["--no-rerun", "--out", str(tmp_path / "o")], capture_output=True, text=True, timeout=120, cwd=ROOT
+    )
     assert run.returncode == 0, run.stderr
     assert "stepped 1000 steps of 0.004 s -> 4.00 s of sim time" in run.stdout

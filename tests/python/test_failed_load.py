@@ -43,8 +43,9 @@ CHILD = """
 def test_a_compile_that_runs_out_of_memory_leaves_the_process_as_it_was(tmp_path):
     falls, stepping_error = stepping_error_scene()
     says = expected("errors.out_of_memory_says")
-    proc = run_python(CHILD.format(tmp=tmp_path, too_big=expected("errors.out_of_memory_scene"), falls=falls),
-                      timeout=300)
+    proc = run_python(
+        CHILD.format(tmp=tmp_path, too_big=expected("errors.out_of_memory_scene"), falls=falls), timeout=300
+    )
     assert proc.returncode == 0, f"exit {proc.returncode}: {proc.stderr[-2000:]}"
     assert proc.stderr == "", proc.stderr  # what the compiling child said is in the error, not on stderr
     lines = proc.stdout.splitlines()

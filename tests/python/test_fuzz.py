@@ -27,9 +27,7 @@ import subprocess
 from pathlib import Path
 
 import pytest
-
 import simloop
-
 from conftest import sim_loop_exe
 
 SEED = int(os.environ.get("FUZZ_SEED", "8"))
@@ -43,10 +41,48 @@ TIME_LIMIT = 60  # seconds per run: a hang fails the test
 OUTPUT_FILES = {"metrics.json", "trajectory.csv", "sweep.csv"}
 
 HOSTILE_NUMBERS = [
-    "", " ", " 5", "5 ", "+5", "-5", "0", "-0", "0x10", "0x1p-3", "1e", ".", "-", "1e-300", "1e300", "1e309",
-    "nan", "NaN", "inf", "-inf", "4611686018427387903", "4611686018427387904", "9223372036854775807",
-    "18446744073709551615", "18446744073709551616", "99999999999999999999999", "1.5", "1,5", "5.", ".5",
-    "1E+2", "00012", "'", "\"", "a'b", "x\ny", "tab\there", "\x7f", "é", "\\", "--steps", "=",
+    "",
+    " ",
+    " 5",
+    "5 ",
+    "+5",
+    "-5",
+    "0",
+    "-0",
+    "0x10",
+    "0x1p-3",
+    "1e",
+    ".",
+    "-",
+    "1e-300",
+    "1e300",
+    "1e309",
+    "nan",
+    "NaN",
+    "inf",
+    "-inf",
+    "4611686018427387903",
+    "4611686018427387904",
+    "9223372036854775807",
+    "18446744073709551615",
+    "18446744073709551616",
+    "99999999999999999999999",
+    "1.5",
+    "1,5",
+    "5.",
+    ".5",
+    "1E+2",
+    "00012",
+    "'",
+    '"',
+    "a'b",
+    "x\ny",
+    "tab\there",
+    "\x7f",
+    "é",
+    "\\",
+    "--steps",
+    "=",
 ]
 SMALL_TIMESTEPS = ["0.002", "0.001", "0.05", "0.01", "2e-3", ".004", "1", "5"]
 SMALL_STEPS = ["1", "2", "10", "64", "65", "300"]
@@ -61,8 +97,15 @@ def _limits() -> None:
 def run_sim_loop(args: list[str], cwd: Path) -> subprocess.CompletedProcess:
     env = dict(os.environ, SIMLOOP_PYTHON=str(cwd / "no-such-python"))
     try:
-        return subprocess.run([str(sim_loop_exe()), *args], cwd=cwd, capture_output=True, stdin=subprocess.DEVNULL,
-                              timeout=TIME_LIMIT, preexec_fn=_limits, env=env)
+        return subprocess.run(
+            [str(sim_loop_exe()), *args],
+            cwd=cwd,
+            capture_output=True,
+            stdin=subprocess.DEVNULL,
+            timeout=TIME_LIMIT,
+            preexec_fn=_limits,
+            env=env,
+        )
     except subprocess.TimeoutExpired:
         pytest.fail(f"sim_loop {args!r} ran past {TIME_LIMIT} s")
 
@@ -91,14 +134,47 @@ def check_outcome(args: list[str], cwd: Path, out: Path) -> int:
 def random_command_line(rng: random.Random) -> list[str]:
     sweep = rng.random() < 0.3
     args = ["sweep"] if sweep else []
-    flags = ["--seed", "--steps", "--timestep", "--record-every", "--smoke", "--energy-audit", "--no-perturb",
-             "--rerun", "--no-rerun", "--model", "--out", "--help", "--version", "--plot", "--threads",
-             "--timesteps", "--range", "--duration", "--bogus", "-h", "-x", "stray"]
+    flags = [
+        "--seed",
+        "--steps",
+        "--timestep",
+        "--record-every",
+        "--smoke",
+        "--energy-audit",
+        "--no-perturb",
+        "--rerun",
+        "--no-rerun",
+        "--model",
+        "--out",
+        "--help",
+        "--version",
+        "--plot",
+        "--threads",
+        "--timesteps",
+        "--range",
+        "--duration",
+        "--bogus",
+        "-h",
+        "-x",
+        "stray",
+    ]
     for _ in range(rng.randint(0, 5)):
         flag = rng.choice(flags)
         r = rng.random()
-        if flag in ("--smoke", "--energy-audit", "--no-perturb", "--rerun", "--no-rerun", "--help", "--version",
-                    "--plot", "-h", "-x", "stray", "--bogus"):
+        if flag in (
+            "--smoke",
+            "--energy-audit",
+            "--no-perturb",
+            "--rerun",
+            "--no-rerun",
+            "--help",
+            "--version",
+            "--plot",
+            "-h",
+            "-x",
+            "stray",
+            "--bogus",
+        ):
             value = rng.choice(HOSTILE_NUMBERS) if r < 0.15 else None
         elif flag == "--steps":
             value = rng.choice(SMALL_STEPS) if r < 0.6 else rng.choice(HOSTILE_NUMBERS)
@@ -107,11 +183,14 @@ def random_command_line(rng: random.Random) -> list[str]:
         elif flag == "--timesteps":
             value = ",".join(rng.choice(SMALL_TIMESTEPS + HOSTILE_NUMBERS[:20]) for _ in range(rng.randint(1, 3)))
         elif flag == "--range":
-            value = f"{rng.choice(SMALL_TIMESTEPS)}:{rng.choice(SMALL_TIMESTEPS)}:{rng.choice(['1', '2', '3', '0', 'x', '10001'])}"
+            count = rng.choice(["1", "2", "3", "0", "x", "10001"])
+            value = f"{rng.choice(SMALL_TIMESTEPS)}:{rng.choice(SMALL_TIMESTEPS)}:{count}"
             if r < 0.3:
                 value = rng.choice(HOSTILE_NUMBERS)
         elif flag == "--duration":
-            value = rng.choice(["0.05", "0.2", "1e-3", "1e300", "9e18", "0"]) if r < 0.7 else rng.choice(HOSTILE_NUMBERS)
+            value = (
+                rng.choice(["0.05", "0.2", "1e-3", "1e300", "9e18", "0"]) if r < 0.7 else rng.choice(HOSTILE_NUMBERS)
+            )
         elif flag == "--model":
             value = rng.choice(["scene.xml", "missing.xml", "broken.xml", ".", "", "out"])
         elif flag == "--out":
@@ -205,13 +284,43 @@ STACK_SCENE = """<mujoco model="stack">
 
 SCENES = [CHAPTER_SCENE, PADDLE_SCENE, STACK_SCENE]
 NUMBER = re.compile(r"-?\d+(?:\.\d+)?(?:e-?\d+)?")
-MUTANT_NUMBERS = ["0", "-1", "1e308", "-1e308", "1e-308", "nan", "inf", "-inf", "2147483648", "99999999999",
-                  "1e9", "3", "0.0000001", "", "x", "1 2 3 4 5 6 7"]
-MUTANT_ELEMENTS = ['<size nkey="100000000"/>', '<size nconmax="2000000000"/>', '<size njmax="-5"/>',
-                   '<option timestep="0"/>', '<option timestep="1e300"/>', '<option integrator="bogus"/>',
-                   '<include file="/etc/passwd"/>', '<include file="missing.xml"/>',
-                   '<body><freejoint/></body>', '<geom type="mesh" mesh="none"/>', "<!--", "<![CDATA[",
-                   '<compiler meshdir="/nonexistent"/>', '<worldbody/>', '<actuator/>', "\x00", "&bogus;"]
+MUTANT_NUMBERS = [
+    "0",
+    "-1",
+    "1e308",
+    "-1e308",
+    "1e-308",
+    "nan",
+    "inf",
+    "-inf",
+    "2147483648",
+    "99999999999",
+    "1e9",
+    "3",
+    "0.0000001",
+    "",
+    "x",
+    "1 2 3 4 5 6 7",
+]
+MUTANT_ELEMENTS = [
+    '<size nkey="100000000"/>',
+    '<size nconmax="2000000000"/>',
+    '<size njmax="-5"/>',
+    '<option timestep="0"/>',
+    '<option timestep="1e300"/>',
+    '<option integrator="bogus"/>',
+    '<include file="/etc/passwd"/>',
+    '<include file="missing.xml"/>',
+    "<body><freejoint/></body>",
+    '<geom type="mesh" mesh="none"/>',
+    "<!--",
+    "<![CDATA[",
+    '<compiler meshdir="/nonexistent"/>',
+    "<worldbody/>",
+    "<actuator/>",
+    "\x00",
+    "&bogus;",
+]
 
 
 def mutate(rng: random.Random, xml: str) -> str:
@@ -250,7 +359,7 @@ def mutate(rng: random.Random, xml: str) -> str:
             chars = list(xml)
             for _ in range(rng.randint(1, 4)):
                 if chars:
-                    chars[rng.randrange(len(chars))] = chr(rng.choice([0x3c, 0x3e, 0x22, 0x2f, 0x20, 0x41, 0xe9]))
+                    chars[rng.randrange(len(chars))] = chr(rng.choice([0x3C, 0x3E, 0x22, 0x2F, 0x20, 0x41, 0xE9]))
             xml = "".join(chars)
     return xml
 
@@ -274,5 +383,7 @@ def test_the_unmutated_scenes_run(tmp_path):
     # The campaign's starting points are good models: what fails is the mutation.
     for i, xml in enumerate(SCENES):
         (tmp_path / f"scene{i}.xml").write_text(xml)
-        assert check_outcome(["--model", f"scene{i}.xml", "--steps", "100", "--out", "out"], tmp_path,
-                             tmp_path / "out") == 0
+        assert (
+            check_outcome(["--model", f"scene{i}.xml", "--steps", "100", "--out", "out"], tmp_path, tmp_path / "out")
+            == 0
+        )

@@ -12,7 +12,6 @@ from __future__ import annotations
 import os
 import random
 import shutil
-from pathlib import Path
 
 from conftest import ROOT
 from test_fuzz import SEED, check_outcome
@@ -25,11 +24,24 @@ BASES = [
     (SCENES / "pusht.toml").read_text(),
     'steps = 40\n[[control]]\nactuator = "push_motor"\ncsv = "u.csv"\n[[disturbance]]\nbody = "box"\n'
     'force = [0.0, 8.0, 0.0]\nstart = 0.01\nduration = 0.02\n[record]\nbodies = ["box"]\n[reset]\n'
-    'qpos_noise = 0.01\n',
+    "qpos_noise = 0.01\n",
 ]
 
-HOSTILE_PATHS = ["/dev/zero", "/dev/null", "/dev/urandom", "fifo", "folder", "huge.csv", "u.csv\\u0000x",
-                 "../../../../../../etc/passwd", "", "missing.xml", "\\u001b]0;t\\u0007", "long.csv", "/proc/self/mem"]
+HOSTILE_PATHS = [
+    "/dev/zero",
+    "/dev/null",
+    "/dev/urandom",
+    "fifo",
+    "folder",
+    "huge.csv",
+    "u.csv\\u0000x",
+    "../../../../../../etc/passwd",
+    "",
+    "missing.xml",
+    "\\u001b]0;t\\u0007",
+    "long.csv",
+    "/proc/self/mem",
+]
 
 
 def dotted(rng: random.Random) -> str:
@@ -97,5 +109,7 @@ def test_the_unmutated_scenarios_run(tmp_path):
     (tmp_path / "u.csv").write_text("u\n0.5\n1.0\n")
     for i, text in enumerate(BASES):
         (tmp_path / f"s{i}.toml").write_text(text)
-        assert check_outcome(["--scenario", f"s{i}.toml", "--steps", "40", "--out", "out"], tmp_path,
-                             tmp_path / "out") == 0
+        assert (
+            check_outcome(["--scenario", f"s{i}.toml", "--steps", "40", "--out", "out"], tmp_path, tmp_path / "out")
+            == 0
+        )

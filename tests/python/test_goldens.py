@@ -14,9 +14,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any, Dict, Tuple
 
-import pytest
-
 import golden_cases as g
+import pytest
 import simloop
 from conftest import sim_loop_exe
 
@@ -27,8 +26,10 @@ def _goldens(version: str, who: str) -> Tuple[Path, Dict[str, Any]]:
     directory = g.golden_dir(version)
     if not (directory / "manifest.json").is_file():
         pinned = sorted(p.name for p in g.GOLDEN_ROOT.glob("mujoco-*")) or ["none"]
-        pytest.skip(f"{who} runs on {version}; the goldens are one MuJoCo build's bytes and tests/golden/ "
-                    f"holds them for {', '.join(pinned)} only")
+        pytest.skip(
+            f"{who} runs on {version}; the goldens are one MuJoCo build's bytes and tests/golden/ "
+            f"holds them for {', '.join(pinned)} only"
+        )
     return directory, g.load_manifest(directory)
 
 
@@ -59,21 +60,30 @@ def check_output(who: str, name: str, data: bytes, golden: Dict[str, Any], direc
     if kept:
         expected = (directory / kept).read_bytes()
         if data != expected:
-            pytest.fail(f"{who}: {name} differs from {directory.relative_to(g.ROOT) / kept}: "
-                        f"{first_difference(expected, data)}", pytrace=False)
+            pytest.fail(
+                f"{who}: {name} differs from {directory.relative_to(g.ROOT) / kept}: "
+                f"{first_difference(expected, data)}",
+                pytrace=False,
+            )
         return
     got = g.file_entry(data)
     if got != {"sha256": golden["sha256"], "bytes": golden["bytes"]}:
         shown = f"; got:\n{data.decode(errors='replace')}" if len(data) <= 2000 else ""
-        pytest.fail(f"{who}: {name} is {got['bytes']} bytes, sha256 {got['sha256']}; the golden "
-                    f"{golden['bytes']} bytes, sha256 {golden['sha256']}{shown}", pytrace=False)
+        pytest.fail(
+            f"{who}: {name} is {got['bytes']} bytes, sha256 {got['sha256']}; the golden "
+            f"{golden['bytes']} bytes, sha256 {golden['sha256']}{shown}",
+            pytrace=False,
+        )
 
 
 def golden_entry(manifest: Dict[str, Any], section: str, name: str) -> Dict[str, Any]:
     entry = manifest[section].get(name)
     if entry is None:
-        pytest.fail(f"tests/golden has no {section} entry {name!r}: golden_cases.py lists it; if the new run is "
-                    "intended, regenerate with scripts/make_goldens.py", pytrace=False)
+        pytest.fail(
+            f"tests/golden has no {section} entry {name!r}: golden_cases.py lists it; if the new run is "
+            "intended, regenerate with scripts/make_goldens.py",
+            pytrace=False,
+        )
     return entry
 
 
@@ -84,12 +94,16 @@ def test_command_writes_the_golden_files_and_stdout(run, program, tmp_path, requ
     directory, manifest = request.getfixturevalue("python_goldens" if python else "sim_loop_goldens")
     entry = golden_entry(manifest, "commands", run.name)
     if entry["command"] != run.command():
-        pytest.fail(f"{run.name}: the golden is of `{entry['command']}`, the test runs `{run.command()}`: "
-                    "regenerate the goldens if the new command line is intended", pytrace=False)
+        pytest.fail(
+            f"{run.name}: the golden is of `{entry['command']}`, the test runs `{run.command()}`: "
+            "regenerate the goldens if the new command line is intended",
+            pytrace=False,
+        )
     who = run.command(python=python)
     try:
-        stdout, files = g.run_command(run, g.python_program() if python else [str(sim_loop_exe())],
-                                      g.scratch(tmp_path), python=python)
+        stdout, files = g.run_command(
+            run, g.python_program() if python else [str(sim_loop_exe())], g.scratch(tmp_path), python=python
+        )
     except RuntimeError as e:
         pytest.fail(str(e), pytrace=False)
     for name, data in files.items():
@@ -102,9 +116,12 @@ def test_command_writes_the_golden_files_and_stdout(run, program, tmp_path, requ
     if python and "text" in entry["stdout"]:  # sim_loop's kept text, less its recording line
         expected = g.pinned_stdout((directory / entry["stdout"]["text"]).read_text(), python=True).encode()
         if got != expected:
-            pytest.fail(f"{who}: stdout differs from {directory.relative_to(g.ROOT) / entry['stdout']['text']} "
-                        "(less its recording line): "
-                        f"{first_difference(expected, got)}", pytrace=False)
+            pytest.fail(
+                f"{who}: stdout differs from {directory.relative_to(g.ROOT) / entry['stdout']['text']} "
+                "(less its recording line): "
+                f"{first_difference(expected, got)}",
+                pytrace=False,
+            )
     check_output(who, "stdout (filtered)", got, golden, directory)
 
 
@@ -128,11 +145,13 @@ def test_api_results_hash_as_the_goldens(case, python_goldens):
     if golden["call"] != case.call:
         pytest.fail(f"{case.name}: the golden is of {golden['call']}, the test runs {case.call}", pytrace=False)
     got = {name: g.part_entry(value) for name, value in case.parts().items()}
-    differ = [f"  {name}: golden {golden['parts'].get(name)}, got {got.get(name)}"
-              for name in sorted(set(got) | set(golden["parts"])) if got.get(name) != golden["parts"].get(name)]
+    differ = [
+        f"  {name}: golden {golden['parts'].get(name)}, got {got.get(name)}"
+        for name in sorted(set(got) | set(golden["parts"]))
+        if got.get(name) != golden["parts"].get(name)
+    ]
     if differ:
-        pytest.fail(f"{case.call}: {len(differ)} part(s) differ from the golden:\n" + "\n".join(differ),
-                    pytrace=False)
+        pytest.fail(f"{case.call}: {len(differ)} part(s) differ from the golden:\n" + "\n".join(differ), pytrace=False)
 
 
 GOLDEN_DIRS = sorted(g.GOLDEN_ROOT.glob("mujoco-*"))
@@ -151,7 +170,10 @@ def test_the_golden_folder_is_what_its_manifest_says(directory):
             if kept:
                 listed.add(kept)
                 data = (directory / kept).read_bytes()
-                assert g.file_entry(data) == {"sha256": golden["sha256"], "bytes": golden["bytes"]}, \
+                assert g.file_entry(data) == {"sha256": golden["sha256"], "bytes": golden["bytes"]}, (
                     f"{directory.name}/{kept}: not the sha256 and size the manifest lists"
+                )
     present = {p.relative_to(directory).as_posix() for p in directory.rglob("*") if p.is_file()}
-    assert present == listed, f"files not in the manifest: {sorted(present - listed)}; missing: {sorted(listed - present)}"
+    assert present == listed, (
+        f"files not in the manifest: {sorted(present - listed)}; missing: {sorted(listed - present)}"
+    )

@@ -21,15 +21,19 @@ def same_bits(a, b):
 
 
 def test_import_simloop_leaves_gymnasium_alone_and_registers_once_it_loads():
-    code = ("import sys, simloop; assert 'gymnasium' not in sys.modules; import gymnasium; "
-            "env = gymnasium.make('simloop/Chapter-v0'); print(env.unwrapped.control_every); "
-            "print(type(gymnasium.make('simloop/PushT-v0').unwrapped).__name__)")
+    code = (
+        "import sys, simloop; assert 'gymnasium' not in sys.modules; import gymnasium; "
+        "env = gymnasium.make('simloop/Chapter-v0'); print(env.unwrapped.control_every); "
+        "print(type(gymnasium.make('simloop/PushT-v0').unwrapped).__name__)"
+    )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.split() == ["50", "ScenarioEnv"]
     # gymnasium first, then simloop: registered at once; simloop.gym first
     # (it imports gymnasium itself): registered too.
-    for code in ("import gymnasium, simloop; gymnasium.make('simloop/PushT-v0')",
-                 "import simloop.gym, gymnasium; gymnasium.make('simloop/PushT-v0')"):
+    for code in (
+        "import gymnasium, simloop; gymnasium.make('simloop/PushT-v0')",
+        "import simloop.gym, gymnasium; gymnasium.make('simloop/PushT-v0')",
+    ):
         subprocess.run([sys.executable, "-c", code], check=True)
 
 
@@ -113,8 +117,15 @@ def test_an_episode_follows_the_bits_of_a_policy_run_with_the_same_actions():
     assert info["step"] == 333  # the last step took 13 physics steps, not 20
     names = env.observation_names
     for i, name in enumerate(names):
-        if not (name.endswith("_ctrl") or name.endswith("_fx") or name.endswith("_fy") or name.endswith("_fz")
-                or name.endswith("_tx") or name.endswith("_ty") or name.endswith("_tz")):
+        if not (
+            name.endswith("_ctrl")
+            or name.endswith("_fx")
+            or name.endswith("_fy")
+            or name.endswith("_fz")
+            or name.endswith("_tx")
+            or name.endswith("_ty")
+            or name.endswith("_tz")
+        ):
             assert same_bits(obs[i], result.trajectory[-1, i + 2]), name
     with pytest.raises(ValueError, match="has ended"):
         env.step(np.zeros(2))
@@ -163,7 +174,8 @@ def test_bad_actions_are_refused():
 def single_envs_with_next_step_autoreset(n, seed, actions, **kwargs):
     """What Gymnasium's next-step autoreset does, with n ScenarioEnvs."""
     envs = [ScenarioEnv(PUSHT_SCENARIO, **kwargs) for _ in range(n)]
-    obs = [env.reset(seed=seed + i)[0] for i, env in enumerate(envs)]
+    for i, env in enumerate(envs):
+        env.reset(seed=seed + i)
     ended = [False] * n
     out = []
     for batch in actions:
@@ -216,7 +228,7 @@ def test_the_docs_random_policy_runs():
     readme = (Path(__file__).resolve().parents[2] / "docs" / "training.md").read_text(encoding="utf-8")
     after = readme.split("A random policy:\n\n```python\n", 1)[1]
     code = after.split("```", 1)[0]
-    assert "gymnasium.make(\"simloop/" in code and "env.step(env.action_space.sample())" in code
+    assert 'gymnasium.make("simloop/' in code and "env.step(env.action_space.sample())" in code
     namespace = {}
     exec(compile(code, "docs/training.md", "exec"), namespace)
     assert namespace["total"] == 0.0  # no reward function: 0.0 every step

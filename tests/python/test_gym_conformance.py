@@ -170,11 +170,14 @@ def test_info_says_step_time_seed_and_why_an_episode_ended():
     assert terminated and info["ended_by"] == "warning" and info["warnings"]
 
 
-@pytest.mark.parametrize("options, error, message", [
-    ({"qpos_jitter": 1}, ValueError, "options: unknown key 'qpos_jitter'"),
-    ({"b": 1, "a": 2}, ValueError, "options: unknown keys 'a', 'b'"),
-    ([("reset_mask", 1)], TypeError, "options must be a dict or None"),
-])
+@pytest.mark.parametrize(
+    "options, error, message",
+    [
+        ({"qpos_jitter": 1}, ValueError, "options: unknown key 'qpos_jitter'"),
+        ({"b": 1, "a": 2}, ValueError, "options: unknown keys 'a', 'b'"),
+        ([("reset_mask", 1)], TypeError, "options must be a dict or None"),
+    ],
+)
 def test_reset_options_are_never_silently_ignored(options, error, message):
     for env in (ScenarioEnv(PUSHT_SCENARIO), ScenarioVectorEnv(PUSHT_SCENARIO, 2)):
         with pytest.raises(error, match=message.replace("(", r"\(")):
@@ -182,12 +185,15 @@ def test_reset_options_are_never_silently_ignored(options, error, message):
         env.reset(seed=0)  # still usable
 
 
-@pytest.mark.parametrize("mask, message", [
-    (np.array([True]), r"shape \(2,\)"),
-    (np.array([1, 0]), "bool array"),
-    ([True, False], "bool array"),
-    (np.array([False, False]), "resets no env"),
-])
+@pytest.mark.parametrize(
+    "mask, message",
+    [
+        (np.array([True]), r"shape \(2,\)"),
+        (np.array([1, 0]), "bool array"),
+        ([True, False], "bool array"),
+        (np.array([False, False]), "resets no env"),
+    ],
+)
 def test_a_bad_reset_mask_is_named_and_the_env_stays_usable(mask, message):
     venv = ScenarioVectorEnv(PUSHT_SCENARIO, 2)
     with pytest.raises(ValueError, match="the first reset must reset every env"):
@@ -205,30 +211,47 @@ def test_a_bad_reset_mask_is_named_and_the_env_stays_usable(mask, message):
 def _single_wrappers():
     w = gymnasium.wrappers
     return [
-        (w.ClipAction, {}), (w.RescaleAction, dict(min_action=-0.5, max_action=0.5)),
+        (w.ClipAction, {}),
+        (w.RescaleAction, dict(min_action=-0.5, max_action=0.5)),
         (w.TransformAction, dict(func=lambda a: 0.5 * a, action_space=None)),
-        (w.StickyAction, dict(repeat_action_probability=0.25)), (w.RepeatAction, dict(num_repeats=2)),
+        (w.StickyAction, dict(repeat_action_probability=0.25)),
+        (w.RepeatAction, dict(num_repeats=2)),
         (w.DiscretizeAction, dict(bins=5)),
-        (w.ClipReward, dict(min_reward=-1.0, max_reward=1.0)), (w.TransformReward, dict(func=lambda r: 2 * r)),
-        (w.NormalizeReward, {}), (w.NormalizeObservation, {}), (w.DtypeObservation, dict(dtype=np.float32)),
-        (w.FlattenObservation, {}), (w.FrameStackObservation, dict(stack_size=3)),
-        (w.DelayObservation, dict(delay=2)), (w.MaxAndSkipObservation, dict(skip=2)),
-        (w.TimeAwareObservation, {}), (w.ReshapeObservation, dict(shape="column")),
+        (w.ClipReward, dict(min_reward=-1.0, max_reward=1.0)),
+        (w.TransformReward, dict(func=lambda r: 2 * r)),
+        (w.NormalizeReward, {}),
+        (w.NormalizeObservation, {}),
+        (w.DtypeObservation, dict(dtype=np.float32)),
+        (w.FlattenObservation, {}),
+        (w.FrameStackObservation, dict(stack_size=3)),
+        (w.DelayObservation, dict(delay=2)),
+        (w.MaxAndSkipObservation, dict(skip=2)),
+        (w.TimeAwareObservation, {}),
+        (w.ReshapeObservation, dict(shape="column")),
         (w.TransformObservation, dict(func=lambda o: o * 2.0, observation_space=None)),
-        (w.TimeLimit, dict(max_episode_steps=2)), (w.RecordEpisodeStatistics, {}), (w.Autoreset, {}),
-        (w.PassiveEnvChecker, {}), (w.OrderEnforcing, {}),
+        (w.TimeLimit, dict(max_episode_steps=2)),
+        (w.RecordEpisodeStatistics, {}),
+        (w.Autoreset, {}),
+        (w.PassiveEnvChecker, {}),
+        (w.OrderEnforcing, {}),
     ]
 
 
 def _vector_wrappers():
     v = gymnasium.wrappers.vector
     return [
-        (v.ClipAction, {}), (v.RescaleAction, dict(min_action=-0.5, max_action=0.5)),
+        (v.ClipAction, {}),
+        (v.RescaleAction, dict(min_action=-0.5, max_action=0.5)),
         (v.TransformAction, dict(func=lambda a: 0.5 * a)),
-        (v.ClipReward, dict(min_reward=-1.0, max_reward=1.0)), (v.TransformReward, dict(func=lambda r: 2 * r)),
-        (v.NormalizeReward, {}), (v.NormalizeObservation, {}), (v.DtypeObservation, dict(dtype=np.float32)),
-        (v.FlattenObservation, {}), (v.ReshapeObservation, dict(shape="column")),
-        (v.TransformObservation, dict(func=lambda o: o * 2.0)), (v.RecordEpisodeStatistics, {}),
+        (v.ClipReward, dict(min_reward=-1.0, max_reward=1.0)),
+        (v.TransformReward, dict(func=lambda r: 2 * r)),
+        (v.NormalizeReward, {}),
+        (v.NormalizeObservation, {}),
+        (v.DtypeObservation, dict(dtype=np.float32)),
+        (v.FlattenObservation, {}),
+        (v.ReshapeObservation, dict(shape="column")),
+        (v.TransformObservation, dict(func=lambda o: o * 2.0)),
+        (v.RecordEpisodeStatistics, {}),
         (v.DictInfoToList, {}),
     ]
 

@@ -12,9 +12,15 @@ from simloop.gym import PUSHT_SCENARIO, ScenarioEnv, ScenarioVectorEnv  # noqa: 
 
 # PushT: the T-block's free joint (7 qpos, 6 qvel), then the pusher's two slides.
 QPOS = [0.3, 0.1, 0.02, 1.0, 0.0, 0.0, 0.0, -0.05, 0.0]
-SHAPED = {"qpos_noise": 0.01, "qvel_noise": 0.05,
-          "params": [{"kind": "mass", "name": "tblock", "uniform": [0.1, 0.6]},
-                     {"kind": "friction", "value": 0.4}, {"kind": "gravity", "uniform": [8.0, 11.0]}]}
+SHAPED = {
+    "qpos_noise": 0.01,
+    "qvel_noise": 0.05,
+    "params": [
+        {"kind": "mass", "name": "tblock", "uniform": [0.1, 0.6]},
+        {"kind": "friction", "value": 0.4},
+        {"kind": "gravity", "uniform": [8.0, 11.0]},
+    ],
+}
 
 
 def column(env, obs, name):
@@ -45,8 +51,9 @@ def test_noise_and_params_come_from_the_episodes_seed():
 def test_an_episode_a_run_and_a_batch_start_alike():
     """options == the scenario's [reset]: the episode's steps are the run's,
     with the same actions as the run's controls."""
-    shaped = simloop.Scenario(scene="tests/scenes/pusht.xml", steps=40, controls={"push_x": 0.8, "push_y": 0.2},
-                              reset=SHAPED)
+    shaped = simloop.Scenario(
+        scene="tests/scenes/pusht.xml", steps=40, controls={"push_x": 0.8, "push_y": 0.2}, reset=SHAPED
+    )
     plain = simloop.Scenario(scene="tests/scenes/pusht.xml", steps=40, controls={"push_x": 0.8, "push_y": 0.2})
     run = simloop.run_scenario(shaped, seed=9)
     env = ScenarioEnv(plain, control_every=10)
@@ -79,16 +86,22 @@ def test_the_vector_env_shapes_each_env_as_a_single_one(threads):
     assert column(venv, masked[1], "tblock_x") == 0.3 and np.array_equal(masked[0], after[0])
 
 
-@pytest.mark.parametrize("options, error, message", [
-    ({"qpos": [1, 2]}, ValueError, "reset.qpos must hold the scene's nq = 9 values, got 2"),
-    ({"qpos_noise": -1.0}, ValueError, "reset.qpos_noise: must not be negative"),
-    ({"qvel": [np.nan] * 8}, ValueError, "qvel must be finite"),
-    ({"params": [{"kind": "mass", "name": "tblok", "value": 1.0}]}, ValueError,
-     "reset.param[0]: mass of 'tblok' = 1.0: no body named 'tblok' (did you mean 'tblock'?)"),
-    ({"params": [{"kind": "stiffness", "value": 1.0}]}, ValueError, "scene parameter kind must be one of"),
-    ({"params": [{"kind": "friction", "uniform": [2.0, 1.0]}]}, ValueError, "low <= high"),
-    ({"params": 3}, TypeError, "reset params must be a list of dicts"),
-])
+@pytest.mark.parametrize(
+    "options, error, message",
+    [
+        ({"qpos": [1, 2]}, ValueError, "reset.qpos must hold the scene's nq = 9 values, got 2"),
+        ({"qpos_noise": -1.0}, ValueError, "reset.qpos_noise: must not be negative"),
+        ({"qvel": [np.nan] * 8}, ValueError, "qvel must be finite"),
+        (
+            {"params": [{"kind": "mass", "name": "tblok", "value": 1.0}]},
+            ValueError,
+            "reset.param[0]: mass of 'tblok' = 1.0: no body named 'tblok' (did you mean 'tblock'?)",
+        ),
+        ({"params": [{"kind": "stiffness", "value": 1.0}]}, ValueError, "scene parameter kind must be one of"),
+        ({"params": [{"kind": "friction", "uniform": [2.0, 1.0]}]}, ValueError, "low <= high"),
+        ({"params": 3}, TypeError, "reset params must be a list of dicts"),
+    ],
+)
 def test_bad_options_are_named_and_the_env_stays_usable(options, error, message):
     env = ScenarioEnv(PUSHT_SCENARIO)
     before, _ = env.reset(seed=0)

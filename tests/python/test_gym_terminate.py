@@ -39,10 +39,14 @@ def test_a_condition_on_an_observed_column_ends_the_episode():
 def test_batched_reward_and_terminate_give_the_per_env_bits(threads):
     index = ScenarioEnv(PUSHT_SCENARIO).observation_names.index("tblock_x")
     # (the same arithmetic per env and per batch: a @ a and einsum may round differently, numpy version by version)
-    per_env = dict(reward=lambda o, a, p: float(p[index] - o[index]) - 0.01 * float(a[0] * a[0] + a[1] * a[1]),
-                   terminate=lambda p: p[index] > 0.22)
-    batch = dict(reward=batched(lambda o, a, p: p[:, index] - o[:, index] - 0.01 * (a[:, 0] * a[:, 0] + a[:, 1] * a[:, 1])),
-                 terminate=batched(lambda p: p[:, index] > 0.22))
+    per_env = dict(
+        reward=lambda o, a, p: float(p[index] - o[index]) - 0.01 * float(a[0] * a[0] + a[1] * a[1]),
+        terminate=lambda p: p[index] > 0.22,
+    )
+    batch = dict(
+        reward=batched(lambda o, a, p: p[:, index] - o[:, index] - 0.01 * (a[:, 0] * a[:, 0] + a[:, 1] * a[:, 1])),
+        terminate=batched(lambda p: p[:, index] > 0.22),
+    )
     envs = [ScenarioVectorEnv(PUSHT_SCENARIO, 4, control_every=10, threads=threads, **kw) for kw in (per_env, batch)]
     actions = np.random.default_rng(2).uniform([0.6, -0.2], [1.0, 0.2], size=(60, 4, 2))  # mostly along x
     for env in envs:
@@ -58,12 +62,15 @@ def test_batched_reward_and_terminate_give_the_per_env_bits(threads):
     assert ended >= 4  # every env reached the line, and was reset the step after
 
 
-@pytest.mark.parametrize("terminate, error, message", [
-    ([("tblok_x", ">", 0.3)], ValueError, "terminate: no observed column named 'tblok_x'; columns: "),
-    ([("tblock_x", "=>", 0.3)], TypeError, "each terminate condition must be (column, op, value)"),
-    ([("tblock_x", ">", float("nan"))], ValueError, "the value must be finite"),
-    ("tblock_x > 0.3", TypeError, "terminate must be a callable or a list of (column, op, value) conditions"),
-])
+@pytest.mark.parametrize(
+    "terminate, error, message",
+    [
+        ([("tblok_x", ">", 0.3)], ValueError, "terminate: no observed column named 'tblok_x'; columns: "),
+        ([("tblock_x", "=>", 0.3)], TypeError, "each terminate condition must be (column, op, value)"),
+        ([("tblock_x", ">", float("nan"))], ValueError, "the value must be finite"),
+        ("tblock_x > 0.3", TypeError, "terminate must be a callable or a list of (column, op, value) conditions"),
+    ],
+)
 def test_bad_terminate_hooks_are_named(terminate, error, message):
     with pytest.raises(error) as caught:
         ScenarioEnv(PUSHT_SCENARIO, terminate=terminate)
@@ -92,14 +99,20 @@ def test_a_hook_that_raises_leaves_the_env_usable():
     assert wrong.reset(seed=0)[0].shape == (2, len(wrong.observation_names))
 
 
-@pytest.mark.parametrize("hooks, message", [
-    ({"reward": lambda o, a, p: None}, r"reward must return a number, got None \(NoneType\)"),
-    ({"reward": lambda o, a, p: np.zeros(2)}, r"reward must return a number, got array\(\[0\., 0\.\]\) \(ndarray\)"),
-    ({"terminate": lambda p: p}, r"terminate must return a bool, got array\(.*\(ndarray\)"),
-    ({"terminate": lambda p: None}, r"terminate must return a bool, got None \(NoneType\)"),
-    ({"terminate": batched(lambda p: p[:, 0])}, r"a batched terminate must return bools, got dtype float64"),
-    ({"terminate": batched(lambda p: [None] * len(p))}, r"a batched terminate must return bools, got dtype object"),
-])
+@pytest.mark.parametrize(
+    "hooks, message",
+    [
+        ({"reward": lambda o, a, p: None}, r"reward must return a number, got None \(NoneType\)"),
+        (
+            {"reward": lambda o, a, p: np.zeros(2)},
+            r"reward must return a number, got array\(\[0\., 0\.\]\) \(ndarray\)",
+        ),
+        ({"terminate": lambda p: p}, r"terminate must return a bool, got array\(.*\(ndarray\)"),
+        ({"terminate": lambda p: None}, r"terminate must return a bool, got None \(NoneType\)"),
+        ({"terminate": batched(lambda p: p[:, 0])}, r"a batched terminate must return bools, got dtype float64"),
+        ({"terminate": batched(lambda p: [None] * len(p))}, r"a batched terminate must return bools, got dtype object"),
+    ],
+)
 @pytest.mark.parametrize("vector", [False, True])
 def test_a_hook_that_returns_the_wrong_kind_of_value_is_named(hooks, message, vector):
     env = ScenarioVectorEnv(PUSHT_SCENARIO, 2, **hooks) if vector else ScenarioEnv(PUSHT_SCENARIO, **hooks)

@@ -10,7 +10,6 @@ import sys
 import time
 
 import pytest
-
 from conftest import run_command, run_python, sim_loop_exe
 
 # A table header of 50,000 dotted keys: toml++ recursed once per key and overflowed the stack (exit 139).
@@ -62,11 +61,14 @@ def test_keys_up_to_the_limit_still_parse_to_the_scenarios_own_error(tmp_path):
 def test_a_scenario_file_is_read_from_a_file_of_at_most_64_mib(tmp_path, python):
     # /dev/zero grew ~0.5 GB/s until killed; a FIFO without a writer blocked the open.
     os.mkfifo(tmp_path / "fifo.toml")
-    for path, says in [("/dev/zero", "/dev/zero: is a device, a pipe or a socket, not a scenario file"),
-                       ("fifo.toml", "fifo.toml: is a device, a pipe or a socket, not a scenario file")]:
+    for path, says in [
+        ("/dev/zero", "/dev/zero: is a device, a pipe or a socket, not a scenario file"),
+        ("fifo.toml", "fifo.toml: is a device, a pipe or a socket, not a scenario file"),
+    ]:
         done = run_command(["--scenario", path, "--out", "out"], tmp_path, python=python)
-        assert done.returncode == 2 and one_error_line(done.stderr).endswith(says + " (simloop reads its inputs "
-                                                                                    "from files)"), done.stderr
+        assert done.returncode == 2 and one_error_line(done.stderr).endswith(
+            says + " (simloop reads its inputs from files)"
+        ), done.stderr
     with open(tmp_path / "huge.toml", "wb") as f:
         f.truncate((64 << 20) + 1)  # sparse: no disk, one byte past the limit
     done = run_command(["--scenario", "huge.toml", "--out", "out"], tmp_path, python=python)
@@ -75,11 +77,14 @@ def test_a_scenario_file_is_read_from_a_file_of_at_most_64_mib(tmp_path, python)
     assert not (tmp_path / "out").exists()
 
 
-@pytest.mark.parametrize("csv, says", [
-    ("/dev/zero", "control[0].csv: /dev/zero: is a device, a pipe or a socket, not a CSV file"),
-    ("fifo.csv", "fifo.csv: is a device, a pipe or a socket, not a CSV file"),
-    ("long.csv", "control[0].csv: long.csv:1: a line longer than 1 MiB"),
-])
+@pytest.mark.parametrize(
+    "csv, says",
+    [
+        ("/dev/zero", "control[0].csv: /dev/zero: is a device, a pipe or a socket, not a CSV file"),
+        ("fifo.csv", "fifo.csv: is a device, a pipe or a socket, not a CSV file"),
+        ("long.csv", "control[0].csv: long.csv:1: a line longer than 1 MiB"),
+    ],
+)
 def test_a_csv_schedule_is_a_file_read_a_bounded_line_at_a_time(tmp_path, csv, says):
     os.mkfifo(tmp_path / "fifo.csv")
     (tmp_path / "long.csv").write_text("u" * (2 << 20) + "\n0.5\n")
@@ -148,8 +153,7 @@ def test_plot_never_writes_through_a_link_planted_at_a_temporary_name(tmp_path):
     assert victim.read_text() == "the user's file"
     assert not (out / "trajectory.png").is_symlink()
     assert (out / "trajectory.png").read_bytes().startswith(b"\x89PNG")
-    assert sorted(p.name for p in out.iterdir() if p.name.endswith(".tmp")) == [".sweep.png.tmp",
-                                                                                  ".trajectory.png.tmp"]
+    assert sorted(p.name for p in out.iterdir() if p.name.endswith(".tmp")) == [".sweep.png.tmp", ".trajectory.png.tmp"]
 
 
 @pytest.mark.parametrize("python", [False, True], ids=["sim_loop", "python"])
@@ -158,12 +162,19 @@ def test_a_scene_too_large_to_compile_fails_at_once_within_the_memory_budget(tmp
     # machine's memory) before failing; its budget (half the limit) refuses the allocation at once.
     (tmp_path / "big.xml").write_text(
         '<mujoco><asset><hfield name="h" nrow="40000" ncol="40000" size="1 1 1 1"/></asset>'
-        '<worldbody><geom type="hfield" hfield="h"/></worldbody></mujoco>\n')
+        '<worldbody><geom type="hfield" hfield="h"/></worldbody></mujoco>\n'
+    )
     cmd = [sys.executable, "-m", "simloop"] if python else [str(sim_loop_exe())]
     started = time.monotonic()
-    done = subprocess.run([*cmd, "--model", "big.xml", "--out", "out"], cwd=tmp_path, capture_output=True,
-                          text=True, stdin=subprocess.DEVNULL, timeout=120,
-                          preexec_fn=lambda: resource.setrlimit(resource.RLIMIT_AS, (8 << 30, 8 << 30)))
+    done = subprocess.run(
+        [*cmd, "--model", "big.xml", "--out", "out"],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        stdin=subprocess.DEVNULL,
+        timeout=120,
+        preexec_fn=lambda: resource.setrlimit(resource.RLIMIT_AS, (8 << 30, 8 << 30)),
+    )
     assert time.monotonic() - started < 20
     assert done.returncode in (1, 2), done.stderr[-2000:]
     assert "big.xml" in one_error_line(done.stderr) and "memory" in done.stderr.lower(), done.stderr
@@ -176,8 +187,11 @@ def test_more_envs_than_memory_holds_are_refused_before_any_is_made():
     import simloop.gym
 
     started = time.monotonic()
-    with pytest.raises(ValueError, match=r"^1048576 episodes need 1048576 x \d+ KiB of MuJoCo data, more than the \d+ "
-                                         r"MiB allowed \(half of the machine's memory or the process's limit\)"):
+    with pytest.raises(
+        ValueError,
+        match=r"^1048576 episodes need 1048576 x \d+ KiB of MuJoCo data, more than the \d+ "
+        r"MiB allowed \(half of the machine's memory or the process's limit\)",
+    ):
         simloop.gym.ScenarioVectorEnv(simloop.Scenario.chapter(), num_envs=1 << 20)  # was killed by the kernel
     assert time.monotonic() - started < 10
 
@@ -222,10 +236,19 @@ def test_a_write_is_never_through_a_link_even_one_planted_after_the_look(tmp_pat
 UNDER_A_GIGABYTE = [  # (file to write or None, its text, the command's arguments, words of its one line)
     ("dd.toml", DEEP_HEADER, ["--scenario", "dd.toml"], "more than 64 dotted parts"),
     (None, "", ["--scenario", "/dev/zero"], "is a device, a pipe or a socket"),
-    ("z.toml", 'steps = 10\n[[control]]\nactuator = "push_motor"\ncsv = "/dev/zero"\n', ["--scenario", "z.toml"],
-     "is a device, a pipe or a socket"),
-    ("big.xml", '<mujoco><asset><hfield name="h" nrow="40000" ncol="40000" size="1 1 1 1"/></asset>'
-                '<worldbody><geom type="hfield" hfield="h"/></worldbody></mujoco>\n', ["--model", "big.xml"], "memory"),
+    (
+        "z.toml",
+        'steps = 10\n[[control]]\nactuator = "push_motor"\ncsv = "/dev/zero"\n',
+        ["--scenario", "z.toml"],
+        "is a device, a pipe or a socket",
+    ),
+    (
+        "big.xml",
+        '<mujoco><asset><hfield name="h" nrow="40000" ncol="40000" size="1 1 1 1"/></asset>'
+        '<worldbody><geom type="hfield" hfield="h"/></worldbody></mujoco>\n',
+        ["--model", "big.xml"],
+        "memory",
+    ),
 ]
 
 
@@ -236,9 +259,15 @@ def test_under_ulimit_v_one_gigabyte_each_input_ends_in_one_line(tmp_path, pytho
         (tmp_path / name).write_text(text)
     cmd = [sys.executable, "-m", "simloop"] if python else [str(sim_loop_exe())]
     started = time.monotonic()
-    done = subprocess.run([*cmd, *args, "--out", "out"], cwd=tmp_path, capture_output=True, text=True,
-                          stdin=subprocess.DEVNULL, timeout=120,
-                          preexec_fn=lambda: resource.setrlimit(resource.RLIMIT_AS, (10**9, 10**9)))
+    done = subprocess.run(
+        [*cmd, *args, "--out", "out"],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        stdin=subprocess.DEVNULL,
+        timeout=120,
+        preexec_fn=lambda: resource.setrlimit(resource.RLIMIT_AS, (10**9, 10**9)),
+    )
     assert time.monotonic() - started < 60
     assert done.returncode in (1, 2), done.stderr[-2000:]
     assert words in one_error_line(done.stderr).lower(), done.stderr

@@ -9,7 +9,6 @@ import time
 from pathlib import Path
 
 import pytest
-
 import simloop
 
 # Each would run for minutes (or, the sweep, seconds) if not stopped, in
@@ -21,7 +20,7 @@ LONG_CALLS = {
     "sweep": "simloop.sweep(timesteps=[0.02, 0.04], duration=10000.0, threads=2)",
     "run_scenario": "simloop.run_scenario(simloop.Scenario.chapter(), steps=10**8, record_every=10**6)",
     "run_scenario_batch": "simloop.run_scenario_batch(simloop.Scenario.chapter(), seeds=range(4), steps=10**8, "
-                          "record_every=10**6, threads=2)",
+    "record_every=10**6, threads=2)",
 }
 
 # The child: signals it is about to call, calls, and reports when the
@@ -52,8 +51,9 @@ def interrupt(code: str):
     """Runs CODE, which prints "calling" before its long call; sends SIGINT
     0.5 s later. Returns the words of the line the child printed next, the
     seconds from the signal to that KeyboardInterrupt and to the exit."""
-    with subprocess.Popen([sys.executable, "-c", textwrap.dedent(code)], stdout=subprocess.PIPE,
-                          stderr=subprocess.PIPE, text=True) as child:
+    with subprocess.Popen(
+        [sys.executable, "-c", textwrap.dedent(code)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    ) as child:
         try:
             assert child.stdout.readline() == "calling\n"
             time.sleep(0.5)
@@ -107,13 +107,18 @@ class Stop(Exception):
     pass
 
 
-@pytest.mark.parametrize("call", [
-    lambda progress: simloop.run(steps=10**8, record_every=10**6, progress=progress),
-    lambda progress: simloop.run_batch(seeds=[0, 1], steps=10**8, record_every=10**6, threads=2, progress=progress),
-    lambda progress: simloop.Sim().step(10**8, progress=progress),
-    lambda progress: simloop.run_scenario_batch(simloop.Scenario.chapter(), seeds=[0, 1], steps=10**8,
-                                                record_every=10**6, threads=2, progress=progress),
-], ids=["run", "run_batch", "Sim.step", "run_scenario_batch"])
+@pytest.mark.parametrize(
+    "call",
+    [
+        lambda progress: simloop.run(steps=10**8, record_every=10**6, progress=progress),
+        lambda progress: simloop.run_batch(seeds=[0, 1], steps=10**8, record_every=10**6, threads=2, progress=progress),
+        lambda progress: simloop.Sim().step(10**8, progress=progress),
+        lambda progress: simloop.run_scenario_batch(
+            simloop.Scenario.chapter(), seeds=[0, 1], steps=10**8, record_every=10**6, threads=2, progress=progress
+        ),
+    ],
+    ids=["run", "run_batch", "Sim.step", "run_scenario_batch"],
+)
 def test_an_exception_from_progress_stops_the_work_and_reaches_the_caller(call):
     def progress(done, total):
         if done > 0:
@@ -153,15 +158,15 @@ def test_ctrl_c_reaches_a_thread_waiting_for_a_sim_another_thread_steps():
 # Ctrl-C still acts within the budget, whatever the thread count.
 POLICY_CALLS = {
     "run_scenario policy": "simloop.run_scenario(simloop.Scenario.chapter(), steps=10**8, record_every=10**6, "
-                           "policy=lambda obs: [1.0], control_every=10)",
+    "policy=lambda obs: [1.0], control_every=10)",
     "policy batch, 1 thread": "simloop.run_scenario_batch(simloop.Scenario.chapter(), seeds=range(2), steps=10**8, "
-                              "record_every=10**6, threads=1, policy=lambda obs: [1.0], control_every=10)",
+    "record_every=10**6, threads=1, policy=lambda obs: [1.0], control_every=10)",
     "policy batch, 2 threads": "simloop.run_scenario_batch(simloop.Scenario.chapter(), seeds=range(2), "
-                               "steps=10**8, record_every=10**6, threads=2, policy=lambda obs: [1.0], "
-                               "control_every=10)",
+    "steps=10**8, record_every=10**6, threads=2, policy=lambda obs: [1.0], "
+    "control_every=10)",
     "vector env, 2 threads": "env = simloop.gym.ScenarioVectorEnv(simloop.Scenario.chapter(), num_envs=4, "
-                             "threads=2, control_every=10**7, steps=10**8); env.reset(seed=0); "
-                             "env.step(__import__('numpy').ones((4, 1)))",
+    "threads=2, control_every=10**7, steps=10**8); env.reset(seed=0); "
+    "env.step(__import__('numpy').ones((4, 1)))",
 }
 DAEMON = """
 import threading
@@ -180,10 +185,13 @@ def test_ctrl_c_stops_policy_batches_and_vector_envs_promptly(name, daemon):
     if name.startswith("vector env"):
         call = "import simloop.gym; " + call
     code = CHILD.replace("import simloop\n", "import simloop\n" + (DAEMON if daemon else ""), 1)
-    words, latency, exit_after = interrupt(code.format(call=call).replace("sys.exit(0)", "os._exit(0)")
-                                           .replace("import sys, time", "import os, sys, time"))
-    print(f"{name} ({'with' if daemon else 'without'} a daemon thread): KeyboardInterrupt {latency * 1e3:.1f} ms "
-          f"after SIGINT")
+    words, latency, exit_after = interrupt(
+        code.format(call=call).replace("sys.exit(0)", "os._exit(0)").replace("import sys, time", "import os, sys, time")
+    )
+    print(
+        f"{name} ({'with' if daemon else 'without'} a daemon thread): KeyboardInterrupt {latency * 1e3:.1f} ms "
+        f"after SIGINT"
+    )
     assert latency < RAISE_BUDGET_S
     assert exit_after < EXIT_BUDGET_S
 
@@ -192,10 +200,26 @@ def test_ctrl_c_stops_policy_batches_and_vector_envs_promptly(name, daemon):
 def test_ctrl_c_while_the_command_loads_its_modules_is_one_line_not_a_traceback(tmp_path, delay):
     # 7 of 20 Ctrl-Cs in the first ~0.2 s printed a KeyboardInterrupt traceback. Sent once the package is
     # importing (its extension module mapped), and a little later, while the command's modules load.
-    child = subprocess.Popen([sys.executable, "-m", "simloop", "--steps", "100000000", "--record-every",
-                              "1000000", "--no-rerun", "--out", "out"], cwd=tmp_path, stdin=subprocess.DEVNULL,
-                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                             preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL) and None)
+    child = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "simloop",
+            "--steps",
+            "100000000",
+            "--record-every",
+            "1000000",
+            "--no-rerun",
+            "--out",
+            "out",
+        ],
+        cwd=tmp_path,
+        stdin=subprocess.DEVNULL,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL) and None,
+    )
     deadline = time.monotonic() + 60
     while "simloop/_core" not in Path(f"/proc/{child.pid}/maps").read_text():
         assert child.poll() is None and time.monotonic() < deadline

@@ -9,7 +9,6 @@ import time
 
 import numpy as np
 import pytest
-
 import simloop
 from conftest import ROOT, sim_loop_exe
 
@@ -57,11 +56,14 @@ def test_an_unknown_observation_name_lists_the_names():
         assert "(policy at decision step 0)" in error.value.__notes__
 
 
-@pytest.mark.parametrize("call", [
-    lambda: simloop.run_scenario(SCENES / "pusht.toml", steps=20, control_every=5),
-    lambda: simloop.run_scenario_batch(SCENES / "pusht.toml", seeds=[0], steps=20, control_every=5),
-    lambda: simloop.run(steps=20, control_every=5),
-])
+@pytest.mark.parametrize(
+    "call",
+    [
+        lambda: simloop.run_scenario(SCENES / "pusht.toml", steps=20, control_every=5),
+        lambda: simloop.run_scenario_batch(SCENES / "pusht.toml", seeds=[0], steps=20, control_every=5),
+        lambda: simloop.run(steps=20, control_every=5),
+    ],
+)
 def test_control_every_without_a_policy_is_refused(call):
     with pytest.raises(ValueError, match=r"control_every=5 needs a policy"):
         call()
@@ -84,8 +86,9 @@ def test_an_interrupted_command_removes_the_folder_it_made(tmp_path, python):
     assert not out.exists() and (tmp_path / "new").exists()  # the folder it made; not its parents
     existing = tmp_path / "kept"
     existing.mkdir()
-    with subprocess.Popen([*cmd[:-1], str(existing)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                          text=True) as child:
+    with subprocess.Popen(
+        [*cmd[:-1], str(existing)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    ) as child:
         time.sleep(1.0)
         child.send_signal(signal.SIGINT)
         child.communicate(timeout=20)

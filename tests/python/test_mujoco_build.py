@@ -12,13 +12,12 @@ import importlib.util
 import re
 import subprocess
 import sys
-import tomllib
 from pathlib import Path
 
 import numpy as np
 import pytest
-
 import simloop
+import tomllib
 from simloop import _build
 from simloop._mujoco_check import load_failure_message
 
@@ -31,8 +30,9 @@ pypi_only = pytest.mark.skipif(not PYPI, reason=f"simloop is built on the system
 def test_the_mujoco_pin_is_one_version():
     project = tomllib.loads((ROOT / "pyproject.toml").read_text())
     (extra,) = project["project"]["optional-dependencies"]["mujoco"]
-    (override,) = [o for o in project["tool"]["scikit-build"]["overrides"]
-                   if "simloop.mujoco" in o["if"].get("config-setting", {})]
+    (override,) = [
+        o for o in project["tool"]["scikit-build"]["overrides"] if "simloop.mujoco" in o["if"].get("config-setting", {})
+    ]
     assert override["build"]["requires"] == [extra], "pyproject.toml pins two mujoco versions"
     if PYPI:
         assert extra == f"mujoco=={_build.MUJOCO_LIBRARY_VERSION}"
@@ -165,7 +165,9 @@ import mujoco
 if sys.argv[1] == "with-simloop":
     import simloop
     simloop.Sim().step(10)
-model = mujoco.MjModel.from_xml_string("<mujoco><worldbody><body><freejoint/><geom size='0.1'/></body></worldbody></mujoco>")
+model = mujoco.MjModel.from_xml_string(
+    "<mujoco><worldbody><body><freejoint/><geom size='0.1'/></body></worldbody></mujoco>"
+)
 data = mujoco.MjData(model)
 data.qpos[0] = float("nan")
 mujoco.mj_step(model, data)
@@ -182,13 +184,17 @@ def test_a_users_own_mujoco_warning_reaches_the_handler_that_was_there_before_si
     for mode in ("without-simloop", "with-simloop"):
         folder = tmp_path / mode
         folder.mkdir()
-        proc = subprocess.run([sys.executable, "-c", USERS_OWN_WARNING, mode], cwd=folder, capture_output=True,
-                              text=True, timeout=120)
+        proc = subprocess.run(
+            [sys.executable, "-c", USERS_OWN_WARNING, mode], cwd=folder, capture_output=True, text=True, timeout=120
+        )
         assert proc.returncode == 0, proc.stderr
         log = folder / "MUJOCO_LOG.TXT"
         # The log but its timestamps (asctime's or strftime's "Fri Nov 27 15:31:07 2026").
-        seen[mode] = [proc.stdout, proc.stderr, re.sub(r"\w{3} \w{3} [ \d]\d \d\d:\d\d:\d\d \d{4}", "<time>",
-                                                       log.read_text() if log.exists() else "")]
+        seen[mode] = [
+            proc.stdout,
+            proc.stderr,
+            re.sub(r"\w{3} \w{3} [ \d]\d \d\d:\d\d:\d\d \d{4}", "<time>", log.read_text() if log.exists() else ""),
+        ]
     printed, logged = seen["without-simloop"][0] + seen["without-simloop"][1], seen["without-simloop"][2]
     assert "WARNING: Nan, Inf or huge value in QPOS at DOF 0" in printed, seen
     assert "Nan, Inf or huge value in QPOS at DOF 0" in logged, seen

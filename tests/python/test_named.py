@@ -8,7 +8,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 import simloop
 
 
@@ -19,7 +18,7 @@ def test_rows_are_named_by_the_objects_they_are():
     assert named.model.geom_friction["floor"].tolist() == [1.0, 0.005, 0.0001]
     assert named.model.actuator_gear["push_motor"][0] == 10.0
     assert named.data.qpos["pusher_slide"].tolist() == [0.0]  # a joint's slice of qpos...
-    assert named.data.qvel["pusher_slide"].shape == (1,)      # ...and of qvel
+    assert named.data.qvel["pusher_slide"].shape == (1,)  # ...and of qvel
     assert named.data.xpos[["box", "pusher"]].shape == (2, 3)
     assert named.data.xpos["box", 2] == 0.05
     assert named.model.body_mass.names == ("world", "box", "pusher")
@@ -72,8 +71,11 @@ def test_what_cannot_be_written_or_found_says_so():
         sim.named.model.body_mass["box"] = float("nan")
     with pytest.raises(KeyError, match=r"no row named 'boxx' \(did you mean 'box'\?\); its rows: world, box, pusher"):
         sim.named.data.xpos["boxx"]
-    with pytest.raises(AttributeError, match=r"^mjModel has no array named 'geom_fricton' \(did you mean "
-                                             r"'geom_friction'\?\)$"):
+    with pytest.raises(
+        AttributeError,
+        match=r"^mjModel has no array named 'geom_fricton' \(did you mean "
+        r"'geom_friction'\?\)$",
+    ):
         sim.named.model.geom_fricton
     with pytest.raises(KeyError, match="rows have no names: index them by number"):
         sim.named.data.efc_force["box"]

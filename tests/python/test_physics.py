@@ -2,7 +2,6 @@
 
 import numpy as np
 import pytest
-
 import simloop
 from expected import expected
 
@@ -44,7 +43,7 @@ def test_break_its_hops_start_at_the_pusher_and_grow_to_the_peak():
     z, ncon = run.column("box_z"), run.column("ncon")
     first_contact = int(np.argmax(ncon > ncon[0]))
     assert first_contact == 7
-    assert z[:first_contact + 1].max() < 0.05 + 0.005  # nothing hops before the pusher arrives
+    assert z[: first_contact + 1].max() < 0.05 + 0.005  # nothing hops before the pusher arrives
     peak = int(np.argmax(z))
     assert peak == expected("break_it.peak_step")
     assert z[peak] == pytest.approx(expected("break_it.peak_z"), abs=5e-5)
@@ -76,8 +75,9 @@ def test_the_seed_changes_the_shove_and_nothing_else():
     assert a.metrics["box_final_pos"] != b.metrics["box_final_pos"]
     base_a, base_b = simloop.run(seed=0, steps=600, perturb=False), simloop.run(seed=1, steps=600, perturb=False)
     assert base_a.trajectory.tobytes() == base_b.trajectory.tobytes()
-    assert {k: v for k, v in base_a.metrics.items() if k != "seed"} == \
-           {k: v for k, v in base_b.metrics.items() if k != "seed"}
+    assert {k: v for k, v in base_a.metrics.items() if k != "seed"} == {
+        k: v for k, v in base_b.metrics.items() if k != "seed"
+    }
 
 
 def chapter_loop_with_sim(steps, shove, clear_after_shove):

@@ -10,7 +10,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 import simloop
 from conftest import needs_worker_processes
 
@@ -115,17 +114,19 @@ def test_results_come_back_from_worker_processes():
         sim_back = pool.submit(pickle.loads, pickle.dumps(sim))  # a Sim through a process and back
         chapter, scenario, sim_back = chapter.result(), scenario.result(), sim_back.result()
     assert same_trajectory(chapter.trajectory, simloop.run(seed=4, steps=200).trajectory)
-    assert same_trajectory(scenario.trajectory,
-                           simloop.run_scenario(SCENES / "pusht.toml", seed=1, steps=200).trajectory)
+    assert same_trajectory(
+        scenario.trajectory, simloop.run_scenario(SCENES / "pusht.toml", seed=1, steps=200).trajectory
+    )
     assert np.array_equal(sim_back.get_state(), sim.get_state())
 
 
 @pytest.mark.parametrize("made", ["keywords", "file", "chapter"])
 def test_an_unpickled_scenario_is_the_scenario_everywhere_even_on_an_executor(made):
-    scenario = {"keywords": lambda: simloop.Scenario(scene=str(SCENES / "pusht.xml"), steps=60,
-                                                     record={"bodies": ["tblock"]}),
-                "file": lambda: simloop.Scenario.from_file(SCENES / "pusht.toml"),
-                "chapter": simloop.Scenario.chapter}[made]()
+    scenario = {
+        "keywords": lambda: simloop.Scenario(scene=str(SCENES / "pusht.xml"), steps=60, record={"bodies": ["tblock"]}),
+        "file": lambda: simloop.Scenario.from_file(SCENES / "pusht.toml"),
+        "chapter": simloop.Scenario.chapter,
+    }[made]()
     again = pickle.loads(pickle.dumps(scenario))
     assert again.toml == scenario.toml and repr(again) == repr(scenario)
     with concurrent.futures.ThreadPoolExecutor(1) as pool:

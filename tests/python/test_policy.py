@@ -7,16 +7,20 @@ import threading
 
 import numpy as np
 import pytest
-
 import simloop
 
 PUSHT = "tests/scenes/pusht.xml"
 
 
 def constant_pusht(steps=600):
-    return simloop.Scenario(scene=PUSHT, steps=steps, controls={"push_x": 0.8, "push_y": 0.3},
-                            disturbances=[dict(body="tblock", newtons=[0.5, 1.5], direction=[0, 1, 0],
-                                               random_sign=True, start_step=250, steps=40)])
+    return simloop.Scenario(
+        scene=PUSHT,
+        steps=steps,
+        controls={"push_x": 0.8, "push_y": 0.3},
+        disturbances=[
+            dict(body="tblock", newtons=[0.5, 1.5], direction=[0, 1, 0], random_sign=True, start_step=250, steps=40)
+        ],
+    )
 
 
 def same_bits(a, b):
@@ -52,7 +56,7 @@ def test_the_policy_sees_the_recorded_row_every_k_steps_and_its_ctrl_is_held():
                 continue  # the observation's are the previous decision's
             assert same_bits(np.array([value]), np.array([recorded])), (name, step)
         decided = np.clip(4.0 * (0.45 - tblock_x), -1, 1)
-        assert np.all(ctrl[step:min(step + 50, 230)] == decided)  # held, and the scenario's 0.8 never shows
+        assert np.all(ctrl[step : min(step + 50, 230)] == decided)  # held, and the scenario's 0.8 never shows
         assert values[names.index("push_x_ctrl")] == (0.0 if k == 0 else ctrl[step - 1])
 
 
@@ -95,13 +99,16 @@ def test_an_exception_in_the_policy_stops_the_run_and_names_the_decision_step():
     assert calls == [0, 25, 50, 75, 100]
 
 
-@pytest.mark.parametrize("answer, error, words", [
-    ([0.0], ValueError, r"2 ctrl values .* got shape \(1,\) at decision step 20"),
-    ([[0.0, 0.0]], ValueError, r"got shape \(1, 2\) at decision step 20"),
-    ([0.0, float("nan")], ValueError, r"not finite at decision step 20"),
-    ("left", ValueError, r"at decision step 20"),
-    (None, ValueError, r"at decision step 20"),
-])
+@pytest.mark.parametrize(
+    "answer, error, words",
+    [
+        ([0.0], ValueError, r"2 ctrl values .* got shape \(1,\) at decision step 20"),
+        ([[0.0, 0.0]], ValueError, r"got shape \(1, 2\) at decision step 20"),
+        ([0.0, float("nan")], ValueError, r"not finite at decision step 20"),
+        ("left", ValueError, r"at decision step 20"),
+        (None, ValueError, r"at decision step 20"),
+    ],
+)
 def test_a_wrong_ctrl_is_a_value_error_naming_the_decision_step(answer, error, words):
     def policy(obs):
         return [0.0, 0.0] if obs.step < 20 else answer
@@ -128,8 +135,9 @@ def test_batches_with_a_policy_equal_sequential_runs(threads):
     def policy(obs):  # depends on the observation only
         return [np.tanh(obs["tblock_x"] - 0.3), -np.tanh(obs["tblock_vy"])]
 
-    batch = simloop.run_scenario_batch(scenario, seeds=range(4), timesteps=[None, 0.001], threads=threads,
-                                       policy=policy, control_every=20)
+    batch = simloop.run_scenario_batch(
+        scenario, seeds=range(4), timesteps=[None, 0.001], threads=threads, policy=policy, control_every=20
+    )
     i = 0
     for seed in range(4):
         for timestep in (None, 0.001):
@@ -163,8 +171,11 @@ def test_between_decisions_the_gil_is_free():
     # A run in another thread, a decision every 10,000 steps: meanwhile this
     # thread keeps running Python.
     decisions = []
-    worker = threading.Thread(target=lambda: simloop.run_scenario(
-        constant_pusht(30_000), policy=lambda obs: decisions.append(obs.step) or [0.1, 0.1], control_every=10_000))
+    worker = threading.Thread(
+        target=lambda: simloop.run_scenario(
+            constant_pusht(30_000), policy=lambda obs: decisions.append(obs.step) or [0.1, 0.1], control_every=10_000
+        )
+    )
     worker.start()
     spins = 0
     while worker.is_alive():

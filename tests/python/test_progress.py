@@ -21,14 +21,12 @@ import time
 from pathlib import Path
 
 import pytest
-
 from conftest import sim_loop_exe, snapshot, without_wall_clock
 from simloop.progress import progress_bar, wants_bar
 
 # Long enough that the bar (shown after 0.25 s of work) appears on a loaded machine too.
 STEPS = "150000"
-BAR = {"sim_loop": re.compile(r"sim_loop \[[#.]*\] +\d+% \d+/\d+ steps"),
-       "python": re.compile(r"running: +\d+%\|")}
+BAR = {"sim_loop": re.compile(r"sim_loop \[[#.]*\] +\d+% \d+/\d+ steps"), "python": re.compile(r"running: +\d+%\|")}
 
 
 def _command(which: str, *args: str) -> list:
@@ -64,8 +62,14 @@ class _Terminal:
             self.data += chunk
 
     def start(self, cmd: list, cwd: Path, env: dict, stdout_too: bool = False) -> subprocess.Popen:
-        proc = subprocess.Popen(cmd, cwd=cwd, env=env, stdin=subprocess.DEVNULL,
-                                stdout=self.slave if stdout_too else subprocess.PIPE, stderr=self.slave)
+        proc = subprocess.Popen(
+            cmd,
+            cwd=cwd,
+            env=env,
+            stdin=subprocess.DEVNULL,
+            stdout=self.slave if stdout_too else subprocess.PIPE,
+            stderr=self.slave,
+        )
         os.close(self.slave)
         self._reader.start()
         return proc
@@ -117,8 +121,9 @@ def _folder(tmp_path: Path, name: str) -> Path:
 
 
 def _plain_run(which: str, cwd: Path) -> subprocess.CompletedProcess:
-    return subprocess.run(_command(which, *RUN), cwd=cwd, env=_env(), capture_output=True, stdin=subprocess.DEVNULL,
-                          timeout=120)
+    return subprocess.run(
+        _command(which, *RUN), cwd=cwd, env=_env(), capture_output=True, stdin=subprocess.DEVNULL, timeout=120
+    )
 
 
 @pytest.mark.parametrize("which", ["sim_loop", "python"])
@@ -178,8 +183,9 @@ def test_no_bar_when_TERM_is_dumb(which, tmp_path):
 @pytest.mark.parametrize("which", ["sim_loop", "python"])
 def test_ctrl_c_during_the_bar_leaves_a_clean_line_and_exit_130(which, tmp_path):
     terminal = _Terminal()
-    proc = terminal.start(_command(which, "--steps", "100000000", "--record-every", "100000", "--out", str(tmp_path)),
-                          tmp_path, _env())
+    proc = terminal.start(
+        _command(which, "--steps", "100000000", "--record-every", "100000", "--out", str(tmp_path)), tmp_path, _env()
+    )
     deadline = time.monotonic() + 60
     # After a second of work the bar says how long is left (tqdm's "<" in Python).
     time_left = {"sim_loop": re.compile(r" steps, \d+:\d\d:\d\d left"), "python": re.compile(r"<\d+:\d\d")}[which]
@@ -190,12 +196,16 @@ def test_ctrl_c_during_the_bar_leaves_a_clean_line_and_exit_130(which, tmp_path)
     stdout = terminal.finish(proc)
     assert proc.returncode == 130
     program = "sim_loop" if which == "sim_loop" else "sim-loop"
-    assert _screen(terminal.data) == [f"{program}: interrupted (SIGINT); the earlier outputs were left as they were", ""]
+    assert _screen(terminal.data) == [
+        f"{program}: interrupted (SIGINT); the earlier outputs were left as they were",
+        "",
+    ]
     assert stdout.decode().startswith("ch0.1-sim-loop | tier: cpu |") and stdout.count(b"\n") == 1
     assert not any(tmp_path.iterdir())
 
 
 # ---- the helper ---------------------------------------------------------------
+
 
 class _FakeTerminal(io.StringIO):
     def isatty(self) -> bool:

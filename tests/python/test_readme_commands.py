@@ -8,7 +8,6 @@ import sys
 from pathlib import Path
 
 from conftest import ROOT, sim_loop_exe
-
 from simloop import _build
 
 SYSTEM_PATH = "/usr/bin:/bin"  # as in a new shell: .venv/bin is not on it
@@ -17,8 +16,13 @@ VENV_PYTHON = ROOT / (".venv-pypi" if _build.MUJOCO_BUILD == "pypi" else ".venv"
 
 
 def test_sim_loop_plot_finds_the_projects_venv(tmp_path):
-    proc = subprocess.run([str(sim_loop_exe()), "--smoke", "--plot", "--out", "o"], cwd=tmp_path,
-                          capture_output=True, text=True, env={"PATH": SYSTEM_PATH})
+    proc = subprocess.run(
+        [str(sim_loop_exe()), "--smoke", "--plot", "--out", "o"],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        env={"PATH": SYSTEM_PATH},
+    )
     if VENV_PYTHON.exists():  # scripts/test.sh made it
         assert proc.returncode == 0, proc.stderr
         assert (tmp_path / "o" / "trajectory.png").read_bytes()[:4] == b"\x89PNG"
@@ -29,19 +33,30 @@ def test_sim_loop_plot_finds_the_projects_venv(tmp_path):
 
 
 def test_sim_loop_plot_without_a_python_is_one_line(tmp_path):
-    proc = subprocess.run([str(sim_loop_exe()), "--smoke", "--plot", "--out", "o"], cwd=tmp_path,
-                          capture_output=True, text=True, env={"SIMLOOP_PYTHON": "/nonexistent/python"})
+    proc = subprocess.run(
+        [str(sim_loop_exe()), "--smoke", "--plot", "--out", "o"],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        env={"SIMLOOP_PYTHON": "/nonexistent/python"},
+    )
     assert proc.returncode == 1
     assert proc.stderr.splitlines() == [
         "sim_loop: --plot: cannot start /nonexistent/python (scripts/test.sh installs the simloop package into "
-        "the project's .venv; or set SIMLOOP_PYTHON to a Python that has it)"]
+        "the project's .venv; or set SIMLOOP_PYTHON to a Python that has it)"
+    ]
 
 
 def test_viewer_line_names_a_rerun_that_exists(tmp_path):
     """`open it with: VIEWER PATH` works as typed where the command ran, also
     when rerun is only in the venv's bin, off PATH."""
-    proc = subprocess.run([sys.executable, "-m", "simloop", "--smoke", "--out", "o"], cwd=tmp_path,
-                          capture_output=True, text=True, env={"PATH": SYSTEM_PATH})
+    proc = subprocess.run(
+        [sys.executable, "-m", "simloop", "--smoke", "--out", "o"],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        env={"PATH": SYSTEM_PATH},
+    )
     assert proc.returncode == 0, proc.stderr
     line = next(line for line in proc.stdout.splitlines() if line.startswith("recording: "))
     viewer, rrd = line.split(" -- open it with: ")[1].rsplit(" ", 1)
@@ -56,8 +71,14 @@ def test_check_py_runs_as_a_command(tmp_path):
     re-runs itself with the project's .venv, which has simloop."""
     answer = tmp_path / "answer.txt"
     answer.write_text("# nothing yet\n")
-    proc = subprocess.run([str(ROOT / "exercises" / "check.py"), "1", "--answer", str(answer)], cwd=ROOT,
-                          capture_output=True, text=True, env={"PATH": SYSTEM_PATH}, timeout=120)
+    proc = subprocess.run(
+        [str(ROOT / "exercises" / "check.py"), "1", "--answer", str(answer)],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        env={"PATH": SYSTEM_PATH},
+        timeout=120,
+    )
     if VENV_PYTHON.exists():
         assert proc.returncode == 2, proc.stderr  # got as far as reading the (blank) answer
         assert "needs the simloop package" not in proc.stderr and "Traceback" not in proc.stderr
@@ -67,9 +88,19 @@ def test_check_py_runs_as_a_command(tmp_path):
 
 
 def test_callgrind_without_valgrind_is_one_line(tmp_path):
-    proc = subprocess.run([sys.executable, str(ROOT / "bench" / "bench_command.py"), "--callgrind",
-                           "--build", str(sim_loop_exe().parent)],
-                          capture_output=True, text=True, env={"PATH": str(tmp_path)}, timeout=60)
+    proc = subprocess.run(
+        [
+            sys.executable,
+            str(ROOT / "bench" / "bench_command.py"),
+            "--callgrind",
+            "--build",
+            str(sim_loop_exe().parent),
+        ],
+        capture_output=True,
+        text=True,
+        env={"PATH": str(tmp_path)},
+        timeout=60,
+    )
     assert proc.returncode == 1
     assert proc.stderr.splitlines() == ["--callgrind: valgrind is not installed (apt-get install valgrind)"]
     assert proc.stdout == ""  # refused before measuring anything

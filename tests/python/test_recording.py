@@ -6,15 +6,23 @@ import numpy as np
 import pyarrow as pa
 import pytest
 import rerun.chunk
-
 import simloop
 from conftest import run_command
 from simloop import chapter_recording as recording
 
 # The box, the pusher and the shove at the chapter's own paths ("the same entity
 # paths every chapter uses").
-TEMPORAL = ["/world/objects/box", "/world/robot/pusher", "/world/objects/box/shove", "/plots/box_x",
-            "/plots/box_y", "/plots/box_z", "/plots/box_speed", "/plots/pusher_x", "/plots/ncon"]
+TEMPORAL = [
+    "/world/objects/box",
+    "/world/robot/pusher",
+    "/world/objects/box/shove",
+    "/plots/box_x",
+    "/plots/box_y",
+    "/plots/box_z",
+    "/plots/box_speed",
+    "/plots/pusher_x",
+    "/plots/ncon",
+]
 ENERGY = ["/plots/" + name for name in simloop.ENERGY_COLUMN_NAMES]
 
 
@@ -64,9 +72,19 @@ def test_entities_timelines_and_every_step(recorded):
     chunks, result = recorded
     assert {entity for entity, static in chunks if not static} == set(TEMPORAL)
     assert {entity for entity, static in chunks if static} == {
-        "/world/static/floor", "/world/objects/box/box_geom", "/world/robot/pusher/pusher_geom",
-        "/world/objects/box/camera_frame", "/world/objects/box/shove", "/plots/box_x",
-        "/plots/box_y", "/plots/box_z", "/plots/box_speed", "/plots/pusher_x", "/plots/ncon", "/__properties"}
+        "/world/static/floor",
+        "/world/objects/box/box_geom",
+        "/world/robot/pusher/pusher_geom",
+        "/world/objects/box/camera_frame",
+        "/world/objects/box/shove",
+        "/plots/box_x",
+        "/plots/box_y",
+        "/plots/box_z",
+        "/plots/box_speed",
+        "/plots/pusher_x",
+        "/plots/ncon",
+        "/__properties",
+    }
     times = result.column("time")
     for entity in TEMPORAL:
         columns = chunks[(entity, False)]
@@ -154,7 +172,9 @@ def test_the_arrow_shows_the_shove_exactly_while_it_acts(recorded):
     # From 8 cm above the box's centre in the world (3 cm above its top face, in view for either sign), so in
     # the box's frame that offset rotated into it; the arrow's direction is the world's shove.
     quat = np.column_stack([result.column(c) for c in ("box_qw", "box_qx", "box_qy", "box_qz")])
-    np.testing.assert_allclose(origins, recording._rotate_into_body(quat, np.tile([0.0, 0.0, 0.08], (2001, 1))), atol=1e-12)
+    np.testing.assert_allclose(
+        origins, recording._rotate_into_body(quat, np.tile([0.0, 0.0, 0.08], (2001, 1))), atol=1e-12
+    )
     assert np.all(np.abs(origins[:, 2] - 0.08) < 1e-3)  # the box stays about flat in the default run
     assert np.all(np.abs(vectors[inside][:, 1]) > 0.9 * lengths[inside])  # sideways, as the shove
 
@@ -162,14 +182,17 @@ def test_the_arrow_shows_the_shove_exactly_while_it_acts(recorded):
 def test_a_model_of_the_chapters_layout_is_drawn_as_it_is(tmp_path):
     # The pusher is whichever body actuator 0 drives, whatever its name, with its own shape and home.
     scene = tmp_path / "ram.xml"
-    scene.write_text(simloop._core.PUSHER_SCENE_XML.replace('<body name="pusher" pos="0 0 0.05">',
-                                                            '<body name="ram" pos="0 0.1 0.05">')
-                     .replace('size="0.04 0.12 0.05"', 'size="0.03 0.2 0.05"'))
+    scene.write_text(
+        simloop._core.PUSHER_SCENE_XML.replace(
+            '<body name="pusher" pos="0 0 0.05">', '<body name="ram" pos="0 0.1 0.05">'
+        ).replace('size="0.04 0.12 0.05"', 'size="0.03 0.2 0.05"')
+    )
     chunks = load_chunks(record_with_command(tmp_path, "m", ["--smoke", "--model", str(scene)]))
     result = simloop.run(model=scene, smoke=True)
     assert ("/world/robot/pusher", False) not in chunks
-    np.testing.assert_allclose(chunks[("/world/robot/ram/pusher_geom", True)]["Boxes3D:half_sizes"][0],
-                               [[0.03, 0.2, 0.05]])
+    np.testing.assert_allclose(
+        chunks[("/world/robot/ram/pusher_geom", True)]["Boxes3D:half_sizes"][0], [[0.03, 0.2, 0.05]]
+    )
     ram = np.array([t[0] for t in chunks[("/world/robot/ram", False)]["Transform3D:translation"]])
     np.testing.assert_allclose(ram[:, 0], result.column("pusher_x"), atol=1e-6)
     np.testing.assert_allclose(ram[:, 1:], 0.0 * ram[:, 1:] + [0.1, 0.05], atol=1e-7)
@@ -212,8 +235,8 @@ def test_the_recording_id_follows_the_run(tmp_path):
     other_rng = record_with_command(tmp_path, "rng", ["--smoke", "--rng", "numpy"])
     ids = [recordings(p) for p in (a, again, other_seed, other_rng)]
     assert all(len(i) == 1 and i[0][0] == "simloop_ch0_1_sim_loop" for i in ids)
-    assert ids[0] == ids[1]                                  # the same run: the same recording
-    assert len({i[0][1] for i in ids[1:]}) == 3              # different runs: different recordings
+    assert ids[0] == ids[1]  # the same run: the same recording
+    assert len({i[0][1] for i in ids[1:]}) == 3  # different runs: different recordings
     # Identical runs hold identical data (the bytes differ: rerun's row and
     # chunk ids are time-based, and the blueprint's store id is random).
     assert load_chunks(a) == load_chunks(again)
@@ -223,8 +246,15 @@ def test_recording_id_sees_every_parameter_and_the_model(tmp_path):
     base = simloop.run(steps=20)
     same = recording.recording_id(base)
     assert recording.recording_id(simloop.run(steps=20)) == same
-    for kwargs in ({"seed": 1}, {"timestep": 0.001}, {"perturb": False}, {"rng": "numpy"}, {"record_every": 2},
-                   {"audit_energy": True}, {"steps": 21}):
+    for kwargs in (
+        {"seed": 1},
+        {"timestep": 0.001},
+        {"perturb": False},
+        {"rng": "numpy"},
+        {"record_every": 2},
+        {"audit_energy": True},
+        {"steps": 21},
+    ):
         assert recording.recording_id(simloop.run(**{"steps": 20, **kwargs})) != same, kwargs
     scene = tmp_path / "scene.xml"
     scene.write_text(simloop._core.PUSHER_SCENE_XML)
@@ -245,8 +275,12 @@ def test_the_recording_id_sees_the_mujoco_build(monkeypatch):
         monkeypatch.setattr(simloop._core, "MUJOCO_VERSION", version)
         monkeypatch.setattr(recorder, "MUJOCO_BUILD", build)
         assert recording.config_parameters(config)["mujoco"] == f"{version} ({build})"
-        ids[version] = (recording.config_recording_id(config), recording.config_recording_id(config),
-                        recorder.scenario_recording_id("key"), recorder.scenario_recording_id("key"))
+        ids[version] = (
+            recording.config_recording_id(config),
+            recording.config_recording_id(config),
+            recorder.scenario_recording_id("key"),
+            recorder.scenario_recording_id("key"),
+        )
     for same_build in ids.values():  # the same run on one build: one id
         assert same_build[0] == same_build[1] and same_build[2] == same_build[3]
     two_builds = list(ids.values())
@@ -298,8 +332,10 @@ def test_the_plots_open_on_the_run_legends_off_the_data_and_no_axis_narrower_tha
                 fields.setdefault(name.split(":")[-1], []).append((entity.split("/")[2], value[0][0]))
     views_with_plots = {view for view, _ in fields["view_range"]}
     assert len(views_with_plots) == 5
-    assert all(r == {"start": 0, "end": 100 * 10**9 - 1} or r == {"start": 0, "end": 100 * 10**9}
-               for _, r in fields["view_range"]), fields["view_range"]  # 2000 steps of 0.05 s: 0 to 100 s
+    assert all(
+        r == {"start": 0, "end": 100 * 10**9 - 1} or r == {"start": 0, "end": 100 * 10**9}
+        for _, r in fields["view_range"]
+    ), fields["view_range"]  # 2000 steps of 0.05 s: 0 to 100 s
     legends = dict(fields["visible"])
     assert sorted(legends.values()) == [False, False, False, False, True]  # only the x panel has two series
     assert all(corner == 1 for _, corner in fields["corner"])  # the top left

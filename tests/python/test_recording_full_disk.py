@@ -20,8 +20,14 @@ WALKER = ROOT / "tests" / "scenes" / "walker.toml"  # its recording (780 kB) out
 
 
 def run(args, **kwargs) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "simloop", *args], capture_output=True, text=True,
-                          stdin=subprocess.DEVNULL, timeout=120, **kwargs)
+    return subprocess.run(
+        [sys.executable, "-m", "simloop", *args],
+        capture_output=True,
+        text=True,
+        stdin=subprocess.DEVNULL,
+        timeout=120,
+        **kwargs,
+    )
 
 
 def state(out: Path) -> dict:
@@ -48,8 +54,9 @@ def mount_tmpfs(path: Path, kib: int) -> str:
     if os.geteuid() != 0:
         return "mounting a tmpfs needs root (run the tests as root to cover a full file system)"
     path.mkdir(exist_ok=True)
-    proc = subprocess.run(["mount", "-t", "tmpfs", "-o", f"size={kib}k", "tmpfs", str(path)], capture_output=True,
-                          text=True)
+    proc = subprocess.run(
+        ["mount", "-t", "tmpfs", "-o", f"size={kib}k", "tmpfs", str(path)], capture_output=True, text=True
+    )
     return "" if proc.returncode == 0 else f"mount -t tmpfs refused here: {proc.stderr.strip()}"
 
 
@@ -89,7 +96,11 @@ def test_a_full_file_system_under_the_recording_fails_cleanly(tmp_path, kib):
 def test_a_write_error_is_kept_and_the_writer_never_blocks(tmp_path):
     # Through a pipe, past a 64 KiB file-size limit: the writer's writes all
     # succeed (the pipe is drained, discarding), and finish() says what failed.
-    proc = subprocess.run([sys.executable, "-c", textwrap.dedent("""
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-c",
+            textwrap.dedent("""
         import os, resource
         from simloop import _core
         resource.setrlimit(resource.RLIMIT_FSIZE, (64 * 1024, resource.RLIM_INFINITY))
@@ -106,7 +117,14 @@ def test_a_write_error_is_kept_and_the_writer_never_blocks(tmp_path):
             print("OSError", e)
         del piped
         print(sorted(os.listdir(".")))
-    """)], cwd=tmp_path, capture_output=True, text=True, stdin=subprocess.DEVNULL, timeout=120)
+    """),
+        ],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        stdin=subprocess.DEVNULL,
+        timeout=120,
+    )
     assert proc.returncode == 0, proc.stderr
     first, second = proc.stdout.splitlines()
     assert first.startswith("OSError ") and first.endswith("out.bin: cannot write (File too large)"), first
@@ -133,9 +151,14 @@ WAITING = textwrap.dedent("""
 
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
 def test_waiting_for_the_recording_has_a_bound_and_hears_signals(tmp_path, sig):
-    with subprocess.Popen([sys.executable, "-c", WAITING], cwd=tmp_path, stdout=subprocess.PIPE,
-                          stderr=subprocess.PIPE, text=True,
-                          preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL)) as proc:
+    with subprocess.Popen(
+        [sys.executable, "-c", WAITING],
+        cwd=tmp_path,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    ) as proc:
         assert proc.stdout.readline() == "bounded 0.3\n"
         time.sleep(0.3)
         sent = time.monotonic()

@@ -6,7 +6,6 @@ import warnings
 
 import numpy as np
 import pytest
-
 import simloop
 from conftest import ROOT, run_python
 from simloop.gym import PUSHT_SCENARIO, ScenarioEnv, ScenarioVectorEnv
@@ -112,10 +111,13 @@ def test_each_env_renders_its_state_as_rgb_or_depth(gymnasium):
 
 def test_the_vector_envs_pictures_are_the_single_envs(gymnasium):
     seeds = [3, 4]
-    envs = ScenarioVectorEnv(PUSHT_SCENARIO, 2, control_every=10, render_mode="rgb_array", view={"track": "tblock"},
-                             **SIZE)
-    singles = [ScenarioEnv(PUSHT_SCENARIO, control_every=10, render_mode="rgb_array", view={"track": "tblock"}, **SIZE)
-               for _ in seeds]
+    envs = ScenarioVectorEnv(
+        PUSHT_SCENARIO, 2, control_every=10, render_mode="rgb_array", view={"track": "tblock"}, **SIZE
+    )
+    singles = [
+        ScenarioEnv(PUSHT_SCENARIO, control_every=10, render_mode="rgb_array", view={"track": "tblock"}, **SIZE)
+        for _ in seeds
+    ]
     envs.reset(seed=seeds)
     for env, seed in zip(singles, seeds):
         env.reset(seed=seed)
@@ -132,8 +134,11 @@ def test_the_vector_envs_pictures_are_the_single_envs(gymnasium):
 
 
 def test_render_arguments_are_checked_when_the_env_is_made(gymnasium):
-    with pytest.raises(ValueError, match=r"^render_mode must be None or one of 'rgb_array', 'depth_array', "
-                                         r"got 'human' \(str\)$"):
+    with pytest.raises(
+        ValueError,
+        match=r"^render_mode must be None or one of 'rgb_array', 'depth_array', "
+        r"got 'human' \(str\)$",
+    ):
         ScenarioEnv(PUSHT_SCENARIO, render_mode="human")
     with pytest.raises(ValueError, match=r"^view: unknown key 'fov' \(known: 'camera', 'track'"):
         ScenarioEnv(PUSHT_SCENARIO, render_mode="rgb_array", view={"fov": 45})
@@ -168,7 +173,8 @@ def test_checkers_and_rendering_wrappers_take_the_render_modes(gymnasium):
         env.reset(seed=0)
         assert env.render().shape == (64, 96, 3)
     pixels = gymnasium.wrappers.AddRenderObservation(
-        gymnasium.make("simloop/PushT-v0", render_mode="rgb_array", **SIZE), render_only=False)
+        gymnasium.make("simloop/PushT-v0", render_mode="rgb_array", **SIZE), render_only=False
+    )
     obs, _ = pixels.reset(seed=0)
     assert obs["pixels"].shape == (64, 96, 3) and pixels.observation_space.contains(obs)
     frames = gymnasium.wrappers.RenderCollection(gymnasium.make("simloop/Chapter-v0", render_mode="rgb_array", **SIZE))
@@ -185,8 +191,9 @@ def test_gymnasiums_own_vectorizations_render_the_same_pictures(gymnasium):
     for mode in ("sync", "async", "vector_entry_point"):
         # (this process has rendered: its forked children could not; spawned ones can)
         extra = {"vector_kwargs": {"context": "spawn"}} if mode == "async" else {}
-        envs = gymnasium.make_vec("simloop/PushT-v0", num_envs=2, vectorization_mode=mode, render_mode="rgb_array",
-                                  **SIZE, **extra)
+        envs = gymnasium.make_vec(
+            "simloop/PushT-v0", num_envs=2, vectorization_mode=mode, render_mode="rgb_array", **SIZE, **extra
+        )
         try:
             envs.reset(seed=5)
             envs.step(np.full((2, 2), 0.5))
@@ -198,7 +205,8 @@ def test_gymnasiums_own_vectorizations_render_the_same_pictures(gymnasium):
 
 
 def test_a_forked_child_of_a_process_that_rendered_is_told_not_left_waiting():
-    done = run_python("""
+    done = run_python(
+        """
         import os, simloop
         sim = simloop.Sim()
         simloop.Renderer(sim, 8, 8).render(sim)
@@ -213,12 +221,17 @@ def test_a_forked_child_of_a_process_that_rendered_is_told_not_left_waiting():
         _, status = os.waitpid(pid, 0)
         print("child", os.waitstatus_to_exitcode(status))
         print(simloop.Renderer(sim, 8, 8).render(sim).shape)  # the parent renders on
-    """, timeout=60)
+    """,
+        timeout=60,
+    )
     assert done.returncode == 0, done.stderr
     assert done.stdout.splitlines() == [
         "cannot render in a process forked from one that had already rendered (EGL and its driver's threads do not "
         "survive fork): start worker processes with 'spawn' or 'forkserver' (for Gymnasium's AsyncVectorEnv: "
-        "context='spawn')", "child 0", "(8, 8, 3)"]
+        "context='spawn')",
+        "child 0",
+        "(8, 8, 3)",
+    ]
 
 
 def test_renderers_share_one_context_and_small_pictures_take_little_memory():

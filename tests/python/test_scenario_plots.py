@@ -6,8 +6,6 @@ import subprocess
 import sys
 
 import numpy as np
-import pytest
-
 from conftest import ROOT, run_command, sim_loop_exe
 
 PUSHT = ROOT / "tests" / "scenes" / "pusht.toml"
@@ -18,8 +16,15 @@ def test_both_commands_plot_a_scenarios_run(tmp_path):
     flags = ["--scenario", str(PUSHT), "--no-rerun", "--plot", "--out", "o"]
     for name, cmd in (("py", [sys.executable, "-m", "simloop"]), ("cpp", [str(sim_loop_exe())])):
         (tmp_path / name).mkdir()
-        proc = subprocess.run(cmd + flags, cwd=tmp_path / name, capture_output=True, text=True, env=env,
-                              stdin=subprocess.DEVNULL, timeout=120)
+        proc = subprocess.run(
+            cmd + flags,
+            cwd=tmp_path / name,
+            capture_output=True,
+            text=True,
+            env=env,
+            stdin=subprocess.DEVNULL,
+            timeout=120,
+        )
         assert proc.returncode == 0, proc.stderr
         assert (tmp_path / name / "o" / "trajectory.png").read_bytes()[:4] == b"\x89PNG"
         assert "plot: o/trajectory.png" in proc.stdout
@@ -65,8 +70,10 @@ def test_the_picture_draws_each_body_its_speed_the_contacts_and_the_disturbance(
             assert any(abs(low - start) < 1e-12 and abs(high - end) < 1e-12 for low, high in spans), ax.get_ylabel()
         labels = [t.get_text() for t in fig.legends[0].get_texts()]
         assert labels[:2] == ["tblock", "pusher"]
-        assert f"disturbance on tblock: [+0.00, {bump['force'][1]:+.2f}, +0.00] N, steps {bump['start_step']} to " \
-               f"{bump['start_step'] + bump['steps'] - 1}" in labels
+        assert (
+            f"disturbance on tblock: [+0.00, {bump['force'][1]:+.2f}, +0.00] N, steps {bump['start_step']} to "
+            f"{bump['start_step'] + bump['steps'] - 1}" in labels
+        )
         assert "scenario pusht: 1000 steps of 0.002 s, seed 0" in fig._suptitle.get_text()
     finally:
         plots._pyplot().close(fig)
@@ -99,7 +106,9 @@ def test_runs_at_two_timesteps_over_the_same_sim_time_line_up_in_time(tmp_path):
     _scenario_run(tmp_path, "fine", "--timestep", "0.001")
     _scenario_run(tmp_path, "short", "--steps", "300")
     same_span = plots.trajectory_figure(tmp_path / "coarse" / "trajectory.csv", [tmp_path / "fine" / "trajectory.csv"])
-    other_span = plots.trajectory_figure(tmp_path / "coarse" / "trajectory.csv", [tmp_path / "short" / "trajectory.csv"])
+    other_span = plots.trajectory_figure(
+        tmp_path / "coarse" / "trajectory.csv", [tmp_path / "short" / "trajectory.csv"]
+    )
     try:
         assert same_span.axes[-1].get_xlabel() == "sim time (s)"
         assert other_span.axes[-1].get_xlabel() == "step"
@@ -121,8 +130,11 @@ def test_a_scenario_beside_the_chapters_run_or_without_bodies_is_refused(tmp_pat
     assert "chapter is the chapter's run and the others a scenario's: draw them apart" in mixed.stderr
     assert not list((tmp_path / "pusht").glob("*.png"))
     joints_only = tmp_path / "joints.toml"
-    joints_only.write_text(PUSHT.read_text().replace('scene = "pusht.xml"', f'scene = "{PUSHT.parent / "pusht.xml"}"')
-                           .replace('bodies = ["tblock", "pusher"]', "bodies = []"))
+    joints_only.write_text(
+        PUSHT.read_text()
+        .replace('scene = "pusht.xml"', f'scene = "{PUSHT.parent / "pusht.xml"}"')
+        .replace('bodies = ["tblock", "pusher"]', "bodies = []")
+    )
     proc = run_command(["--scenario", str(joints_only), "--no-rerun", "--plot", "--out", "j"], tmp_path)
     assert proc.returncode == 1 and "the run recorded no bodies" in proc.stderr, proc.stderr
     assert len(proc.stderr.splitlines()) == 1

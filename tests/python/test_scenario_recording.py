@@ -4,7 +4,6 @@ writes trajectory.csv, whose bytes do not depend on the recording."""
 
 import numpy as np
 import pytest
-
 import simloop
 from conftest import ROOT, run_command
 from test_recording import load_chunks
@@ -22,8 +21,15 @@ def quat_multiply(a, b):
     """Rows of w x y z quaternions, a * b."""
     aw, ax, ay, az = a.T
     bw, bx, by, bz = b.T
-    return np.stack([aw * bw - ax * bx - ay * by - az * bz, aw * bx + ax * bw + ay * bz - az * by,
-                     aw * by - ax * bz + ay * bw + az * bx, aw * bz + ax * by - ay * bx + az * bw], axis=1)
+    return np.stack(
+        [
+            aw * bw - ax * bx - ay * by - az * bz,
+            aw * bx + ax * bw + ay * bz - az * by,
+            aw * by - ax * bz + ay * bw + az * bx,
+            aw * bz + ax * by - ay * bx + az * bw,
+        ],
+        axis=1,
+    )
 
 
 def rotate(q, v):
@@ -35,8 +41,12 @@ def rotate(q, v):
 
 def forward_kinematics(result):
     """Every leg body's world pose from the torso's recorded pose and the recorded hinge angles."""
-    poses = {"torso": (np.stack([result.column("torso_" + a) for a in "xyz"], axis=1),
-                       np.stack([result.column("torso_" + a) for a in ("qw", "qx", "qy", "qz")], axis=1))}
+    poses = {
+        "torso": (
+            np.stack([result.column("torso_" + a) for a in "xyz"], axis=1),
+            np.stack([result.column("torso_" + a) for a in ("qw", "qx", "qy", "qz")], axis=1),
+        )
+    }
     for body, (parent, offset, hinge) in LEGS.items():  # parents come first
         position, orientation = poses[parent]
         half = result.column(hinge + "_pos") / 2  # about the body's y axis
@@ -52,9 +62,11 @@ def walker_with_joints(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("walker")
     text = (SCENES / "walker.toml").read_text().replace('scene = "walker.xml"', f'scene = "{SCENES / "walker.xml"}"')
     scenario = tmp / "walker_joints.toml"
-    scenario.write_text(text + '\n[record]\nbodies = ["torso"]\n'
-                        'joints = ["hip_left", "knee_left", "hip_right", "knee_right"]\n'
-                        '[[reset.param]]\nkind = "mass"\nname = "torso"\nuniform = [6.0, 9.0]\n')
+    scenario.write_text(
+        text + '\n[record]\nbodies = ["torso"]\n'
+        'joints = ["hip_left", "knee_left", "hip_right", "knee_right"]\n'
+        '[[reset.param]]\nkind = "mass"\nname = "torso"\nuniform = [6.0, 9.0]\n'
+    )
     for flags, out in ((["--record-every", "3"], "r"), (["--record-every", "3", "--no-rerun"], "n")):
         proc = run_command(["--scenario", str(scenario), *flags, "--out", out], tmp)
         assert proc.returncode == 0, proc.stderr
@@ -73,8 +85,9 @@ def test_the_legs_move_as_forward_kinematics_of_the_recorded_angles(walker_with_
         quaternion = np.array([q[0] for q in entity["Transform3D:quaternion"]])[:, [3, 0, 1, 2]]  # x y z w -> w x y z
         # rerun keeps float32: within its precision.
         np.testing.assert_allclose(translation, position, rtol=0, atol=2e-6, err_msg=body)
-        same_rotation = np.minimum(np.abs(quaternion - orientation).max(axis=1),
-                                   np.abs(quaternion + orientation).max(axis=1))
+        same_rotation = np.minimum(
+            np.abs(quaternion - orientation).max(axis=1), np.abs(quaternion + orientation).max(axis=1)
+        )
         assert same_rotation.max() < 2e-6, body
     # The legs turn over the run: the check above is not of bodies standing still.
     assert np.ptp(result.column("knee_left_pos")) > 0.3
@@ -97,7 +110,9 @@ def test_every_moving_body_of_the_walker_is_drawn(tmp_path):
     chunks = load_chunks(tmp_path / "w" / "sim_loop.rrd")
     result = simloop.run_scenario(SCENES / "walker.toml")
     assert list(result.bodies) == ["torso"]  # what the scenario records
-    moving = list(simloop._core.moving_bodies(result_model := simloop.Scenario.from_file(SCENES / "walker.toml").model()))
+    moving = list(
+        simloop._core.moving_bodies(result_model := simloop.Scenario.from_file(SCENES / "walker.toml").model())
+    )
     assert sorted(moving) == sorted(["torso", *LEGS])
     for body in moving:
         assert len(chunks[(f"/world/bodies/{body}", False)]["Transform3D:translation"]) == result.rows, body

@@ -6,7 +6,6 @@ import math
 
 import numpy as np
 import pytest
-
 import simloop
 from conftest import ROOT, run_command, without_wall_clock
 
@@ -21,19 +20,25 @@ def read_csv(path):
     return names, np.array([[float(cell) for cell in line.split(",")] for line in lines[1:]])
 
 
-@pytest.mark.parametrize("scenario,flags", [
-    (PUSHT, ["--timesteps", "0.001,0.002,0.004,0.03", "--duration", "0.8"]),
-    (WALKER, []),  # the default grid over the scenario's own 3 s
-])
+@pytest.mark.parametrize(
+    "scenario,flags",
+    [
+        (PUSHT, ["--timesteps", "0.001,0.002,0.004,0.03", "--duration", "0.8"]),
+        (WALKER, []),  # the default grid over the scenario's own 3 s
+    ],
+)
 def test_both_commands_and_python_sweep_the_same_bytes(tmp_path, scenario, flags):
     outputs = {}
     for label, python in (("cpp1", False), ("cpp2", False), ("py", True)):
-        proc = run_command(["sweep", "--scenario", str(scenario), "--threads", "2", "--out", label, *flags], tmp_path,
-                           python=python)
+        proc = run_command(
+            ["sweep", "--scenario", str(scenario), "--threads", "2", "--out", label, *flags], tmp_path, python=python
+        )
         assert proc.returncode == 0, proc.stderr
         assert proc.stderr == ""
-        outputs[label] = ((tmp_path / label / "sweep.csv").read_bytes(),
-                          without_wall_clock(proc.stdout).replace(label, "OUT"))
+        outputs[label] = (
+            (tmp_path / label / "sweep.csv").read_bytes(),
+            without_wall_clock(proc.stdout).replace(label, "OUT"),
+        )
     assert outputs["cpp1"] == outputs["cpp2"] == outputs["py"]
     if flags:
         timesteps = [float(t) for t in flags[1].split(",")]
@@ -47,7 +52,8 @@ def test_both_commands_and_python_sweep_the_same_bytes(tmp_path, scenario, flags
     assert names[-3:] == ["max_offset", "tolerance", "blew_up"]
     for body in result.bodies:
         assert [body + s for s in ("_final_x", "_final_y", "_final_z", "_offset")] == names[
-            names.index(body + "_final_x"):names.index(body + "_final_x") + 4]
+            names.index(body + "_final_x") : names.index(body + "_final_x") + 4
+        ]
     assert len(table) == len(result.points)
 
 
@@ -83,26 +89,45 @@ def test_the_rule_marks_warnings_and_far_ends_and_the_edge_below_them():
     assert pusht.edge == 0.0005
     for point in walker.points + pusht.points:
         tolerance = walker.tolerance if point in walker.points else pusht.tolerance
-        assert point.blew_up == (point.mujoco_warnings > 0 or point.diverged > 0
-                                 or not point.max_offset <= tolerance)
+        assert point.blew_up == (point.mujoco_warnings > 0 or point.diverged > 0 or not point.max_offset <= tolerance)
 
 
 def test_quick_flags_sweep_any_scene(tmp_path):
-    proc = run_command(["sweep", "--model", str(SCENES / "walker.xml"), "--body", "torso", "--ctrl", "hip_left=0.3",
-                        "--timesteps", "0.002,0.004", "--duration", "0.4", "--out", "q"], tmp_path, python=False)
+    proc = run_command(
+        [
+            "sweep",
+            "--model",
+            str(SCENES / "walker.xml"),
+            "--body",
+            "torso",
+            "--ctrl",
+            "hip_left=0.3",
+            "--timesteps",
+            "0.002,0.004",
+            "--duration",
+            "0.4",
+            "--out",
+            "q",
+        ],
+        tmp_path,
+        python=False,
+    )
     assert proc.returncode == 0, proc.stderr
     names, table = read_csv(tmp_path / "q" / "sweep.csv")
     assert "torso_offset" in names and table.shape == (2, len(names))
     assert "swept scenario walker over 2 timesteps, 0.4 s of sim time each" in proc.stdout
 
 
-@pytest.mark.parametrize("args,message", [
-    (["--scenario", str(PUSHT), "--model", str(SCENES / "pusht.xml")], "--model and --scenario"),
-    (["--scenario", str(PUSHT), "--duration", "0.001"], "--duration: 0.001 s of sim time is too short"),
-    (["--scenario", str(PUSHT), "--timesteps", "0.6"], "--timesteps/--duration (default: the scenario's length)"),
-    (["--scenario", str(PUSHT), "--seed", "1"], "--seed is not a sweep option"),
-    (["--body", "tblok", "--model", str(SCENES / "pusht.xml")], "did you mean 'tblock'"),
-])
+@pytest.mark.parametrize(
+    "args,message",
+    [
+        (["--scenario", str(PUSHT), "--model", str(SCENES / "pusht.xml")], "--model and --scenario"),
+        (["--scenario", str(PUSHT), "--duration", "0.001"], "--duration: 0.001 s of sim time is too short"),
+        (["--scenario", str(PUSHT), "--timesteps", "0.6"], "--timesteps/--duration (default: the scenario's length)"),
+        (["--scenario", str(PUSHT), "--seed", "1"], "--seed is not a sweep option"),
+        (["--body", "tblok", "--model", str(SCENES / "pusht.xml")], "did you mean 'tblock'"),
+    ],
+)
 def test_bad_scenario_sweeps_are_one_line_and_exit_2(tmp_path, args, message):
     for python in (False, True):
         proc = run_command(["sweep", *args, "--out", "bad"], tmp_path, python=python)
@@ -116,15 +141,31 @@ def test_python_refuses_bad_arguments_by_name():
         simloop.sweep([0.002], duration=0.1, scenario=PUSHT, rng="pcg")
     with pytest.raises(TypeError, match="scenario must be"):
         simloop.sweep([0.002], duration=0.1, scenario=3)
-    with pytest.raises(ValueError, match=r"^duration 0.001 s at timestep 0.0005 s is 2 steps; a sweep point needs 4 to "):
+    with pytest.raises(
+        ValueError, match=r"^duration 0.001 s at timestep 0.0005 s is 2 steps; a sweep point needs 4 to "
+    ):
         simloop.sweep(duration=0.001, scenario=PUSHT)
     with pytest.raises(ValueError, match="steps"):
         simloop.sweep([0.5], duration=1.0, scenario=PUSHT)
 
 
 def test_the_sweep_picture_of_a_scenario(tmp_path):
-    proc = run_command(["sweep", "--scenario", str(PUSHT), "--timesteps", "0.001,0.004,0.03", "--duration", "0.8",
-                        "--plot", "--out", "p"], tmp_path, python=False)
+    proc = run_command(
+        [
+            "sweep",
+            "--scenario",
+            str(PUSHT),
+            "--timesteps",
+            "0.001,0.004,0.03",
+            "--duration",
+            "0.8",
+            "--plot",
+            "--out",
+            "p",
+        ],
+        tmp_path,
+        python=False,
+    )
     assert proc.returncode == 0, proc.stderr
     png = tmp_path / "p" / "sweep.png"
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

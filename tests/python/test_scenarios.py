@@ -9,7 +9,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 import simloop
 from conftest import ROOT, run_command, sim_loop_exe
 from test_recording import load_chunks
@@ -54,17 +53,21 @@ def test_the_python_result_holds_what_the_scenario_asked():
     assert bump["body"] == "tblock" and bump["start_step"] == 600 and bump["end_step"] == 650
     assert fy[600] == bump["force"][1] != 0.0 and fy[599] == 0.0 and fy[650] == 0.0
     assert 0.5 <= abs(bump["force"][1]) < 1.5
-    assert result.metrics["bodies"]["tblock"]["final_pos"] == [round(v, 6) for v in
-                                                               (result.column("tblock_x")[-1],
-                                                                result.column("tblock_y")[-1],
-                                                                result.column("tblock_z")[-1])]
+    assert result.metrics["bodies"]["tblock"]["final_pos"] == [
+        round(v, 6)
+        for v in (result.column("tblock_x")[-1], result.column("tblock_y")[-1], result.column("tblock_z")[-1])
+    ]
     assert result.column_units["tblock_x"] == "m"
     # Each column its own unit: a quaternion has none, a velocity's angular part is rad/s, a torque N m.
     units = result.column_units
     assert [units[f"tblock_{c}"] for c in ("qw", "vx", "wz", "fy", "tz")] == ["", "m/s", "rad/s", "N", "N m"]
     free = simloop.run_scenario(simloop.Scenario(steps=2, record=dict(joints="all"))).column_units  # the box's
-    assert [free[f"joint0_pos{i}"] for i in (2, 3)] + [free[f"joint0_vel{i}"] for i in (2, 3)] == ["m", "", "m/s",
-                                                                                                 "rad/s"]
+    assert [free[f"joint0_pos{i}"] for i in (2, 3)] + [free[f"joint0_vel{i}"] for i in (2, 3)] == [
+        "m",
+        "",
+        "m/s",
+        "rad/s",
+    ]
     # the seed draws the bump and nothing else
     other = simloop.run_scenario(SCENES / "pusht.toml", seed=4)
     assert other.disturbances[0]["force"][1] != bump["force"][1]
@@ -73,25 +76,38 @@ def test_the_python_result_holds_what_the_scenario_asked():
 
 def test_keyword_scenarios_read_like_files(tmp_path):
     built = simloop.Scenario(
-        scene=SCENES / "pusht.xml", name="pusht", duration=2.0,
+        scene=SCENES / "pusht.xml",
+        name="pusht",
+        duration=2.0,
         controls={"push_x": 0.8, "push_y": [(0.0, 0.0), (0.5, 0.4), (1.0, 2.0)]},
-        disturbances=[dict(body="tblock", newtons=[0.5, 1.5], direction=[0, 1, 0], random_sign=True,
-                           start=1.2, duration=0.1)],
-        record=dict(bodies=["tblock", "pusher"], joints=["slide_x", "slide_y"], actuators=["push_x", "push_y"],
-                    sensors=["tblock_pos", "tip_x"]))
+        disturbances=[
+            dict(body="tblock", newtons=[0.5, 1.5], direction=[0, 1, 0], random_sign=True, start=1.2, duration=0.1)
+        ],
+        record=dict(
+            bodies=["tblock", "pusher"],
+            joints=["slide_x", "slide_y"],
+            actuators=["push_x", "push_y"],
+            sensors=["tblock_pos", "tip_x"],
+        ),
+    )
     from_file = simloop.run_scenario(SCENES / "pusht.toml", seed=5)
     from_keywords = simloop.run_scenario(built, seed=5)
     # model= takes the scene as any run does: compiled, or an MJCF file's path.
     for scene in (built.model(), SCENES / "pusht.xml", str(SCENES / "pusht.xml")):
         np.testing.assert_array_equal(simloop.run_scenario(built, seed=5, model=scene).trajectory, from_file.trajectory)
     assert repr(simloop.sweep(scenario=built, model=SCENES / "pusht.xml", timesteps=[0.002], duration=0.1)) == repr(
-        simloop.sweep(scenario=built, timesteps=[0.002], duration=0.1))
+        simloop.sweep(scenario=built, timesteps=[0.002], duration=0.1)
+    )
     assert from_keywords.column_names == from_file.column_names
     np.testing.assert_array_equal(from_keywords.trajectory, from_file.trajectory)
-    with pytest.raises(ValueError, match=r"no body named 'tblok' \(did you mean 'tblock'\?\); "
-                                         r"the scene's bodies a force can move: tblock, pusher"):
-        simloop.run_scenario(simloop.Scenario(scene=SCENES / "pusht.xml", steps=10,
-                                              disturbances=[dict(body="tblok", force=[1, 0, 0])]))
+    with pytest.raises(
+        ValueError,
+        match=r"no body named 'tblok' \(did you mean 'tblock'\?\); "
+        r"the scene's bodies a force can move: tblock, pusher",
+    ):
+        simloop.run_scenario(
+            simloop.Scenario(scene=SCENES / "pusht.xml", steps=10, disturbances=[dict(body="tblok", force=[1, 0, 0])])
+        )
     with pytest.raises(ValueError, match="setps: unknown key"):
         simloop.Scenario.from_file(_write(tmp_path / "bad.toml", "setps = 3\n"))
 
@@ -105,8 +121,9 @@ def test_record_all_takes_every_joint_and_actuator_of_a_robot_of_hinges():
     joints = [n for n in scene.names("joint")]
     assert [c for c in result.column_names if c.endswith("_vel")] == [f"{j}_vel" for j in joints[1:]]  # [0]: free
     assert [c for c in result.column_names if c.endswith("_force")] == [f"{a}_force" for a in scene.names("actuator")]
-    listed = simloop.Scenario(scene=SCENES / "walker.xml", steps=20,
-                              record={"joints": joints, "actuators": scene.names("actuator")})
+    listed = simloop.Scenario(
+        scene=SCENES / "walker.xml", steps=20, record={"joints": joints, "actuators": scene.names("actuator")}
+    )
     np.testing.assert_array_equal(simloop.run_scenario(listed).trajectory, result.trajectory)
     assert repr(simloop.Scenario(scene=SCENES / "walker.xml", record={"bodies": "all"})).endswith("bodies='all')")
     with pytest.raises(ValueError, match=r'record.joints: expected an array of names or "all", got a string'):
@@ -118,14 +135,20 @@ def test_record_all_takes_every_joint_and_actuator_of_a_robot_of_hinges():
 
 
 def test_tendons_are_recorded_by_name_or_all(tmp_path):
-    scene = _write(tmp_path / "two_slides.xml", """<mujoco><worldbody>
+    scene = _write(
+        tmp_path / "two_slides.xml",
+        """<mujoco><worldbody>
       <body><joint name="a" type="slide" axis="1 0 0"/><geom size="0.1" mass="1"/>
         <body><joint name="b" type="slide" axis="0 1 0"/><geom size="0.1" mass="1"/></body></body></worldbody>
       <tendon><fixed name="sum"><joint joint="a" coef="1"/><joint joint="b" coef="1"/></fixed></tendon>
-    </mujoco>""")
+    </mujoco>""",
+    )
     for tendons in (["sum"], "all"):
-        r = simloop.run_scenario(simloop.Scenario(scene=scene, steps=20, reset={"qvel": [0.3, 0.5]},
-                                                  record={"joints": "all", "tendons": tendons}))
+        r = simloop.run_scenario(
+            simloop.Scenario(
+                scene=scene, steps=20, reset={"qvel": [0.3, 0.5]}, record={"joints": "all", "tendons": tendons}
+            )
+        )
         assert r.column_names[-3:] == ("sum_length", "sum_vel", "ncon") and r.column_units["sum_length"] == "m or rad"
         np.testing.assert_array_equal(r.column("sum_length"), r.column("a_pos") + r.column("b_pos"))
         assert r.column("sum_length")[-1] > 0.01
@@ -138,8 +161,22 @@ def _write(path: Path, text: str) -> Path:
 
 def test_quick_flags_on_any_scene(tmp_path):
     walker = str(SCENES / "walker.xml")
-    proc = run_command(["--model", walker, "--body", "torso", "--ctrl", "hip_left=0.5", "--ctrl", "3=-0.2",
-                        "--no-rerun", "--out", "w"], tmp_path)
+    proc = run_command(
+        [
+            "--model",
+            walker,
+            "--body",
+            "torso",
+            "--ctrl",
+            "hip_left=0.5",
+            "--ctrl",
+            "3=-0.2",
+            "--no-rerun",
+            "--out",
+            "w",
+        ],
+        tmp_path,
+    )
     assert proc.returncode == 0, proc.stderr
     metrics = json.loads((tmp_path / "w" / "metrics.json").read_text())
     assert metrics["timestep"] == 0.004  # the scene's own, not the chapter's 0.002
@@ -148,16 +185,28 @@ def test_quick_flags_on_any_scene(tmp_path):
     assert header[:4] == ["step", "time", "hip_left_ctrl", "knee_left_ctrl"]
     # Errors name the flag, what the scene has, and a likely typo; nothing is written.
     for args, message in [
-        (["--model", walker], '--model: {}: the model has no body named "box"; for any other scene, name the body'
-                              ' to shove (--body) or run a --scenario'.format(walker)),
-        (["--model", walker, "--body", "torsoo"], "--body: no body named 'torsoo' (did you mean 'torso'?); the scene's "
-                                                  "bodies a force can move: torso, thigh_left, shin_left, thigh_right, shin_right"),
-        (["--model", walker, "--body", "torso", "--ctrl", "hip=1"], "--ctrl hip: no actuator named 'hip'; the scene's "
-                                                                    "actuators: hip_left, knee_left, hip_right, knee_right"),
-        (["--ctrl", "push_motor=fast"], "--ctrl must be ACTUATOR=VALUE (an actuator's name or index, a finite number), "
-                                        "got 'push_motor=fast'"),
-        (["--scenario", str(SCENES / "pusht.toml"), "--energy-audit"],
-         "--energy-audit accounts for the chapter's box and pusher only (not with --scenario, --body or --ctrl)"),
+        (
+            ["--model", walker],
+            '--model: {}: the model has no body named "box"; for any other scene, name the body'
+            " to shove (--body) or run a --scenario".format(walker),
+        ),
+        (
+            ["--model", walker, "--body", "torsoo"],
+            "--body: no body named 'torsoo' (did you mean 'torso'?); the scene's "
+            "bodies a force can move: torso, thigh_left, shin_left, thigh_right, shin_right",
+        ),
+        (
+            ["--model", walker, "--body", "torso", "--ctrl", "hip=1"],
+            "--ctrl hip: no actuator named 'hip'; the scene's actuators: hip_left, knee_left, hip_right, knee_right",
+        ),
+        (
+            ["--ctrl", "push_motor=fast"],
+            "--ctrl must be ACTUATOR=VALUE (an actuator's name or index, a finite number), got 'push_motor=fast'",
+        ),
+        (
+            ["--scenario", str(SCENES / "pusht.toml"), "--energy-audit"],
+            "--energy-audit accounts for the chapter's box and pusher only (not with --scenario, --body or --ctrl)",
+        ),
     ]:
         for python in (False, True):
             proc = run_command([*args, "--out", "bad"], tmp_path, python=python)
@@ -167,21 +216,27 @@ def test_quick_flags_on_any_scene(tmp_path):
 
 
 def test_a_cut_window_and_the_numpy_generator(tmp_path):
-    proc = subprocess.run([str(sim_loop_exe()), "--body", "box", "--steps", "1030", "--rng", "numpy", "--out", "o"],
-                          cwd=tmp_path, capture_output=True, text=True)
+    proc = subprocess.run(
+        [str(sim_loop_exe()), "--body", "box", "--steps", "1030", "--rng", "numpy", "--out", "o"],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+    )
     assert proc.returncode == 0, proc.stderr
     metrics = json.loads((tmp_path / "o" / "metrics.json").read_text())
     (shove,) = metrics["disturbances"]
     # the chapter's shove on the box, drawn by numpy's default_rng(0): +9.82 N
     assert shove["force"][1] == round(simloop.draw_shove(0, 1030, rng="numpy").force_y, 6)
     assert shove["start_step"] == 515 and shove["steps"] == 50
-    short = simloop.run_scenario(simloop.Scenario(steps=1030, disturbances=[dict(body="box", force=[0, 5, 0],
-                                                                                 start_step=1000, steps=50)]))
+    short = simloop.run_scenario(
+        simloop.Scenario(steps=1030, disturbances=[dict(body="box", force=[0, 5, 0], start_step=1000, steps=50)])
+    )
     (cut,) = short.disturbances
     assert cut["end_step"] == 1030 and cut["asked_end_step"] == 1050
     assert "30 steps from step 1000 (of 50: the run ended first)" in short.summary()
-    late = simloop.run_scenario(simloop.Scenario(steps=5, disturbances=[dict(body="box", force=[0, 5, 0],
-                                                                             start_step=250)]))
+    late = simloop.run_scenario(
+        simloop.Scenario(steps=5, disturbances=[dict(body="box", force=[0, 5, 0], start_step=250)])
+    )
     assert "N m, never: it starts after the run's 5 steps\n" in late.summary(), late.summary()
 
 
@@ -190,9 +245,17 @@ def test_the_recording_draws_the_scene(tmp_path):
     assert proc.returncode == 0, proc.stderr
     chunks = load_chunks(tmp_path / "r" / "sim_loop.rrd")
     entities = {path for path, _ in chunks}
-    for entity in ["/world/static/floor", "/world/static/goal", "/world/bodies/tblock/t_bar",
-                   "/world/bodies/tblock/t_stem", "/world/bodies/pusher/tip", "/world/bodies/tblock",
-                   "/plots/tblock_z", "/plots/push_y_ctrl", "/plots/ncon"]:
+    for entity in [
+        "/world/static/floor",
+        "/world/static/goal",
+        "/world/bodies/tblock/t_bar",
+        "/world/bodies/tblock/t_stem",
+        "/world/bodies/pusher/tip",
+        "/world/bodies/tblock",
+        "/plots/tblock_z",
+        "/plots/push_y_ctrl",
+        "/plots/ncon",
+    ]:
         assert entity in entities, sorted(entities)
     result = simloop.run_scenario(SCENES / "pusht.toml")
     z = np.array([v[0] for v in chunks[("/plots/tblock_z", False)]["Scalars:scalars"]])
@@ -210,7 +273,7 @@ def test_a_control_from_a_csv_file(tmp_path):
     (tmp_path / "u.csv").write_text("push_x\n" + "".join(f"{v!r}\n" for v in values))
     s = simloop.Scenario(scene=SCENES / "pusht.xml", steps=60, controls={"push_x": tmp_path / "u.csv"})
     applied = simloop.run_scenario(s).column("push_x_ctrl")
-    np.testing.assert_array_equal(applied[:40], values)        # step by step, as written (inside ctrlrange)
+    np.testing.assert_array_equal(applied[:40], values)  # step by step, as written (inside ctrlrange)
     np.testing.assert_array_equal(applied[40:60], values[-1])  # then the last value holds
 
 
@@ -219,12 +282,21 @@ def test_a_scenario_the_run_would_refuse_is_bad_input(tmp_path):
     # began: exit 1, in words that named no flag, file or key.
     pusht = str(SCENES / "pusht.xml")
     cases = [
-        ("short.toml", f'scene = "{pusht}"\nduration = 0.0001\n',
-         "the run's length (0.0001 s) is less than one step of 0.002 s"),
-        ("long.toml", f'scene = "{pusht}"\nduration = 1e30\n',
-         "the run's length (1e+30 s) is more than 4611686018427387903 steps of 0.002 s"),
-        ("twice.toml", f'scene = "{pusht}"\nsteps = 10\n[record]\nbodies = ["tblock", "tblock"]\n',
-         "two recorded columns would both be named 'tblock_x': rename one of the scene's elements, or record fewer"),
+        (
+            "short.toml",
+            f'scene = "{pusht}"\nduration = 0.0001\n',
+            "the run's length (0.0001 s) is less than one step of 0.002 s",
+        ),
+        (
+            "long.toml",
+            f'scene = "{pusht}"\nduration = 1e30\n',
+            "the run's length (1e+30 s) is more than 4611686018427387903 steps of 0.002 s",
+        ),
+        (
+            "twice.toml",
+            f'scene = "{pusht}"\nsteps = 10\n[record]\nbodies = ["tblock", "tblock"]\n',
+            "two recorded columns would both be named 'tblock_x': rename one of the scene's elements, or record fewer",
+        ),
     ]
     for name, text, message in cases:
         path = _write(tmp_path / name, text)
@@ -240,8 +312,14 @@ def test_keyword_scenarios_refuse_odd_values_in_one_line_naming_them():
     # These raised Python's own words ("'bool' object is not iterable",
     # "not enough values to unpack") or a TOML error about the generated text.
     pusht = str(SCENES / "pusht.xml")
-    for controls in ({"push_x": "1"}, {"push_x": True}, {"push_x": None}, {"push_x": [(0.0, 1.0, 2.0)]},
-                     {"push_x": [("a", 1.0)]}, {"push_x": 10 ** 400}):
+    for controls in (
+        {"push_x": "1"},
+        {"push_x": True},
+        {"push_x": None},
+        {"push_x": [(0.0, 1.0, 2.0)]},
+        {"push_x": [("a", 1.0)]},
+        {"push_x": 10**400},
+    ):
         with pytest.raises((TypeError, ValueError)) as error:
             simloop.Scenario(scene=pusht, controls=controls)
         assert str(error.value).startswith("controls['push_x'] must be"), str(error.value)
@@ -249,8 +327,8 @@ def test_keyword_scenarios_refuse_odd_values_in_one_line_naming_them():
     s = simloop.Scenario(scene=pusht, steps=10, controls={"push_x": np.int64(1), 1: np.float32(0.5)})
     assert s.toml.count('"value" = ') == 2
     # Names outside the Basic Multilingual Plane are written as TOML escapes.
-    with pytest.raises(ValueError, match="disturbance\\[0\\]: no body named 't\U0001F600'"):
-        simloop.run_scenario(simloop.Scenario(scene=pusht, disturbances=[dict(body="t\U0001F600", force=[0, 1, 0])]))
+    with pytest.raises(ValueError, match="disturbance\\[0\\]: no body named 't\U0001f600'"):
+        simloop.run_scenario(simloop.Scenario(scene=pusht, disturbances=[dict(body="t\U0001f600", force=[0, 1, 0])]))
     with pytest.raises(ValueError, match="^scene must be text"):
         simloop.Scenario(scene="tests/\udcffx.xml")
 
@@ -262,8 +340,14 @@ def test_the_chapters_scenario_is_the_chapters_run_bit_for_bit(seed, rng, timest
     # columns and metrics, written by its own loop).
     chapter = simloop.run(seed=seed, rng=rng, timestep=0.002 if timestep is None else timestep)
     scenario = simloop.run_scenario(simloop.Scenario.chapter(), seed=seed, rng=rng, timestep=timestep)
-    pairs = {"ctrl": "push_motor_ctrl", "shove_x": "box_fx", "shove_y": "box_fy", "shove_z": "box_fz",
-             "pusher_x": "pusher_slide_pos", "pusher_vx": "pusher_slide_vel"}
+    pairs = {
+        "ctrl": "push_motor_ctrl",
+        "shove_x": "box_fx",
+        "shove_y": "box_fy",
+        "shove_z": "box_fz",
+        "pusher_x": "pusher_slide_pos",
+        "pusher_vx": "pusher_slide_vel",
+    }
     for axis in ("x", "y", "z", "vx", "vy", "vz"):
         pairs["box_" + axis] = "box_" + axis
     for ours, theirs in pairs.items():
@@ -285,8 +369,16 @@ def test_the_chapters_result_is_a_run_record_with_its_report_on_top(tmp_path):
     assert chapter.column_units["box_z"] == "m" and chapter.column_units["ncon"] == ""
     assert np.array_equal(chapter.final_row, chapter.trajectory[-1], equal_nan=True)
     # its own metrics and files are the chapter's
-    assert set(chapter.metrics) == {"box_final_pos", "box_final_speed", "lateral_drift", "perturb",
-                                    "pusher_final_x", "seed", "shove_moved_box", "steps"}
+    assert set(chapter.metrics) == {
+        "box_final_pos",
+        "box_final_speed",
+        "lateral_drift",
+        "perturb",
+        "pusher_final_x",
+        "seed",
+        "shove_moved_box",
+        "steps",
+    }
     chapter.write(tmp_path)
     assert (tmp_path / "metrics.json").read_text() == chapter.metrics_json()
     assert (tmp_path / "trajectory.csv").read_text() == chapter.trajectory_csv()
@@ -294,7 +386,12 @@ def test_the_chapters_result_is_a_run_record_with_its_report_on_top(tmp_path):
     # state (the second half unshoved, as the first half's shove is over).
     whole = simloop.run_scenario(simloop.Scenario.chapter(), seed=2, steps=800, perturb=False)
     first = simloop.run_scenario(simloop.Scenario.chapter(), seed=2, steps=400, perturb=False)
-    rest = simloop.run_scenario(simloop.Scenario.chapter(), seed=2, steps=400, perturb=False,
-                                initial_state=simloop.run(seed=2, steps=400, perturb=False).final_state)
+    rest = simloop.run_scenario(
+        simloop.Scenario.chapter(),
+        seed=2,
+        steps=400,
+        perturb=False,
+        initial_state=simloop.run(seed=2, steps=400, perturb=False).final_state,
+    )
     assert np.array_equal(first.final_state, simloop.run(seed=2, steps=400, perturb=False).final_state)
     assert np.array_equal(rest.final_state, whole.final_state)

@@ -5,7 +5,6 @@ to push, a MuJoCo error while stepping quoting the timestep that ran, and
 MuJoCo's load-time warnings on the report."""
 
 import pytest
-
 import simloop
 from conftest import run_command
 from expected import expected, stepping_error_scene
@@ -42,8 +41,10 @@ def test_an_unnamed_body_is_shoved_by_its_index(tmp_path, python):
     assert "body2_fy" in header and "body2_x" in header
     refused = run_command(["--model", arm, "--body", "3", "--out", "o"], tmp_path, python)
     assert refused.returncode == 2
-    assert refused.stderr.endswith("--body: body index 3 is out of range: the scene has 3 bodies (0 to 2); the scene's "
-                                   "bodies a force can move: unnamed, by index: 1, 2\n"), refused.stderr
+    assert refused.stderr.endswith(
+        "--body: body index 3 is out of range: the scene has 3 bodies (0 to 2); the scene's "
+        "bodies a force can move: unnamed, by index: 1, 2\n"
+    ), refused.stderr
     assert refused.stderr.count("\n") == 1
 
 
@@ -69,13 +70,18 @@ def test_a_mujoco_error_while_stepping_quotes_the_timestep_that_ran(tmp_path, py
     proc = run_command(["--model", falls, "--body", "b1", "--no-rerun", "--out", "o"], tmp_path, python)
     assert proc.returncode == 1
     prefix = "sim-loop: " if python else "sim_loop: "
-    assert proc.stderr.startswith(f"{prefix}MuJoCo error while running 2000 steps of --model falls.xml (the "
-                                  "scenario's length, timestep 0.004 s: the scene's own, --record-every 1): running "
-                                  "the model at timestep 0.004 s, in steps "), proc.stderr
+    assert proc.stderr.startswith(
+        f"{prefix}MuJoCo error while running 2000 steps of --model falls.xml (the "
+        "scenario's length, timestep 0.004 s: the scene's own, --record-every 1): running "
+        "the model at timestep 0.004 s, in steps "
+    ), proc.stderr
     assert f": {says}" in proc.stderr, proc.stderr
     assert proc.stderr.count("\n") == 1, proc.stderr
-    given = run_command(["--model", falls, "--body", "b1", "--steps", "3000", "--timestep", "0.003", "--no-rerun",
-                         "--out", "o"], tmp_path, python)
+    given = run_command(
+        ["--model", falls, "--body", "b1", "--steps", "3000", "--timestep", "0.003", "--no-rerun", "--out", "o"],
+        tmp_path,
+        python,
+    )
     assert "(--steps 3000, --timestep 0.003, --record-every 1): running the model at timestep 0.003 s" in given.stderr
     assert f": {says}" in given.stderr, given.stderr
 
@@ -99,8 +105,9 @@ def test_the_compilers_load_time_warning_is_on_the_report(tmp_path, python):
     # No scene is known that makes MuJoCo 4.0's compiler warn; the table has one for 2.2.
     size, warning = expected("errors.load_warning_size"), expected("errors.load_warning_says")
     scene = simloop._core.PUSHER_SCENE_XML
-    full = write(tmp_path, "full.xml", scene.replace('<compiler autolimits="true"/>',
-                                                     f'<compiler autolimits="true"/>{size}'))
+    full = write(
+        tmp_path, "full.xml", scene.replace('<compiler autolimits="true"/>', f'<compiler autolimits="true"/>{size}')
+    )
     check_load_warning(tmp_path, python, full, warning)
     plain = run_command(["--smoke", "--no-rerun", "--out", "p"], tmp_path, python)
     assert "while loading" not in plain.stdout
@@ -117,7 +124,8 @@ WELDED = """<mujoco model="welded">
   <worldbody><geom type="plane" size="2 2 0.1"/>
     <body name="table" pos="0 0 0.4"><geom type="box" size="0.5 0.5 0.02"/>
       <body name="lamp" pos="0 0 0.1"><geom type="sphere" size="0.05"/></body></body>
-    <body name="target" mocap="true" pos="0.2 0 0.5"><geom type="sphere" size="0.02" contype="0" conaffinity="0"/></body>
+    <body name="target" mocap="true" pos="0.2 0 0.5">
+      <geom type="sphere" size="0.02" contype="0" conaffinity="0"/></body>
   </worldbody>
 </mujoco>
 """
@@ -131,8 +139,9 @@ def test_a_scene_with_nothing_to_push_runs_and_says_so(tmp_path, python, scene):
     assert proc.returncode == 0, proc.stderr
     lines = proc.stdout.splitlines()
     assert "model: still.xml" in lines
-    assert ("nothing could be pushed: the scene has no body a force can move and no actuator; it ran as it is"
-            in lines), proc.stdout
+    assert (
+        "nothing could be pushed: the scene has no body a force can move and no actuator; it ran as it is" in lines
+    ), proc.stdout
     rows = (tmp_path / "o" / "trajectory.csv").read_text().splitlines()
     assert len(rows) == 1 + 51 and rows[0].startswith("step,time"), rows[:2]  # a header, then steps 0 to 50
     assert (tmp_path / "o" / "sim_loop.rrd").exists() == python

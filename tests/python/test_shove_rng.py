@@ -7,10 +7,9 @@ SeedSequence must give the very same doubles for every seed.
 
 import numpy as np
 import pytest
-
 import simloop
-from simloop import _core
 from conftest import run_command
+from simloop import _core
 
 U64_MAX = 2**64 - 1
 
@@ -111,7 +110,12 @@ def test_draw_shove_is_the_runs_shove_without_the_run():
     for rng in ("mt19937_64", "numpy"):
         drawn = simloop.draw_shove(seed=7, steps=600, rng=rng)
         ran = simloop.run(seed=7, steps=600, rng=rng).shove
-        assert (drawn.newtons, drawn.sign, drawn.start_step, drawn.steps, drawn.rng) == \
-               (ran.newtons, ran.sign, ran.start_step, ran.steps, ran.rng)
+        assert (drawn.newtons, drawn.sign, drawn.start_step, drawn.steps, drawn.rng) == (
+            ran.newtons,
+            ran.sign,
+            ran.start_step,
+            ran.steps,
+            ran.rng,
+        )
     with pytest.raises(ValueError, match="rng must be 'mt19937_64' or 'numpy', got 'pcg'"):
         simloop.draw_shove(rng="pcg")

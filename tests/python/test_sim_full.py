@@ -10,7 +10,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 import simloop
 
 SCENES = Path(__file__).resolve().parents[1] / "scenes"
@@ -61,10 +60,13 @@ def test_array_writes_take_effect_at_the_next_step():
 
 def test_a_mocap_body_goes_where_mocap_pos_and_mocap_quat_put_it():
     """MuJoCo's mocap bodies (a Menagerie arm's target) move by their mocap arrays, inputs as ctrl is."""
-    sim = simloop.Sim(simloop.Model.from_xml_string(
-        '<mujoco><worldbody><body name="box"><freejoint/><geom size=".1"/></body>'
-        '<body name="target" mocap="true" pos="0 0 1"><geom size=".05" contype="0" conaffinity="0"/></body>'
-        '</worldbody></mujoco>'))
+    sim = simloop.Sim(
+        simloop.Model.from_xml_string(
+            '<mujoco><worldbody><body name="box"><freejoint/><geom size=".1"/></body>'
+            '<body name="target" mocap="true" pos="0 0 1"><geom size=".05" contype="0" conaffinity="0"/></body>'
+            "</worldbody></mujoco>"
+        )
+    )
     assert sim.mocap_pos.shape == (1, 3) and np.array_equal(sim.mocap_quat, [[1, 0, 0, 0]])
     sim.mocap_pos[0] = [0.5, 0.0, 0.5]
     sim.named.data.mocap_quat["target"] = [0.0, 0.0, 0.0, 1.0]  # rows by the mocap body's name
@@ -80,7 +82,7 @@ def test_views_are_views_and_keep_their_sim_alive():
     qpos = sim.qpos
     sensors = sim.sensordata
     drive(sim, 50)
-    assert np.array_equal(qpos, sim.get_state()[1:1 + sim.model.nq])  # moved with the Sim
+    assert np.array_equal(qpos, sim.get_state()[1 : 1 + sim.model.nq])  # moved with the Sim
     with pytest.raises(ValueError, match="read-only"):
         sensors[0] = 1.0
     del sim
@@ -101,7 +103,9 @@ def test_named_access_by_name_and_index():
     sim.forward()
     assert np.array_equal(torso.xpos, sim.qpos[:3])  # the free body's origin is its qpos
     v = sim.joint("root").qvel
-    assert np.allclose(torso.linear_velocity, v[:3]) and np.allclose(torso.angular_velocity, sim.body(1).angular_velocity)
+    assert np.allclose(torso.linear_velocity, v[:3]) and np.allclose(
+        torso.angular_velocity, sim.body(1).angular_velocity
+    )
     assert "torso" in repr(torso) and "free" in repr(sim.joint("root")) and "hip_left" in repr(sim.actuator(0))
 
 
@@ -109,8 +113,10 @@ def test_unknown_names_say_what_the_scene_has():
     sim = simloop.Sim(WALKER)
     with pytest.raises(ValueError) as caught:
         sim.body("torsoo")
-    assert str(caught.value) == ("no body named 'torsoo' (did you mean 'torso'?); the scene's bodies: world, torso, "
-                                 "thigh_left, shin_left, thigh_right, shin_right")
+    assert str(caught.value) == (
+        "no body named 'torsoo' (did you mean 'torso'?); the scene's bodies: world, torso, "
+        "thigh_left, shin_left, thigh_right, shin_right"
+    )
     with pytest.raises(ValueError, match="no joint named 'hip'; the scene's joints: root, hip_left"):
         sim.joint("hip")
     with pytest.raises(ValueError, match="actuator index 4 is out of range: the scene has 4 actuators"):
@@ -189,10 +195,16 @@ def test_state_layout_and_bad_states():
     layout = sim.state_layout()
     names = [n for n, _ in layout]
     assert layout[:3] == [("time", 1), ("qpos", 11), ("qvel", 10)] and "userdata" in names
-    assert names[-1] in ("userdata", "plastic", "tree_asleep")  # 2.2's layout ends with userdata; 3.x's mj_getState's does not
+    assert names[-1] in (
+        "userdata",
+        "plastic",
+        "tree_asleep",
+    )  # 2.2's layout ends with userdata; 3.x's mj_getState's does not
     size = sum(n for _, n in layout)
     assert sim.get_state().shape == (size,) == (sim.state_size,)
-    with pytest.raises(ValueError, match=rf"state must have {size} values for this model \(time, qpos, .*\), got {size - 1}$"):
+    with pytest.raises(
+        ValueError, match=rf"state must have {size} values for this model \(time, qpos, .*\), got {size - 1}$"
+    ):
         sim.set_state(np.zeros(size - 1))
     with pytest.raises(ValueError, match="state must have dtype float64, got float32"):
         sim.set_state(np.zeros(size, dtype=np.float32))
@@ -221,8 +233,9 @@ def test_reset_to_zero_and_to_keyframes():
     assert sim.qvel[0] == 1.0 and sim.qpos[2] == 2.0
     sim.reset()
     assert sim.qpos[2] == 1.0 and sim.qvel[0] == 0.0
-    with pytest.raises(ValueError, match="no keyframe named 'hihg' \\(did you mean 'high'\\?\\); "
-                                         "the scene's keyframes: high, moving"):
+    with pytest.raises(
+        ValueError, match="no keyframe named 'hihg' \\(did you mean 'high'\\?\\); the scene's keyframes: high, moving"
+    ):
         sim.reset(keyframe="hihg")
     with pytest.raises(ValueError, match="keyframe index 2 is out of range: the scene has 2 keyframes"):
         sim.reset(keyframe=2)

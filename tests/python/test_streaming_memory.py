@@ -14,8 +14,13 @@ GROWTH_LIMIT_MIB = 10.0
 
 
 def peak_mib(args, tmp_path) -> float:
-    proc = subprocess.run([sys.executable, "-m", "simloop", *args, "--out", str(tmp_path / "o")], capture_output=True,
-                          text=True, stdin=subprocess.DEVNULL, timeout=300)
+    proc = subprocess.run(
+        [sys.executable, "-m", "simloop", *args, "--out", str(tmp_path / "o")],
+        capture_output=True,
+        text=True,
+        stdin=subprocess.DEVNULL,
+        timeout=300,
+    )
     assert proc.returncode == 0, proc.stderr
     return float(re.search(r"peak memory: ([0-9.]+) MiB", proc.stdout.splitlines()[-1]).group(1))
 

@@ -8,7 +8,6 @@ from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 import pytest
-
 import simloop
 from conftest import ROOT
 
@@ -83,8 +82,10 @@ def test_arrow_types_follow_the_columns():
     assert t.schema.field("perturb").type == pa.bool_()
     assert t.schema.field("rng").type == pa.string()
     assert t.schema.field("lateral_drift").type == pa.float64()
-    assert t.column("lateral_drift").to_pylist() == simloop.table(simloop.run_batch(seeds=[0, 1], steps=100))[
-        "lateral_drift"].tolist()
+    assert (
+        t.column("lateral_drift").to_pylist()
+        == simloop.table(simloop.run_batch(seeds=[0, 1], steps=100))["lateral_drift"].tolist()
+    )
 
 
 def test_a_sweep_is_one_row_per_timestep():
@@ -95,7 +96,9 @@ def test_a_sweep_is_one_row_per_timestep():
     assert df["peak_box_z"].tolist() == [p.peak_box_z for p in sweep.points]
     assert df["edge"].tolist() == [p.timestep == sweep.edge for p in sweep.points]
     assert df["steps"].dtype == np.int64 and df["warnings"].dtype == np.int64
-    assert simloop.to_arrow(sweep).num_rows == 4 and simloop.table(sweep)["timestep"].tolist() == df["timestep"].tolist()
+    assert (
+        simloop.to_arrow(sweep).num_rows == 4 and simloop.table(sweep)["timestep"].tolist() == df["timestep"].tolist()
+    )
 
 
 def test_tables_pickle_and_concatenate():
@@ -153,7 +156,8 @@ def test_a_batch_is_one_kind_of_table_locally_metrics_only_and_on_an_executor(ki
     assert (kept.has_results, lean.has_results, remote.has_results) == (True, False, False)
     # The results are the rows' runs, in the rows' order (itertools.product(seeds, timesteps)).
     assert [seed_and_timestep(r) for r in kept.results] == [
-        (kept.row(i)["seed"], kept.row(i)["timestep"]) for i in range(len(kept))]
+        (kept.row(i)["seed"], kept.row(i)["timestep"]) for i in range(len(kept))
+    ]
     assert kept["seed"].tolist() == [5, 5, 6, 6]
     # No runs: no rows and no columns, in every mode.
     with ThreadPoolExecutor(1) as pool:
@@ -165,9 +169,12 @@ def test_a_table_iterates_over_its_column_names_and_is_indexed_by_name_only():
     t = simloop.run_batch(seeds=[0, 1, 2], steps=50)
     assert list(t) == t.column_names and "lateral_drift" in t and 0 not in t
     for index in (0, np.int64(1), -1, slice(0, 2), True):
-        with pytest.raises(TypeError, match=r"^a BatchTable is indexed by column name, got .+: table\.row\(i\) is "
-                                            r"run i's row as a dict, table\.results\[i\] its result \(when the batch "
-                                            r"kept them\)$"):
+        with pytest.raises(
+            TypeError,
+            match=r"^a BatchTable is indexed by column name, got .+: table\.row\(i\) is "
+            r"run i's row as a dict, table\.results\[i\] its result \(when the batch "
+            r"kept them\)$",
+        ):
             t[index]
     with pytest.raises(KeyError, match="no column named 'drift'"):
         t["drift"]
@@ -187,9 +194,12 @@ def test_a_table_iterates_over_its_column_names_and_is_indexed_by_name_only():
 def test_a_table_without_results_says_so_in_one_line():
     lean = simloop.run_batch(seeds=[0], steps=50, metrics_only=True)
     assert not lean.has_results
-    with pytest.raises(ValueError, match=r"^this BatchTable holds no results, only its columns: metrics_only=True and "
-                                         r"executor= batches keep none \(run the batch locally without them to keep "
-                                         r"each run's result\)$"):
+    with pytest.raises(
+        ValueError,
+        match=r"^this BatchTable holds no results, only its columns: metrics_only=True and "
+        r"executor= batches keep none \(run the batch locally without them to keep "
+        r"each run's result\)$",
+    ):
         lean.results
     with pytest.raises(ValueError, match=r"^results must hold one result per row \(2\), got 1$"):
         simloop.BatchTable({"x": np.zeros(2)}, [simloop.run(steps=10)])

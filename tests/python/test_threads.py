@@ -4,7 +4,6 @@ Each check runs in a subprocess, so a crash of the interpreter is a test
 failure rather than the end of pytest."""
 
 import pytest
-
 import simloop
 from conftest import run_python
 
@@ -92,7 +91,8 @@ def test_a_sim_called_from_inside_its_own_step_refuses_instead_of_deadlocking():
 
 def test_a_vector_env_read_from_another_thread_mid_step_waits_instead_of_deadlocking():
     """Episodes (under the vector env): a second thread's call waits for a long step without the GIL."""
-    proc = run_python("""
+    proc = run_python(
+        """
         import threading, time
         import numpy as np
         from simloop import _core, Scenario
@@ -115,13 +115,16 @@ def test_a_vector_env_read_from_another_thread_mid_step_waits_instead_of_deadloc
         steps, _ = episodes.progress()  # waits for the step to end
         stepper.join()
         print("waited", steps.tolist(), episodes.steps_taken(0), episodes.time(1) > 0, episodes.warnings(0))
-    """, timeout=60)
+    """,
+        timeout=60,
+    )
     assert proc.returncode == 0, f"exit {proc.returncode}: {proc.stderr[-2000:]}"
     assert proc.stdout.split() == ["waited", "[400000,", "400000]", "400000", "True", "[]"]
 
 
 def test_episodes_called_from_a_signal_handler_inside_their_own_step_refuse_instead_of_deadlocking():
-    proc = run_python("""
+    proc = run_python(
+        """
         import signal
         import numpy as np
         from simloop import _core, Scenario
@@ -140,8 +143,12 @@ def test_episodes_called_from_a_signal_handler_inside_their_own_step_refuse_inst
         signal.setitimer(signal.ITIMER_REAL, 0)
         steps, _ = episodes.progress()  # usable again
         print(0 < steps[0] < 5_000_000)
-    """, timeout=60)
+    """,
+        timeout=60,
+    )
     assert proc.returncode == 0, f"exit {proc.returncode}: {proc.stderr[-2000:]}"
     assert proc.stdout.splitlines() == [
         "these episodes are in the middle of a call on this thread (a signal handler or progress callback called "
-        "it); call it after that call returns", "True"]
+        "it); call it after that call returns",
+        "True",
+    ]

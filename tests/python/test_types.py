@@ -17,19 +17,20 @@ import re
 import subprocess
 import sys
 from pathlib import Path
-from typing import List
+from typing import Dict, List
 
 import pytest
-from stub_signatures import _compare, _Stub
-
 import simloop
+from stub_signatures import _compare, _Stub
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
 STUB = ROOT / "python" / "simloop" / "_core.pyi"
 ALLOWLIST = HERE / "stubtest_allowlist.txt"
-FIX = ("update python/simloop/_core.pyi, then reinstall the package "
-       "(.venv/bin/pip install --no-deps .) so that the installed stub is the new one")
+FIX = (
+    "update python/simloop/_core.pyi, then reinstall the package "
+    "(.venv/bin/pip install --no-deps .) so that the installed stub is the new one"
+)
 
 
 @pytest.fixture(scope="module")
@@ -39,8 +40,14 @@ def mypy_cache(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 def _mypy(*args: str, cache: Path) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "mypy", "--cache-dir", str(cache), *args], cwd=ROOT,
-                          capture_output=True, text=True, stdin=subprocess.DEVNULL, timeout=300)
+    return subprocess.run(
+        [sys.executable, "-m", "mypy", "--cache-dir", str(cache), *args],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        stdin=subprocess.DEVNULL,
+        timeout=300,
+    )
 
 
 def test_the_installed_package_ships_this_stub_and_py_typed():
@@ -49,7 +56,8 @@ def test_the_installed_package_ships_this_stub_and_py_typed():
     stub = installed / "_core.pyi"
     assert stub.is_file(), f"{installed} has no _core.pyi: the wheel does not ship the stub"
     assert stub.read_text() == STUB.read_text(), (
-        f"the installed {stub} is not python/simloop/_core.pyi: reinstall (.venv/bin/pip install --no-deps .)")
+        f"the installed {stub} is not python/simloop/_core.pyi: reinstall (.venv/bin/pip install --no-deps .)"
+    )
 
 
 # stubtest's report, one error per paragraph: "error: NAME WHAT\nStub: ...\nRuntime: ...".
@@ -72,8 +80,14 @@ HINTS = {
 
 def test_stubtest_finds_no_difference():
     """stubtest on the installed simloop._core (as the package leaves it after import)."""
-    proc = subprocess.run([sys.executable, "-m", "mypy.stubtest", "simloop._core", "--allowlist", str(ALLOWLIST)],
-                          capture_output=True, text=True, stdin=subprocess.DEVNULL, timeout=300, cwd=HERE)
+    proc = subprocess.run(
+        [sys.executable, "-m", "mypy.stubtest", "simloop._core", "--allowlist", str(ALLOWLIST)],
+        capture_output=True,
+        text=True,
+        stdin=subprocess.DEVNULL,
+        timeout=300,
+        cwd=HERE,
+    )
     if proc.returncode == 0:
         return
     errors = _stubtest_errors(proc.stdout)
@@ -81,40 +95,54 @@ def test_stubtest_finds_no_difference():
     for error in errors:
         hint = next((h for key, h in HINTS.items() if key in error.splitlines()[0]), "")
         lines.append(f"- {error}" + (f"\n    -> {hint}" if hint else ""))
-    pytest.fail(f"mypy.stubtest: python/simloop/_core.pyi and simloop._core disagree ({len(errors)}); {FIX}\n"
-                + ("\n".join(lines) if lines else proc.stdout + proc.stderr), pytrace=False)
+    pytest.fail(
+        f"mypy.stubtest: python/simloop/_core.pyi and simloop._core disagree ({len(errors)}); {FIX}\n"
+        + ("\n".join(lines) if lines else proc.stdout + proc.stderr),
+        pytrace=False,
+    )
 
 
 def test_pybind11_signatures_match_the_stub():
     problems = _compare(_Stub(STUB))
     if problems:
-        pytest.fail(f"python/simloop/_core.pyi and pybind11's signatures of simloop._core disagree "
-                    f"({len(problems)}): update the stub (numpy.ndarray is written _Float64Array; check its dtype)\n"
-                    + "\n".join(f"- {p}" for p in problems), pytrace=False)
+        pytest.fail(
+            f"python/simloop/_core.pyi and pybind11's signatures of simloop._core disagree "
+            f"({len(problems)}): update the stub (numpy.ndarray is written _Float64Array; check its dtype)\n"
+            + "\n".join(f"- {p}" for p in problems),
+            pytrace=False,
+        )
 
 
 def test_the_comparison_sees_a_missing_parameter_and_a_wrong_type(tmp_path):
     """The check above can fail: a stub with one parameter dropped and one return type changed."""
     text = STUB.read_text()
-    broken = text.replace("def run(model: Model, config: RunConfig, progress: _Progress = None) -> RunResult: ...",
-                          "def run(model: Model, config: RunConfig) -> RunResult: ...")
+    broken = text.replace(
+        "def run(model: Model, config: RunConfig, progress: _Progress = None) -> RunResult: ...",
+        "def run(model: Model, config: RunConfig) -> RunResult: ...",
+    )
     broken = broken.replace("    def ctrl(self) -> float: ...", "    def ctrl(self) -> int: ...")
     assert broken.count("\n") == text.count("\n") and broken != text
     (tmp_path / "_core.pyi").write_text(broken)
     new = sorted(set(_compare(_Stub(tmp_path / "_core.pyi"))) - set(_compare(_Stub(STUB))))
     assert len(new) == 2, new
-    assert new[0].startswith("Sim.ctrl: returns float in the module, int in the stub; the module has: "
-                             "@property def ctrl(self) -> float: ..."), new
-    assert new[1].startswith("run: parameters (model, config, progress) in the module, (model, config) in the stub; "
-                             "the module has: def run(model: Model, config: RunConfig, progress: object = None)"), new
+    assert new[0].startswith(
+        "Sim.ctrl: returns float in the module, int in the stub; the module has: @property def ctrl(self) -> float: ..."
+    ), new
+    assert new[1].startswith(
+        "run: parameters (model, config, progress) in the module, (model, config) in the stub; "
+        "the module has: def run(model: Model, config: RunConfig, progress: object = None)"
+    ), new
 
 
 # ---- mypy --strict ------------------------------------------------------------
 
+
 def test_the_package_passes_mypy_strict(mypy_cache):
     """python/simloop with the stub, under pyproject.toml's [tool.mypy] (strict)."""
     proc = _mypy(cache=mypy_cache)
-    assert proc.returncode == 0, f"mypy (pyproject.toml's [tool.mypy], strict) on python/simloop:\n{proc.stdout}{proc.stderr}"
+    assert proc.returncode == 0, (
+        f"mypy (pyproject.toml's [tool.mypy], strict) on python/simloop:\n{proc.stdout}{proc.stderr}"
+    )
 
 
 def test_an_example_of_the_public_api_type_checks_and_runs(mypy_cache):
@@ -122,8 +150,9 @@ def test_an_example_of_the_public_api_type_checks_and_runs(mypy_cache):
     example = HERE / "typing_example.py"
     proc = _mypy("--strict", str(example), cache=mypy_cache)
     assert proc.returncode == 0, f"mypy --strict {example.name}:\n{proc.stdout}{proc.stderr}"
-    ran = subprocess.run([sys.executable, str(example)], capture_output=True, text=True, stdin=subprocess.DEVNULL,
-                         timeout=120, cwd=HERE)
+    ran = subprocess.run(
+        [sys.executable, str(example)], capture_output=True, text=True, stdin=subprocess.DEVNULL, timeout=120, cwd=HERE
+    )
     assert ran.returncode == 0, ran.stderr
 
 
@@ -131,8 +160,11 @@ def test_misuse_of_the_api_is_a_type_error(mypy_cache):
     """Each line of typing_misuse.py marked `# error: CODE` is a mypy error with that code, and no other line
     is: the stub's types are precise, not Any."""
     misuse = HERE / "typing_misuse.py"
-    expected = {i: m.group(1) for i, line in enumerate(misuse.read_text().splitlines(), 1)
-                if (m := re.search(r"# error: ([\w-]+)", line))}
+    expected = {
+        i: m.group(1)
+        for i, line in enumerate(misuse.read_text().splitlines(), 1)
+        if (m := re.search(r"# error: ([\w-]+)", line))
+    }
     assert len(expected) >= 8
     proc = _mypy("--strict", "--show-error-codes", "--no-pretty", str(misuse), cache=mypy_cache)
     found: Dict[int, List[str]] = {}
@@ -142,5 +174,6 @@ def test_misuse_of_the_api_is_a_type_error(mypy_cache):
             found.setdefault(int(m.group(1)), []).append(m.group(2))
     missed = {n: code for n, code in expected.items() if code not in found.get(n, [])}
     extra = {n: codes for n, codes in found.items() if n not in expected}
-    assert not missed and not extra, (f"lines mypy did not flag as expected: {missed}; unexpected errors: {extra}\n"
-                                      f"{proc.stdout}")
+    assert not missed and not extra, (
+        f"lines mypy did not flag as expected: {missed}; unexpected errors: {extra}\n{proc.stdout}"
+    )

@@ -9,7 +9,6 @@ import zlib
 
 import numpy as np
 import pytest
-
 from conftest import ROOT, run_command
 
 # Every check draws; a machine without EGL says so in the run's one line instead.
@@ -21,9 +20,9 @@ def apng_frames(path):
     assert data[:8] == b"\x89PNG\r\n\x1a\n"
     at, frames, delays, width, height, first = 8, None, [], 0, 0, b""
     while at < len(data):
-        size, kind = struct.unpack(">I4s", data[at:at + 8])
-        body = data[at + 8:at + 8 + size]
-        assert struct.unpack(">I", data[at + 8 + size:at + 12 + size])[0] == zlib.crc32(kind + body) & 0xFFFFFFFF
+        size, kind = struct.unpack(">I4s", data[at : at + 8])
+        body = data[at + 8 : at + 8 + size]
+        assert struct.unpack(">I", data[at + 8 + size : at + 12 + size])[0] == zlib.crc32(kind + body) & 0xFFFFFFFF
         if kind == b"IHDR":
             width, height = struct.unpack(">II", body[:8])
         elif kind == b"acTL":
@@ -43,7 +42,7 @@ def apng_frames(path):
 def test_the_chapters_video_is_an_animated_png_of_every_25th_of_a_second(tmp_path):
     run = run_command(["--seed", "0", "--no-rerun", "--video", "run.png", "--out", "out"], tmp_path)
     assert run.returncode == 0, run.stderr
-    assert f"video: run.png\n" in run.stdout
+    assert "video: run.png\n" in run.stdout
     frames, delays, first = apng_frames(tmp_path / "run.png")
     assert frames == len(delays) == 101  # 4 s of simulated time, a frame each 0.04 s, the first at t = 0
     assert delays == [0.04] * 101
@@ -56,16 +55,20 @@ def test_the_chapters_video_is_an_animated_png_of_every_25th_of_a_second(tmp_pat
 
 
 def test_break_its_frames_are_its_rows(tmp_path):
-    run = run_command(["--timestep", "0.05", "--no-perturb", "--steps", "40", "--no-rerun", "--video", "b.png",
-                       "--out", "out"], tmp_path)
+    run = run_command(
+        ["--timestep", "0.05", "--no-perturb", "--steps", "40", "--no-rerun", "--video", "b.png", "--out", "out"],
+        tmp_path,
+    )
     assert run.returncode == 0, run.stderr
     frames, delays, _ = apng_frames(tmp_path / "b.png")
     assert frames == 41 and set(delays) == {0.05}  # rows sparser than 1/25 s: each one a frame, played in real time
 
 
 def test_a_scenarios_video_draws_its_qpos_with_the_recording_beside(tmp_path):
-    run = run_command(["--scenario", str(ROOT / "tests/scenes/pusht.toml"), "--steps", "200", "--video", "pusht.png",
-                       "--out", "out"], tmp_path)
+    run = run_command(
+        ["--scenario", str(ROOT / "tests/scenes/pusht.toml"), "--steps", "200", "--video", "pusht.png", "--out", "out"],
+        tmp_path,
+    )
     assert run.returncode == 0, run.stderr
     frames, delays, first = apng_frames(tmp_path / "pusht.png")
     times = np.loadtxt(tmp_path / "out" / "trajectory.csv", delimiter=",", skiprows=1, usecols=1)
@@ -83,8 +86,9 @@ def test_without_ffmpeg_an_mp4_becomes_an_animated_png_and_says_so(tmp_path, mon
     assert apng_frames(tmp_path / "clip.png")[0] == 16  # 300 steps of 2 ms: 0.6 s, a frame each 0.04 s
 
 
-@pytest.mark.parametrize("asked, note", [("clip.gif", ".gif is not a format"),
-                                         ("clip", "a name without a suffix is not a format")])
+@pytest.mark.parametrize(
+    "asked, note", [("clip.gif", ".gif is not a format"), ("clip", "a name without a suffix is not a format")]
+)
 def test_a_video_asked_in_another_format_is_an_animated_png_and_says_so(asked, note, tmp_path):
     run = run_command(["--smoke", "--steps", "50", "--no-rerun", "--video", asked, "--out", "out"], tmp_path)
     assert run.returncode == 0, run.stderr
@@ -109,20 +113,24 @@ def test_a_video_that_cannot_be_made_leaves_nothing(tmp_path):
     assert not (tmp_path / "missing").exists()
     refused = run_command(["--smoke", "--video", "clip.png", "--out", "out"], tmp_path, python=False)
     assert refused.returncode == 2
-    assert refused.stderr == ("sim_loop: --video: sim_loop draws no pictures; python -m simloop --video clip.png "
-                              "does (nothing was written)\n")
+    assert refused.stderr == (
+        "sim_loop: --video: sim_loop draws no pictures; python -m simloop --video clip.png does (nothing was written)\n"
+    )
     assert not (tmp_path / "clip.png").exists() and not (tmp_path / "out" / "metrics.json").exists()
     assert [p for p in os.listdir(tmp_path) if p.startswith(".")] == []  # no temporary file left
 
 
-@pytest.mark.parametrize("video, says", [
-    ("out/trajectory.png", "is also the run's --plot's trajectory.png"),
-    ("out/metrics.json", "is also the run's metrics.json"),
-    ("out/trajectory.gif", "is also the run's --plot's trajectory.png"),  # an APNG at out/trajectory.png
-    ("/dev/null", "is a device, a pipe or a socket"),
-    ("somewhere/", "must name a file, not a folder"),
-    ("folder", "is a folder; name a file in it"),
-])
+@pytest.mark.parametrize(
+    "video, says",
+    [
+        ("out/trajectory.png", "is also the run's --plot's trajectory.png"),
+        ("out/metrics.json", "is also the run's metrics.json"),
+        ("out/trajectory.gif", "is also the run's --plot's trajectory.png"),  # an APNG at out/trajectory.png
+        ("/dev/null", "is a device, a pipe or a socket"),
+        ("somewhere/", "must name a file, not a folder"),
+        ("folder", "is a folder; name a file in it"),
+    ],
+)
 def test_a_video_never_shares_a_path_with_another_output_nor_writes_a_device_or_a_folder(tmp_path, video, says):
     (tmp_path / "folder").mkdir()
     done = run_command(["--steps", "20", "--no-rerun", "--plot", "--video", video, "--out", "out"], tmp_path)
@@ -133,8 +141,10 @@ def test_a_video_never_shares_a_path_with_another_output_nor_writes_a_device_or_
 
 
 def test_a_timestep_of_a_day_draws_a_video_whose_frames_apng_can_hold(tmp_path):
-    done = run_command(["--steps", "3", "--timestep", "86400", "--no-rerun", "--no-perturb", "--video", "v.png",
-                        "--out", "out"], tmp_path)
+    done = run_command(
+        ["--steps", "3", "--timestep", "86400", "--no-rerun", "--no-perturb", "--video", "v.png", "--out", "out"],
+        tmp_path,
+    )
     if "cannot render" in done.stderr:
         pytest.skip(done.stderr.strip())
     assert done.returncode == 0, done.stderr[-3000:]

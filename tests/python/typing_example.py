@@ -12,11 +12,10 @@ from pathlib import Path
 from typing import Any, Dict, List, Optional, Tuple
 
 import numpy as np
-from numpy.typing import NDArray
-from typing_extensions import assert_type
-
 import simloop
 import simloop.gym
+from numpy.typing import NDArray
+from typing_extensions import assert_type
 
 result = simloop.run(seed=1, steps=300, audit_energy=True, progress=lambda done, total: None)
 assert_type(result, simloop.RunResult)
