@@ -66,7 +66,7 @@ struct Episodes::Impl {
       if (e.step < e.schedule.steps) e.inputs->write(e.step, d);
       e.decision->observe(m, d);
     });
-    recorder->before_step(observation, e.step, m, d, true);
+    recorder->before_step(observation, e.step, m, d, true, e.decision->entering_ncon(d));
     recorder->after_step(observation, m, d);
   }
 

@@ -45,6 +45,8 @@ void derive_uncounted(const mjModel* m, mjData* d) {
 
 void DecisionStep::observe(const mjModel* m, mjData* d) {
   begun_ = false;
+  observed_ = true;
+  ncon_ = d->ncon;
   take_state(entering_, d);
   const bool callbacks = mjcb_control || mjcb_passive || mjcb_sensor || mjcb_act_dyn || mjcb_act_gain ||
                          mjcb_act_bias || mjcb_contactfilter;
@@ -107,7 +109,7 @@ LoopResult run_loop(const mjModel* m, mjData* d, const Schedule& schedule, const
         scheduled.write(step, d);
         decision.observe(m, d);
       });
-      recorder.before_step(observation.data(), step, m, d, true);
+      recorder.before_step(observation.data(), step, m, d, true, decision.entering_ncon(d));
       recorder.after_step(observation.data(), m, d);
       policy->decide(step, observation.data(), width, d->ctrl, nu);
       next_decision = steps - step > policy->every() ? step + policy->every() : steps;
@@ -123,7 +125,7 @@ LoopResult run_loop(const mjModel* m, mjData* d, const Schedule& schedule, const
         double* row = nullptr;
         if (until_record-- == 0) {
           row = block.next();
-          recorder.before_step(row, step, m, d, true);
+          recorder.before_step(row, step, m, d, true, decision.entering_ncon(d));
           if (derive_before_step) {
             derive_uncounted(m, d);
             recorder.after_step(row, m, d);
@@ -141,7 +143,7 @@ LoopResult run_loop(const mjModel* m, mjData* d, const Schedule& schedule, const
     if (control) control->advance(chunk_end - chunk_start);
   }
   double* last = block.next();
-  recorder.before_step(last, steps, m, d, false);
+  recorder.before_step(last, steps, m, d, false, d->ncon);
   // Before mj_forward, which would overwrite the warmstart the next step needs.
   result.final_state = get_state(m, d);
   // MuJoCo derives a state's quantities (and its energy) during a step; the

@@ -116,6 +116,7 @@ class DecisionStep {
   // The next physics step: the second half of the one observe() began, or
   // mj_step.
   void step(const mjModel* m, mjData* d) {
+    observed_ = false;
     if (!begun_) {
       mj_step(m, d);
       return;
@@ -126,14 +127,19 @@ class DecisionStep {
   }
   // Whether the last observe() began the next step (mj_step1).
   [[nodiscard]] bool begun() const noexcept { return begun_; }
+  // The contacts d held when the step began: observe() runs the collision
+  // again, which a row's ncon must not see (RowRecorder::before_step).
+  [[nodiscard]] int entering_ncon(const mjData* d) const noexcept { return observed_ ? ncon_ : d->ncon; }
 
  private:
   void take_state(std::vector<double>& into, const mjData* d) const;
   void put_state(const std::vector<double>& from, mjData* d) const;
   int nq_, nv_;
-  bool whole_forward_;            // the recorder reads the acceleration stage, RK4, plugins
-  bool begun_ = false;            // mj_step1 has run on the state entering the next step
-  bool held_ = false;             // mj_step1 rewrote qpos or qvel: stepped_ holds what it wrote
+  bool whole_forward_;     // the recorder reads the acceleration stage, RK4, plugins
+  bool begun_ = false;     // mj_step1 has run on the state entering the next step
+  bool held_ = false;      // mj_step1 rewrote qpos or qvel: stepped_ holds what it wrote
+  bool observed_ = false;  // observe() has run since the last step: ncon_ is d->ncon before it
+  int ncon_ = 0;
   std::vector<double> entering_;  // qpos and qvel as they entered the step
   std::vector<double> stepped_;   // and as mj_step1 left them
 };

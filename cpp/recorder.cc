@@ -73,6 +73,7 @@ void Recorder::add(Source::Kind kind, int id, int count, const std::vector<std::
   for (std::size_t i = 0; i < names.size(); ++i) {
     columns_.push_back({names[i], units.size() == 1 ? units[0] : units.at(i), integer, input, body});
   }
+  // (kNcon is read before the step: it is the count the step begins with.)
   const bool derived = kind == Source::kBodyPose || kind == Source::kBodyVelocity || kind == Source::kActuatorForce ||
                        kind == Source::kSensor || kind == Source::kTendon || kind == Source::kContacts;
   (derived ? after_ : before_).push_back(source);
@@ -98,10 +99,20 @@ Recorder::Recorder(const mjModel* m, const ResolvedScenario& scenario, const Sch
   }
   for (int b : scenario.bodies) {
     const std::string base = name_of(m, mjOBJ_BODY, b, "body");
-    add(Source::kBodyPose, b, 7, suffixed(base, {"_x", "_y", "_z", "_qw", "_qx", "_qy", "_qz"}),
-        joint_units(mjJNT_FREE, false), false, false, base);
-    add(Source::kBodyVelocity, b, 6, suffixed(base, {"_vx", "_vy", "_vz", "_wx", "_wy", "_wz"}),
-        joint_units(mjJNT_FREE, true), false, false, base);
+    const std::vector<std::string> pose = suffixed(base, {"_x", "_y", "_z", "_qw", "_qx", "_qy", "_qz"});
+    const std::vector<std::string> velocity = suffixed(base, {"_vx", "_vy", "_vz", "_wx", "_wy", "_wz"});
+    // A free joint of the world holds exactly these numbers, as the chapter
+    // reads its box: the quaternion as integrated (xquat is it normalised
+    // again), the linear velocity in the world frame, the angular in the
+    // body's. (A free joint deeper in the tree moves relative to its parent.)
+    const int joint = m->body_jntadr[b];
+    if (m->body_jntnum[b] >= 1 && m->jnt_type[joint] == mjJNT_FREE && m->body_parentid[b] == 0) {
+      add(Source::kQpos, m->jnt_qposadr[joint], 7, pose, joint_units(mjJNT_FREE, false), false, false, base);
+      add(Source::kQvel, m->jnt_dofadr[joint], 6, velocity, joint_units(mjJNT_FREE, true), false, false, base);
+    } else {
+      add(Source::kBodyPose, b, 7, pose, joint_units(mjJNT_FREE, false), false, false, base);
+      add(Source::kBodyVelocity, b, 6, velocity, joint_units(mjJNT_FREE, true), false, false, base);
+    }
   }
   for (int j : scenario.joints) {
     const std::string base = name_of(m, mjOBJ_JOINT, j, "joint");
@@ -123,7 +134,8 @@ Recorder::Recorder(const mjModel* m, const ResolvedScenario& scenario, const Sch
     add(Source::kTendon, t, 2, suffixed(name_of(m, mjOBJ_TENDON, t, "tendon"), {"_length", "_vel"}),
         spatial ? std::vector<std::string>{"m", "m/s"} : std::vector<std::string>{"m or rad", "m/s or rad/s"});
   }
-  if (scenario.contacts) add(Source::kContacts, 0, 1, {"ncon"}, {""}, true);
+  if (scenario.contacts) add(Source::kContacts, 0, 1, {"contacts"}, {""}, true);
+  if (scenario.ncon) add(Source::kNcon, 0, 1, {"ncon"}, {""}, true);
 
   std::set<std::string> seen;
   for (const Column& c : columns_) {
@@ -134,8 +146,8 @@ Recorder::Recorder(const mjModel* m, const ResolvedScenario& scenario, const Sch
   }
 }
 
-void Recorder::before_step(double* row, std::int64_t step, const mjModel* m, const mjData* d,
-                           bool inputs) const noexcept {
+void Recorder::before_step(double* row, std::int64_t step, const mjModel* m, const mjData* d, bool inputs,
+                           int ncon) const noexcept {
   (void)m;
   row[0] = static_cast<double>(step);
   row[1] = d->time;
@@ -157,6 +169,9 @@ void Recorder::before_step(double* row, std::int64_t step, const mjModel* m, con
       case Source::kQvel:
         std::copy(d->qvel + s.id, d->qvel + s.id + s.count, out);
         break;
+      case Source::kNcon:
+        out[0] = ncon;
+        break;
       default:
         break;
     }
@@ -172,10 +187,13 @@ void Recorder::after_step(double* row, const mjModel* m, const mjData* d) const 
         std::copy(d->xquat + 4 * s.id, d->xquat + 4 * s.id + 4, out + 3);
         break;
       case Source::kBodyVelocity: {
-        mjtNum velocity[6];  // MuJoCo's order: angular, then linear
-        mj_objectVelocity(m, d, mjOBJ_BODY, s.id, velocity, 0);
-        std::copy(velocity + 3, velocity + 6, out);
-        std::copy(velocity, velocity + 3, out + 3);
+        // MuJoCo's order: angular, then linear; the linear in the world
+        // frame, the angular in the body's, as a free joint's qvel holds them.
+        mjtNum world[6], local[6];
+        mj_objectVelocity(m, d, mjOBJ_XBODY, s.id, world, 0);
+        mj_objectVelocity(m, d, mjOBJ_XBODY, s.id, local, 1);
+        std::copy(world + 3, world + 6, out);
+        std::copy(local, local + 3, out + 3);
         break;
       }
       case Source::kActuatorForce:

@@ -28,8 +28,8 @@ class ChapterRecorder final : public RowRecorder {
  public:
   ChapterRecorder(const ChapterLayout& at, int columns) : at_(at), columns_(chapter_columns(columns)) {}
   [[nodiscard]] const std::vector<Column>& columns() const noexcept override { return columns_; }
-  void before_step(double* row, std::int64_t step, const mjModel* /*m*/, const mjData* d,
-                   bool inputs) const noexcept override {
+  void before_step(double* row, std::int64_t step, const mjModel* /*m*/, const mjData* d, bool inputs,
+                   int ncon) const noexcept override {
     const auto put = [row](int column, double value) { row[column] = value; };
     const double* box_q = d->qpos + at_.box_qposadr;
     const double* box_v = d->qvel + at_.box_dofadr;
@@ -43,7 +43,7 @@ class ChapterRecorder final : public RowRecorder {
     for (int i = 0; i < 6; ++i) put(ChapterColumns::kBoxVx + i, box_v[i]);
     put(ChapterColumns::kPusherX, d->qpos[at_.pusher_qposadr]);
     put(ChapterColumns::kPusherVx, d->qvel[at_.pusher_dofadr]);
-    put(ChapterColumns::kNcon, d->ncon);
+    put(ChapterColumns::kNcon, ncon);
   }
   void after_step(double* /*row*/, const mjModel* /*m*/, const mjData* /*d*/) const noexcept override {}
 

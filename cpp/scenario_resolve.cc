@@ -117,6 +117,7 @@ ResolvedScenario resolve(const Scenario& scenario, const mjModel* m) {
     for (int a = 0; a < m->nu; ++a) r.actuators.push_back(a);
   }
   r.contacts = rec.contacts;
+  r.ncon = rec.ncon;
   r.qpos0.assign(m->qpos0, m->qpos0 + m->nq);
   r.nv = detail::compat::as_int(m->nv);
   check_reset(r, scenario.reset, m);

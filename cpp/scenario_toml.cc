@@ -391,7 +391,7 @@ Scenario Scenario::from_toml_string(std::string_view text, std::string_view sour
     const auto* table = node->as_table();
     if (table == nullptr) top.fail("record", "expected a [record] table");
     const TableReader r(*table, std::string(source), "record");
-    r.allow_only({"bodies", "joints", "actuators", "sensors", "tendons", "contacts"});
+    r.allow_only({"bodies", "joints", "actuators", "sensors", "tendons", "contacts", "ncon"});
     for (const auto& [key, names, all] : {std::tuple{"bodies", &s.record.bodies, &s.record.all_bodies},
                                           std::tuple{"joints", &s.record.joints, &s.record.all_joints},
                                           std::tuple{"actuators", &s.record.actuators, &s.record.all_actuators},
@@ -402,6 +402,7 @@ Scenario Scenario::from_toml_string(std::string_view text, std::string_view sour
       if (!*all) *names = r.strings(key, "or \"all\"");
     }
     s.record.contacts = r.boolean("contacts").value_or(true);
+    s.record.ncon = r.boolean("ncon").value_or(false);
   }
   if (const toml::node* node = root.get("reset")) {
     const auto* table = node->as_table();

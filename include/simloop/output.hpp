@@ -36,7 +36,7 @@ namespace simloop {
 // trajectory.csv: a header of the column names (the chapter's,
 // ChapterColumns::kNames, unless `columns` are given), then one line per
 // row. Numbers are the shortest text that reads back as the same double;
-// integer columns (step, ncon) are whole numbers; the final row's input cells
+// integer columns (step, ncon, contacts) are whole numbers; the final row's input cells
 // are empty.
 [[nodiscard]] std::string trajectory_csv(const Trajectory& trajectory, const std::vector<Column>& columns = {});
 

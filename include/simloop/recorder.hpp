@@ -38,8 +38,12 @@ class RowRecorder {
   [[nodiscard]] int width() const noexcept { return static_cast<int>(columns().size()); }
   // Before mj_step: step, time, the inputs just written (NaN in the final
   // row, which has no step after it) and the state entering the step.
-  virtual void before_step(double* row, std::int64_t step, const mjModel* m, const mjData* d,
-                           bool inputs) const noexcept = 0;
+  // ncon: the contacts MuJoCo had found when the step began (its last
+  // collision pass: the previous step's, row 0's the first mj_forward's),
+  // which d no longer holds once a decision's observation has derived the
+  // state again (loop.hpp's DecisionStep::entering_ncon).
+  virtual void before_step(double* row, std::int64_t step, const mjModel* m, const mjData* d, bool inputs,
+                           int ncon) const noexcept = 0;
   // After mj_step (the final row: after mj_forward): what MuJoCo derived
   // from the row's state.
   virtual void after_step(double* row, const mjModel* m, const mjData* d) const noexcept = 0;
@@ -53,32 +57,38 @@ class RowRecorder {
 //
 // A row holds the state entering its step and the inputs written for that
 // step, as in the chapter. Columns read straight from the state (joint
-// positions and velocities) are taken before mj_step; quantities MuJoCo
-// derives from that state (body poses and velocities, actuator forces,
-// sensors, contacts) are taken right after it, when mj_step has computed them
-// for exactly that state (read before it, they would lag by one step). The
-// final row gets them from mj_forward. Under RK4, whose later stages leave
-// them for another state, a recorded row derives them before its step (a
-// forward pass more per recorded row, the run's bits unchanged).
+// positions and velocities, a free body's pose and velocity: its joint's)
+// are taken before mj_step; quantities MuJoCo derives from that state (other
+// bodies' poses and velocities, actuator forces, sensors, contacts) are taken
+// right after it, when mj_step has computed them for exactly that state (read
+// before it, they would lag by one step). The final row gets them from
+// mj_forward. Under RK4, whose later stages leave them for another state, a
+// recorded row derives them before its step (a forward pass more per
+// recorded row, the run's bits unchanged).
 //
-// Columns, in order: step, time; `<actuator>_ctrl` (the ctrl MuJoCo applied,
-// after ctrlrange clamping) for every controlled or recorded actuator;
-// `<body>_fx _fy _fz _tx _ty _tz` (xfrc_applied, world frame) for every
-// disturbed body; per recorded body `_x _y _z` (position, world, m), `_qw _qx
-// _qy _qz` (orientation), `_vx _vy _vz` (linear velocity, world, m/s), `_wx _wy
-// _wz` (angular velocity, world, rad/s); per recorded joint `_pos` and `_vel`
-// (m and m/s for a slide, rad and rad/s for a hinge; `_pos0..` for the
-// several numbers of ball and free joints); per recorded actuator `_force`
-// (N or N m); per recorded sensor its value(s); per recorded tendon
-// `_length` and `_vel` (m and m/s, or rad for a fixed tendon of hinges);
-// `ncon` (contacts).
+// A name means one quantity wherever it appears, the chapter's trajectory
+// included (docs/cli.md's table of columns). Columns, in order: step, time;
+// `<actuator>_ctrl` (the ctrl MuJoCo applied, after ctrlrange clamping) for
+// every controlled or recorded actuator; `<body>_fx _fy _fz _tx _ty _tz`
+// (xfrc_applied, world frame) for every disturbed body; per recorded body
+// `_x _y _z` (its frame's origin, world, m), `_qw _qx _qy _qz` (orientation),
+// `_vx _vy _vz` (the origin's linear velocity, world frame, m/s), `_wx _wy
+// _wz` (angular velocity in the body's own frame, rad/s): for a body on a
+// free joint of the world these are its joint's qpos and qvel, bit for bit
+// the chapter's box; per recorded joint `_pos` and `_vel` (m and m/s for a
+// slide, rad and rad/s for a hinge; `_pos0..` for the several numbers of ball
+// and free joints); per recorded actuator `_force` (N or N m); per recorded
+// sensor its value(s); per recorded tendon `_length` and `_vel` (m and m/s,
+// or rad for a fixed tendon of hinges); `contacts` (the contacts of the row's
+// state); `ncon` (the chapter's: the contacts found when the step began, the
+// row before's state's).
 class Recorder final : public RowRecorder {
  public:
   Recorder(const mjModel* m, const ResolvedScenario& scenario, const Schedule& schedule);
 
   [[nodiscard]] const std::vector<Column>& columns() const noexcept override { return columns_; }
-  void before_step(double* row, std::int64_t step, const mjModel* m, const mjData* d,
-                   bool inputs) const noexcept override;
+  void before_step(double* row, std::int64_t step, const mjModel* m, const mjData* d, bool inputs,
+                   int ncon) const noexcept override;
   void after_step(double* row, const mjModel* m, const mjData* d) const noexcept override;
   [[nodiscard]] bool reads_acceleration_stage() const noexcept override { return reads_acceleration_stage_; }
 
@@ -94,7 +104,8 @@ class Recorder final : public RowRecorder {
       kActuatorForce,
       kSensor,
       kTendon,
-      kContacts
+      kContacts,
+      kNcon
     } kind;
     int id = 0;      // actuator, body, or address into qpos/qvel/sensordata
     int count = 1;   // numbers it fills

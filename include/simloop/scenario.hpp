@@ -88,7 +88,8 @@ struct RecordSpec {
   std::vector<std::string> actuators;  // ctrl as applied (after ctrlrange clamping), force
   std::vector<std::string> sensors;    // sensordata
   std::vector<std::string> tendons;    // length, rate of change
-  bool contacts = true;                // contact count
+  bool contacts = true;                // `contacts`: the contacts of each row's state
+  bool ncon = false;                   // `ncon`: the contacts when its step began (the chapter's)
   // "all" in a scenario file instead of a list: every one the scene has, by
   // index (every body that can move), after any named above.
   bool all_bodies = false, all_joints = false, all_actuators = false, all_sensors = false, all_tendons = false;
@@ -123,7 +124,8 @@ struct Scenario {
   RecordSpec record;
   ResetSpec reset;
 
-  // The chapter's run: its scene, ctrl 1.0 on push_motor, the shove on box.
+  // The chapter's run: its scene, ctrl 1.0 on push_motor, the shove on box;
+  // it records the box, the pusher's joint and ncon, as the chapter does.
   [[nodiscard]] static Scenario chapter();
   // A scenario file (TOML). Relative `scene` paths resolve against the
   // file's folder. Throws InvalidArgument naming the file, the key and what
@@ -149,7 +151,7 @@ struct ResolvedScenario {
   std::vector<Control> controls;
   std::vector<Disturbance> disturbances;
   std::vector<int> bodies, joints, actuators, sensors, tendons;  // to record
-  bool contacts = true;
+  bool contacts = true, ncon = false;
   // What the start draws against: the scene's qpos0 and its nv.
   std::vector<double> qpos0;
   int nv = 0;

@@ -263,7 +263,9 @@ def scenario_trajectory_figure(runs, x: str = "auto"):
         raise ValueError("the run recorded no bodies ([record] bodies = [...] in the scenario): no positions to draw")
     palette = BODY_COLORS if len(bodies) <= len(BODY_COLORS) else _many_colours(len(bodies))
     colour = {b: palette[i % len(palette)] for i, b in enumerate(bodies)}
-    contacts = any("ncon" in cols for cols, _, _ in runs)
+    # A scenario's own count (its row's state's), or the chapter's ncon.
+    counted = [next((c for c in ("contacts", "ncon") if c in cols), None) for cols, _, _ in runs]
+    contacts = any(counted)
     plt = _pyplot()
     ratios = [1, 1, 1, 1] + ([0.6] if contacts else [])
     fig, axes = plt.subplots(
@@ -282,8 +284,8 @@ def scenario_trajectory_figure(runs, x: str = "auto"):
             if all(f"{b}_v{axis}" in cols for axis in "xyz"):
                 speed = np.sqrt(sum(cols[f"{b}_v{axis}"] ** 2 for axis in "xyz"))
                 ax_v.plot(t, speed, color=colour[b], ls=style, lw=1.3)
-        if contacts and "ncon" in cols:
-            axes[4].step(t, cols["ncon"], where="post", color=CONTACT_COLOR, ls=style, lw=1.0)
+        if counted[k]:
+            axes[4].step(t, cols[counted[k]], where="post", color=CONTACT_COLOR, ls=style, lw=1.0)
         if len(runs) > 1:
             legend.append((Line2D([], [], color="black", ls=style), f"{name}: {_describe_scenario(cols, metrics)}"))
         for d in metrics.get("disturbances", []):

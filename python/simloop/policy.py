@@ -23,7 +23,7 @@ class Observation:
     values: a read-only float64 vector, one value per name in `names`, which
     are the run's trajectory columns after "step" and "time"
     (result.column_names[2:]): ctrl inputs, disturbance forces, body poses
-    and velocities, joints, actuator forces, sensors, ncon. obs["tblock_x"]
+    and velocities, joints, actuator forces, sensors, contacts. obs["tblock_x"]
     reads one by name. The ctrl columns hold the ctrl in force until now (the
     previous decision's; 0 before the first), and so do actuator forces; the
     force columns hold the disturbances acting in this step.

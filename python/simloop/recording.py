@@ -178,7 +178,7 @@ QUANTITIES = [
     ("velocities (m/s, rad/s)", lambda name, unit: unit.startswith(("m/s", "rad/s"))),
     ("forces (N, N m)", lambda name, unit: unit.startswith("N")),
     ("controls", lambda name, unit: name.endswith("_ctrl")),
-    ("contacts", lambda name, unit: name == "ncon"),
+    ("contacts", lambda name, unit: name in ("contacts", "ncon")),
     ("the rest", lambda name, unit: True),
 ]
 

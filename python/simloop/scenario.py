@@ -165,8 +165,10 @@ class Scenario:
     name or index. disturbances: a list of dicts with the scenario file's keys (body,
     force, torque, newtons, direction, random_sign, start, start_step,
     start_fraction, duration, steps). record: a dict with bodies, joints,
-    actuators, sensors, tendons (lists of names, or "all") and contacts
-    (bool) (None: every body on a free joint and every actuator). reset: how
+    actuators, sensors, tendons (lists of names, or "all"), contacts (bool:
+    the contacts of each row's state, default True) and ncon (bool: the
+    chapter's count, as each step began) (None: every body on a free joint
+    and every actuator). reset: how
     each run starts, a dict with qpos, qvel (the scene's nq / nv values),
     qpos_noise, qvel_noise (half-widths of uniform noise drawn from the run's
     seed) and params (a list of dicts: kind "friction", "mass", "damping" or

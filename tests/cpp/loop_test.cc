@@ -61,7 +61,7 @@ constexpr const char* kPushtRecord =
     "[[disturbance]]\nbody = \"tblock\"\nnewtons = [0.5, 1.5]\ndirection = [0, 1, 0]\nrandom_sign = true\n"
     "start_step = 60\nsteps = 40\n"
     "[record]\nbodies = [\"tblock\", \"pusher\"]\njoints = [\"tblock_free\", \"slide_x\"]\n"
-    "actuators = [\"push_x\", \"push_y\"]\nsensors = [\"tblock_pos\", \"tip_x\"]\ncontacts = true\n";
+    "actuators = [\"push_x\", \"push_y\"]\nsensors = [\"tblock_pos\", \"tip_x\"]\ncontacts = true\nncon = true\n";
 
 // Takes `steps` steps with a decision every `every`, twice from the same
 // start: observing through DecisionStep, and through forward_keeping_state
@@ -90,13 +90,16 @@ void expect_the_same_run(const simloop::Model& scene, const std::string& scenari
   for (std::int64_t step = 0; step < steps; step += every) {
     std::vector<double> seen_a(width), seen_b(width);
     inputs_a.write(step, a);
+    const int ncon_a = a->ncon;
     decision.observe(m, a);
     EXPECT_EQ(decision.begun(), halfway) << "step " << step;
-    recorder.before_step(seen_a.data(), step, m, a, true);
+    EXPECT_EQ(decision.entering_ncon(a), ncon_a) << "the count the step began with, step " << step;
+    recorder.before_step(seen_a.data(), step, m, a, true, decision.entering_ncon(a));
     recorder.after_step(seen_a.data(), m, a);
     inputs_b.write(step, b);
+    const int ncon_b = b->ncon;
     simloop::forward_keeping_state(m, b);
-    recorder.before_step(seen_b.data(), step, m, b, true);
+    recorder.before_step(seen_b.data(), step, m, b, true, ncon_b);
     recorder.after_step(seen_b.data(), m, b);
     ASSERT_TRUE(same_bits(seen_a, seen_b)) << "the observation at step " << step;
     if (watch) watch(a);
@@ -104,6 +107,7 @@ void expect_the_same_run(const simloop::Model& scene, const std::string& scenari
     for (std::int64_t s = step; s < std::min(steps, step + every); ++s) {
       inputs_a.write(s, a);
       decision.step(m, a);
+      ASSERT_EQ(decision.entering_ncon(a), a->ncon) << "after a step, d's own count";
       inputs_b.write(s, b);
       mj_step(m, b);
     }

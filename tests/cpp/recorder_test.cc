@@ -79,7 +79,7 @@ TEST(ScenarioRun, ColumnsAreNamedFromTheScene) {
       "tblock_wy",   "tblock_wz",   "pusher_x",    "pusher_y",    "pusher_z",    "pusher_qw",    "pusher_qx",
       "pusher_qy",   "pusher_qz",   "pusher_vx",   "pusher_vy",   "pusher_vz",   "pusher_wx",    "pusher_wy",
       "pusher_wz",   "slide_x_pos", "slide_x_vel", "slide_y_pos", "slide_y_vel", "push_x_force", "push_y_force",
-      "tblock_pos0", "tblock_pos1", "tblock_pos2", "tip_x",       "ncon"};
+      "tblock_pos0", "tblock_pos1", "tblock_pos2", "tip_x",       "contacts"};
   EXPECT_EQ(names, expected);
   EXPECT_EQ(r.result.rows, 1001);  // 2.0 s of 0.002 s steps, plus the final state
   EXPECT_EQ(r.result.trajectory.rows(), 1001);
@@ -162,7 +162,7 @@ TEST(ScenarioRun, AWalkerUnderATorqueScheduleRecordsTheDefaults) {
 TEST(ScenarioRun, AnArmPushesAPuckOnTwoSlides) {
   const PushtRun r = run_file("arm_push.toml", 0);
   double most_contacts = 0;
-  for (std::int64_t i = 0; i < r.result.rows; ++i) most_contacts = std::max(most_contacts, r.at(i, "ncon"));
+  for (std::int64_t i = 0; i < r.result.rows; ++i) most_contacts = std::max(most_contacts, r.at(i, "contacts"));
   EXPECT_GT(most_contacts, 0);
   const std::int64_t last = r.result.rows - 1;
   EXPECT_GT(std::hypot(r.at(last, "puck_x_pos"), r.at(last, "puck_y_pos")), 0.01);  // the puck moved
@@ -190,7 +190,7 @@ TEST(ScenarioRun, ATendonsLengthAndRateAreRecordedForTheRowsState) {
   std::vector<std::string> names;
   for (const simloop::Column& c : r.columns) names.push_back(c.name);
   EXPECT_EQ(names, (std::vector<std::string>{"step", "time", "push_ctrl", "a_pos", "a_vel", "b_pos", "b_vel",
-                                             "sum_length", "sum_vel", "ncon"}));
+                                             "sum_length", "sum_vel", "contacts"}));
   for (std::int64_t row = 0; row < r.trajectory.rows(); ++row) {
     EXPECT_EQ(r.trajectory.at(row, 7), r.trajectory.at(row, 3) + r.trajectory.at(row, 5)) << row;
     EXPECT_EQ(r.trajectory.at(row, 8), r.trajectory.at(row, 4) + r.trajectory.at(row, 6)) << row;

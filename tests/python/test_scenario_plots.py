@@ -60,7 +60,7 @@ def test_the_picture_draws_each_body_its_speed_the_contacts_and_the_disturbance(
                 assert any(np.array_equal(d, cols[f"{body}_{axis}"]) for d in drawn), (axis, body)
         speed = np.sqrt(cols["tblock_vx"] ** 2 + cols["tblock_vy"] ** 2 + cols["tblock_vz"] ** 2)
         assert any(np.allclose(line.get_ydata(), speed) for line in ax_v.get_lines())
-        assert np.array_equal(ax_c.get_lines()[0].get_ydata(), cols["ncon"])
+        assert np.array_equal(ax_c.get_lines()[0].get_ydata(), cols["contacts"])
         # The disturbance as it ran (metrics.json), shaded on every panel, from its first step's time.
         (bump,) = metrics["disturbances"]
         start = cols["time"][bump["start_step"]]

@@ -166,5 +166,5 @@ def test_a_scenarios_plots_are_grouped_by_quantity_with_units():
     assert {"tblock_vx", "tblock_wz", "slide_x_vel"} <= set(panels["velocities (m/s, rad/s)"])
     assert {"tblock_fx", "tblock_tz", "push_x_force"} <= set(panels["forces (N, N m)"])
     assert panels["controls"] == ["push_x_ctrl", "push_y_ctrl"]
-    assert panels["contacts"] == ["ncon"]
+    assert panels["contacts"] == ["contacts"]
     assert not any(name.endswith(("_qw", "_qx", "_qy", "_qz")) for name in panels["positions (m)"])

@@ -149,7 +149,8 @@ def test_tendons_are_recorded_by_name_or_all(tmp_path):
                 scene=scene, steps=20, reset={"qvel": [0.3, 0.5]}, record={"joints": "all", "tendons": tendons}
             )
         )
-        assert r.column_names[-3:] == ("sum_length", "sum_vel", "ncon") and r.column_units["sum_length"] == "m or rad"
+        assert r.column_names[-3:] == ("sum_length", "sum_vel", "contacts")
+        assert r.column_units["sum_length"] == "m or rad"
         np.testing.assert_array_equal(r.column("sum_length"), r.column("a_pos") + r.column("b_pos"))
         assert r.column("sum_length")[-1] > 0.01
 
@@ -254,7 +255,7 @@ def test_the_recording_draws_the_scene(tmp_path):
         "/world/bodies/tblock",
         "/plots/tblock_z",
         "/plots/push_y_ctrl",
-        "/plots/ncon",
+        "/plots/contacts",
     ]:
         assert entity in entities, sorted(entities)
     result = simloop.run_scenario(SCENES / "pusht.toml")
