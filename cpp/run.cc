@@ -17,6 +17,7 @@
 #include "simloop/errors.hpp"
 #include "simloop/number_format.hpp"
 #include "simloop/recorder.hpp"
+#include "simloop/scenario.hpp"
 
 namespace simloop {
 namespace {
@@ -52,22 +53,18 @@ class ChapterRecorder final : public RowRecorder {
   std::vector<Column> columns_;
 };
 
-// The chapter's inputs as a schedule: full throttle on actuator 0 from step
-// 0, and the shove on the box for its window (if the run is perturbed).
-Schedule chapter_schedule(const ChapterLayout& at, const Shove& shove, std::int64_t steps, bool perturb) {
-  Schedule schedule;
-  schedule.steps = steps;
-  schedule.control_changes.push_back({0, 0, 1.0});
-  if (perturb) {
-    Schedule::Force force;
-    force.body = at.box_body;
-    force.wrench = {0.0, shove.force_y(), 0.0, 0.0, 0.0, 0.0};
-    force.start = std::min(shove.start_step, steps);
-    force.asked_end = shove.start_step + shove.num_steps;
-    force.end = std::min(force.asked_end, steps);
-    schedule.forces.push_back(force);
-  }
-  return schedule;
+// The chapter's inputs, drawn as Scenario::chapter()'s: full throttle on
+// actuator 0 from step 0, and the shove on the box for its window (if the
+// run is perturbed). Actuator 0 by index, and nothing named to record:
+// another scene's motor and pusher have other names.
+Schedule chapter_schedule(const mjModel* m, const RunConfig& config) {
+  Scenario chapter = Scenario::chapter();
+  chapter.controls.front().actuator = "0";
+  chapter.record = RecordSpec{};
+  chapter.length = When::steps(config.num_steps());
+  if (!config.perturb) chapter.disturbances.clear();
+  const std::unique_ptr<Draws> draws = make_draws(config.seed, config.rng);
+  return build_schedule(resolve(chapter, m), chapter, m->opt.timestep, *draws);
 }
 
 // What the chapter watches besides the rows: where the box was when the
@@ -165,7 +162,7 @@ RunResult detail::run_counted_elsewhere(const Model& model_in, const RunConfig& 
   RunResult result;
   result.config = config;
   result.shove = draw_shove(config.seed, steps, config.rng);
-  result.schedule = chapter_schedule(at, result.shove, steps, config.perturb);
+  result.schedule = chapter_schedule(m, config);
   const ChapterRecorder recorder(at,
                                  config.audit_energy ? ChapterColumns::kNumColumns : ChapterColumns::kNumBaseColumns);
   ChapterWatch watch(m, at, result.shove.start_step, config.audit_energy);
