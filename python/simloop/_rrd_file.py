@@ -3,39 +3,11 @@ into a file simloop checks and puts in place (recording.py's Recording)."""
 
 from __future__ import annotations
 
-import contextlib
-import signal
-import threading
 from pathlib import Path
-from typing import Any, Iterator, List
+from typing import Any, List
 
 from . import _core
-
-
-@contextlib.contextmanager
-def signals_wait() -> Iterator[None]:
-    """Ctrl-C and the terminating signals wait for the block to end, then act
-    as they would have (the signal is raised again). rerun objects stopped
-    half-way print under the command's one line: a RecordingStream stopped
-    inside its constructor prints a traceback from its __del__, a blueprint
-    stopped between its MemorySink and the send warns "Dropping data".
-    Python runs signal handlers on the main thread only: elsewhere, nothing
-    to do."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    caught: List[int] = []
-    previous = {}
-    for signum in _core.TERMINATING_SIGNALS:  # Ctrl-C among them
-        if signal.getsignal(signum) not in (signal.SIG_IGN, None):
-            previous[signum] = signal.signal(signum, lambda number, frame: caught.append(number))
-    try:
-        yield
-    finally:
-        for signum, handler in previous.items():
-            signal.signal(signum, handler)
-        if caught:
-            signal.raise_signal(caught[0])
+from ._command import signals_wait
 
 
 class RrdFile:

@@ -64,7 +64,8 @@ from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
 from . import _core
 from ._build import MUJOCO_BUILD
-from ._rrd_file import RrdFile, signals_wait
+from ._command import signals_wait
+from ._rrd_file import RrdFile
 
 # rerun accepts these application ids as they are (no "/" or ".").
 SCENARIO_APPLICATION_ID = "simloop_scenario"
