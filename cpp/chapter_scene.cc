@@ -78,12 +78,9 @@ Model pusher_scene() { return Model::from_own_xml(kPusherSceneXml, "pusher scene
 PusherTrack pusher_track(const Model& model) {
   const mjModel* m = model.get();
   const ChapterLayout at = chapter_layout(model);
-  Data scratch(model);
+  Data scratch(model);  // as mj_resetData leaves it: the rest pose
   mjData* d = scratch.get();
-  detail::mujoco_call([&] {
-    mj_resetData(m, d);
-    mj_kinematics(m, d);
-  });
+  detail::mujoco_call([&] { mj_kinematics(m, d); });
   PusherTrack track;
   for (int i = 0; i < 3; ++i) track.rest_position[i] = d->xpos[3 * at.pusher_body + i];
   if (m->jnt_type[at.pusher_joint] == mjJNT_SLIDE) {

@@ -6,7 +6,13 @@ namespace simloop {
 
 void RunControl::poll_now() {
   last_poll_ = std::chrono::steady_clock::now();
-  if (poll_) poll_(steps_done(), steps_total());
+  if (!poll_ || stop_requested()) return;
+  try {
+    poll_(steps_done(), steps_total());
+  } catch (...) {
+    poll_failure_ = std::current_exception();
+    request_stop();
+  }
 }
 
 void RunControl::advance(std::int64_t steps) {

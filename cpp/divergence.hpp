@@ -27,6 +27,7 @@
 #include <mujoco/mujoco.h>
 
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <cstdio>
 #include <string>
@@ -72,26 +73,27 @@ class DivergenceCheck {
 
   // After each step: one comparison per free body.
   void after_step(const mjData* d, std::int64_t step) noexcept {
-    for (Body& b : bodies_) {
-      const double z = d->qpos[b.z_adr];
-      if (!(z < b.limit_z)) continue;
+    for (std::size_t i = 0; i < bodies_.size(); ++i) {
+      const double z = d->qpos[bodies_[i].z_adr];
+      if (!(z < bodies_[i].limit_z)) continue;
       if (count_ == 0) {
         first_step_ = step;
-        first_body_ = &b;
+        first_body_ = i;
       }
       ++count_;
-      if (&b == first_body_ && z < lowest_z_) lowest_z_ = z;
+      if (i == first_body_ && z < lowest_z_) lowest_z_ = z;
     }
   }
 
   // The warning to add to the run's, if any body diverged.
   [[nodiscard]] bool diverged() const noexcept { return count_ > 0; }
   [[nodiscard]] Warning warning() const {
+    const Body& first = bodies_[first_body_];
     char text[400];
     std::snprintf(text, sizeof text,
                   "body \"%s\" went through the floor: its centre reached z = %.6g m, more than %g times its size "
                   "(%.3g m) below the floor (z = %.6g m); the simulation diverged (too large a timestep?)",
-                  first_body_->name.c_str(), lowest_z_, kDivergedDepthInSizes, 2.0 * first_body_->radius, floor_z_);
+                  first.name.c_str(), lowest_z_, kDivergedDepthInSizes, 2.0 * first.radius, floor_z_);
     return Warning{kDivergedWarning, count_, first_step_, text};
   }
 
@@ -106,7 +108,7 @@ class DivergenceCheck {
   double floor_z_ = 0.0;
   std::int64_t count_ = 0;  // steps that ended with a body past its line
   std::int64_t first_step_ = 0;
-  const Body* first_body_ = nullptr;
+  std::size_t first_body_ = 0;  // an index, not a pointer: a copy (Sim's) keeps its own
   double lowest_z_ = INFINITY;
 };
 

@@ -5,16 +5,14 @@
 #include <optional>
 #include <string>
 
-#include "loop.hpp"
 #include "mujoco_compat.hpp"
-#include "mujoco_guard.hpp"
 #include "run_detail.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/number_format.hpp"
 #include "simloop/rows.hpp"
 #include "simloop/scene_params.hpp"
 #include "simloop/shove.hpp"
-#include "simloop/state.hpp"
+#include "stepper.hpp"
 #include "worker_pool.hpp"
 
 namespace simloop {
@@ -23,14 +21,22 @@ namespace {
 
 // One episode: its own Data, the schedule drawn at its reset, where it is.
 struct Episode {
-  explicit Episode(const Model& shared) : model(shared), data(shared), health(shared.get()) {}
+  Episode(const Model& shared, bool observe_acceleration)
+      : model(shared), data(shared), core(shared.get(), observe_acceleration) {}
   Model model;  // the shared one, or a copy with this episode's scene parameters (the same sizes)
   Data data;
   Schedule schedule;
   std::optional<ScheduledInputs> inputs;  // empty until the first reset
   std::int64_t step = 0;
-  detail::StepHealth health;
-  std::optional<detail::DecisionStep> decision;  // from the first reset
+  detail::Stepper core;
+};
+
+// What an episode does around each physics step: its scheduled inputs
+// (the disturbances; ctrl is the actions').
+struct EpisodeInputs : detail::StepHooks {
+  explicit EpisodeInputs(ScheduledInputs& scheduled) : inputs(scheduled) {}
+  void before_step(std::int64_t step, mjData* d) noexcept { inputs.write(step, d); }
+  ScheduledInputs& inputs;
 };
 
 // `count` episodes' data, each `bytes`, fit the memory budget a run's
@@ -62,15 +68,13 @@ struct Episodes::Impl {
   void observe(Episode& e, double* observation) const {
     const mjModel* m = e.model.get();
     mjData* d = e.data.get();
-    detail::mujoco_call([&] {
-      if (e.step < e.schedule.steps) e.inputs->write(e.step, d);
-      e.decision->observe(m, d);
-    });
-    recorder->before_step(observation, e.step, m, d, true, e.decision->entering_ncon(d));
+    if (e.step < e.schedule.steps) e.inputs->write(e.step, d);
+    e.core.observe(m, d, e.step);
+    recorder->before_step(observation, e.step, m, d, true, e.core.entering_ncon(d));
     recorder->after_step(observation, m, d);
   }
 
-  [[nodiscard]] bool terminated(const Episode& e) const noexcept { return e.health.broken(); }
+  [[nodiscard]] bool terminated(const Episode& e) const noexcept { return e.core.health().broken(); }
 };
 
 Episodes::Episodes(const Model& scene, const Scenario& scenario, const ScenarioConfig& config, std::size_t count)
@@ -91,7 +95,7 @@ Episodes::Episodes(const Model& scene, const Scenario& scenario, const ScenarioC
   s.length = schedule.steps;
   s.episodes.reserve(count);
   for (std::size_t i = 0; i < count; ++i) {
-    s.episodes.emplace_back(s.model);
+    s.episodes.emplace_back(s.model, s.recorder->reads_acceleration_stage());
     if (i == 0) check_episodes_memory(count, detail::compat::data_bytes(s.episodes.front().data.get()));
   }
 }
@@ -133,15 +137,7 @@ void Episodes::reset(std::size_t i, std::uint64_t seed, double* observation, con
   e.model = std::move(model);
   e.inputs.emplace(e.schedule, false);  // ctrl is the actions'
   e.step = 0;
-  const mjModel* m = e.model.get();
-  e.health = detail::StepHealth(m);
-  e.decision.emplace(m, *s.recorder);
-  mjData* d = e.data.get();
-  detail::guarded_steps(m, 0, 0, [&] {
-    mj_resetData(m, d);
-    detail::set_start(m, d, e.schedule.start);
-    mj_forward(m, d);  // as run_loop starts
-  });
+  e.core.reset(e.model.get(), e.data.get(), {-1, &e.schedule.start});  // as run_loop starts
   s.observe(e, observation);
 }
 
@@ -198,23 +194,8 @@ void Episodes::step(const double* actions, std::size_t action_count, std::int64_
     const mjModel* m = e.model.get();
     mjData* d = e.data.get();
     std::copy(actions + i * static_cast<std::size_t>(nu), actions + (i + 1) * static_cast<std::size_t>(nu), d->ctrl);
-    const std::int64_t end = e.step + steps[i];
-    while (e.step < end && !s.terminated(e)) {
-      const std::int64_t chunk_start = e.step;
-      const std::int64_t chunk_end = std::min(end, e.step + RunControl::kChunkSteps);
-      detail::guarded_steps(m, chunk_start, chunk_end - 1, [&] {
-        for (; e.step < chunk_end; ++e.step) {
-          e.inputs->write(e.step, d);
-          e.decision->step(m, d);  // mj_step (its second half after the observation)
-          e.health.after_step(d, e.step);
-          if (s.terminated(e)) {
-            ++e.step;
-            break;
-          }
-        }
-      });
-      ctl.advance(e.step - chunk_start);
-    }
+    // The first step is the rest of the one the observation began.
+    e.core.run(m, d, e.step, e.step + steps[i], EpisodeInputs(*e.inputs), &ctl, true);
     s.observe(e, observations + i * static_cast<std::size_t>(width));
     terminated[i] = s.terminated(e);
     truncated[i] = !terminated[i] && e.step >= e.schedule.steps;
@@ -234,7 +215,7 @@ double Episodes::time(std::size_t i) const {
 
 std::vector<Warning> Episodes::warnings(std::size_t i) const {
   check_index(i, impl_->episodes.size());
-  return impl_->episodes[i].health.warnings();
+  return impl_->episodes[i].core.health().warnings();
 }
 
 }  // namespace simloop

@@ -40,9 +40,10 @@ mjvCamera camera_for(const mjModel* m, const mjData* d, const CameraView& view) 
   mjv_defaultCamera(&camera);
   const bool free_settings = view.distance || view.azimuth || view.elevation;
   if (!view.camera.empty()) {
-    if (!view.track.empty()) {
-      throw InvalidArgument("a picture is taken from a scene's camera ('" + view.camera +
-                            "') or a free camera looking at a body ('" + view.track + "'), not both");
+    if (!view.track.empty() || view.lookat) {
+      throw InvalidArgument(
+          "a picture is taken from a scene's camera ('" + view.camera + "') or a free camera looking at " +
+          (view.track.empty() ? std::string("a point") : "a body ('" + view.track + "')") + ", not both");
     }
     if (free_settings) {
       throw InvalidArgument("camera '" + view.camera +
@@ -53,6 +54,17 @@ mjvCamera camera_for(const mjModel* m, const mjData* d, const CameraView& view) 
     return camera;
   }
   mjv_defaultFreeCamera(m, &camera);
+  if (view.lookat) {
+    if (!view.track.empty()) {
+      throw InvalidArgument("a free camera looks at a body ('" + view.track + "') or at a point, not both");
+    }
+    for (double x : *view.lookat) {
+      if (!std::isfinite(x)) {
+        throw InvalidArgument("the camera's lookat must be 3 finite numbers of metres, got " + python_float_repr(x));
+      }
+    }
+    std::copy(view.lookat->begin(), view.lookat->end(), camera.lookat);
+  }
   if (!view.track.empty()) {
     // A free camera looking at the body's subtree centre of mass. (MuJoCo's
     // mjCAMERA_TRACKING moves its lookat a fifth of the way there per
@@ -94,19 +106,26 @@ struct Renderer::Impl {
   std::vector<std::uint8_t> rgb;  // as OpenGL reads them: rows from the bottom
   std::vector<float> depth;
   std::mutex mutex;
+  RenderStyle style;
 
-  Impl(const Model& m, int w, int h) : model(m), width(w), height(h) {
+  Impl(const Model& m, int w, int h, const RenderStyle& s) : model(m), width(w), height(h), style(s) {
     mjv_defaultScene(&scene);
     mjv_defaultOption(&option);
     mjr_defaultContext(&context);
   }
 };
 
-Renderer::Renderer(const Model& model, int width, int height) {
+Renderer::Renderer(const Model& model, int width, int height, const RenderStyle& style) {
   check_size("width", width);
   check_size("height", height);
+  if (style.shadow_size != 0 &&
+      (style.shadow_size < RenderStyle::kMinShadowSize || style.shadow_size > RenderStyle::kMaxShadowSize)) {
+    throw InvalidArgument("shadow_size must be " + std::to_string(RenderStyle::kMinShadowSize) + " to " +
+                          std::to_string(RenderStyle::kMaxShadowSize) + " texels, or 0 for 2 a pixel, got " +
+                          std::to_string(style.shadow_size));
+  }
   detail::install_mujoco_handlers();
-  impl_ = std::make_unique<Impl>(model, width, height);
+  impl_ = std::make_unique<Impl>(model, width, height, style);
   Impl& r = *impl_;
   const mjModel* m = model.get();
   // MuJoCo sizes its offscreen framebuffer (and its multisampled twin) by the
@@ -121,9 +140,22 @@ Renderer::Renderer(const Model& model, int width, int height) {
   mjModel sized = *m;
   sized.vis.global.offwidth = width;
   sized.vis.global.offheight = height;
-  int shadow = 512;
-  while (shadow < 2 * std::max(width, height) && shadow < m->vis.quality.shadowsize) shadow *= 2;
+  int shadow = style.shadow_size;
+  if (shadow == 0) {
+    shadow = 512;
+    while (shadow < 2 * std::max(width, height) && shadow < m->vis.quality.shadowsize) shadow *= 2;
+  }
   sized.vis.quality.shadowsize = std::min(m->vis.quality.shadowsize, shadow);
+  if (!style.multisample) sized.vis.quality.offsamples = 0;
+  // MuJoCo builds each plane's drawing with the context, to the plane's
+  // size; a plane of no size it draws out to the far clipping plane.
+  std::vector<mjtNum> geom_size(m->geom_size, m->geom_size + 3 * m->ngeom);
+  if (style.endless_planes) {
+    for (int g = 0; g < m->ngeom; ++g) {
+      if (m->geom_type[g] == mjGEOM_PLANE) geom_size[3 * g] = geom_size[3 * g + 1] = 0;
+    }
+    sized.geom_size = geom_size.data();
+  }
   r.gl->make_current();
   try {
     detail::mujoco_call([&] {

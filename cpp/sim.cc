@@ -4,7 +4,6 @@
 #include <cmath>
 #include <string>
 
-#include "loop.hpp"
 #include "mujoco_compat.hpp"
 #include "mujoco_guard.hpp"
 #include "simloop/errors.hpp"
@@ -12,12 +11,13 @@
 #include "simloop/object_names.hpp"
 #include "simloop/scenario.hpp"
 #include "simloop/state.hpp"
+#include "stepper.hpp"
 
 namespace simloop {
 
-// MuJoCo's warnings and the divergence check, as every loop watches them.
-struct Sim::Counter : detail::StepHealth {
-  using StepHealth::StepHealth;
+// The stepping core every run steps with: its warnings, its divergence check.
+struct Sim::Stepping : detail::Stepper {
+  using Stepper::Stepper;
 };
 
 namespace {
@@ -51,14 +51,16 @@ ArrayView array_of(const mjModel* m, const mjData* d, std::string_view name) {
 
 }  // namespace
 
-Sim::Sim(const Model& model) : model_(model), data_(model) { reset(); }
+Sim::Sim(const Model& model) : model_(model), data_(model), stepping_(std::make_shared<Stepping>(model.get())) {
+  reset();
+}
 
 Sim::Sim(const Sim& other)
     : model_(other.owns_model_ ? other.model_.with_timestep(other.model_.timestep()) : other.model_),
       owns_model_(other.owns_model_),
       data_(other.model_),
       steps_(other.steps_),
-      counter_(std::make_shared<Counter>(*other.counter_)) {
+      stepping_(std::make_shared<Stepping>(*other.stepping_)) {
   const mjModel* m = model_.get();
   mjData* d = data_.get();
   const mjData* src = other.data_.get();
@@ -66,26 +68,14 @@ Sim::Sim(const Sim& other)
 }
 
 void Sim::reset() {
-  const mjModel* m = model_.get();
-  mjData* d = data_.get();
-  detail::mujoco_call([&] {
-    mj_resetData(m, d);
-    mj_forward(m, d);
-  });
+  stepping_->reset(model_.get(), data_.get(), {});
   steps_ = 0;
-  counter_ = std::make_shared<Counter>(m);
 }
 
 void Sim::reset_to_keyframe(int key) {
-  const mjModel* m = model_.get();
   (void)checked_index(mjOBJ_KEY, key);
-  mjData* d = data_.get();
-  detail::mujoco_call([&] {
-    mj_resetDataKeyframe(m, d, key);
-    mj_forward(m, d);
-  });
+  stepping_->reset(model_.get(), data_.get(), {key});
   steps_ = 0;
-  counter_ = std::make_shared<Counter>(m);
 }
 
 int Sim::id(mjtObj type, const std::string& name) const { return object_id(model_.get(), type, name); }
@@ -189,19 +179,8 @@ void Sim::step(std::int64_t n, RunControl* control) {
   const mjModel* m = model_.get();
   mjData* d = data_.get();
   if (control) control->add_total(n);
-  Counter& health = *counter_;
-  for (std::int64_t done = 0; done < n;) {
-    const std::int64_t chunk = std::min(n - done, RunControl::kChunkSteps);
-    detail::guarded_steps(m, steps_, steps_ + chunk - 1, [&] {
-      for (std::int64_t i = 0; i < chunk; ++i) {
-        mj_step(m, d);
-        health.after_step(d, steps_);
-        ++steps_;
-      }
-    });
-    done += chunk;
-    if (control) control->advance(chunk);
-  }
+  // Nothing around each step: the caller writes the inputs between calls.
+  stepping_->run(m, d, steps_, steps_ + n, detail::StepHooks{}, control);
 }
 
 std::vector<Contact> Sim::contacts() const {
@@ -249,6 +228,6 @@ std::vector<double> Sim::read(std::string_view name, long long start, long long 
   return std::vector<double>(view.data + start, view.data + start + count);
 }
 
-std::vector<Warning> Sim::warnings() const { return counter_->warnings(); }
+std::vector<Warning> Sim::warnings() const { return stepping_->health().warnings(); }
 
 }  // namespace simloop

@@ -21,6 +21,7 @@
 #include <utility>
 #include <vector>
 
+#include "simloop/call_gate.hpp"
 #include "simloop/control.hpp"
 #include "simloop/number_format.hpp"
 #include "simloop/output.hpp"
@@ -54,36 +55,36 @@ auto naming_failures(const std::string& what, Work&& work) -> decltype(work()) {
   }
 }
 
-// Long C++ work that Ctrl-C can stop. The work runs with the GIL released;
-// between its chunks of steps the RunControl polls (on this thread, at most
-// every 20 ms): the poll takes the GIL, runs Python's signal handlers
-// (PyErr_CheckSignals) and the caller's progress(steps_done, steps_total).
-// If either raises, the poll keeps that Python exception and requests a
-// stop; the loop throws simloop::Interrupted at its next chunk, and the
-// kept exception (KeyboardInterrupt, say) is what the caller sees. Python
-// runs signal handlers only on the main thread, so elsewhere, without a
+// Python's signal handlers, run between the chunks of long work and the
+// slices of a long wait, so that Ctrl-C and SIGTERM act during them.
+inline void check_signals() {
+  if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+}
+
+// Long C++ work that Ctrl-C can stop: the work runs with the GIL released,
+// and its RunControl's poll (on this thread, at most every 20 ms) takes the
+// GIL to run the signal handlers and progress(steps_done, steps_total). What
+// they raise stops the work and reaches the caller (RunControl::run). Python
+// runs signal handlers only on the main thread: elsewhere, without a
 // progress callback, there is nothing to poll and the GIL is left alone.
 class Interruptible {
  public:
   explicit Interruptible(py::object progress)
       : progress_(progress.is_none() ? py::object() : std::move(progress)),
         control_(progress_ || on_main_thread()
-                     ? simloop::RunControl::Poll([this](std::int64_t done, std::int64_t total) { poll(done, total); })
+                     ? simloop::RunControl::Poll([this](std::int64_t done, std::int64_t total) {
+                         py::gil_scoped_acquire gil;
+                         check_signals();
+                         if (progress_) progress_(done, total);
+                       })
                      : simloop::RunControl::Poll()) {}
 
   template <class Work>
   auto run(Work&& work) -> decltype(work(static_cast<simloop::RunControl*>(nullptr))) {
-    try {
+    return control_.run([&](simloop::RunControl* control) {
       py::gil_scoped_release release;
-      return work(&control_);
-    } catch (...) {
-      // Interrupted, normally; whatever ended the work, a Ctrl-C the user
-      // pressed (or progress's exception) is what they hear about.
-      if (!error_) throw;
-      py::error_already_set error = std::move(*error_);
-      error_.reset();
-      throw error;
-    }
+      return work(control);
+    });
   }
 
   // After the work is done: one last progress call, at its full count.
@@ -96,44 +97,20 @@ class Interruptible {
     return py::module_::import("threading").attr("main_thread")().attr("ident").cast<unsigned long>() ==
            PyThread_get_thread_ident();
   }
-
-  void poll(std::int64_t done, std::int64_t total) noexcept {
-    if (control_.stop_requested()) return;
-    py::gil_scoped_acquire gil;
-    try {
-      if (PyErr_CheckSignals() != 0) throw py::error_already_set();
-      if (progress_) progress_(done, total);
-    } catch (py::error_already_set& e) {
-      error_.emplace(std::move(e));
-      control_.request_stop();
-    } catch (...) {
-      // Not from Python (a bad_alloc, say): stop; the caller sees Interrupted.
-      control_.request_stop();
-    }
-  }
-
   py::object progress_;
-  std::optional<py::error_already_set> error_;
   simloop::RunControl control_;
 };
 
-// Waits with the GIL released, in slices of RunControl::kPollInterval
-// (wait_slice(interval) waits up to one and says whether the wait is over),
-// running Python's signal handlers between them, so Ctrl-C and SIGTERM act
-// during a long wait. False if `timeout` seconds pass first.
+// A wait in slices (simloop::wait_in_slices) with the GIL released during
+// each: False if `timeout` seconds pass first.
 template <class WaitSlice>
-bool wait_in_slices(WaitSlice&& wait_slice, std::optional<double> timeout = std::nullopt) {
-  const auto start = std::chrono::steady_clock::now();
-  for (;;) {
-    bool over = false;
-    {
-      py::gil_scoped_release release;
-      over = wait_slice(simloop::RunControl::kPollInterval);
-    }
-    if (over) return true;
-    if (PyErr_CheckSignals() != 0) throw py::error_already_set();
-    if (timeout && std::chrono::steady_clock::now() - start >= std::chrono::duration<double>(*timeout)) return false;
-  }
+bool wait_without_gil(WaitSlice&& wait_slice, std::optional<double> timeout = std::nullopt) {
+  return simloop::wait_in_slices(
+      [&](std::chrono::milliseconds slice) {
+        py::gil_scoped_release release;
+        return wait_slice(slice);
+      },
+      check_signals, timeout);
 }
 
 // Text from the C++ side that may hold a path's raw bytes (not UTF-8): as a

@@ -70,7 +70,7 @@ void bind_outputs(py::module_& m) {
       .def(
           "wait",
           [](simloop::PipedFile& f, double timeout) {
-            return wait_in_slices([&](auto slice) { return f.wait_for_end(slice); }, timeout);
+            return wait_without_gil([&](auto slice) { return f.wait_for_end(slice); }, timeout);
           },
           "timeout"_a, "Waits up to timeout seconds for the writer to close its end; True once it did.")
       .def("finish", &simloop::PipedFile::finish,

@@ -4,6 +4,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -44,18 +45,22 @@ void bind_render(py::module_& m) {
   m.attr("MAX_PICTURE_SIZE") = simloop::Renderer::kMaxSize;
   py::class_<simloop::CameraView>(m, "CameraView", "Where a picture is taken from (include/simloop/render.hpp).")
       .def(py::init([](const std::optional<std::string>& camera, const std::optional<std::string>& track,
-                       std::optional<double> distance, std::optional<double> azimuth, std::optional<double> elevation) {
-             return simloop::CameraView{camera.value_or(""), track.value_or(""), distance, azimuth, elevation};
+                       std::optional<double> distance, std::optional<double> azimuth, std::optional<double> elevation,
+                       const std::optional<std::array<double, 3>>& lookat) {
+             return simloop::CameraView{camera.value_or(""), track.value_or(""), lookat, distance, azimuth, elevation};
            }),
-           "camera"_a, "track"_a, "distance"_a, "azimuth"_a, "elevation"_a);
+           "camera"_a, "track"_a, "distance"_a, "azimuth"_a, "elevation"_a, "lookat"_a = py::none());
   m.def("check_camera_view", &simloop::check_camera_view, "model"_a, "view"_a,
         "What a picture checks of its view, without drawing one.");
   py::class_<simloop::Renderer>(m, "Renderer", "Offscreen pictures of a scene's states (MuJoCo's renderer on EGL).")
-      .def(py::init([](const simloop::Model& model, int width, int height) {
-             return naming_failures("Renderer",
-                                    [&] { return std::make_unique<simloop::Renderer>(model, width, height); });
+      .def(py::init([](const simloop::Model& model, int width, int height, bool multisample, bool endless_planes,
+                       int shadow_size) {
+             return naming_failures("Renderer", [&] {
+               return std::make_unique<simloop::Renderer>(
+                   model, width, height, simloop::RenderStyle{multisample, endless_planes, shadow_size});
+             });
            }),
-           "model"_a, "width"_a, "height"_a)
+           "model"_a, "width"_a, "height"_a, "multisample"_a = true, "endless_planes"_a = false, "shadow_size"_a = 0)
       .def_property_readonly("width", &simloop::Renderer::width)
       .def_property_readonly("height", &simloop::Renderer::height)
       .def(

@@ -4,14 +4,12 @@
 
 #include <pybind11/pybind11.h>
 
-#include <atomic>
 #include <cstddef>
-#include <mutex>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include "bindings_common.hpp"
+#include "simloop/call_gate.hpp"
 #include "simloop/control.hpp"
 #include "simloop/episode.hpp"
 #include "simloop/model.hpp"
@@ -23,42 +21,24 @@ namespace simloop_py {
 namespace py = pybind11;
 
 // What a Sim or Episodes holder shares so that any Python thread may call
-// it. Every call holds the lock for its whole length, GIL released or not,
-// so no call sees another half done (a step while set_timestep swaps the
-// model, say). The lock is waited for without the GIL, so a thread waiting
-// for it never blocks the thread that holds it from getting the GIL back;
-// and in slices, between which the waiter runs Python's signal handlers, so
-// Ctrl-C reaches a thread waiting for a call another thread is in for a
-// long time.
+// it: every call holds the gate for its whole length, GIL released or not.
+// The gate is waited for without the GIL, so a thread waiting for it never
+// blocks the thread inside from getting the GIL back.
 struct Lockable {
-  std::timed_mutex mutex;
-  // The thread holding `mutex`, if any. Only the holder writes it, and a
-  // thread only asks whether it is itself the holder, so relaxed order does.
-  std::atomic<std::thread::id> holder{};
+  simloop::CallGate gate;
 };
 
 class CallLock {
  public:
-  CallLock(Lockable& s, const char* what) : s_(s) {
-    // A signal handler or a progress callback, run from inside this object's
-    // own call, calling it again: refuse rather than deadlock.
-    if (s.holder.load(std::memory_order_relaxed) == std::this_thread::get_id()) {
-      throw py::value_error(std::string(what) +
-                            " in the middle of a call on this thread (a signal handler or "
-                            "progress callback called it); call it after that call returns");
-    }
-    if (!s.mutex.try_lock()) wait_in_slices([&](auto slice) { return s.mutex.try_lock_for(slice); });
-    s.holder.store(std::this_thread::get_id(), std::memory_order_relaxed);
+  CallLock(Lockable& s, const char* what) : gate_(s.gate) {
+    gate_.enter(what, [](const simloop::CallGate::TryFor& try_for) { wait_without_gil(try_for); });
   }
-  ~CallLock() {
-    s_.holder.store(std::thread::id(), std::memory_order_relaxed);
-    s_.mutex.unlock();
-  }
+  ~CallLock() { gate_.leave(); }
   CallLock(const CallLock&) = delete;
   CallLock& operator=(const CallLock&) = delete;
 
  private:
-  Lockable& s_;
+  simloop::CallGate& gate_;
 };
 
 struct PySim : Lockable {

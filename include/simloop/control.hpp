@@ -11,16 +11,18 @@
 #include <atomic>
 #include <chrono>
 #include <cstdint>
+#include <exception>
 #include <functional>
 #include <thread>
+#include <utility>
 
 namespace simloop {
 
 class RunControl {
  public:
   // poll(steps_done, steps_total): the Python bindings check for Ctrl-C
-  // there; a progress bar draws there. It may call request_stop(); it must
-  // not throw.
+  // there; a progress bar draws there. It may call request_stop(), or throw:
+  // the control then keeps what it threw and stops the work (see run()).
   using Poll = std::function<void(std::int64_t steps_done, std::int64_t steps_total)>;
 
   // Steps a loop runs between two calls to advance(). Small enough that a
@@ -54,6 +56,20 @@ class RunControl {
   // while it waits for its workers), then throws Interrupted if stopped.
   void check();
 
+  // Runs work(this) (long work that takes this control). When the work ends
+  // with an exception because the poll threw (the loop's Interrupted, or a
+  // batch's), what the poll threw is what the caller gets: the Ctrl-C the
+  // user pressed, the progress callback's own error.
+  template <class Work>
+  auto run(Work&& work) -> decltype(work(this)) {
+    try {
+      return work(this);
+    } catch (...) {
+      if (poll_failure_) std::rethrow_exception(std::exchange(poll_failure_, nullptr));
+      throw;
+    }
+  }
+
   [[nodiscard]] std::int64_t steps_done() const noexcept { return done_.load(std::memory_order_relaxed); }
   [[nodiscard]] std::int64_t steps_total() const noexcept { return total_.load(std::memory_order_relaxed); }
 
@@ -64,6 +80,7 @@ class RunControl {
   std::atomic<std::int64_t> done_{0};
   std::atomic<std::int64_t> total_{0};
   Poll poll_;
+  std::exception_ptr poll_failure_;  // what the poll threw (owner thread only)
   std::thread::id owner_;
   std::chrono::steady_clock::time_point last_poll_;
 };

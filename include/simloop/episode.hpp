@@ -9,7 +9,7 @@
 // actions a Policy would have returned follows the bits of run_schedule with
 // that policy: the same inputs, the same observations (the recorder's row
 // for the state entering the next decision, derived as the first half of
-// the next step: loop.hpp's DecisionStep).
+// the next step: stepper.hpp's Stepper::observe).
 #pragma once
 
 #include <cstddef>

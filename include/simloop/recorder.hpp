@@ -49,7 +49,7 @@ class RowRecorder {
   virtual void after_step(double* row, const mjModel* m, const mjData* d) const noexcept = 0;
   // Whether after_step reads anything of MuJoCo's acceleration stage but
   // the actuator forces (an acceleration-stage sensor, say): a decision's
-  // observation then takes a whole forward pass (loop.hpp's DecisionStep).
+  // observation then takes a whole forward pass (stepper.hpp's Stepper::observe).
   [[nodiscard]] virtual bool reads_acceleration_stage() const noexcept { return true; }
 };
 
@@ -160,7 +160,7 @@ class ScheduledInputs {
 // The observation is the recorder's row for the state entering the decision
 // step (Recorder's columns, step and time first), computed before the
 // decision: deciding leaves the run's bits as they would be with the same
-// ctrl written open-loop (loop.hpp's DecisionStep derives it as the first
+// ctrl written open-loop (Stepper::observe, stepper.hpp, derives it as the first
 // half of the next mj_step, or by forward_keeping_state); its ctrl columns
 // hold the ctrl in force until now (the previous decision's; 0 before the
 // first), and so do what follows from ctrl (actuator forces, acceleration

@@ -7,6 +7,7 @@
 
 #include <mujoco/mujoco.h>
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -23,11 +24,35 @@ namespace simloop {
 struct CameraView {
   std::string camera;  // one of the scene's cameras, by name, as the scene defines it
   std::string track;   // or a free camera that looks at this body, by name
+  // or at this point (world, m): a video follows a body along the floor this
+  // way, so that its hops show as the body rising in the picture
+  std::optional<std::array<double, 3>> lookat;
   // A free camera's distance (m) and direction (degrees); unset: the
   // default free camera's.
   std::optional<double> distance;
   std::optional<double> azimuth;
   std::optional<double> elevation;
+};
+
+// How a renderer draws, beyond where from.
+struct RenderStyle {
+  // MuJoCo's multisampling (the scene's <quality offsamples>, 4 unless it
+  // says): smoother edges, at about 3 times a picture's time on Mesa's
+  // software rasteriser. A video's frames go without.
+  bool multisample = true;
+  // Planes drawn to the horizon, as the physics has them (a plane collides
+  // everywhere), rather than to their size: a body that travels off the
+  // drawn floor (the chapter's box, 4.9 m out by the end of a run; Break
+  // It's hop, at 9 m) still has it under it. A video's frames have them.
+  bool endless_planes = false;
+  // The shadow map's side, in texels: 0, about 2 a pixel of the picture's
+  // larger side (at least 512); else this many (kMinShadowSize to
+  // kMaxShadowSize), never more than the scene's <quality shadowsize>. A
+  // video's frames take 512: its shadow pass was half a frame's time, for
+  // shadows no sharper to the eye in motion.
+  int shadow_size = 0;
+  static constexpr int kMinShadowSize = 64;
+  static constexpr int kMaxShadowSize = 16384;
 };
 
 // Checks `view` against `model`, as a picture would: InvalidArgument for a
@@ -42,11 +67,11 @@ class Renderer {
 
   // Draws states of `model` (or of a copy of it with other parameters: the
   // same structure) `width` x `height` pixels. Throws InvalidArgument unless
-  // both are from 1 to kMaxSize, RenderError when this machine cannot render
+  // both are from 1 to kMaxSize and style.shadow_size is 0 or in its range, RenderError when this machine cannot render
   // (no libEGL, no display, an OpenGL MuJoCo cannot use; the message says
   // what to install; or in a process forked from one that had already
   // rendered, which EGL does not survive).
-  Renderer(const Model& model, int width, int height);
+  Renderer(const Model& model, int width, int height, const RenderStyle& style = {});
   ~Renderer();
   Renderer(const Renderer&) = delete;
   Renderer& operator=(const Renderer&) = delete;

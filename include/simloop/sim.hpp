@@ -159,8 +159,8 @@ class Sim {
   bool owns_model_ = false;
   Data data_;
   std::int64_t steps_ = 0;
-  struct Counter;
-  std::shared_ptr<Counter> counter_;
+  struct Stepping;  // the library's stepping core: its warnings, its divergence check
+  std::shared_ptr<Stepping> stepping_;
 };
 
 }  // namespace simloop

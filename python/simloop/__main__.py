@@ -92,7 +92,8 @@ def _plot_command(args: List[str]) -> int:
         i += 1
     if compare and what != "trajectory":
         return _fail(EXIT_USAGE, "plot: --compare draws trajectories only")
-    from .plots import sweep_png, trajectory_png
+    from .plots import trajectory_png
+    from .sweep_plots import sweep_png
 
     csv = out / f"{what}.csv"
     for flag, path in [("--out", csv)] + [("--compare", c / "trajectory.csv") for c in compare]:
@@ -328,7 +329,8 @@ class _Host:
         """--plot: out/<what>.png drawn here, from the CSV just written."""
         folder = Path(out)
         try:
-            from .plots import sweep_png, trajectory_png
+            from .plots import trajectory_png
+            from .sweep_plots import sweep_png
 
             if what == "sweep":
                 return str(sweep_png(folder / "sweep.csv", folder / "sweep.png"))

@@ -5,10 +5,12 @@ raised as KeyboardInterrupt, and the peak memory they report.
 
 from __future__ import annotations
 
+import contextlib
 import signal
 import sys
+import threading
 from types import FrameType
-from typing import Any, Dict, NoReturn, Optional, TextIO
+from typing import Any, Dict, Iterator, List, NoReturn, Optional, TextIO
 
 from . import _core
 
@@ -52,6 +54,35 @@ def _catch_terminating_signals() -> Dict[int, Any]:
         if signal.getsignal(signum) == signal.SIG_DFL:
             previous[signum] = signal.signal(signum, _on_signal)
     return previous
+
+
+@contextlib.contextmanager
+def signals_wait() -> Iterator[None]:
+    """Ctrl-C and the terminating signals wait for the block to end, then act
+    as they would have (the signal is raised again). For work that a
+    KeyboardInterrupt raised inside would leave saying something else: rerun
+    objects stopped half-way print under the command's one line (a
+    RecordingStream stopped inside its constructor prints a traceback from
+    its __del__, a blueprint stopped between its MemorySink and the send
+    warns "Dropping data"), and a C extension's import turns it into an
+    error of its own (numpy's ImportError: "PyCapsule_Import could not import
+    module datetime"). Python runs signal handlers on the main thread only:
+    elsewhere, nothing to do."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    caught: List[int] = []
+    previous = {}
+    for signum in _core.TERMINATING_SIGNALS:  # Ctrl-C among them
+        if signal.getsignal(signum) not in (signal.SIG_IGN, None):
+            previous[signum] = signal.signal(signum, lambda number, frame: caught.append(number))
+    try:
+        yield
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
+        if caught:
+            signal.raise_signal(caught[0])
 
 
 class _ReportLost(Exception):

@@ -456,6 +456,7 @@ class CameraView(metaclass=_Pybind11Type):
         distance: Optional[float],
         azimuth: Optional[float],
         elevation: Optional[float],
+        lookat: Optional[Sequence[float]] = None,
     ) -> None: ...
 
 def check_camera_view(model: Model, view: CameraView) -> None: ...
@@ -463,7 +464,15 @@ def check_camera_view(model: Model, view: CameraView) -> None: ...
 # Offscreen pictures (simloop.Renderer): (height, width, 3) uint8, or with
 # depth (height, width) float32 metres.
 class Renderer(metaclass=_Pybind11Type):
-    def __init__(self, model: Model, width: int, height: int) -> None: ...
+    def __init__(
+        self,
+        model: Model,
+        width: int,
+        height: int,
+        multisample: bool = True,
+        endless_planes: bool = False,
+        shadow_size: int = 0,
+    ) -> None: ...
     @property
     def width(self) -> int: ...
     @property

@@ -57,16 +57,15 @@ an error, not a hang or a truncated file.
 
 from __future__ import annotations
 
-import contextlib
 import os
-import signal
-import threading
 import uuid
 from pathlib import Path
-from typing import Any, Dict, Iterator, List, Mapping, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
 from . import _core
 from ._build import MUJOCO_BUILD
+from ._command import signals_wait
+from ._rrd_file import RrdFile
 
 # rerun accepts these application ids as they are (no "/" or ".").
 SCENARIO_APPLICATION_ID = "simloop_scenario"
@@ -183,90 +182,6 @@ QUANTITIES = [
 ]
 
 
-@contextlib.contextmanager
-def _signals_wait() -> Iterator[None]:
-    """Ctrl-C and the terminating signals wait for the block to end, then act
-    as they would have (the signal is raised again). rerun objects stopped
-    half-way print under the command's one line: a RecordingStream stopped
-    inside its constructor prints a traceback from its __del__, a blueprint
-    stopped between its MemorySink and the send warns "Dropping data".
-    Python runs signal handlers on the main thread only: elsewhere, nothing
-    to do."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    caught: List[int] = []
-    previous = {}
-    for signum in _core.TERMINATING_SIGNALS:  # Ctrl-C among them
-        if signal.getsignal(signum) not in (signal.SIG_IGN, None):
-            previous[signum] = signal.signal(signum, lambda number, frame: caught.append(number))
-    try:
-        yield
-    finally:
-        for signum, handler in previous.items():
-            signal.signal(signum, handler)
-        if caught:
-            signal.raise_signal(caught[0])
-
-
-class RrdFile:
-    """A RecordingStream whose file simloop writes. rerun's file sink writes
-    to a pipe (_core.PipedFile); a thread of simloop's appends every byte,
-    each write checked, to a temporary file beside `target`, which is put in
-    place together with the run's other outputs (its `files`) once finish()
-    has checked it whole. A full disk or
-    a file-size limit is an OSError naming the file, and rerun itself never
-    sees it (the pipe is drained whatever happens), so nothing hangs in
-    rerun and nothing half-written is put in place. Waiting for rerun takes
-    at most FINISH_TIMEOUT seconds, and Ctrl-C and SIGTERM act during it."""
-
-    FINISH_TIMEOUT = 60.0
-
-    def __init__(self, rr: Any, application_id: str, recording_id: str, target: Path) -> None:
-        self.target = Path(target)
-        self.piped: Any = _core.PipedFile(self.target)
-        self.rec: Any = None
-        try:
-            with _signals_wait():
-                self.rec = rr.RecordingStream(application_id, recording_id=recording_id, send_properties=False)
-                self.rec.save(self.piped.writer_path)
-        except BaseException:
-            self.close()
-            raise
-        finally:
-            if self.piped is not None:
-                self.piped.close_writer()  # rerun holds its own end now
-
-    @property
-    def files(self) -> list:
-        """The file to put in place with the run's outputs, until it is closed."""
-        return [] if self.piped is None else [self.piped]
-
-    def flush(self) -> None:
-        """Waits for rerun to have written what was sent (keeps its queue short)."""
-        try:
-            self.rec.flush(timeout_sec=self.FINISH_TIMEOUT)
-        except RuntimeError as e:
-            raise OSError(f"{self.target}: rerun could not write the recording ({e})") from None
-
-    def finish(self) -> None:
-        """Every byte rerun wrote is in the temporary file, checked; OSError if not."""
-        self.flush()
-        self.rec.disconnect()  # rerun closes its end: the end of the stream
-        self.rec = None
-        if not self.piped.wait(self.FINISH_TIMEOUT):
-            raise OSError(f"{self.target}: rerun did not finish writing the recording within {self.FINISH_TIMEOUT:g} s")
-        self.piped.finish()
-
-    def close(self) -> None:
-        """Abandons the file if it was not finished: the temporary file goes at
-        once, and what rerun still writes is drained and dropped."""
-        rec, self.rec = self.rec, None
-        self.piped = None
-        if rec is not None:
-            rec.disconnect()
-
-
 class Recording:
     """The .rrd of one run of `model`'s scene, written as the run goes: the
     run calls columns(names) once, rows(block) per block of rows and
@@ -353,7 +268,7 @@ class Recording:
                 rr.Boxes3D(centers=[centre], half_sizes=[half], colors=[_rgba(plane["rgba"])], fill_mode="solid"),
                 static=True,
             )
-        with _signals_wait():  # rerun's blueprint passes through a MemorySink that warns if dropped full
+        with signals_wait():  # rerun's blueprint passes through a MemorySink that warns if dropped full
             self._rec.send_blueprint(self._blueprint(), make_active=False, make_default=True)
         self._rec.send_recording_name(self._name(result))
         self.file.finish()

@@ -13,8 +13,17 @@ RuntimeError saying what to install, when the Renderer is made.
 Where the picture is taken from: `camera`, one of the scene's cameras by
 name; or a free camera, looking at the whole scene (MuJoCo's default free
 camera: the scene's centre, from 1.5 times its extent), or at a body's
-subtree centre of mass with `track`; `distance` (m), `azimuth` and
-`elevation` (degrees) move the free camera.
+subtree centre of mass with `track`, or at a point with `lookat` (x, y, z
+in metres, world frame); `distance` (m), `azimuth` and `elevation`
+(degrees) move the free camera.
+
+How it draws: multisample=False leaves out MuJoCo's multisampling (edges a
+little jagged, a picture about 3 times faster on Mesa's software
+rasteriser); endless_planes=True draws planes to the horizon, as the
+physics has them, rather than to their size (a body that travels off the
+drawn floor still has it under it); shadow_size (texels a side, 64 to
+16384) sets the shadow map, about 2 texels a pixel unless given. A video's
+frames use all three (512 texels).
 
 A picture shows the poses MuJoCo last computed: a Sim's are as of its last
 step (MuJoCo derives them before integrating); sim.forward() brings them
@@ -23,14 +32,24 @@ up to date first, without changing the run's bits.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any, Mapping, Optional, Union
+from typing import TYPE_CHECKING, Any, Mapping, Optional, Sequence, Union
 
 if TYPE_CHECKING:
     import numpy as np
     from numpy.typing import NDArray
 
 from . import _core
-from ._checks import ModelLike, _check_bool, _check_int, _check_keys, _check_real, _check_str, _describe, load_model
+from ._checks import (
+    ModelLike,
+    _check_bool,
+    _check_int,
+    _check_keys,
+    _check_real,
+    _check_str,
+    _describe,
+    _reals,
+    load_model,
+)
 from .sim import Sim
 
 MAX_PICTURE_SIZE: int = _core.MAX_PICTURE_SIZE
@@ -47,15 +66,19 @@ class CameraSettings:
         distance: Optional[float] = None,
         azimuth: Optional[float] = None,
         elevation: Optional[float] = None,
+        lookat: Optional[Sequence[float]] = None,
     ) -> None:
         self.camera = None if camera is None else _check_str("camera", camera)
         self.track = None if track is None else _check_str("track", track)
         self.distance = None if distance is None else _check_real("distance", distance)
         self.azimuth = None if azimuth is None else _check_real("azimuth", azimuth)
         self.elevation = None if elevation is None else _check_real("elevation", elevation)
+        self.lookat = None if lookat is None else _reals("lookat", lookat)
+        if self.lookat is not None and len(self.lookat) != 3:
+            raise ValueError(f"lookat must be 3 numbers (x, y, z in metres), got {len(self.lookat)}")
 
     def core(self) -> _core.CameraView:
-        return _core.CameraView(self.camera, self.track, self.distance, self.azimuth, self.elevation)
+        return _core.CameraView(self.camera, self.track, self.distance, self.azimuth, self.elevation, self.lookat)
 
     def __repr__(self) -> str:
         given = {k: v for k, v in vars(self).items() if v is not None}
@@ -71,10 +94,24 @@ class Renderer:
     turns); close() frees the OpenGL context early.
     """
 
-    def __init__(self, model: Union[ModelLike, Sim] = None, width: int = 640, height: int = 480) -> None:
+    def __init__(
+        self,
+        model: Union[ModelLike, Sim] = None,
+        width: int = 640,
+        height: int = 480,
+        *,
+        multisample: bool = True,
+        endless_planes: bool = False,
+        shadow_size: Optional[int] = None,
+    ) -> None:
         scene = model.model if isinstance(model, Sim) else load_model(model)
         self._renderer: Optional[_core.Renderer] = _core.Renderer(
-            scene, _check_int("width", width, 1, MAX_PICTURE_SIZE), _check_int("height", height, 1, MAX_PICTURE_SIZE)
+            scene,
+            _check_int("width", width, 1, MAX_PICTURE_SIZE),
+            _check_int("height", height, 1, MAX_PICTURE_SIZE),
+            _check_bool("multisample", multisample),
+            _check_bool("endless_planes", endless_planes),
+            0 if shadow_size is None else _check_int("shadow_size", shadow_size),
         )
         self.width, self.height = width, height
 
@@ -87,6 +124,7 @@ class Renderer:
         distance: Optional[float] = None,
         azimuth: Optional[float] = None,
         elevation: Optional[float] = None,
+        lookat: Optional[Sequence[float]] = None,
         depth: bool = False,
     ) -> "NDArray[np.generic]":
         """A picture of sim's state: (height, width, 3) uint8 RGB, rows from
@@ -96,7 +134,7 @@ class Renderer:
         scene's camera, or a Sim of another scene."""
         if not isinstance(sim, Sim):
             raise TypeError(f"sim must be a simloop.Sim, got {_describe(sim)}")
-        view = CameraSettings(camera, track, distance, azimuth, elevation).core()
+        view = CameraSettings(camera, track, distance, azimuth, elevation, lookat).core()
         return self._core().render_sim(sim._sim, view, _check_bool("depth", depth))
 
     def _core(self) -> _core.Renderer:
@@ -120,7 +158,7 @@ class Renderer:
 
 # What a Gymnasium env's render_mode may be (gym.py): a picture, or its depth.
 RENDER_MODES = ("rgb_array", "depth_array")
-VIEW_KEYS = ("camera", "track", "distance", "azimuth", "elevation")
+VIEW_KEYS = ("camera", "track", "distance", "azimuth", "elevation", "lookat")
 
 
 class EpisodePictures:

@@ -3,10 +3,14 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cstring>
+#include <stdexcept>
+#include <thread>
 #include <vector>
 
 #include "simloop/batch.hpp"
+#include "simloop/call_gate.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/run.hpp"
 #include "simloop/sim.hpp"
@@ -131,6 +135,92 @@ TEST(RunControl, CountsProgressOverABatch) {
   EXPECT_EQ(results.size(), 5u);
   EXPECT_EQ(control.steps_total(), 3500);
   EXPECT_EQ(control.steps_done(), 3500);
+}
+
+// What the poll throws (Python's KeyboardInterrupt, a progress callback's
+// error) stops the work at its next chunk, and run() hands it to the
+// caller in place of the loop's Interrupted; one run or a batch.
+TEST(RunControl, WhatThePollThrowsReachesTheCallerOfRun) {
+  struct FromThePoll : std::runtime_error {
+    using std::runtime_error::runtime_error;
+  };
+  simloop::RunConfig config;
+  config.steps = 10'000'000;
+  config.record_every = 10'000;  // no trajectory to allocate
+  int polls = 0;
+  simloop::RunControl control([&](std::int64_t, std::int64_t) {
+    if (++polls == 2) throw FromThePoll("pressed Ctrl-C");
+  });
+  simloop::Data data(scene());
+  EXPECT_THROW(control.run([&](simloop::RunControl* c) { return simloop::run(scene(), config, data, nullptr, c); }),
+               FromThePoll);
+  EXPECT_EQ(polls, 2);  // not polled again once stopped
+  EXPECT_LT(control.steps_done(), config.steps / 10);
+  // Without run(), the loop's own Interrupted; the failure was handed over once.
+  EXPECT_THROW(control.run([&](simloop::RunControl* c) { return simloop::run(scene(), config, data, nullptr, c); }),
+               simloop::Interrupted);
+
+  std::vector<simloop::RunConfig> configs(4, config);
+  simloop::RunControl batch_control([&](std::int64_t, std::int64_t) { throw FromThePoll("progress failed"); });
+  EXPECT_THROW(batch_control.run([&](simloop::RunControl* c) { return simloop::run_batch(scene(), configs, 2, c); }),
+               FromThePoll);
+  // Work that fails on its own keeps its own exception.
+  simloop::RunControl quiet;
+  EXPECT_THROW(quiet.run([](simloop::RunControl*) -> int { throw std::logic_error("the work's own"); }),
+               std::logic_error);
+}
+
+TEST(CallGate, RefusesReentryOnItsThreadAndMakesOthersWaitInSlices) {
+  simloop::CallGate gate;
+  const auto no_wait = [](const simloop::CallGate::TryFor&) { FAIL() << "the gate was free"; };
+  gate.enter("this Sim is", no_wait);
+  try {
+    gate.enter("this Sim is", no_wait);
+    ADD_FAILURE() << "entered twice on one thread";
+  } catch (const simloop::InvalidArgument& e) {
+    EXPECT_STREQ(e.what(),
+                 "this Sim is in the middle of a call on this thread (a signal handler or progress callback called "
+                 "it); call it after that call returns");
+  }
+  // Another thread waits, slice by slice, until the gate is left; a wait
+  // that gives up (Ctrl-C between slices) leaves it unentered.
+  std::atomic<int> slices{0};
+  std::atomic<bool> entered{false};
+  std::thread waiter([&] {
+    try {
+      gate.enter("this Sim is", [&](const simloop::CallGate::TryFor& try_for) {
+        simloop::wait_in_slices(try_for, [&] {
+          if (++slices == 1000) throw std::runtime_error("gave up");
+        });
+      });
+      entered = true;
+      gate.leave();
+    } catch (const std::runtime_error&) {
+    }
+  });
+  while (slices < 2) std::this_thread::yield();
+  EXPECT_FALSE(entered);
+  gate.leave();
+  waiter.join();
+  EXPECT_TRUE(entered);
+  EXPECT_LT(slices, 1000);
+  gate.enter("this Sim is", no_wait);  // free again, and re-enterable after leave()
+  gate.leave();
+}
+
+TEST(CallGate, WaitInSlicesStopsAtItsTimeoutAndWithWhatBetweenThrows) {
+  int betweens = 0;
+  const auto sleeps = [](std::chrono::milliseconds slice) {
+    std::this_thread::sleep_for(slice);
+    return false;
+  };
+  EXPECT_FALSE(simloop::wait_in_slices(
+      sleeps, [&] { ++betweens; }, 0.05));
+  EXPECT_GE(betweens, 1);
+  EXPECT_TRUE(simloop::wait_in_slices([](std::chrono::milliseconds) { return true; }, [] { FAIL(); }, 0.0));
+  EXPECT_THROW(simloop::wait_in_slices([](std::chrono::milliseconds) { return false; },
+                                       [] { throw std::runtime_error("Ctrl-C"); }),
+               std::runtime_error);
 }
 
 }  // namespace

@@ -1,12 +1,14 @@
-// The observation before a decision (DecisionStep, loop.hpp): the first half
-// of the next mj_step where it can be, a whole forward pass where not; either
-// way the bits of a forward pass kept aside (forward_keeping_state) then
+// The stepping core (stepper.hpp) and the loop on it (loop.hpp). The
+// observation before a decision (Stepper::observe): the first half of the
+// next mj_step where it can be, a whole forward pass where not; either way
+// the bits of a forward pass kept aside (forward_keeping_state) then
 // mj_step, in the observation and in the run.
 #include "loop.hpp"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -17,12 +19,15 @@
 #include <vector>
 
 #include "mujoco_compat.hpp"
+#include "simloop/episode.hpp"
 #include "simloop/model.hpp"
 #include "simloop/recorder.hpp"
 #include "simloop/scenario.hpp"
 #include "simloop/scenario_run.hpp"
 #include "simloop/shove.hpp"
+#include "simloop/sim.hpp"
 #include "simloop/state.hpp"
+#include "stepper.hpp"
 
 namespace {
 
@@ -63,11 +68,18 @@ constexpr const char* kPushtRecord =
     "[record]\nbodies = [\"tblock\", \"pusher\"]\njoints = [\"tblock_free\", \"slide_x\"]\n"
     "actuators = [\"push_x\", \"push_y\"]\nsensors = [\"tblock_pos\", \"tip_x\"]\ncontacts = true\nncon = true\n";
 
+// The scheduled inputs, written before each step the core takes.
+struct WriteInputs : simloop::detail::StepHooks {
+  simloop::ScheduledInputs& inputs;
+  explicit WriteInputs(simloop::ScheduledInputs& to_write) : inputs(to_write) {}
+  void before_step(std::int64_t step, mjData* d) noexcept { inputs.write(step, d); }
+};
+
 // Takes `steps` steps with a decision every `every`, twice from the same
-// start: observing through DecisionStep, and through forward_keeping_state
-// then mj_step. Expects the same observations and end state bit for bit, and
-// DecisionStep to have begun the next step at each decision iff `halfway`.
-// `watch` sees the state at each decision.
+// start: observing through the core, and through forward_keeping_state then
+// mj_step. Expects the same observations and end state bit for bit, and the
+// core to have begun the next step at each decision iff `halfway`. `watch`
+// sees the state at each decision.
 void expect_the_same_run(const simloop::Model& scene, const std::string& scenario_toml, bool halfway,
                          std::int64_t steps = 300, std::int64_t every = 7,
                          const std::function<void(const mjData*)>& watch = nullptr) {
@@ -83,18 +95,18 @@ void expect_the_same_run(const simloop::Model& scene, const std::string& scenari
   mjData* a = data_a.get();
   mjData* b = data_b.get();
   simloop::ScheduledInputs inputs_a(schedule, false), inputs_b(schedule, false);
-  mj_forward(m, a);
+  simloop::detail::Stepper core(m, recorder.reads_acceleration_stage());
+  core.reset(m, a, {});
   mj_forward(m, b);
-  simloop::detail::DecisionStep decision(m, recorder);
   const auto width = static_cast<std::size_t>(recorder.width());
   for (std::int64_t step = 0; step < steps; step += every) {
     std::vector<double> seen_a(width), seen_b(width);
     inputs_a.write(step, a);
     const int ncon_a = a->ncon;
-    decision.observe(m, a);
-    EXPECT_EQ(decision.begun(), halfway) << "step " << step;
-    EXPECT_EQ(decision.entering_ncon(a), ncon_a) << "the count the step began with, step " << step;
-    recorder.before_step(seen_a.data(), step, m, a, true, decision.entering_ncon(a));
+    core.observe(m, a, step);
+    EXPECT_EQ(core.begun(), halfway) << "step " << step;
+    EXPECT_EQ(core.entering_ncon(a), ncon_a) << "the count the step began with, step " << step;
+    recorder.before_step(seen_a.data(), step, m, a, true, core.entering_ncon(a));
     recorder.after_step(seen_a.data(), m, a);
     inputs_b.write(step, b);
     const int ncon_b = b->ncon;
@@ -104,10 +116,11 @@ void expect_the_same_run(const simloop::Model& scene, const std::string& scenari
     ASSERT_TRUE(same_bits(seen_a, seen_b)) << "the observation at step " << step;
     if (watch) watch(a);
     for (int u = 0; u < m->nu; ++u) a->ctrl[u] = b->ctrl[u] = std::sin(0.05 * static_cast<double>(step) + u);
+    std::int64_t taken = step;
+    core.run(m, a, taken, std::min(steps, step + every), WriteInputs(inputs_a), nullptr);
+    EXPECT_EQ(taken, std::min(steps, step + every));
+    EXPECT_EQ(core.entering_ncon(a), a->ncon) << "after a step, d's own count";
     for (std::int64_t s = step; s < std::min(steps, step + every); ++s) {
-      inputs_a.write(s, a);
-      decision.step(m, a);
-      ASSERT_EQ(decision.entering_ncon(a), a->ncon) << "after a step, d's own count";
       inputs_b.write(s, b);
       mj_step(m, b);
     }
@@ -118,7 +131,7 @@ void expect_the_same_run(const simloop::Model& scene, const std::string& scenari
 
 }  // namespace
 
-TEST(DecisionStep, BeginsTheNextStepAndGivesTheBitsOfAWholeForwardPass) {
+TEST(Decision, BeginsTheNextStepAndGivesTheBitsOfAWholeForwardPass) {
   // A free joint (2.2 normalises its quaternion in place: held aside),
   // actuator forces of the ctrl in force, contacts, a disturbance.
   expect_the_same_run(pusht(), kPushtRecord, true);
@@ -126,7 +139,7 @@ TEST(DecisionStep, BeginsTheNextStepAndGivesTheBitsOfAWholeForwardPass) {
   expect_the_same_run(pusht_integrated_by("implicit"), kPushtRecord, true);
 }
 
-TEST(DecisionStep, TakesAWholeForwardPassForWhatTheFirstHalfCannotGive) {
+TEST(Decision, TakesAWholeForwardPassForWhatTheFirstHalfCannotGive) {
   // RK4's mj_step is not mj_step1 + mj_step2.
   expect_the_same_run(pusht_integrated_by("RK4"), kPushtRecord, false);
   // An acceleration-stage sensor, recorded; unrecorded, it changes nothing.
@@ -138,7 +151,7 @@ TEST(DecisionStep, TakesAWholeForwardPassForWhatTheFirstHalfCannotGive) {
   expect_the_same_run(imu, kPushtRecord, true);
 }
 
-TEST(DecisionStep, LeavesABadStateAndACallbackToTheWholeStep) {
+TEST(Decision, LeavesABadStateAndACallbackToTheWholeStep) {
   const simloop::Model scene = pusht();
   const mjModel* m = scene.get();
   const simloop::Scenario scenario = simloop::Scenario::from_toml_string(
@@ -149,38 +162,43 @@ TEST(DecisionStep, LeavesABadStateAndACallbackToTheWholeStep) {
   const simloop::Recorder recorder(m, resolved, simloop::build_schedule(resolved, scenario, m->opt.timestep, *draws));
   simloop::Data data(scene);
   mjData* d = data.get();
-  // Stepped inside simloop's guard, as the library steps it: a warning
-  // raised outside simloop's calls would go to MuJoCo's own handler (and
-  // MUJOCO_LOG.TXT).
-  const auto guarded = [](auto&& f) { simloop::detail::mujoco_call(f); };
-  guarded([&] { mj_forward(m, d); });
-  simloop::detail::DecisionStep decision(m, recorder);
-  guarded([&] { decision.observe(m, d); });
-  EXPECT_TRUE(decision.begun());
+  simloop::detail::Stepper core(m, recorder.reads_acceleration_stage());
+  core.reset(m, d, {});
+  const auto counted = [&](const std::string& name) {
+    for (const simloop::Warning& w : core.health().warnings()) {
+      if (w.name == name) return w.count;
+    }
+    return std::int64_t{0};
+  };
+  std::int64_t step = 0;
+  core.observe(m, d, step);
+  EXPECT_TRUE(core.begun());
   // A callback would see the ctrl before the decision. What it warns, the
   // step counts once (the whole forward pass and the step both run it).
   mjcb_passive = [](const mjModel*, mjData* data) { mj_warning(data, mjWARN_CONTACTFULL, 1); };
   d->warning[mjWARN_CONTACTFULL].number = 0;
-  guarded([&] { decision.observe(m, d); });
-  EXPECT_FALSE(decision.begun());
-  guarded([&] { decision.step(m, d); });
+  core.observe(m, d, step);
+  EXPECT_FALSE(core.begun());
+  core.run(m, d, step, step + 1, simloop::detail::StepHooks{}, nullptr);
   mjcb_passive = nullptr;
-  EXPECT_EQ(d->warning[mjWARN_CONTACTFULL].number, 1) << "the callback's warning, counted once, as mj_step alone";
+  EXPECT_EQ(counted("mjWARN_CONTACTFULL"), 1) << "the callback's warning, counted once, as mj_step alone";
+  EXPECT_FALSE(core.health().broken());
   // mj_step1 would reset a bad velocity at the observation: mj_step resets it
   // at the step, as without a decision.
   d->qvel[0] = std::numeric_limits<double>::quiet_NaN();
-  guarded([&] { decision.observe(m, d); });
-  EXPECT_FALSE(decision.begun());
+  core.observe(m, d, step);
+  EXPECT_FALSE(core.begun());
   EXPECT_TRUE(std::isnan(d->qvel[0]));
-  guarded([&] { decision.step(m, d); });
-  EXPECT_EQ(d->warning[mjWARN_BADQVEL].number, 1) << "counted once, by the step, as mj_step alone counts it";
+  core.run(m, d, step, step + 1, simloop::detail::StepHooks{}, nullptr);
+  EXPECT_EQ(counted("mjWARN_BADQVEL"), 1) << "counted once, by the step, as mj_step alone counts it";
+  EXPECT_TRUE(core.health().broken()) << "MuJoCo reset the state";
   EXPECT_FALSE(std::isnan(d->qvel[0]));
-  guarded([&] { decision.observe(m, d); });
-  EXPECT_TRUE(decision.begun());
+  core.observe(m, d, step);
+  EXPECT_TRUE(core.begun());
 }
 
 #if mjVERSION_HEADER >= 300
-TEST(DecisionStep, TakesAWholeForwardPassWithPlugins) {
+TEST(Decision, TakesAWholeForwardPassWithPlugins) {
   // An actuator plugin computes in mj_fwdActuation: the observation's extra
   // call must not be the one that counts.
   std::string xml = scene_text("plugin_pid.xml");
@@ -192,7 +210,7 @@ TEST(DecisionStep, TakesAWholeForwardPassWithPlugins) {
 #endif
 
 #if mjVERSION_HEADER >= 340
-TEST(DecisionStep, FollowsTreesThatFallAsleep) {
+TEST(Decision, FollowsTreesThatFallAsleep) {
   const simloop::Model scene = simloop::Model::from_file(std::string(SIMLOOP_TEST_SCENES) + "/sleeping_boxes.xml");
   int asleep = 0;  // decisions with a tree asleep
   expect_the_same_run(scene,
@@ -232,4 +250,66 @@ TEST(Loop, EveryColumnOfARowIsOfTheRowsStateUnderEveryIntegrator) {
     }
     EXPECT_GT(moved, 1e-3) << integrator << ": the block moves, so a lag would show";
   }
+}
+
+// The run's inputs written through a Sim, step by step up to `end`: the
+// motor on, each scheduled force on at its start and off at its end.
+void step_as_scheduled(simloop::Sim& sim, const simloop::Schedule& schedule, std::int64_t end) {
+  sim.set_ctrl(1.0);
+  for (std::int64_t step = sim.steps_taken(); step < end; ++step) {
+    for (const simloop::Schedule::Force& f : schedule.forces) {
+      const std::array<double, 3> force{f.wrench[0], f.wrench[1], f.wrench[2]}, none{};
+      if (step == f.start) sim.apply_wrench(f.body, &force, nullptr);
+      if (step == f.end) sim.apply_wrench(f.body, &none, nullptr);
+    }
+    sim.step();
+  }
+}
+
+bool same_warnings(const std::vector<simloop::Warning>& a, const std::vector<simloop::Warning>& b) {
+  if (a.size() != b.size()) return false;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (a[i].name != b[i].name || a[i].count != b[i].count || a[i].first_step != b[i].first_step ||
+        a[i].message != b[i].message) {
+      return false;
+    }
+  }
+  return true;
+}
+
+// One core steps them all: the same inputs through a run, a Sim and an
+// episode give the same state and the same warnings. The chapter's scene at
+// 0.3 s a step: the shove sends the box through the floor mid-run.
+TEST(Stepper, ARunASimAndAnEpisodeStepTheSameBitsAndWarnTheSame) {
+  const simloop::Scenario chapter = simloop::Scenario::chapter();
+  const simloop::Model scene = simloop::load_scene(chapter);
+  simloop::ScenarioConfig config;
+  config.timestep = 0.3;
+  const simloop::RunRecord run = simloop::run_scenario(scene, chapter, config);
+  ASSERT_FALSE(run.warnings.empty());
+  const simloop::Warning& diverged = run.warnings.back();
+  ASSERT_EQ(diverged.name, "simloop_DIVERGED");
+  ASSERT_GT(diverged.first_step, 0);
+  ASSERT_GT(diverged.count, 1);
+
+  simloop::Sim sim(scene.with_timestep(0.3));
+  step_as_scheduled(sim, run.schedule, run.schedule.steps);
+  EXPECT_TRUE(same_bits(sim.state(), run.final_state));
+  EXPECT_TRUE(same_warnings(sim.warnings(), run.warnings));
+
+  // The episode ends after the step that diverged: so does a Sim.
+  simloop::Episodes episodes(scene, chapter, config, 1);
+  std::vector<double> observation(static_cast<std::size_t>(episodes.width()));
+  episodes.reset(0, config.seed, observation.data());
+  const double action = 1.0;
+  std::uint8_t terminated = 0, truncated = 0;
+  while (!terminated && !truncated) {
+    episodes.step(&action, 1, 10, nullptr, 0, observation.data(), &terminated, &truncated);
+  }
+  ASSERT_EQ(terminated, 1);
+  ASSERT_EQ(episodes.steps_taken(0), diverged.first_step + 1);
+  simloop::Sim until_diverged(scene.with_timestep(0.3));
+  step_as_scheduled(until_diverged, run.schedule, episodes.steps_taken(0));
+  EXPECT_TRUE(same_bits(until_diverged.state(), simloop::get_state(episodes.model(0).get(), episodes.data(0))));
+  EXPECT_TRUE(same_warnings(until_diverged.warnings(), episodes.warnings(0)));
 }

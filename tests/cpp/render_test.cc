@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cstdint>
 #include <limits>
 #include <string>
@@ -146,6 +147,24 @@ TEST(Renderer, BadSizesAndViewsAreRefusedNamingThem) {
   both.camera = "top";
   EXPECT_EQ(refused(both),
             "a picture is taken from a scene's camera ('top') or a free camera looking at a body ('box'), not both");
+  simloop::CameraView point = camera;
+  point.lookat = std::array<double, 3>{0.0, 0.0, 0.0};
+  EXPECT_EQ(refused(point),
+            "a picture is taken from a scene's camera ('top') or a free camera looking at a point, not both");
+  point.camera.clear();
+  point.track = "box";
+  EXPECT_EQ(refused(point), "a free camera looks at a body ('box') or at a point, not both");
+  point.track.clear();
+  point.lookat = std::array<double, 3>{0.0, std::numeric_limits<double>::quiet_NaN(), 0.0};
+  EXPECT_EQ(refused(point), "the camera's lookat must be 3 finite numbers of metres, got nan");
+  simloop::RenderStyle style;
+  style.shadow_size = 63;
+  try {
+    simloop::Renderer too_fine(model, kWidth, kHeight, style);
+    ADD_FAILURE() << "a shadow map of 63 texels was taken";
+  } catch (const simloop::InvalidArgument& e) {
+    EXPECT_STREQ(e.what(), "shadow_size must be 64 to 16384 texels, or 0 for 2 a pixel, got 63");
+  }
   camera.distance = 2.0;
   EXPECT_EQ(refused(camera), "camera 'top' is the scene's own: distance, azimuth and elevation are for a free camera");
   simloop::CameraView far;

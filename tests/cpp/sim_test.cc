@@ -9,6 +9,7 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -214,6 +215,22 @@ TEST(SimAny, ACopyIsIndependentAndStepsAsTheOriginalWould) {
   EXPECT_EQ(copy.steps_taken(), 120);
   drive(original, 40);
   EXPECT_TRUE(same_bits(original.state(), copy.state()));
+}
+
+TEST(SimAny, ACopyKeepsItsWarningsWhenTheOriginalIsGone) {
+  auto original = std::make_unique<Sim>(scene().with_timestep(1.0));  // the box goes through the floor
+  original->set_ctrl(1.0);
+  original->step(200);
+  const std::vector<simloop::Warning> warned = original->warnings();
+  ASSERT_FALSE(warned.empty());
+  ASSERT_EQ(warned.back().name, "simloop_DIVERGED");
+  const Sim copy(*original);
+  original.reset();
+  const std::vector<std::vector<char>> reuse(64, std::vector<char>(56, 'x'));  // the freed memory, taken again
+  const std::vector<simloop::Warning> kept = copy.warnings();
+  ASSERT_EQ(kept.size(), warned.size());
+  EXPECT_EQ(kept.back().message, warned.back().message);
+  EXPECT_EQ(kept.back().count, warned.back().count);
 }
 
 TEST(SimAny, ResetsToAKeyframe) {

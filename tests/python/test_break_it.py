@@ -182,14 +182,14 @@ def test_plot_refuses_bad_arguments(tmp_path, args, message):
 
 
 def test_sweep_picture_zooms_on_the_band_and_marks_the_rest(tmp_path):
-    from simloop import plots
+    from simloop import plots, sweep_plots
 
     timesteps = [0.001, 0.002, 0.004, 0.005, 0.04, 0.05, 0.5]
     csv = simloop.sweep(timesteps).write(tmp_path)
-    fig = plots.sweep_figure(csv)
+    fig = sweep_plots.sweep_figure(csv)
     try:
         ax_z = fig.axes[0]
-        assert ax_z.get_ylim() == plots.SWEEP_Z_RANGE  # the 6 mm band fills a quarter of the panel
+        assert ax_z.get_ylim() == sweep_plots.SWEEP_Z_RANGE  # the 6 mm band fills a quarter of the panel
         points = {p.timestep: p for p in simloop.sweep(timesteps).points}
         labels = [t.get_text() for t in ax_z.texts]
         # The far points are on the edge with their values: Break It's peak at

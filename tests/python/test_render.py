@@ -78,6 +78,43 @@ def test_renderer_arguments_are_checked_with_one_line_each():
         renderer.render(sim)
 
 
+def test_a_videos_style_floor_to_the_horizon_no_multisampling_and_a_camera_on_a_point():
+    # The box far out, as Break It's hop leaves it (x = 9.1 m): the floor is drawn 2 m out.
+    sim = simloop.Sim()
+    sim.qpos[:3] = (9.1, 0.0, 0.25)
+    sim.forward()
+    view = dict(lookat=(9.1, 0.0, 0.05), distance=1.5)
+    plain = simloop.Renderer(sim, **SIZE).render(sim, **view)
+    video = simloop.Renderer(sim, **SIZE, multisample=False, endless_planes=True).render(sim, **view)
+    floor = np.ones((64, 96), bool)
+    floor[16:48, 32:64] = False  # around the box
+    assert plain[floor].max() < 5  # no floor there: the background
+    assert video[floor].min() > 40  # the floor, drawn to the horizon
+    assert red(video)[16:30, 42:54].any()  # the box, 20 cm above where the camera looks: above the middle
+    assert not red(video)[40:, :].any()
+    # At rest, a camera on the box's centre is the camera that tracks it; without
+    # multisampling the box's edges change and nothing else.
+    sim = simloop.Sim()
+    renderer = simloop.Renderer(sim, **SIZE)
+    assert np.array_equal(renderer.render(sim, lookat=(0.4, 0.0, 0.05)), renderer.render(sim, track="box"))
+    sharp = simloop.Renderer(sim, **SIZE, multisample=False).render(sim, track="box")
+    smooth = renderer.render(sim, track="box")
+    assert not np.array_equal(sharp, smooth) and red(sharp)[32, 48]
+    assert np.mean(np.abs(sharp.astype(int) - smooth)) < 2
+    with pytest.raises(ValueError, match=r"^a free camera looks at a body \('box'\) or at a point, not both$"):
+        renderer.render(sim, track="box", lookat=(0, 0, 0))
+    with pytest.raises(ValueError, match=r"^lookat must be 3 numbers \(x, y, z in metres\), got 2$"):
+        renderer.render(sim, lookat=(0, 0))
+    with pytest.raises(ValueError, match=r"^the camera's lookat must be 3 finite numbers of metres, got inf$"):
+        renderer.render(sim, lookat=(0, float("inf"), 0))
+    with pytest.raises(TypeError, match=r"^multisample must be a bool"):
+        simloop.Renderer(sim, **SIZE, multisample="no")
+    with pytest.raises(ValueError, match=r"^shadow_size must be 64 to 16384 texels, or 0 for 2 a pixel, got 32$"):
+        simloop.Renderer(sim, **SIZE, shadow_size=32)
+    soft = simloop.Renderer(sim, **SIZE, shadow_size=64).render(sim, track="box")  # the shadow's edge changes
+    assert not np.array_equal(soft, smooth) and red(soft)[32, 48]
+
+
 def test_a_scenes_own_camera_is_drawn_from():
     xml = """<mujoco><worldbody>
       <camera name="above" pos="0 0 2" xyaxes="1 0 0 0 1 0"/>

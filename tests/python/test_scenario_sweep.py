@@ -169,7 +169,7 @@ def test_the_sweep_picture_of_a_scenario(tmp_path):
     assert proc.returncode == 0, proc.stderr
     png = tmp_path / "p" / "sweep.png"
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    from simloop.plots import sweep_figure
+    from simloop.sweep_plots import sweep_figure
 
     fig = sweep_figure(tmp_path / "p" / "sweep.csv")
     offsets, speeds = fig.axes

@@ -1,0 +1,242 @@
+"""ScenarioVectorEnv: N episodes of a scenario stepped together in C++ (gym.py
+describes the episodes, and ScenarioEnv, the single environment)."""
+
+from __future__ import annotations
+
+import copy
+from typing import Any, Dict, List, Optional, Sequence, Tuple, Union, cast
+
+import numpy as np
+from gymnasium.utils import seeding
+from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector.utils import batch_space
+
+from ._checks import ModelLike, _check_int, _check_threads, _describe
+from ._gym_setup import (
+    _TERMINAL_ENDS,
+    Rendering,
+    Reward,
+    Terminate,
+    _check_max_episode_steps,
+    _check_options,
+    _ended_by,
+    _episode_seed,
+    _Setup,
+    _start,
+)
+from .render import RENDER_MODES
+from .scenario import RESET_KEYS, ScenarioLike
+
+
+class ScenarioVectorEnv(VectorEnv):
+    """num_envs episodes of a scenario over one compiled model, one MuJoCo
+    data each, stepped together on `threads` C++ threads (None: one per
+    core) with the GIL released. Bitwise the same as num_envs ScenarioEnvs
+    reset with the same seeds and stepped with the same actions, whatever
+    the thread count, and the same infos as gymnasium.vector.SyncVectorEnv
+    over them gives.
+
+    autoreset_mode: Gymnasium's AutoresetMode (or its value, "NextStep",
+    "SameStep", "Disabled"). NEXT_STEP (the default): the step after an
+    episode ends resets it, ignoring its action, with reward 0 and both flags
+    False. SAME_STEP: the step that ends it resets it at once; the ended
+    episode's observation and info are in infos["final_obs"] and
+    infos["final_info"]. DISABLED: the caller resets ended envs with
+    reset(options={"reset_mask": mask}); stepping one first is an error. An
+    autoreset draws the new episode's seed from that env's own np_random, as
+    ScenarioEnv.reset() without a seed does, and starts as the scenario's
+    own [reset] says (Gymnasium's autoreset passes no options: randomisation
+    every episode needs belongs in the scenario). Other arguments: as for
+    ScenarioEnv.
+    """
+
+    metadata = {"render_modes": list(RENDER_MODES), "autoreset_mode": AutoresetMode.NEXT_STEP}
+
+    def __init__(
+        self,
+        scenario: ScenarioLike,
+        num_envs: int = 1,
+        *,
+        control_every: int = 1,
+        reward: Optional[Reward] = None,
+        terminate: Optional[Terminate] = None,
+        max_episode_steps: Optional[int] = None,
+        autoreset_mode: Union[AutoresetMode, str] = AutoresetMode.NEXT_STEP,
+        threads: Optional[int] = None,
+        rng: str = "mt19937_64",
+        timestep: Optional[float] = None,
+        steps: Optional[int] = None,
+        perturb: bool = True,
+        model: ModelLike = None,
+        render_mode: Optional[str] = None,
+        width: int = 480,
+        height: int = 480,
+        view: Optional[Dict[str, Any]] = None,
+    ) -> None:
+        try:
+            mode = AutoresetMode(autoreset_mode)
+        except ValueError:
+            raise ValueError(
+                f"autoreset_mode must be one of {', '.join(repr(m.value) for m in AutoresetMode)}, "
+                f"got {_describe(autoreset_mode)}"
+            ) from None
+        self.metadata = {**type(self).metadata, "autoreset_mode": mode}
+        self.autoreset_mode = mode
+        self.num_envs = _check_int("num_envs", num_envs, 1, 1 << 20)
+        self._threads = _check_threads(threads)
+        self._setup = _Setup(
+            scenario,
+            self.num_envs,
+            control_every,
+            reward,
+            terminate,
+            rng,
+            timestep,
+            steps,
+            perturb,
+            model,
+            Rendering(render_mode, width, height, view),
+        )
+        self.render_mode = render_mode
+        self.metadata["render_fps"] = self._setup.render_fps
+        self.single_action_space = self._setup.action_space
+        self.single_observation_space = self._setup.observation_space
+        self.action_space = batch_space(self.single_action_space, self.num_envs)
+        self.observation_space = batch_space(self.single_observation_space, self.num_envs)
+        self.observation_names = self._setup.names
+        self.control_every = self._setup.control_every
+        self.max_episode_steps = _check_max_episode_steps(max_episode_steps)
+        self._rngs: List[Optional[np.random.Generator]] = [None] * self.num_envs
+        self._obs: Optional[np.ndarray] = None
+        self._decisions = np.zeros(self.num_envs, dtype=np.int64)
+        self._ended = np.zeros(self.num_envs, dtype=bool)  # ended, not reset yet
+
+    def _reset_one(self, i: int, seed: Optional[int], infos: Dict[str, Any], start: Optional[str] = None) -> np.ndarray:
+        rng = self._rngs[i]
+        if seed is not None or rng is None:
+            rng, _ = seeding.np_random(seed)  # as gymnasium.Env.reset seeds np_random
+        else:
+            rng = copy.deepcopy(rng)  # kept only if the reset succeeds
+        episode_seed = _episode_seed(rng, seed)
+        obs = self._setup.episodes.reset(i, episode_seed, start)
+        self._rngs[i] = rng
+        self._decisions[i], self._ended[i] = 0, False
+        info = self._setup.info(i)
+        info["seed"] = np.uint64(episode_seed)
+        self._add_info(infos, info, i)
+        return obs
+
+    def reset(
+        self, *, seed: Union[int, Sequence[Optional[int]], None] = None, options: Optional[Dict[str, Any]] = None
+    ) -> Tuple[np.ndarray, Dict[str, Any]]:
+        """seed: None, an int (env i gets seed + i, as Gymnasium's vector
+        environments do), or one seed (or None) per env. options: as for
+        ScenarioEnv.reset (the same start for every env reset, each drawn
+        from its own seed), and "reset_mask": a bool array of num_envs: reset
+        only those envs (the others keep their episodes, and no info)."""
+        options = _check_options(options, ("reset_mask",) + RESET_KEYS)
+        start = _start(options)
+        if seed is None:
+            seeds: List[Optional[int]] = [None] * self.num_envs
+        elif isinstance(seed, (int, np.integer)) and not isinstance(seed, bool):
+            seeds = [_check_int("seed", seed, 0, 2**64 - self.num_envs) + i for i in range(self.num_envs)]
+        else:
+            # (a bool is not iterable here: list() raises TypeError for it, as before)
+            seeds = list(cast(Sequence[Optional[int]], seed))
+            if len(seeds) != self.num_envs:
+                raise ValueError(f"seed must be None, an int, or {self.num_envs} seeds, got {len(seeds)}")
+        mask = np.ones(self.num_envs, dtype=bool)
+        if "reset_mask" in options:
+            mask = options["reset_mask"]
+            if not isinstance(mask, np.ndarray) or mask.dtype != np.bool_ or mask.shape != (self.num_envs,):
+                raise ValueError(
+                    f"options['reset_mask'] must be a numpy bool array of shape ({self.num_envs},), "
+                    f"got {_describe(mask)}"
+                )
+            if not mask.any():
+                raise ValueError("options['reset_mask'] resets no env: give at least one True")
+            if self._obs is None and not mask.all():
+                raise ValueError("the first reset must reset every env (no reset_mask, or all True)")
+        obs = self._obs if self._obs is not None else np.zeros((self.num_envs, len(self.observation_names)))
+        infos: Dict[str, Any] = {}
+        for i in np.flatnonzero(mask):
+            obs[i] = self._reset_one(int(i), seeds[i], infos, start)
+        self._obs = obs
+        return obs.copy(), infos
+
+    def step(self, actions: object) -> Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, Dict[str, Any]]:
+        if self._obs is None:
+            raise ValueError("reset() the environment before step()")
+        values = self._setup.actions(actions, (self.num_envs, self._setup.nu))
+        if not np.isfinite(values).all():  # (before any autoreset: a refused step changes nothing)
+            env, index = np.argwhere(~np.isfinite(values))[0]
+            raise ValueError(f"env {env}: action {index} is not finite, got {float(values[env, index])!r}")
+        infos: Dict[str, Any] = {}
+        if self.autoreset_mode == AutoresetMode.DISABLED and self._ended.any():
+            raise ValueError(
+                f"env {int(np.flatnonzero(self._ended)[0])} has ended: reset it first "
+                "(reset(options={'reset_mask': mask}); autoreset_mode is Disabled)"
+            )
+        resetting = self._ended.copy() if self.autoreset_mode == AutoresetMode.NEXT_STEP else np.zeros_like(self._ended)
+        for i in np.flatnonzero(resetting):
+            self._obs[i] = self._reset_one(int(i), None, infos)
+        active = ~resetting
+        mask = None if not resetting.any() else active.astype(np.uint8)
+        obs, terminated, truncated = self._setup.episodes.step(values, self.control_every, mask, self._threads)
+        obs[resetting] = self._obs[resetting]
+        before, self._obs = self._obs, obs  # stepped: a hook that raises below leaves the envs where they are
+        self._decisions[active] += 1
+        terminated &= active
+        truncated &= active
+        self._ended |= terminated | truncated
+        setup = self._setup
+        rewards = np.zeros(self.num_envs)
+        hooked = np.zeros(self.num_envs, dtype=bool)
+        if active.all():
+            rewards = setup.rewards(before, values, obs)
+            if setup.terminates:
+                hooked = setup.terminations(obs)
+        elif active.any():
+            rewards[active] = setup.rewards(before[active], values[active], obs[active])
+            if setup.terminates:
+                hooked[active] = setup.terminations(obs[active])
+        ending = terminated | truncated | hooked
+        if self.max_episode_steps is not None:
+            ending |= active & (self._decisions >= self.max_episode_steps)
+        for i in np.flatnonzero(ending):  # each ended episode's info says why
+            ended_by = _ended_by(
+                bool(terminated[i]),
+                bool(truncated[i]),
+                int(self._decisions[i]),
+                self.max_episode_steps,
+                bool(hooked[i]),
+            )
+            info = setup.info(int(i), ended_by, bool(terminated[i]))
+            terminated[i] = ended_by in _TERMINAL_ENDS
+            truncated[i] = not terminated[i]
+            self._ended[i] = True
+            if self.autoreset_mode == AutoresetMode.SAME_STEP:
+                self._add_info(infos, {"final_obs": obs[i].copy(), "final_info": info}, int(i))
+                obs[i] = self._reset_one(int(i), None, infos)
+            else:
+                self._add_info(infos, info, int(i))
+        # Every env stepped or was reset: each has its step and time (as
+        # _add_info would lay them out, env by env).
+        steps, times = setup.episodes.progress()
+        everyone = np.ones(self.num_envs, dtype=bool)
+        infos.update({"step": steps, "_step": everyone, "time": times, "_time": everyone.copy()})
+        return obs.copy(), rewards, terminated, truncated, infos
+
+    def render(self) -> Optional[Tuple[np.ndarray, ...]]:
+        """Every env's current state as a picture, one per env (as
+        SyncVectorEnv gives them), or None without a render_mode."""
+        if self._setup.pictures is None:
+            return None
+        if self._obs is None:
+            raise ValueError("reset() the environment before render()")
+        pictures = self._setup.pictures
+        return tuple(pictures.picture(self._setup.episodes, i) for i in range(self.num_envs))
+
+    def close_extras(self, **kwargs: Any) -> None:
+        if self._setup.pictures is not None:
+            self._setup.pictures.close()
