@@ -38,6 +38,11 @@ std::string shape(const Result& result, bool scenario) {
 }  // namespace
 
 Orchestration::Orchestration(const std::vector<std::string>& args) : started_(std::chrono::steady_clock::now()) {
+  if (!args.empty() && args[0] == "plot") {  // parsed by the same parser, drawn by the Python package (matplotlib)
+    throw Failure(
+        kExitUsage,
+        "plot is a command of the Python package: python -m simloop plot (see python -m simloop plot --help)");
+  }
   try {
     opts_ = parse(args);
   } catch (const UsageError& e) {

@@ -63,6 +63,14 @@ void bind_command(py::module_& m) {
       .def_readonly("run", &cli::Options::run)
       .def_readonly("rerun", &cli::Options::rerun)
       .def_readonly("plot", &cli::Options::plot)
+      .def_readonly("plot_what", &cli::Options::plot_what)
+      .def_property_readonly("plot_compare",
+                             [](const cli::Options& o) {
+                               py::list paths;
+                               for (const auto& p : o.plot_compare) paths.append(fs_str(p.native()));
+                               return paths;
+                             })
+      .def_readonly("plot_x", &cli::Options::plot_x)
       .def_readonly("help", &cli::Options::help)
       .def_readonly("version", &cli::Options::version)
       .def_property_readonly("video", [](const cli::Options& o) { return fs_str(o.video.native()); })

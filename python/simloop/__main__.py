@@ -64,35 +64,17 @@ PLOT_USAGE = (
 
 def _plot_command(args: List[str]) -> int:
     """`python -m simloop plot trajectory|sweep [--out DIR] [--compare DIR ...]
-    [--x auto|time|step]`: draws the PNG from the CSV in DIR. sim_loop --plot calls this."""
-    if args and args[0] in ("-h", "--help"):
+    [--x auto|time|step]`: draws the PNG from the CSV in DIR, its flags parsed
+    by the commands' one parser (command/cli_options.cc). sim_loop --plot calls this."""
+    try:
+        opts = _core.parse_command_line(["plot", *args])
+    except ValueError as e:
+        return _fail(EXIT_USAGE, str(e))
+    if opts.help:
         print(PLOT_USAGE)
         return 0
-    if not args or args[0] not in ("trajectory", "sweep"):
-        return _fail(EXIT_USAGE, "plot needs 'trajectory' or 'sweep' first (see plot --help)")
-    what, rest = args[0], args[1:]
-    out, compare, x_axis = Path("outputs/ch0.1-sim-loop"), [], "auto"
-    i = 0
-    while i < len(rest):
-        flag, inline = rest[i].partition("=")[::2] if rest[i].startswith("--") else (rest[i], "")
-        if flag not in ("--out", "--compare", "--x"):
-            return _fail(EXIT_USAGE, f"plot: unknown argument '{rest[i]}' (see plot --help)")
-        if not inline:
-            if i + 1 >= len(rest):
-                return _fail(EXIT_USAGE, f"plot: {flag} needs a value")
-            i += 1
-            inline = rest[i]
-        if flag == "--out":
-            out = Path(inline)
-        elif flag == "--compare":
-            compare.append(Path(inline))
-        elif inline not in ("auto", "time", "step"):
-            return _fail(EXIT_USAGE, f"plot: --x must be auto, time or step, got '{inline}'")
-        else:
-            x_axis = inline
-        i += 1
-    if compare and what != "trajectory":
-        return _fail(EXIT_USAGE, "plot: --compare draws trajectories only")
+    what, out, x_axis = opts.plot_what, Path(opts.out), opts.plot_x
+    compare = [Path(c) for c in opts.plot_compare]
     from .plots import trajectory_png
     from .sweep_plots import sweep_png
 
