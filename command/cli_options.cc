@@ -157,6 +157,49 @@ void check_video_file(const Options& opts) {
   }
 }
 
+// `plot trajectory|sweep [--out DIR] [--compare DIR ...] [--x auto|time|step]`:
+// the chart python -m simloop draws from the CSV a run or sweep wrote.
+Options parse_plot(int argc, const char* const* argv) {
+  Options opts;
+  opts.command = Command::kPlot;
+  const std::string_view what = argc > 2 ? argv[2] : "";
+  if (what == "-h" || what == "--help") {
+    opts.help = true;
+    return opts;
+  }
+  if (what != "trajectory" && what != "sweep")
+    throw UsageError("plot needs 'trajectory' or 'sweep' first (see plot --help)");
+  opts.plot_what = what;
+  for (int i = 3; i < argc; ++i) {
+    std::string_view flag = argv[i];
+    std::string_view value;
+    if (const auto eq = flag.find('='); flag.rfind("--", 0) == 0 && eq != std::string_view::npos) {
+      value = flag.substr(eq + 1);
+      flag = flag.substr(0, eq);
+    }
+    if (flag != "--out" && flag != "--compare" && flag != "--x") {
+      throw UsageError("plot: unknown argument " + quoted_value(argv[i]) + " (see plot --help)");
+    }
+    if (value.empty()) {
+      if (i + 1 >= argc) throw UsageError("plot: " + std::string(flag) + " needs a value");
+      value = argv[++i];
+    }
+    if (flag == "--out") {
+      opts.out = std::string(value);
+    } else if (flag == "--compare") {
+      opts.plot_compare.emplace_back(std::string(value));
+    } else if (value != "auto" && value != "time" && value != "step") {
+      throw UsageError("plot: --x must be auto, time or step, got " + quoted_value(value));
+    } else {
+      opts.plot_x = value;
+    }
+  }
+  if (!opts.plot_compare.empty() && opts.plot_what != "trajectory") {
+    throw UsageError("plot: --compare draws trajectories only");
+  }
+  return opts;
+}
+
 }  // namespace
 
 Options parse(const std::vector<std::string>& args) {
@@ -169,6 +212,7 @@ Options parse(int argc, const char* const* argv) {
   Options opts;
   const char* timesteps_flag = "--duration";  // what set the sweep's timesteps
   int first = 1;
+  if (argc > 1 && std::string_view(argv[1]) == "plot") return parse_plot(argc, argv);
   if (argc > 1 && std::string_view(argv[1]) == "sweep") {
     opts.command = Command::kSweep;
     first = 2;
@@ -303,8 +347,8 @@ Options parse(int argc, const char* const* argv) {
       opts.version = true;
     } else if (arg.rfind("-", 0) == 0) {
       throw UsageError("unknown option " + quoted_value(arg) + " (see --help)");
-    } else if (i == 1 && (arg == "plot" || arg == "batch")) {
-      // Commands the Python package adds (matplotlib, pyarrow): not sim_loop's.
+    } else if (i == 1 && arg == "batch") {
+      // A command the Python package adds (pyarrow): not sim_loop's.
       throw UsageError(std::string(arg) + " is a command of the Python package: python -m simloop " + std::string(arg) +
                        " (see python -m simloop " + std::string(arg) + " --help)");
     } else {

@@ -18,7 +18,7 @@
 
 namespace simloop::cli {
 
-enum class Command { kRun, kSweep };
+enum class Command { kRun, kSweep, kPlot };
 
 struct Options {
   Command command = Command::kRun;
@@ -28,7 +28,12 @@ struct Options {
   double sweep_duration = 4.0;
   bool sweep_duration_given = false;  // --duration was given (a scenario sweep's default is the scenario's length)
   int threads = 0;                    // 0: one per core
-  bool plot = false;                  // --plot: trajectory.png / sweep.png
+  // `plot` (python -m simloop's): what to draw from --out's CSV, the runs
+  // drawn beside it (--compare) and the x axis (--x: auto, time or step).
+  std::string plot_what;
+  std::vector<std::filesystem::path> plot_compare;
+  std::string plot_x = "auto";
+  bool plot = false;  // --plot: trajectory.png / sweep.png
   std::filesystem::path out = "outputs/ch0.1-sim-loop";
   std::string model_path;  // empty: the embedded pusher scene
   // Your scene, your loop (a scenario instead of the chapter's fixed run):

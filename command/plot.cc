@@ -13,6 +13,8 @@
 #include <cstring>
 #include <filesystem>
 #include <string>
+#include <system_error>
+#include <vector>
 
 #include "command.hpp"
 #include "sim_loop.hpp"
@@ -20,15 +22,19 @@
 extern char** environ;
 
 namespace sim_loop {
+namespace {
 
-// --plot: the chart is drawn by the Python package (matplotlib), which reads
-// the CSV just written. The interpreter: $SIMLOOP_PYTHON if set, else the one
-// CMake recorded (the project's .venv, which scripts/test.sh makes).
-std::filesystem::path plot_with_python(const std::filesystem::path& out, const char* what) {
-  const char* env = std::getenv("SIMLOOP_PYTHON");
-  const std::string python = env && *env ? env : SIMLOOP_DEFAULT_PYTHON;
-  const std::string out_text = out.string();
-  const char* argv[] = {python.c_str(), "-m", "simloop", "plot", what, "--out", out_text.c_str(), nullptr};
+// One try of `python -m simloop plot WHAT --out OUT`: whether it started,
+// its wait status and its stderr (up to 64 KiB).
+struct Attempt {
+  bool started = false;
+  int status = 0;
+  std::string err;
+};
+
+Attempt plot_with(const std::string& python, const char* what, const std::string& out) {
+  Attempt attempt;
+  const char* argv[] = {python.c_str(), "-m", "simloop", "plot", what, "--out", out.c_str(), nullptr};
   // Its stderr comes back through a pipe: a failure is reported in our one
   // line (its last line, a traceback's verdict), not as a traceback and ours.
   int err_pipe[2];
@@ -53,15 +59,11 @@ std::filesystem::path plot_with_python(const std::filesystem::path& out, const c
   ::close(err_pipe[1]);
   if (spawned != 0) {
     ::close(err_pipe[0]);
-    throw simloop::cli::Failure(simloop::cli::kExitRunFailed,
-                                "--plot: cannot start " + python +
-                                    " (scripts/test.sh installs the simloop package "
-                                    "into the project's .venv; or set SIMLOOP_PYTHON to a Python that has it)");
+    return attempt;
   }
+  attempt.started = true;
   // Read its stderr until it exits (not until the pipe's end: something it
   // started may hold that open); on a stop, end its process group.
-  std::string err_text;
-  int status = 0;
   bool exited = false, stopped = false;
   while (!exited) {
     if (g_control.stop_requested() && !stopped) {
@@ -72,36 +74,97 @@ std::filesystem::path plot_with_python(const std::filesystem::path& out, const c
     if (::poll(&p, 1, 20) > 0) {
       char buf[4096];
       const ssize_t n = ::read(err_pipe[0], buf, sizeof buf);
-      if (n > 0 && err_text.size() < (1u << 16)) err_text.append(buf, static_cast<size_t>(n));
+      if (n > 0 && attempt.err.size() < (1u << 16)) attempt.err.append(buf, static_cast<size_t>(n));
     }
-    const pid_t done = ::waitpid(pid, &status, WNOHANG);
+    const pid_t done = ::waitpid(pid, &attempt.status, WNOHANG);
     exited = done == pid || (done < 0 && errno != EINTR);
   }
   // What it wrote just before exiting, without waiting for the pipe's end.
   ::fcntl(err_pipe[0], F_SETFL, O_NONBLOCK);
-  for (char buf[4096]; err_text.size() < (1u << 16);) {
+  for (char buf[4096]; attempt.err.size() < (1u << 16);) {
     const ssize_t n = ::read(err_pipe[0], buf, sizeof buf);
     if (n <= 0) break;
-    err_text.append(buf, static_cast<size_t>(n));
+    attempt.err.append(buf, static_cast<size_t>(n));
   }
   ::close(err_pipe[0]);
   check_stop();
-  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-    std::string last;  // its last non-empty line
-    const size_t end = err_text.find_last_not_of(" \r\n");
-    if (end != std::string::npos) {
-      const size_t newline = err_text.find_last_of('\n', end);
-      const size_t begin = newline == std::string::npos ? 0 : newline + 1;
-      last = err_text.substr(begin, end - begin + 1);
+  return attempt;
+}
+
+// Its last non-empty line, without our own program's name.
+std::string last_line(const std::string& text) {
+  const size_t end = text.find_last_not_of(" \r\n");
+  if (end == std::string::npos) return "";
+  const size_t newline = text.find_last_of('\n', end);
+  const size_t begin = newline == std::string::npos ? 0 : newline + 1;
+  std::string last = text.substr(begin, end - begin + 1);
+  if (last.rfind("sim-loop: ", 0) == 0) last.erase(0, 10);
+  return last;
+}
+
+bool succeeded(const Attempt& a) { return a.started && WIFEXITED(a.status) && WEXITSTATUS(a.status) == 0; }
+
+// A Python that started but has no simloop package ("python3: No module named simloop").
+bool lacks_simloop(const Attempt& a) {
+  return a.started && WIFEXITED(a.status) && WEXITSTATUS(a.status) == 1 &&
+         last_line(a.err).find("No module named simloop") != std::string::npos;
+}
+
+// The Pythons to try, found now: python3 on PATH, then the project's venvs
+// beside the folder this sim_loop was built in (scripts/setup.sh makes them).
+std::vector<std::string> candidates() {
+  std::vector<std::string> found = {"python3"};
+  std::error_code error;
+  const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", error);
+  if (!error) {
+    for (const char* venv : {".venv", ".venv-pypi"}) {
+      const std::filesystem::path python = exe.parent_path().parent_path() / venv / "bin" / "python";
+      if (std::filesystem::exists(python, error)) found.push_back(python.string());
     }
-    if (last.rfind("sim-loop: ", 0) == 0) last.erase(0, 10);
-    throw simloop::cli::Failure(simloop::cli::kExitRunFailed,
-                                "--plot: " + python + " -m simloop plot failed" +
-                                    (last.empty() ? std::string() : ": " + last) +
-                                    " (the outputs above were written; the plot needs the simloop package and "
-                                    "matplotlib; scripts/test.sh installs both into the project's .venv)");
   }
-  return out / (std::string(what) + ".png");
+  return found;
+}
+
+[[noreturn]] void plot_failed(const std::string& python, const Attempt& a) {
+  const std::string last = last_line(a.err);
+  throw simloop::cli::Failure(simloop::cli::kExitRunFailed,
+                              "--plot: " + python + " -m simloop plot failed" + (last.empty() ? "" : ": " + last) +
+                                  " (the outputs above were written; the plot needs the simloop package and "
+                                  "matplotlib; scripts/test.sh installs both into the project's .venv)");
+}
+
+}  // namespace
+
+// --plot: the chart is drawn by the Python package (matplotlib), which reads
+// the CSV just written, in a child process. The interpreter: $SIMLOOP_PYTHON
+// if set; else the first, found at run time, that has the simloop package
+// (candidates()).
+std::filesystem::path plot_with_python(const std::filesystem::path& out, const char* what) {
+  const std::string out_text = out.string();
+  const std::filesystem::path png = out / (std::string(what) + ".png");
+  const char* env = std::getenv("SIMLOOP_PYTHON");
+  if (env && *env) {
+    const Attempt a = plot_with(env, what, out_text);
+    if (!a.started) {
+      throw simloop::cli::Failure(simloop::cli::kExitRunFailed,
+                                  std::string("--plot: cannot start ") + env +
+                                      " (scripts/test.sh installs the simloop package "
+                                      "into the project's .venv; or set SIMLOOP_PYTHON to a Python that has it)");
+    }
+    if (!succeeded(a)) plot_failed(env, a);
+    return png;
+  }
+  std::string tried;
+  for (const std::string& python : candidates()) {
+    const Attempt a = plot_with(python, what, out_text);
+    if (succeeded(a)) return png;
+    if (a.started && !lacks_simloop(a)) plot_failed(python, a);
+    tried += (tried.empty() ? "" : ", ") + python;
+  }
+  throw simloop::cli::Failure(simloop::cli::kExitRunFailed,
+                              "--plot: no Python with the simloop package was found (tried " + tried +
+                                  "; the outputs above were written): install it with scripts/setup.sh --package "
+                                  "(or pip install . in a venv), or set SIMLOOP_PYTHON to a Python that has it");
 }
 
 }  // namespace sim_loop

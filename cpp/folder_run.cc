@@ -1,37 +1,27 @@
 #include "simloop/folder_run.hpp"
 
 namespace simloop {
-namespace {
 
-std::vector<PendingFile*> files_of(RunDrawing* drawing) {
-  return drawing ? drawing->files() : std::vector<PendingFile*>{};
-}
-
-}  // namespace
-
-std::pair<RunResult, OutputFiles> run_to_folder(const Model& model, const RunConfig& config,
-                                                const std::filesystem::path& out, RunDrawing* drawing,
-                                                RunControl* control) {
-  OutputWriter writer(out);
+std::pair<RunResult, PendingOutputs> run_to_folder(const Model& model, const RunConfig& config,
+                                                   const std::filesystem::path& out, RowSink* drawing,
+                                                   RunControl* control) {
+  auto writer = std::make_unique<OutputWriter>(out);
   Data workspace(model);
-  TeeRows rows(writer.trajectory(), drawing ? &drawing->rows() : nullptr);
+  TeeRows rows(writer->trajectory(), drawing);
   RunResult result = run(model, config, workspace, &rows, control);
-  if (drawing) drawing->finish(result);
-  OutputFiles files = writer.commit(result.metrics, control, files_of(drawing));
-  return {std::move(result), std::move(files)};
+  std::string metrics = metrics_json(result.metrics);
+  return {std::move(result), PendingOutputs(std::move(writer), std::move(metrics))};
 }
 
-std::pair<RunRecord, OutputFiles> run_to_folder(const Model& scene, const Scenario& scenario,
-                                                const ScenarioConfig& config, const std::filesystem::path& out,
-                                                RunDrawing* drawing, RunControl* control) {
-  OutputWriter writer(out);
+std::pair<RunRecord, PendingOutputs> run_to_folder(const Model& scene, const Scenario& scenario,
+                                                   const ScenarioConfig& config, const std::filesystem::path& out,
+                                                   RowSink* drawing, RunControl* control) {
+  auto writer = std::make_unique<OutputWriter>(out);
   // A drawing draws every moving body: the run hands it their poses too.
-  RunRecord result = drawing
-                         ? run_scenario_drawn(scene, scenario, config, writer.trajectory(), drawing->rows(), control)
-                         : run_scenario(scene, scenario, config, nullptr, &writer.trajectory(), control);
-  if (drawing) drawing->finish(result);
-  OutputFiles files = writer.commit(metrics_json(result), control, files_of(drawing));
-  return {std::move(result), std::move(files)};
+  RunRecord result = drawing ? run_scenario_drawn(scene, scenario, config, writer->trajectory(), *drawing, control)
+                             : run_scenario(scene, scenario, config, nullptr, &writer->trajectory(), control);
+  std::string metrics = metrics_json(result);
+  return {std::move(result), PendingOutputs(std::move(writer), std::move(metrics))};
 }
 
 }  // namespace simloop

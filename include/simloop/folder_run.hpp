@@ -1,10 +1,13 @@
 // A run streamed into an output folder: trajectory.csv written as the loop
 // steps (memory bounded however long the run), then metrics.json, put in
-// place together with a drawing's files, or (an error, a stop) none of them.
-// Both commands' runs and Python's run_to_files are these.
+// place by commit() together with what else the caller made of the run (a
+// recording's files), or (an error, a stop, never committed) none of them.
+// Both commands' runs are these.
 #pragma once
 
 #include <filesystem>
+#include <memory>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -19,29 +22,35 @@
 
 namespace simloop {
 
-// What else a run into a folder feeds (a recording): its rows go to rows()
-// too (a scenario's with every moving body's pose after them, as
-// run_scenario_drawn gives them); finish(result) is called once the run is
-// done, before the outputs are put in place together with files().
-class RunDrawing {
+// A finished run's outputs, written beside their places and not yet in them.
+// Destroyed uncommitted, it removes its temporary files.
+class PendingOutputs {
  public:
-  virtual ~RunDrawing() = default;
-  [[nodiscard]] virtual RowSink& rows() = 0;
-  [[nodiscard]] virtual std::vector<PendingFile*> files() = 0;
-  virtual void finish(const RunResult& result) = 0;  // the chapter's run
-  virtual void finish(const RunRecord& result) = 0;  // a scenario's
+  PendingOutputs(std::unique_ptr<OutputWriter> writer, std::string metrics)
+      : writer_(std::move(writer)), metrics_(std::move(metrics)) {}
+  // metrics.json and trajectory.csv put in place together with `also`, all
+  // or none (commit_together); Interrupted if `control`'s stop was asked.
+  OutputFiles commit(const RunControl* control = nullptr, const std::vector<PendingFile*>& also = {}) {
+    return writer_->commit(metrics_, control, also);
+  }
+
+ private:
+  std::unique_ptr<OutputWriter> writer_;
+  std::string metrics_;
 };
 
-// The chapter's run into `out` (a prepared folder), and where its files went.
-[[nodiscard]] std::pair<RunResult, OutputFiles> run_to_folder(const Model& model, const RunConfig& config,
-                                                              const std::filesystem::path& out,
-                                                              RunDrawing* drawing = nullptr,
-                                                              RunControl* control = nullptr);
-// A scenario's run into `out`.
-[[nodiscard]] std::pair<RunRecord, OutputFiles> run_to_folder(const Model& scene, const Scenario& scenario,
-                                                              const ScenarioConfig& config,
-                                                              const std::filesystem::path& out,
-                                                              RunDrawing* drawing = nullptr,
-                                                              RunControl* control = nullptr);
+// The chapter's run into `out` (a prepared folder). `drawing`, if given,
+// gets its rows too.
+[[nodiscard]] std::pair<RunResult, PendingOutputs> run_to_folder(const Model& model, const RunConfig& config,
+                                                                 const std::filesystem::path& out,
+                                                                 RowSink* drawing = nullptr,
+                                                                 RunControl* control = nullptr);
+// A scenario's run into `out`. `drawing`, if given, gets its rows with every
+// moving body's pose after them, as run_scenario_drawn gives them.
+[[nodiscard]] std::pair<RunRecord, PendingOutputs> run_to_folder(const Model& scene, const Scenario& scenario,
+                                                                 const ScenarioConfig& config,
+                                                                 const std::filesystem::path& out,
+                                                                 RowSink* drawing = nullptr,
+                                                                 RunControl* control = nullptr);
 
 }  // namespace simloop

@@ -1,10 +1,11 @@
 """`python -m simloop` and `sim-loop`: the chapter's command, in Python.
 
-The command is sim_loop's own (command/command.cc, through _core.run_command):
-the same flags, checks, outputs, report and failures. This process adds its
-part as the host (_Host): its report through sys.stdout, its progress bar,
-and, as in the chapter, a rerun recording sim_loop.rrd by default
-(--no-rerun to skip) and --plot drawn here. `plot` and `batch` are its own
+The command is sim_loop's own orchestration (command/command.cc, through
+_core.Orchestration), taken step by step: the same flags, checks, outputs,
+report and failures. This process adds its part: its report through
+sys.stdout, its progress bar, and, as in the chapter, a rerun recording
+sim_loop.rrd by default (--no-rerun to skip), drawn from the rows the run
+kept, and --plot drawn here. `plot` and `batch` are its own
 commands.
 """
 
@@ -63,35 +64,17 @@ PLOT_USAGE = (
 
 def _plot_command(args: List[str]) -> int:
     """`python -m simloop plot trajectory|sweep [--out DIR] [--compare DIR ...]
-    [--x auto|time|step]`: draws the PNG from the CSV in DIR. sim_loop --plot calls this."""
-    if args and args[0] in ("-h", "--help"):
+    [--x auto|time|step]`: draws the PNG from the CSV in DIR, its flags parsed
+    by the commands' one parser (command/cli_options.cc). sim_loop --plot calls this."""
+    try:
+        opts = _core.parse_command_line(["plot", *args])
+    except ValueError as e:
+        return _fail(EXIT_USAGE, str(e))
+    if opts.help:
         print(PLOT_USAGE)
         return 0
-    if not args or args[0] not in ("trajectory", "sweep"):
-        return _fail(EXIT_USAGE, "plot needs 'trajectory' or 'sweep' first (see plot --help)")
-    what, rest = args[0], args[1:]
-    out, compare, x_axis = Path("outputs/ch0.1-sim-loop"), [], "auto"
-    i = 0
-    while i < len(rest):
-        flag, inline = rest[i].partition("=")[::2] if rest[i].startswith("--") else (rest[i], "")
-        if flag not in ("--out", "--compare", "--x"):
-            return _fail(EXIT_USAGE, f"plot: unknown argument '{rest[i]}' (see plot --help)")
-        if not inline:
-            if i + 1 >= len(rest):
-                return _fail(EXIT_USAGE, f"plot: {flag} needs a value")
-            i += 1
-            inline = rest[i]
-        if flag == "--out":
-            out = Path(inline)
-        elif flag == "--compare":
-            compare.append(Path(inline))
-        elif inline not in ("auto", "time", "step"):
-            return _fail(EXIT_USAGE, f"plot: --x must be auto, time or step, got '{inline}'")
-        else:
-            x_axis = inline
-        i += 1
-    if compare and what != "trajectory":
-        return _fail(EXIT_USAGE, "plot: --compare draws trajectories only")
+    what, out, x_axis = opts.plot_what, Path(opts.out), opts.plot_x
+    compare = [Path(c) for c in opts.plot_compare]
     from .plots import trajectory_png
     from .sweep_plots import sweep_png
 
@@ -213,7 +196,77 @@ def _main(argv: Optional[List[str]]) -> int:
         return _plot_command(args[1:])
     if args and args[0] == "batch":
         return batch_command(args[1:])
-    return _core.run_command(args, _Host(args))
+    return _run(args)
+
+
+class _HostFailure(Exception):
+    """A failure of this process's part (the recording, the plot), as the
+    command's one line."""
+
+    def __init__(self, code: int, line: str) -> None:
+        super().__init__(line)
+        self.code = code
+
+
+def _run(args: List[str]) -> int:
+    """sim_loop's orchestration (_core.Orchestration), step by step, with this
+    process's part: its report on sys.stdout, its progress bar, its recording
+    and --plot. Whatever is not put in place goes when it ends."""
+    global _outputs_written
+    try:
+        command = _core.Orchestration(args)
+    except _core.CommandFailure as e:
+        return _fail(*e.args)
+    opts = command.options
+    if opts.help:
+        sys.stdout.write(_help(command.sweep))
+        return 0
+    if opts.version:
+        sys.stdout.write(f"simloop {_core.__version__} ({_core.MUJOCO_VERSION})\n")
+        return 0
+    try:
+        return _orchestrate(command, args)
+    except _core.CommandFailure as e:
+        return _fail(*e.args)
+    except _HostFailure as e:
+        return _fail(e.code, str(e))
+    except (OSError, ValueError) as e:  # the recording's file, say
+        return _fail(EXIT_RUN_FAILED, str(e))
+    except MemoryError:
+        return _fail(EXIT_RUN_FAILED, f"out of memory while {command.doing}")
+    finally:
+        _outputs_written = command.committed
+        command.close()
+
+
+def _help(sweep: bool) -> str:
+    if sweep:
+        return _core.sweep_help_text("python -m simloop")
+    return _core.help_text(f"python -m simloop (or {PROGRAM})", "record sim_loop.rrd in --out (the default), or not")
+
+
+def _orchestrate(command: Any, args: List[str]) -> int:
+    global _outputs_written
+    opts = command.options
+    sys.stdout.write(command.banner())
+    sys.stdout.flush()
+    sys.stdout.write(command.load())
+    command.check()
+    command.open_output()
+    drawings, lines = (None, "") if command.sweep else _drawings(command, args)
+    try:
+        with progress_bar("sweeping" if command.sweep else "running") as progress:
+            command.run(progress, drawn=drawings is not None)
+        command.commit(_draw(command, drawings) if drawings else [])
+    finally:
+        if drawings:
+            drawings.close()
+    _outputs_written = True
+    sys.stdout.write(command.report(lines))
+    if opts.plot:
+        sys.stdout.write(command.plot_line(_plot(opts.out, "sweep" if command.sweep else "trajectory")))
+    sys.stdout.write(command.closing_line())
+    return 0
 
 
 class _Drawings:
@@ -243,101 +296,70 @@ class _Drawings:
             d.close()
 
 
-class _HostFailure(Exception):
-    """A failure of this process's part, as the command's one line."""
+def _drawings(command: Any, args: List[str]) -> "Tuple[Optional[_Drawings], str]":
+    """What draws the run (the rerun recording, --video's pictures, or both:
+    each begun before anything is written) and the report's lines for them."""
+    opts = command.options
+    if not (opts.rerun or opts.video):
+        return None, ""
+    model, scenario = command.model, command.scenario
+    drawings: List[Any] = []
+    lines: List[str] = []
+    try:
+        if opts.rerun:
+            rrd = Path(opts.out) / "sim_loop.rrd"
+            try:
+                from .chapter_recording import ChapterRecording
+                from .recording import Recording, scenario_recording_id
 
-    def __init__(self, code: int, line: str) -> None:
-        super().__init__(line)
-        self.code = code
+                if scenario is None:
+                    drawings.append(ChapterRecording(opts.run, opts.model_path or None, model, rrd))
+                else:
+                    drawings.append(Recording(model, rrd, scenario_recording_id(_run_key(args, opts))))
+            except ImportError as e:
+                raise _HostFailure(
+                    EXIT_RUN_FAILED, f"{e} (nothing was written; --no-rerun runs without the recording)"
+                ) from None
+            lines.append(f"recording: {rrd} -- open it with: {_viewer()} {rrd}")
+        if opts.video:
+            from .video import VideoRecording
+
+            try:
+                video = VideoRecording(model, opts.video, chapter=scenario is None)
+            except RuntimeError as e:  # no EGL, no OpenGL
+                raise _HostFailure(EXIT_RUN_FAILED, f"--video: {e} (nothing was written)") from None
+            drawings.append(video)
+            lines.append(video.line)
+    except BaseException:
+        for drawing in drawings:
+            drawing.close()
+        raise
+    return _Drawings(drawings), "\n".join(lines)
 
 
-class _Host:
-    """What python -m simloop does its own way in sim_loop's command
-    (_core.run_command calls these)."""
+def _draw(command: Any, drawings: _Drawings) -> List[Any]:
+    """The drawings fed the rows the run kept for them, block by block as the
+    run wrote them, and its result: the files to put in place with its own."""
+    drawings.columns(command.drawn_columns())
+    while (block := command.next_drawn_block()) is not None:
+        drawings.rows(block)
+    drawings.finish(command.result)
+    return drawings.files
 
-    Failure = _HostFailure
 
-    def __init__(self, args: List[str]) -> None:
-        self.args = args
+def _plot(out: str, what: str) -> str:
+    """--plot: out/<what>.png drawn here, from the CSV just written."""
+    folder = Path(out)
+    try:
+        from .plots import trajectory_png
+        from .sweep_plots import sweep_png
 
-    def help(self, sweep: bool) -> str:
-        if sweep:
-            return _core.sweep_help_text("python -m simloop")
-        return _core.help_text(
-            f"python -m simloop (or {PROGRAM})", "record sim_loop.rrd in --out (the default), or not"
-        )
-
-    def version(self) -> str:
-        return f"simloop {_core.__version__} ({_core.MUJOCO_VERSION})"
-
-    def print(self, text: str) -> None:
-        sys.stdout.write(text)
-
-    def flush(self) -> None:
-        sys.stdout.flush()
-
-    def fail(self, code: int, line: str) -> int:
-        return _fail(code, line)
-
-    def progress(self, label: str) -> Any:
-        return progress_bar(label)
-
-    def outputs_written(self) -> None:
-        global _outputs_written
-        _outputs_written = True
-
-    def recording(
-        self, opts: "_core.CommandLine", model: "_core.Model", scenario: "Optional[_core.Scenario]"
-    ) -> "Tuple[Any, str]":
-        """What draws the run (the rerun recording, --video's pictures, or
-        both: each begun before anything is written) and the report's lines
-        for them."""
-        drawings: List[Any] = []
-        lines: List[str] = []
-        try:
-            if opts.rerun:
-                rrd = Path(opts.out) / "sim_loop.rrd"
-                try:
-                    from .chapter_recording import ChapterRecording
-                    from .recording import Recording, scenario_recording_id
-
-                    if scenario is None:
-                        drawings.append(ChapterRecording(opts.run, opts.model_path or None, model, rrd))
-                    else:
-                        drawings.append(Recording(model, rrd, scenario_recording_id(_run_key(self.args, opts))))
-                except ImportError as e:
-                    raise _HostFailure(
-                        EXIT_RUN_FAILED, f"{e} (nothing was written; --no-rerun runs without the recording)"
-                    ) from None
-                lines.append(f"recording: {rrd} -- open it with: {_viewer()} {rrd}")
-            if opts.video:
-                from .video import VideoRecording
-
-                try:
-                    video = VideoRecording(model, opts.video, chapter=scenario is None)
-                except RuntimeError as e:  # no EGL, no OpenGL
-                    raise _HostFailure(EXIT_RUN_FAILED, f"--video: {e} (nothing was written)") from None
-                drawings.append(video)
-                lines.append(video.line)
-        except BaseException:
-            for drawing in drawings:
-                drawing.close()
-            raise
-        return _Drawings(drawings), "\n".join(lines)
-
-    def plot(self, out: str, what: str) -> str:
-        """--plot: out/<what>.png drawn here, from the CSV just written."""
-        folder = Path(out)
-        try:
-            from .plots import trajectory_png
-            from .sweep_plots import sweep_png
-
-            if what == "sweep":
-                return str(sweep_png(folder / "sweep.csv", folder / "sweep.png"))
-            return str(trajectory_png(folder / "trajectory.csv", folder / "trajectory.png"))
-        except ImportError as e:  # matplotlib
-            written = "sweep.csv was written" if what == "sweep" else "metrics.json and trajectory.csv were written"
-            raise _HostFailure(EXIT_RUN_FAILED, f"{'plot: ' if what == 'sweep' else ''}{e} ({written})") from None
+        if what == "sweep":
+            return str(sweep_png(folder / "sweep.csv", folder / "sweep.png"))
+        return str(trajectory_png(folder / "trajectory.csv", folder / "trajectory.png"))
+    except ImportError as e:  # matplotlib
+        written = "sweep.csv was written" if what == "sweep" else "metrics.json and trajectory.csv were written"
+        raise _HostFailure(EXIT_RUN_FAILED, f"{'plot: ' if what == 'sweep' else ''}{e} ({written})") from None
 
 
 if __name__ == "__main__":

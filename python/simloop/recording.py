@@ -22,12 +22,13 @@ viewer opens on it) and `step` (a sequence):
 The 3D view opens framed on where the moving bodies start (the chapter's
 follows its box instead).
 
-Recording is the recorder, as a scenario's run uses it: python -m simloop's
-host (__main__._Host.recording) makes one, and the command's run into --out
-(the library's run_to_folder) writes trajectory.csv as it steps (its columns
-are the scenario's, recording or not) and hands the recording each block of
-rows followed by every moving body's pose (its frame in the world, read where
-the recorded bodies' poses are).
+Recording is the recorder, as a scenario's run uses it: python -m simloop
+(__main__._drawings) makes one, and the command's run into --out (the
+library's run_to_folder) writes trajectory.csv as it steps (its columns are
+the scenario's, recording or not) and keeps each block of rows followed by
+every moving body's pose (its frame in the world, read where the recorded
+bodies' poses are), which __main__._draw hands the recording once the run is
+done.
 
 The chapter's run adds its own on top (chapter_recording.ChapterRecording:
 its poses from its trajectory, the shove arrow, its series and panels).

@@ -117,8 +117,6 @@ TEST(CliOptions, BadValuesNameTheFlagAndTheValue) {
   EXPECT_EQ(usage_error({"--model="}), "--model must name an MJCF file, got ''");
   EXPECT_EQ(usage_error({"--frobnicate"}), "unknown option '--frobnicate' (see --help)");
   EXPECT_EQ(usage_error({"seed"}), "unexpected argument 'seed' (see --help)");
-  EXPECT_EQ(usage_error({"plot", "trajectory"}),
-            "plot is a command of the Python package: python -m simloop plot (see python -m simloop plot --help)");
   EXPECT_EQ(usage_error({"--seed", "1", "batch"}), "unexpected argument 'batch' (see --help)");
   EXPECT_EQ(usage_error({"--smoke=yes"}), "--smoke takes no value, got 'yes'");
   EXPECT_EQ(usage_error({"--rng", "pcg64"}), "--rng must be mt19937_64 or numpy, got 'pcg64'");
@@ -201,3 +199,22 @@ TEST(CliOptions, AHugeRunIsTheLibrarysToRefuseOnlyIfItKeepsItsRows) {
 }
 
 }  // namespace
+
+// plot's flags (python -m simloop plot) are parsed here too, as every other command's.
+TEST(CliOptions, PlotIsParsedByTheSameParser) {
+  const auto o = parse({"plot", "trajectory", "--out", "a", "--compare=b", "--compare", "c", "--x", "step"});
+  EXPECT_EQ(o.command, simloop::cli::Command::kPlot);
+  EXPECT_EQ(o.plot_what, "trajectory");
+  EXPECT_EQ(o.out, std::filesystem::path("a"));
+  EXPECT_EQ(o.plot_compare, (std::vector<std::filesystem::path>{"b", "c"}));
+  EXPECT_EQ(o.plot_x, "step");
+  EXPECT_EQ(parse({"plot", "sweep"}).out, std::filesystem::path("outputs/ch0.1-sim-loop"));
+  EXPECT_EQ(parse({"plot", "sweep"}).plot_x, "auto");
+  EXPECT_TRUE(parse({"plot", "--help"}).help);
+  EXPECT_EQ(usage_error({"plot"}), "plot needs 'trajectory' or 'sweep' first (see plot --help)");
+  EXPECT_EQ(usage_error({"plot", "trajectory", "--seed", "1"}), "plot: unknown argument '--seed' (see plot --help)");
+  EXPECT_EQ(usage_error({"plot", "trajectory", "--out"}), "plot: --out needs a value");
+  EXPECT_EQ(usage_error({"plot", "trajectory", "--x", "sideways"}),
+            "plot: --x must be auto, time or step, got 'sideways'");
+  EXPECT_EQ(usage_error({"plot", "sweep", "--compare", "x"}), "plot: --compare draws trajectories only");
+}

@@ -37,6 +37,18 @@ TEST(Command, Help) {
   EXPECT_FALSE(fs::exists(dir.path() / "outputs"));
 }
 
+// plot is parsed by the commands' one parser, and drawn by the Python package.
+TEST(Command, PlotIsThePythonPackagesCommand) {
+  test::TempDir dir;
+  const Outcome o = sim_loop(dir.path(), {"plot", "trajectory", "--x", "step"});
+  EXPECT_EQ(o.exit_code, 2);
+  EXPECT_EQ(o.err,
+            "sim_loop: plot is a command of the Python package: python -m simloop plot (see python -m simloop plot "
+            "--help)\n");
+  EXPECT_TRUE(o.out.empty());
+  EXPECT_FALSE(fs::exists(dir.path() / "outputs"));
+}
+
 TEST(Command, VersionIsTheProjectVersion) {
   test::TempDir dir;
   const Outcome o = sim_loop(dir.path(), {"--version"});

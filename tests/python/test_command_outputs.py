@@ -31,8 +31,8 @@ def test_ctrl_c_is_one_line_and_exit_130_and_keeps_the_earlier_outputs(earlier_o
     def interrupted_run(*args, **kwargs):
         raise KeyboardInterrupt
 
-    # The host's progress bar begins the run: a Ctrl-C there stands for one during it.
-    monkeypatch.setattr(command._Host, "progress", interrupted_run)
+    # The progress bar begins the run: a Ctrl-C there stands for one during it.
+    monkeypatch.setattr(command, "progress_bar", interrupted_run)
     try:
         code = command.main(["--seed", "3", "--no-rerun", "--out", str(earlier_outputs)])
     except KeyboardInterrupt:
@@ -44,13 +44,13 @@ def test_ctrl_c_is_one_line_and_exit_130_and_keeps_the_earlier_outputs(earlier_o
 
 
 # The long call a signal interrupts, stood in for by a sleep (which Python
-# interrupts to run its signal handlers) where the host's progress bar begins
+# interrupts to run its signal handlers) where the progress bar begins
 # the run: what is tested is the command's handling, not how promptly the
 # bindings notice a signal.
 SLEEPING_COMMAND = textwrap.dedent("""
     import sys, time
     import simloop.__main__
-    simloop.__main__._Host.progress = lambda *args, **kwargs: time.sleep(60)
+    simloop.__main__.progress_bar = lambda *args, **kwargs: time.sleep(60)
     sys.exit(simloop.__main__.main(sys.argv[1:]))
 """)
 

@@ -7,6 +7,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
 from conftest import ROOT, sim_loop_exe
 from simloop import _build
 
@@ -28,8 +29,53 @@ def test_sim_loop_plot_finds_the_projects_venv(tmp_path):
         assert (tmp_path / "o" / "trajectory.png").read_bytes()[:4] == b"\x89PNG"
     else:
         assert proc.returncode == 1
-        assert proc.stderr.startswith(f"sim_loop: --plot: cannot start {VENV_PYTHON} (scripts/test.sh")
+        assert proc.stderr.startswith("sim_loop: --plot: no Python with the simloop package was found (tried python3")
         assert len(proc.stderr.splitlines()) == 1
+
+
+def _sim_loop_elsewhere(tmp_path: Path) -> Path:
+    """build/sim_loop copied into a tree with no venv beside it."""
+    exe = tmp_path / "elsewhere" / "build" / "sim_loop"
+    exe.parent.mkdir(parents=True)
+    shutil.copy2(sim_loop_exe(), exe)
+    return exe
+
+
+def test_sim_loop_plot_finds_python3_on_path_at_run_time(tmp_path):
+    """No interpreter path is built in: the python3 on PATH, when it has simloop, draws."""
+    proc = subprocess.run(
+        [str(_sim_loop_elsewhere(tmp_path)), "--smoke", "--plot", "--out", "o"],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        env={"PATH": f"{Path(sys.executable).parent}:{SYSTEM_PATH}"},
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.splitlines()[-2] == "plot: o/trajectory.png"
+    assert (tmp_path / "o" / "trajectory.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def test_sim_loop_plot_with_no_python_that_has_simloop_is_one_line_and_keeps_the_run(tmp_path):
+    bin_dir = tmp_path / "bin"  # a python3 without the simloop package, first on PATH
+    bin_dir.mkdir()
+    (bin_dir / "python3").symlink_to(shutil.which("python3", path=SYSTEM_PATH) or "/usr/bin/python3")
+    proc = subprocess.run(
+        [str(_sim_loop_elsewhere(tmp_path)), "--smoke", "--plot", "--out", "o"],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        env={"PATH": f"{bin_dir}:{SYSTEM_PATH}"},
+    )
+    if subprocess.run([str(bin_dir / "python3"), "-c", "import simloop"], capture_output=True).returncode == 0:
+        pytest.skip("this machine's python3 has simloop itself: nothing to miss")
+    assert proc.returncode == 1
+    assert proc.stderr.splitlines() == [
+        "sim_loop: --plot: no Python with the simloop package was found (tried python3; the outputs above were "
+        "written): install it with scripts/setup.sh --package (or pip install . in a venv), or set SIMLOOP_PYTHON "
+        "to a Python that has it"
+    ]
+    assert "trajectory: o/trajectory.csv (301 rows)" in proc.stdout
+    assert sorted(p.name for p in (tmp_path / "o").iterdir()) == ["metrics.json", "trajectory.csv"]
 
 
 def test_sim_loop_plot_without_a_python_is_one_line(tmp_path):

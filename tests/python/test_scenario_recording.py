@@ -123,7 +123,7 @@ def test_every_moving_body_of_the_walker_is_drawn(tmp_path):
     assert result_model.nq == 11
 
 
-def test_a_drawing_that_fails_stops_the_run_and_writes_nothing(tmp_path, capsys):
+def test_a_drawing_that_fails_writes_nothing(tmp_path, monkeypatch):
     """The command's run into --out with a recording whose rows() raises: the
     error reaches Python as itself, and nothing is put in place."""
     from simloop import __main__ as command
@@ -140,14 +140,11 @@ def test_a_drawing_that_fails_stops_the_run_and_writes_nothing(tmp_path, capsys)
         def close(self):
             pass
 
-    class BrokenRecording(command._Host):
-        def recording(self, opts, model, scenario):
-            return Broken(), "recording: none (test)"
-
+    monkeypatch.setattr(command, "_drawings", lambda *args: (command._Drawings([Broken()]), "recording: none (test)"))
     (tmp_path / "o").mkdir()  # the run's folder: left as it was
     args = ["--scenario", str(SCENES / "pusht.toml"), "--steps", "50", "--out", str(tmp_path / "o")]
     with pytest.raises(RuntimeError, match="the drawing broke"):
-        simloop._core.run_command(args, BrokenRecording(args))
+        command._run(args)
     assert list((tmp_path / "o").iterdir()) == []  # no outputs, no temporary files
 
 
