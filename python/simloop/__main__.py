@@ -133,10 +133,10 @@ def main(argv: Optional[List[str]] = None) -> int:
     except KeyboardInterrupt as e:
         name, code = _stopped_by(e)
         kept = "after the outputs were written" if _outputs_written else "the earlier outputs were left as they were"
-        code = _fail(code, f"interrupted ({name}); {kept}")
+        code = _fail(code, f"interrupted ({name}); {kept}", signal_first=False)
     except _ReportLost as e:
         done = "the outputs were written" if _outputs_written else "nothing was written"
-        code = _fail(EXIT_RUN_FAILED, f"cannot write the report to standard output ({e}); {done}")
+        code = _fail(EXIT_RUN_FAILED, f"cannot write the report to standard output ({e}); {done}", signal_first=False)
     finally:
         sys.stdout = stdout
         for signum, handler in previous.items():

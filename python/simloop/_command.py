@@ -34,8 +34,21 @@ class _Terminated(KeyboardInterrupt):
         self.signum = signum
 
 
+# The terminating signals raised here as KeyboardInterrupt, Ctrl-C's among
+# them. A library may turn that exception into an error of its own (a C
+# extension's import: numpy's ImportError "PyCapsule_Import could not import
+# module datetime"); the command then reports the signal, not that error.
+_raised: List[int] = []
+
+
 def _on_signal(signum: int, frame: Optional[FrameType]) -> NoReturn:
+    _raised.append(signum)
     raise _Terminated(signum)
+
+
+def _on_sigint(signum: int, frame: Optional[FrameType]) -> NoReturn:
+    _raised.append(signum)
+    raise KeyboardInterrupt
 
 
 def _stopped_by(e: KeyboardInterrupt) -> "tuple[str, int]":
@@ -47,12 +60,15 @@ def _stopped_by(e: KeyboardInterrupt) -> "tuple[str, int]":
 def _catch_terminating_signals() -> Dict[int, Any]:
     """Installs _on_signal for every terminating signal whose action is still
     the default (one the command was started ignoring stays ignored, as
-    nohup wants; SIGINT keeps Python's KeyboardInterrupt; Python ignores
-    SIGPIPE itself). Returns what to restore."""
+    nohup wants; SIGINT keeps Python's KeyboardInterrupt, noted in _raised;
+    Python ignores SIGPIPE itself). Returns what to restore."""
+    _raised.clear()
     previous = {}
     for signum in _core.TERMINATING_SIGNALS:
         if signal.getsignal(signum) == signal.SIG_DFL:
             previous[signum] = signal.signal(signum, _on_signal)
+        elif signum == signal.SIGINT and signal.getsignal(signum) is signal.default_int_handler:
+            previous[signum] = signal.signal(signum, _on_sigint)  # the same KeyboardInterrupt, noted
     return previous
 
 
@@ -113,7 +129,16 @@ class _Report:
         return getattr(self._stream, name)
 
 
-def _fail(code: int, message: str) -> int:
+def _fail(code: int, message: str, *, signal_first: bool = True) -> int:
+    """Says `message` on one line and returns `code`; but when a terminating
+    signal was raised and a library turned it into the failure being
+    reported (_raised), raises the signal's KeyboardInterrupt again instead,
+    for the command to report (signal_first=False: the command's own report
+    of a stop or a lost report)."""
+    if signal_first and _raised and code in (EXIT_RUN_FAILED, EXIT_USAGE):
+        signum = _raised[0]
+        _raised.clear()
+        raise KeyboardInterrupt if signum == signal.SIGINT else _Terminated(signum)
     # As bytes: a path's undecodable bytes (surrogate escapes) go through and come back.
     line = _core._one_line(str(message).encode("utf-8", "surrogateescape")).decode("utf-8", "surrogateescape")
     if sys.stderr is not None:  # (print(file=None) would write to stdout)

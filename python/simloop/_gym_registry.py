@@ -32,16 +32,25 @@ def register_when_gymnasium_loads() -> None:
         return
 
     class _WhenGymnasiumLoads(importlib.abc.MetaPathFinder):
+        finding = False  # importlib.util.find_spec below asks the finders again, this one among them
+
         def find_spec(self, name, path, target=None):  # type: ignore[no-untyped-def]
-            if name != "gymnasium":
+            if name != "gymnasium" or self.finding:
                 return None
-            sys.meta_path.remove(self)
-            spec = importlib.util.find_spec(name)
+            self.finding = True
+            try:
+                spec = importlib.util.find_spec(name)
+            finally:
+                self.finding = False
             if spec is None or spec.loader is None:
                 return spec
             execute = spec.loader.exec_module
 
             def exec_module(module):  # type: ignore[no-untyped-def]
+                # Only an import gets here (a program's own find_spec("gymnasium") does not): the hook's
+                # one use.
+                if self in sys.meta_path:
+                    sys.meta_path.remove(self)
                 execute(module)
                 register_envs(module)
 

@@ -30,9 +30,13 @@ def test_import_simloop_leaves_gymnasium_alone_and_registers_once_it_loads():
     assert out.split() == ["50", "ScenarioEnv"]
     # gymnasium first, then simloop: registered at once; simloop.gym first
     # (it imports gymnasium itself): registered too.
+    # A program that asks where gymnasium is before importing it: still registered (the hook was used
+    # up by the question, and the import then registered nothing).
     for code in (
         "import gymnasium, simloop; gymnasium.make('simloop/PushT-v0')",
         "import simloop.gym, gymnasium; gymnasium.make('simloop/PushT-v0')",
+        "import importlib.util, simloop; importlib.util.find_spec('gymnasium'); import gymnasium; "
+        "gymnasium.make('simloop/PushT-v0')",
     ):
         subprocess.run([sys.executable, "-c", code], check=True)
 

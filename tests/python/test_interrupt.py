@@ -231,3 +231,35 @@ def test_ctrl_c_while_the_command_loads_its_modules_is_one_line_not_a_traceback(
     assert "Traceback" not in err and len(err.strip().splitlines()) == 1, err
     assert err.startswith("sim-loop: interrupted (SIGINT)"), err
     assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())
+
+
+# A signal that a library turns into an error of its own: numpy's import, hit by
+# SIGUSR1 inside, said "ImportError: ... PyCapsule_Import could not import module
+# datetime" and the command exited 1 (once, on a fresh Debian). Here the drawing
+# is made to do the same.
+SWALLOWED = """
+import os, signal, sys, time
+import simloop.chapter_recording
+from simloop.__main__ import main
+
+class Swallowing:
+    def __init__(self, *args, **kwargs):
+        try:
+            os.kill(os.getpid(), getattr(signal, sys.argv[1]))
+            time.sleep(5)
+        except BaseException:
+            raise ImportError("PyCapsule_Import could not import module datetime") from None
+
+simloop.chapter_recording.ChapterRecording = Swallowing
+sys.exit(main(["--steps", "50", "--out", "out"]))
+"""
+
+
+@pytest.mark.parametrize("name", ["SIGUSR1", "SIGINT", "SIGTERM"])
+def test_a_signal_a_library_turned_into_its_own_error_is_reported_as_the_signal(tmp_path, name):
+    child = subprocess.run(
+        [sys.executable, "-c", SWALLOWED, name], cwd=tmp_path, capture_output=True, text=True, timeout=60
+    )
+    assert child.returncode == 128 + getattr(signal, name), child.stderr
+    assert child.stderr == f"sim-loop: interrupted ({name}); the earlier outputs were left as they were\n"
+    assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())
