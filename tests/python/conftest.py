@@ -47,6 +47,19 @@ def run_command(args, cwd: Path, python: bool = True) -> subprocess.CompletedPro
     return subprocess.run(cmd, cwd=cwd, capture_output=True, text=True, stdin=subprocess.DEVNULL, timeout=120)
 
 
+def batch(args, cwd: Path, timeout: float = 300, **kwargs) -> subprocess.CompletedProcess:
+    """`python -m simloop batch ARGS` in cwd, stdin closed, with a time limit (kwargs: subprocess.run's, env=...)."""
+    return subprocess.run(
+        [sys.executable, "-m", "simloop", "batch", *args],
+        cwd=cwd,
+        capture_output=True,
+        text=True,
+        stdin=subprocess.DEVNULL,
+        timeout=timeout,
+        **kwargs,
+    )
+
+
 def without_wall_clock(stdout: str) -> str:
     return "".join(line for line in stdout.splitlines(keepends=True) if not line.startswith("wall-clock:"))
 

@@ -14,7 +14,8 @@ from pathlib import Path
 import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
-from test_batch_resume import batch, interrupted
+from conftest import batch
+from test_batch_resume import interrupted
 
 ARGS = ["--seeds", "0:300", "--steps", "300", "--chunk-size", "10", "--threads", "1"]
 

@@ -13,6 +13,7 @@ import sys
 import time
 from pathlib import Path
 
+import conftest
 import psutil
 import pyarrow.parquet as pq
 import pytest
@@ -27,15 +28,7 @@ PUSHT = ROOT / "tests" / "scenes" / "pusht.toml"
 
 
 def batch(args, cwd, **kwargs) -> subprocess.CompletedProcess:
-    return subprocess.run(
-        [sys.executable, "-m", "simloop", "batch", *args],
-        cwd=cwd,
-        capture_output=True,
-        text=True,
-        stdin=subprocess.DEVNULL,
-        timeout=180,
-        **kwargs,
-    )
+    return conftest.batch(args, cwd, timeout=180, **kwargs)
 
 
 @contextlib.contextmanager

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 import simloop
-from conftest import ROOT
+from conftest import ROOT, batch
 
 pytest.importorskip("pyarrow")
 
@@ -88,17 +88,6 @@ def test_a_worker_refuses_a_scene_edited_since_the_batch_started(tmp_path):
     edit(files["include"], "include")
     with pytest.raises(distributed.InputMismatch, match=r"tblock\.xml is not the file the batch started with"):
         distributed.run_chunk(job, [(0, 0, None, ())])
-
-
-def batch(args, cwd: Path) -> subprocess.CompletedProcess:
-    return subprocess.run(
-        [sys.executable, "-m", "simloop", "batch", *args],
-        cwd=cwd,
-        capture_output=True,
-        text=True,
-        stdin=subprocess.DEVNULL,
-        timeout=300,
-    )
 
 
 @pytest.mark.parametrize("what", ["scene", "include", "csv", "scenario"])

@@ -12,21 +12,11 @@ import time
 from pathlib import Path
 
 import pytest
+from conftest import batch
 
 pytest.importorskip("pyarrow")
 
 ARGS = ["--seeds", "0:300", "--steps", "300", "--chunk-size", "10", "--threads", "1"]
-
-
-def batch(args, cwd) -> subprocess.CompletedProcess:
-    return subprocess.run(
-        [sys.executable, "-m", "simloop", "batch", *args],
-        cwd=cwd,
-        capture_output=True,
-        text=True,
-        stdin=subprocess.DEVNULL,
-        timeout=300,
-    )
 
 
 def interrupted(args, cwd: Path, out: str, chunks: int) -> Path:
