@@ -41,14 +41,14 @@ class _Terminated(KeyboardInterrupt):
 _raised: List[int] = []
 
 
+def _interruption(signum: int) -> KeyboardInterrupt:
+    """What a terminating signal raises: Ctrl-C's own KeyboardInterrupt, or _Terminated."""
+    return KeyboardInterrupt() if signum == signal.SIGINT else _Terminated(signum)
+
+
 def _on_signal(signum: int, frame: Optional[FrameType]) -> NoReturn:
     _raised.append(signum)
-    raise _Terminated(signum)
-
-
-def _on_sigint(signum: int, frame: Optional[FrameType]) -> NoReturn:
-    _raised.append(signum)
-    raise KeyboardInterrupt
+    raise _interruption(signum)
 
 
 def _stopped_by(e: KeyboardInterrupt) -> "tuple[str, int]":
@@ -68,7 +68,7 @@ def _catch_terminating_signals() -> Dict[int, Any]:
         if signal.getsignal(signum) == signal.SIG_DFL:
             previous[signum] = signal.signal(signum, _on_signal)
         elif signum == signal.SIGINT and signal.getsignal(signum) is signal.default_int_handler:
-            previous[signum] = signal.signal(signum, _on_sigint)  # the same KeyboardInterrupt, noted
+            previous[signum] = signal.signal(signum, _on_signal)  # the same KeyboardInterrupt, noted
     return previous
 
 
@@ -138,7 +138,7 @@ def _fail(code: int, message: str, *, signal_first: bool = True) -> int:
     if signal_first and _raised and code in (EXIT_RUN_FAILED, EXIT_USAGE):
         signum = _raised[0]
         _raised.clear()
-        raise KeyboardInterrupt if signum == signal.SIGINT else _Terminated(signum)
+        raise _interruption(signum)
     # As bytes: a path's undecodable bytes (surrogate escapes) go through and come back.
     line = _core._one_line(str(message).encode("utf-8", "surrogateescape")).decode("utf-8", "surrogateescape")
     if sys.stderr is not None:  # (print(file=None) would write to stdout)
