@@ -32,7 +32,7 @@ from .sim import Sim
 
 FRAMES_PER_SECOND = 25
 WIDTH, HEIGHT = 640, 480
-CHAPTER_DISTANCE = 1.5  # m from the box at rest: it and the pusher fill a third of the frame
+CHAPTER_DISTANCE = 1.5  # m from the box at rest, as simloop/Chapter-v0's pictures look at it
 FINISH_TIMEOUT = 60.0
 
 
@@ -124,12 +124,12 @@ class VideoRecording:
         # about halves a frame's time on a software rasteriser: edges a little
         # jagged, shadows a little soft), and with the floor drawn to the
         # horizon: the box ends the run 4.9 m out, past the floor's drawn 2 m,
-        # and Break It's hop is at 9 m.
+        # and Break It's hop peaks 11 m out, 1.3 m up.
         self.renderer = Renderer(
             self.sim, width=WIDTH, height=HEIGHT, multisample=False, endless_planes=True, shadow_size=512
         )
         self._box: List[int] = []  # the chapter's box_x, box_y, box_z columns
-        self._lookat_z: Optional[float] = None  # the height the camera follows the box at: where it started
+        self._lookat_z: Optional[float] = None  # the box's height at the first frame: the floor's, for the camera
         requested = Path(path)
         mp4 = requested.suffix.lower() == ".mp4"
         self.ffmpeg = shutil.which("ffmpeg") if mp4 else None
