@@ -396,10 +396,6 @@ Options parse(int argc, const char* const* argv) {
                        " and --scenario: the scenario file says what is pushed and driven");
     }
   }
-  if (opts.is_scenario() && opts.run.audit_energy) {
-    throw UsageError(
-        "--energy-audit accounts for the chapter's box and pusher only (not with --scenario, --body or --ctrl)");
-  }
   check_video_file(opts);
   // The library would refuse it too; say it in the flags' words.
   try {

@@ -131,6 +131,7 @@ ScenarioConfig scenario_config(const Options& opts) {
   if (opts.steps_given) c.steps = opts.run.num_steps();
   c.perturb = opts.run.perturb;
   c.record_every = opts.run.record_every;
+  c.audit_energy = opts.run.audit_energy;
   return c;
 }
 

@@ -14,7 +14,6 @@
 #include <system_error>
 #include <thread>
 
-#include "chapter_detail.hpp"
 #include "run_detail.hpp"
 #include "simloop/errors.hpp"
 #include "worker_pool.hpp"
@@ -220,44 +219,6 @@ void detail::run_jobs(std::size_t jobs, int threads, const std::vector<std::int6
   for (const std::exception_ptr& e : errors) {
     if (e) std::rethrow_exception(e);
   }
-}
-
-std::vector<RunResult> run_batch(const Model& model, const std::vector<RunConfig>& configs, int threads,
-                                 RunControl* control) {
-  return run_batch(model, configs, {}, threads, control);
-}
-
-std::vector<RunResult> run_batch(const Model& model, const std::vector<RunConfig>& configs,
-                                 const std::vector<RowSink*>& sinks, int threads, RunControl* control) {
-  detail::check_threads(threads);
-  for (std::size_t i = 0; i < configs.size(); ++i) detail::check_run(i, [&] { validate(configs[i]); });
-  if (sinks.empty()) {
-    std::vector<KeptRows> kept;
-    for (const RunConfig& config : configs) kept.push_back(kept_rows(config));
-    check_kept_rows(kept);
-  } else if (sinks.size() != configs.size() || std::find(sinks.begin(), sinks.end(), nullptr) != sinks.end()) {
-    throw InvalidArgument("sinks: one RowSink per config, none null, got " + std::to_string(sinks.size()) + " for " +
-                          std::to_string(configs.size()) + " configs");
-  }
-  // The model is frozen while stepping, so each setting (timestep, energy)
-  // gets its own copy, made here, before the workers share them.
-  std::map<std::pair<double, bool>, Model> models;
-  std::vector<const Model*> model_of(configs.size());
-  for (std::size_t i = 0; i < configs.size(); ++i) {
-    const std::pair<double, bool> key{configs[i].timestep, configs[i].audit_energy};
-    auto it = models.find(key);
-    if (it == models.end()) it = models.emplace(key, model.for_run(key.first, key.second)).first;
-    model_of[i] = &it->second;
-  }
-
-  std::vector<RunResult> results(configs.size());
-  std::vector<std::int64_t> steps;
-  for (const RunConfig& c : configs) steps.push_back(c.num_steps());
-  detail::run_jobs(model, configs.size(), threads, steps, control, [&](std::size_t i, Data& data, RunControl& ctl) {
-    results[i] =
-        detail::run_counted_elsewhere(*model_of[i], configs[i], data, sinks.empty() ? nullptr : sinks[i], &ctl);
-  });
-  return results;
 }
 
 }  // namespace simloop

@@ -78,12 +78,12 @@ void fields(Io& io, typename Io::template Of<SweepResult> r) {
 template <class Io>
 void fields(Io& io, typename Io::template Of<RunRecord> r) {
   io(r.name, r.seed, r.rng, r.perturb, r.disturbed_bodies, r.columns, r.final_row, r.final_state, r.trajectory, r.rows,
-     r.schedule.steps, r.schedule.control_changes, r.schedule.forces, r.warnings, r.timestep, r.sim_time);
+     r.schedule.steps, r.schedule.control_changes, r.schedule.forces, r.warnings, r.timestep, r.sim_time, r.energy);
 }
 template <class Io>
 void fields(Io& io, typename Io::template Of<RunResult> r) {
   fields(io, static_cast<typename Io::template Of<RunRecord>>(r));  // the record's, then the report's
-  io(r.config, r.metrics, r.unrounded_metrics, r.shove, r.energy);
+  io(r.config, r.metrics, r.unrounded_metrics, r.shove);
 }
 
 // Numbers as their bytes; bools and enums as one byte (a bool's other bit

@@ -6,6 +6,7 @@
 #include <map>
 #include <set>
 
+#include "energy_audit.hpp"
 #include "loop.hpp"
 #include "mujoco_compat.hpp"
 #include "run_detail.hpp"
@@ -79,7 +80,7 @@ void Recorder::add(Source::Kind kind, int id, int count, const std::vector<std::
   (derived ? after_ : before_).push_back(source);
 }
 
-Recorder::Recorder(const mjModel* m, const ResolvedScenario& scenario, const Schedule& schedule) {
+Recorder::Recorder(const mjModel* m, const ResolvedScenario& scenario, const Schedule& schedule, bool energy) {
   columns_.push_back({"step", "", true, false, ""});
   columns_.push_back({"time", "s", false, false, ""});
   ctrl_range_ = ctrl_range(m);
@@ -136,6 +137,13 @@ Recorder::Recorder(const mjModel* m, const ResolvedScenario& scenario, const Sch
   }
   if (scenario.contacts) add(Source::kContacts, 0, 1, {"contacts"}, {""}, true);
   if (scenario.ncon) add(Source::kNcon, 0, 1, {"ncon"}, {""}, true);
+  if (energy) {  // no Source: the energy audit (energy_audit.hpp) fills them
+    energy_column_ = width();
+    for (const char* name : {"energy", "work_actuator", "work_shove", "work_passive", "work_constraint",
+                             "work_constraint_positive", "energy_unexplained"}) {
+      columns_.push_back({name, "J", false, false, ""});
+    }
+  }
 
   std::set<std::string> seen;
   for (const Column& c : columns_) {
@@ -355,14 +363,24 @@ RunRecord detail::run_schedule_with(const mjModel* m, mjData* d, const Recorder&
 
 RunRecord detail::run_schedule_counted_elsewhere(const mjModel* m, mjData* d, const Recorder& recorder,
                                                  const Schedule& schedule, std::int64_t record_every, RowSink* sink,
-                                                 RunControl* control, const RunInputs& inputs) {
+                                                 RunControl* control, const RunInputs& inputs,
+                                                 const std::vector<StepObserver*>& watching, bool d_is_reset) {
   detail::check_schedule_run(schedule.steps, record_every);
   check_inputs(m, inputs, schedule.steps);
   if (sink == nullptr) check_kept_rows({{schedule.steps, record_every, recorder.width()}});
   RunRecord result;
   detail::KeepRows keep(result.trajectory);
-  detail::LoopResult loop =
-      detail::run_loop(m, d, schedule, recorder, record_every, sink ? *sink : keep, control, inputs);
+  std::optional<EnergyAudit> audit;
+  std::vector<StepObserver*> observers = watching;
+  if (recorder.energy_column() >= 0) {
+    std::vector<int> pushed;
+    for (const Schedule::Force& f : schedule.forces) {
+      if (std::find(pushed.begin(), pushed.end(), f.body) == pushed.end()) pushed.push_back(f.body);
+    }
+    observers.push_back(&audit.emplace(compat::as_int(m->nv), std::move(pushed), recorder.energy_column()));
+  }
+  detail::LoopResult loop = detail::run_loop(m, d, schedule, recorder, record_every, sink ? *sink : keep, control,
+                                             inputs, observers, d_is_reset);
   result.columns = recorder.columns();
   result.schedule = schedule;
   result.timestep = loop.timestep;
@@ -371,6 +389,7 @@ RunRecord detail::run_schedule_counted_elsewhere(const mjModel* m, mjData* d, co
   result.final_state = std::move(loop.final_state);
   result.warnings = std::move(loop.warnings);
   result.sim_time = loop.sim_time;
+  if (audit) result.energy = audit->totals();
   return result;
 }
 

@@ -38,6 +38,20 @@ std::string warning_line(const Warning& w) {
   return line;
 }
 
+namespace {
+// The audit's totals in one line, in the run's words for its forces.
+std::string energy_line(const EnergyTotals& e, const char* actuators, const char* pushed, const char* passive,
+                        const char* contacts) {
+  char line[512];
+  std::snprintf(line, sizeof line,
+                "energy audit: change %+.4f J = work by %s %+.4f, %s %+.4f, %s %+.4f, "
+                "%s %+.4f (positive steps %+.4f) + unexplained %+.4f J\n",
+                e.energy_end - e.energy_start, actuators, e.work_actuator, pushed, e.work_shove, passive,
+                e.work_passive, contacts, e.work_constraint, e.work_constraint_positive, e.unexplained);
+  return line;
+}
+}  // namespace
+
 std::string load_warnings_text(const Model& model) {
   std::string out;
   for (const std::string& w : model.load_warnings()) out += "MuJoCo warning while loading the model: " + w + "\n";
@@ -74,15 +88,7 @@ std::string summary_text(const RunResult& r) {
   }
   out += line;
   for (const Warning& w : r.warnings) out += warning_line(w);
-  if (r.config.audit_energy) {
-    const EnergyTotals& e = r.energy;
-    std::snprintf(line, sizeof line,
-                  "energy audit: change %+.4f J = work by motor %+.4f, shove %+.4f, damping %+.4f, "
-                  "contacts %+.4f (positive steps %+.4f) + unexplained %+.4f J\n",
-                  e.energy_end - e.energy_start, e.work_actuator, e.work_shove, e.work_passive, e.work_constraint,
-                  e.work_constraint_positive, e.unexplained);
-    out += line;
-  }
+  if (r.config.audit_energy) out += energy_line(r.energy, "motor", "shove", "damping", "contacts");
   const bool mujoco_warned =
       std::any_of(r.warnings.begin(), r.warnings.end(), [](const Warning& w) { return w.name.rfind("mj", 0) == 0; });
   if (mujoco_warned) {
@@ -215,6 +221,9 @@ std::string summary_text(const RunRecord& r) {
     out += line;
   }
   for (const Warning& w : r.warnings) out += warning_line(w);
+  const bool audited =
+      std::any_of(r.columns.begin(), r.columns.end(), [](const Column& c) { return c.name == "energy_unexplained"; });
+  if (audited) out += energy_line(r.energy, "actuators", "disturbances", "passive forces", "constraints");
   return out;
 }
 

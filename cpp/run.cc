@@ -1,109 +1,171 @@
+// The chapter's view of its scenario: the chapter is Scenario::chapter()
+// (chapter_scenario fits it to a scene) run as any scenario runs, and this
+// file only turns that run into the chapter's report: its columns in its
+// order, metrics.json's numbers, the energy totals, the shove drawn.
 #include "simloop/run.hpp"
-
-#include <sys/resource.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <limits>
-#include <sstream>
+#include <utility>
 
 #include "chapter_detail.hpp"
-#include "energy_audit.hpp"
 #include "loop.hpp"
-#include "mujoco_compat.hpp"
 #include "run_detail.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/number_format.hpp"
 #include "simloop/recorder.hpp"
-#include "simloop/scenario.hpp"
 
 namespace simloop {
 namespace {
 
-// The chapter's row: the state entering the step and the inputs just written
-// (NaN in the final row, which has no step after it), all read before the
-// step as the chapter reads them (ncon: the contacts the last step found).
-class ChapterRecorder final : public RowRecorder {
+constexpr double kNone = std::numeric_limits<double>::quiet_NaN();
+
+// Where the box was as the shove's window began (its drift is measured from
+// there), read whether or not the shove is applied: a copy, as the chapter
+// takes it, of xpos, which the next step overwrites.
+class ShoveOrigin final : public detail::StepObserver {
  public:
-  ChapterRecorder(const ChapterLayout& at, int columns) : at_(at), columns_(chapter_columns(columns)) {}
-  [[nodiscard]] const std::vector<Column>& columns() const noexcept override { return columns_; }
-  void before_step(double* row, std::int64_t step, const mjModel* /*m*/, const mjData* d, bool inputs,
-                   int ncon) const noexcept override {
-    const auto put = [row](int column, double value) { row[column] = value; };
-    const double* box_q = d->qpos + at_.box_qposadr;
-    const double* box_v = d->qvel + at_.box_dofadr;
-    const double* shove = d->xfrc_applied + 6 * at_.box_body;
-    constexpr double kNone = std::numeric_limits<double>::quiet_NaN();
-    put(ChapterColumns::kStep, static_cast<double>(step));
-    put(ChapterColumns::kTime, d->time);
-    put(ChapterColumns::kCtrl, inputs ? d->ctrl[0] : kNone);
-    for (int i = 0; i < 3; ++i) put(ChapterColumns::kShoveX + i, inputs ? shove[i] : kNone);
-    for (int i = 0; i < 7; ++i) put(ChapterColumns::kBoxX + i, box_q[i]);
-    for (int i = 0; i < 6; ++i) put(ChapterColumns::kBoxVx + i, box_v[i]);
-    put(ChapterColumns::kPusherX, d->qpos[at_.pusher_qposadr]);
-    put(ChapterColumns::kPusherVx, d->qvel[at_.pusher_dofadr]);
-    put(ChapterColumns::kNcon, ncon);
-  }
-  void after_step(double* /*row*/, const mjModel* /*m*/, const mjData* /*d*/) const noexcept override {}
-
- private:
-  ChapterLayout at_;
-  std::vector<Column> columns_;
-};
-
-// The chapter's inputs, drawn as Scenario::chapter()'s: full throttle on
-// actuator 0 from step 0, and the shove on the box for its window (if the
-// run is perturbed). Actuator 0 by index, and nothing named to record:
-// another scene's motor and pusher have other names.
-Schedule chapter_schedule(const mjModel* m, const RunConfig& config) {
-  Scenario chapter = Scenario::chapter();
-  chapter.controls.front().actuator = "0";
-  chapter.record = RecordSpec{};
-  chapter.length = When::steps(config.num_steps());
-  if (!config.perturb) chapter.disturbances.clear();
-  const std::unique_ptr<Draws> draws = make_draws(config.seed, config.rng);
-  return build_schedule(resolve(chapter, m), chapter, m->opt.timestep, *draws);
-}
-
-// What the chapter watches besides the rows: where the box was when the
-// shove began (its drift is measured from there), and with the energy
-// audit, the energy of each row's state and the work done up to it.
-class ChapterWatch final : public detail::StepObserver {
- public:
-  ChapterWatch(const mjModel* m, const ChapterLayout& at, std::int64_t shove_start, bool audit)
-      : box_body_(at.box_body), shove_start_(shove_start), audit_(audit), energy_(detail::compat::as_int(m->nv)) {}
-
+  ShoveOrigin(int box_body, std::int64_t start_step) : box_body_(box_body), start_step_(start_step) {}
   void before_step(std::int64_t step, const mjModel* /*m*/, const mjData* d) noexcept override {
-    // A copy, as the chapter takes: xpos is overwritten by the next step.
-    if (step == shove_start_) box_y_at_shove_ = d->xpos[3 * box_body_ + 1];
-    if (audit_) energy_.before_step(d);
+    if (step == start_step_) y_ = d->xpos[3 * box_body_ + 1];
   }
-  void after_step(std::int64_t /*step*/, const mjModel* m, mjData* d, double* row) noexcept override {
-    if (!audit_) return;
-    // The row's state is the one this step started from: its energy is known
-    // now, and the work before this step's is what the row holds.
-    const double entering = energy_.observe(d);
-    if (row) energy_.fill_row(row, entering);
-    energy_.add_step_work(m, d, box_body_);
-  }
-  void at_end(const mjModel* /*m*/, const mjData* d, double* row) noexcept override {
-    if (!audit_) return;
-    final_energy_ = d->energy[0] + d->energy[1];  // from the loop's final mj_forward
-    energy_.fill_row(row, final_energy_);
-  }
-
-  [[nodiscard]] double box_y_at_shove() const noexcept { return box_y_at_shove_; }
-  [[nodiscard]] EnergyTotals energy() const noexcept { return audit_ ? energy_.totals(final_energy_) : EnergyTotals{}; }
+  [[nodiscard]] double y() const noexcept { return y_; }
 
  private:
   int box_body_;
-  std::int64_t shove_start_;
-  bool audit_;
-  detail::EnergyAudit energy_;
-  double box_y_at_shove_ = 0.0;  // the drift is sideways: y only
-  double final_energy_ = 0.0;
+  std::int64_t start_step_;
+  double y_ = 0.0;  // the drift is sideways: y only
+};
+
+// The chapter's rows made from its scenario's as they come: the chapter's
+// columns in its order. ctrl is the value written (the schedule's, before
+// ctrlrange clamping); shove_x.. the force on the box, zeros in a run
+// without the shove; the final row's inputs NaN, as every run's.
+class ChapterRows final : public RowSink {
+ public:
+  // motor: actuator 0's ctrl column; pusher_joint: its joint's columns' stem.
+  ChapterRows(RowSink& to, int width, std::string motor, std::string pusher_joint, double ctrl)
+      : to_(to), width_(width), motor_(std::move(motor)), pusher_joint_(std::move(pusher_joint)), ctrl_(ctrl) {}
+
+  void describe(const std::vector<Column>& columns) override {
+    const auto at = [&](const std::string& name) {
+      const auto it = std::find_if(columns.begin(), columns.end(), [&](const Column& c) { return c.name == name; });
+      return it == columns.end() ? -1 : static_cast<int>(it - columns.begin());
+    };
+    from_.assign(static_cast<std::size_t>(width_), -1);
+    for (int c = 0; c < width_; ++c) from_[static_cast<std::size_t>(c)] = at(std::string(ChapterColumns::kNames[c]));
+    for (int i = 0; i < 3; ++i) from_[ChapterColumns::kShoveX + i] = at(std::string("box_f") + "xyz"[i]);
+    from_[ChapterColumns::kPusherX] = at(pusher_joint_ + "_pos");
+    from_[ChapterColumns::kPusherVx] = at(pusher_joint_ + "_vel");
+    motor_column_ = at(motor_);
+    source_width_ = static_cast<int>(columns.size());
+    to_.describe(chapter_columns(width_));
+  }
+  void start(int /*columns*/, std::int64_t rows) override { to_.start(width_, rows); }
+  void write(const double* rows, std::int64_t count) override {
+    buffer_.resize(static_cast<std::size_t>(count * width_));
+    for (std::int64_t r = 0; r < count; ++r) view(rows + r * source_width_, buffer_.data() + r * width_);
+    to_.write(buffer_.data(), count);
+  }
+
+  // One row in the chapter's columns.
+  void view(const double* row, double* out) const noexcept {
+    const bool inputs = !std::isnan(row[motor_column_]);  // the final row has none
+    for (int c = 0; c < width_; ++c) {
+      const int from = from_[static_cast<std::size_t>(c)];
+      out[c] = from >= 0 ? row[from] : inputs ? 0.0 : kNone;  // (a shove column of a run without the shove)
+    }
+    out[ChapterColumns::kCtrl] = inputs ? ctrl_ : kNone;
+  }
+
+ private:
+  RowSink& to_;
+  int width_;
+  std::string motor_, pusher_joint_;
+  double ctrl_;
+  std::vector<int> from_;
+  int motor_column_ = 0;
+  int source_width_ = 0;
+  std::vector<double> buffer_;
+};
+
+// The chapter's motor, pusher and the value the chapter writes to ctrl.
+struct ChapterParts {
+  ChapterLayout at;
+  Scenario scenario;
+  std::string motor, pusher_joint;
+  double ctrl = 0.0;
+};
+
+std::string name_or(const mjModel* m, mjtObj type, int id, const char* kind) {
+  const char* name = mj_id2name(m, type, id);
+  return name && *name ? std::string(name) : std::string(kind) + std::to_string(id);
+}
+
+ChapterParts chapter_parts(const Model& model) {
+  ChapterParts parts;
+  parts.at = chapter_layout(model);
+  parts.scenario = chapter_scenario(model);
+  parts.motor = name_or(model.get(), mjOBJ_ACTUATOR, 0, "actuator") + "_ctrl";
+  parts.pusher_joint = name_or(model.get(), mjOBJ_JOINT, parts.at.pusher_joint, "joint");
+  parts.ctrl = parts.scenario.controls.front().schedule.front().second;
+  return parts;
+}
+
+int chapter_width(const RunConfig& config) {
+  return config.audit_energy ? ChapterColumns::kNumColumns : ChapterColumns::kNumBaseColumns;
+}
+
+// The chapter's report on a run of its scenario.
+RunResult chapter_result(RunRecord record, Trajectory trajectory, const ChapterRows& rows, const RunConfig& config,
+                         double box_y_at_shove) {
+  RunResult result;
+  std::vector<double> final_row(static_cast<std::size_t>(chapter_width(config)));
+  rows.view(record.final_row.data(), final_row.data());
+  static_cast<RunRecord&>(result) = std::move(record);
+  result.columns = chapter_columns(chapter_width(config));
+  result.final_row = std::move(final_row);
+  result.trajectory = std::move(trajectory);
+  result.config = config;
+  result.shove = draw_shove(config.seed, config.num_steps(), config.rng);
+  if (!config.perturb) result.disturbed_bodies.clear();
+
+  // Inspect, as the chapter does: the box's free joint's position and linear
+  // velocity, and the pusher's joint, in the final state.
+  const double* box_q = result.final_row.data() + ChapterColumns::kBoxX;
+  const double* box_v = result.final_row.data() + ChapterColumns::kBoxVx;
+  const double pusher_x = result.final_row[ChapterColumns::kPusherX];
+  const double speed = std::sqrt(box_v[0] * box_v[0] + box_v[1] * box_v[1] + box_v[2] * box_v[2]);
+  const double drift = std::fabs(box_q[1] - box_y_at_shove);
+  Metrics& metrics = result.metrics;
+  metrics.steps = config.num_steps();
+  metrics.seed = config.seed;
+  metrics.perturb = config.perturb;
+  for (int i = 0; i < 3; ++i) metrics.box_final_pos[i] = round6(box_q[i]);
+  metrics.box_final_speed = round6(speed);
+  metrics.pusher_final_x = round6(pusher_x);
+  metrics.lateral_drift = round6(drift);
+  metrics.shove_moved_box = drift > 0.01;
+  Metrics& exact = result.unrounded_metrics;
+  exact = metrics;
+  for (int i = 0; i < 3; ++i) exact.box_final_pos[i] = box_q[i];
+  exact.box_final_speed = speed;
+  exact.pusher_final_x = pusher_x;
+  exact.lateral_drift = drift;
+  return result;
+}
+
+// One chapter run's parts: its rows' view and its observer.
+struct ChapterRun {
+  ChapterRun(const ChapterParts& parts, const RunConfig& config, RowSink* sink)
+      : keep(trajectory),
+        rows(sink ? *sink : keep, chapter_width(config), parts.motor, parts.pusher_joint, parts.ctrl),
+        origin(parts.at.box_body, draw_shove(config.seed, config.num_steps(), config.rng).start_step) {}
+  Trajectory trajectory;  // the rows, unless they go to a sink
+  detail::KeepRows keep;
+  ChapterRows rows;
+  ShoveOrigin origin;
 };
 
 }  // namespace
@@ -128,8 +190,31 @@ void validate(const RunConfig& config) {
 }
 
 KeptRows kept_rows(const RunConfig& config) noexcept {
-  return {config.num_steps(), config.record_every,
-          config.audit_energy ? ChapterColumns::kNumColumns : ChapterColumns::kNumBaseColumns};
+  return {config.num_steps(), config.record_every, chapter_width(config)};
+}
+
+Scenario chapter_scenario(const Model& model) {
+  const ChapterLayout at = chapter_layout(model);
+  const mjModel* m = model.get();
+  Scenario chapter = Scenario::chapter();
+  // Actuator 0 and its joint by index: another scene's motor and pusher have
+  // other names (or none).
+  chapter.controls.front().actuator = "0";
+  const char* joint = mj_id2name(m, mjOBJ_JOINT, at.pusher_joint);
+  chapter.record.joints = {joint && *joint ? std::string(joint) : std::to_string(at.pusher_joint)};
+  return chapter;
+}
+
+ScenarioConfig scenario_config(const RunConfig& config) {
+  ScenarioConfig c;
+  c.seed = config.seed;
+  c.rng = config.rng;
+  c.timestep = config.timestep;
+  c.steps = config.num_steps();
+  c.perturb = config.perturb;
+  c.record_every = config.record_every;
+  c.audit_energy = config.audit_energy;
+  return c;
 }
 
 RunResult run(const Model& model, const RunConfig& config) {
@@ -146,66 +231,48 @@ RunResult run(const Model& model, const RunConfig& config, Data& workspace, RowS
   return detail::run_counted_elsewhere(model, config, workspace, sink, control);
 }
 
-RunResult detail::run_counted_elsewhere(const Model& model_in, const RunConfig& config, Data& workspace, RowSink* sink,
+RunResult detail::run_counted_elsewhere(const Model& model, const RunConfig& config, Data& workspace, RowSink* sink,
                                         RunControl* control) {
   validate(config);
-  const Model model = model_in.for_run(config.timestep, config.audit_energy);
-  if (!workspace.fits(model)) {
-    throw InvalidArgument("workspace Data was made for a model of another size");
+  const ChapterParts parts = chapter_parts(model);
+  ChapterRun run(parts, config, sink);
+  RunRecord record = run_scenario_watched(model, parts.scenario, scenario_config(config), workspace, &run.rows, control,
+                                          {&run.origin}, false);
+  return chapter_result(std::move(record), std::move(run.trajectory), run.rows, config, run.origin.y());
+}
+
+std::vector<RunResult> detail::run_chapter_batch(const Model& model, const std::vector<RunConfig>& configs,
+                                                 const std::vector<RowSink*>& sinks, int threads, RunControl* control) {
+  check_threads(threads);
+  for (std::size_t i = 0; i < configs.size(); ++i) check_run(i, [&] { validate(configs[i]); });
+  if (sinks.empty()) {
+    std::vector<KeptRows> kept;
+    for (const RunConfig& config : configs) kept.push_back(kept_rows(config));
+    check_kept_rows(kept);
+  } else if (sinks.size() != configs.size() || std::find(sinks.begin(), sinks.end(), nullptr) != sinks.end()) {
+    throw InvalidArgument("sinks: one RowSink per config, none null, got " + std::to_string(sinks.size()) + " for " +
+                          std::to_string(configs.size()) + " configs");
   }
-  const mjModel* m = model.get();
-  const bool d_is_reset = workspace.fresh_for(model);  // before get(), which ends that
-  mjData* d = workspace.get();
-  const ChapterLayout at = chapter_layout(model);
-  const std::int64_t steps = config.num_steps();
-
-  RunResult result;
-  result.config = config;
-  result.shove = draw_shove(config.seed, steps, config.rng);
-  result.schedule = chapter_schedule(m, config);
-  const ChapterRecorder recorder(at,
-                                 config.audit_energy ? ChapterColumns::kNumColumns : ChapterColumns::kNumBaseColumns);
-  ChapterWatch watch(m, at, result.shove.start_step, config.audit_energy);
-  detail::KeepRows keep(result.trajectory);
-  detail::LoopResult loop = detail::run_loop(m, d, result.schedule, recorder, config.record_every, sink ? *sink : keep,
-                                             control, RunInputs{}, {&watch}, d_is_reset);
-  // The record any run leaves, as the chapter's scenario would label it.
-  result.name = std::string(kChapterScenarioName);
-  result.seed = config.seed;
-  result.rng = std::string(rng_name(config.rng));
-  result.perturb = config.perturb;
-  if (config.perturb) result.disturbed_bodies = {mj_id2name(m, mjOBJ_BODY, at.box_body)};
-  result.columns = recorder.columns();
-  result.final_row = std::move(loop.final_row);
-  result.final_state = std::move(loop.final_state);
-  result.timestep = loop.timestep;
-  result.rows = loop.rows;
-  result.warnings = std::move(loop.warnings);
-  result.sim_time = loop.sim_time;
-  result.energy = watch.energy();
-
-  // Inspect, as the chapter does: the box's free joint owns qpos[adr..adr+3)
-  // (position) and qvel[adr..adr+3) (linear velocity).
-  const double* box_q = d->qpos + at.box_qposadr;
-  const double* box_v = d->qvel + at.box_dofadr;
-  const double speed = std::sqrt(box_v[0] * box_v[0] + box_v[1] * box_v[1] + box_v[2] * box_v[2]);
-  const double drift = std::fabs(box_q[1] - watch.box_y_at_shove());
-  Metrics& metrics = result.metrics;
-  metrics.steps = steps;
-  metrics.seed = config.seed;
-  metrics.perturb = config.perturb;
-  for (int i = 0; i < 3; ++i) metrics.box_final_pos[i] = round6(box_q[i]);
-  metrics.box_final_speed = round6(speed);
-  metrics.pusher_final_x = round6(d->qpos[at.pusher_qposadr]);
-  metrics.lateral_drift = round6(drift);
-  metrics.shove_moved_box = drift > 0.01;
-  Metrics& exact = result.unrounded_metrics;
-  exact = metrics;
-  for (int i = 0; i < 3; ++i) exact.box_final_pos[i] = box_q[i];
-  exact.box_final_speed = speed;
-  exact.pusher_final_x = d->qpos[at.pusher_qposadr];
-  exact.lateral_drift = drift;
-  return result;
+  const ChapterParts parts = chapter_parts(model);
+  std::vector<std::unique_ptr<ChapterRun>> runs;
+  std::vector<ScenarioConfig> scenario_configs;
+  std::vector<RowSink*> rows;
+  std::vector<std::vector<StepObserver*>> watching;
+  for (std::size_t i = 0; i < configs.size(); ++i) {
+    runs.push_back(std::make_unique<ChapterRun>(parts, configs[i], sinks.empty() ? nullptr : sinks[i]));
+    scenario_configs.push_back(scenario_config(configs[i]));
+    rows.push_back(&runs.back()->rows);
+    watching.push_back({&runs.back()->origin});
+  }
+  std::vector<RunRecord> records =
+      run_scenario_batch_watched(model, parts.scenario, scenario_configs, rows, threads, control, {}, watching);
+  std::vector<RunResult> results;
+  results.reserve(records.size());
+  for (std::size_t i = 0; i < records.size(); ++i) {
+    results.push_back(chapter_result(std::move(records[i]), std::move(runs[i]->trajectory), runs[i]->rows, configs[i],
+                                     runs[i]->origin.y()));
+  }
+  return results;
 }
 
 }  // namespace simloop

@@ -58,11 +58,29 @@ void check_schedule_run(std::int64_t steps, std::int64_t record_every);
                                           RunControl* control, const RunInputs& inputs = {});
 
 // The same without announcing its steps to the control (a batch announces
-// all of its runs' steps up front).
+// all of its runs' steps up front), with `watching` observing every step too
+// (loop.hpp), and the energy audit when the recorder has its columns.
+// `d_is_reset`: d is as mj_resetData leaves it (run_loop).
+class StepObserver;
 [[nodiscard]] RunRecord run_schedule_counted_elsewhere(const mjModel* m, mjData* d, const Recorder& recorder,
                                                        const Schedule& schedule, std::int64_t record_every,
-                                                       RowSink* sink, RunControl* control,
-                                                       const RunInputs& inputs = {});
+                                                       RowSink* sink, RunControl* control, const RunInputs& inputs = {},
+                                                       const std::vector<StepObserver*>& watching = {},
+                                                       bool d_is_reset = false);
+
+// run_scenario(scene, scenario, config, &workspace, sink, control) with
+// `watching` observing every step too, without announcing its steps to the
+// control unless `announce`.
+[[nodiscard]] RunRecord run_scenario_watched(const Model& scene, const Scenario& scenario, const ScenarioConfig& config,
+                                             Data& workspace, RowSink* sink, RunControl* control,
+                                             const std::vector<StepObserver*>& watching, bool announce);
+
+// run_scenario_batch(..., sinks, threads, control, inputs) with watching[i]
+// (empty, or one list per config) observing run i's steps too.
+[[nodiscard]] std::vector<RunRecord> run_scenario_batch_watched(
+    const Model& scene, const Scenario& scenario, const std::vector<ScenarioConfig>& configs,
+    const std::vector<RowSink*>& sinks, int threads, RunControl* control, const std::vector<RunInputs>& inputs,
+    const std::vector<std::vector<StepObserver*>>& watching);
 
 // A scenario as one run of `config` sees it: its length replaced by
 // config.steps, its disturbances dropped unless config.perturb.
@@ -101,7 +119,7 @@ void run_jobs(std::size_t jobs, int threads, const std::vector<std::int64_t>& st
               const std::function<void(std::size_t job, int worker, RunControl& control)>& job,
               WorkerPool* kept = nullptr);
 
-// Tests only: from now on run_batch can start at most `threads` more threads
+// Tests only: from now on a batch can start at most `threads` more threads
 // (as under a process limit, RLIMIT_NPROC); a negative count lifts the limit.
 void limit_thread_starts_for_testing(int threads) noexcept;
 

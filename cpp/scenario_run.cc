@@ -42,7 +42,7 @@ PreparedRun prepare(const Model& model, const Scenario& scenario, const Scenario
   run.resolved = resolve(effective, model.get());
   const std::unique_ptr<Draws> draws = make_draws(config.seed, config.rng);
   run.schedule = build_schedule(run.resolved, effective, model.timestep(), *draws);
-  run.recorder.emplace(model.get(), run.resolved, run.schedule);
+  run.recorder.emplace(model.get(), run.resolved, run.schedule, config.audit_energy);
   return run;
 }
 
@@ -56,6 +56,26 @@ RunRecord labelled(RunRecord result, const mjModel* m, const Scenario& scenario,
     result.disturbed_bodies.push_back(name ? name : "body" + std::to_string(f.body));
   }
   return result;
+}
+
+// A run on `model` (scene.for_run's already): prepared, then stepped in
+// `workspace`, which need not be reset if fresh.
+RunRecord run_watched(const Model& model, const Scenario& scenario, const ScenarioConfig& config, Data& workspace,
+                      RowSink* sink, RunControl* control, const RunInputs& inputs,
+                      const std::vector<detail::StepObserver*>& watching, bool announce) {
+  if (!workspace.fits(model)) throw InvalidArgument("workspace Data was made for a model of another size");
+  const PreparedRun run = prepare(model, scenario, config);
+  // The run's own scene parameters ([reset] params), on its own copy.
+  const Model with_params = with_scene_params(model, run.schedule.start.params);
+  const bool d_is_reset = workspace.fresh_for(with_params);  // before get(), which ends that
+  mjData* d = workspace.get();
+  const mjModel* m = with_params.get();
+  if (announce && control && run.schedule.steps >= 1 && run.schedule.steps <= kMaxSteps) {
+    control->add_total(run.schedule.steps);
+  }
+  return labelled(detail::run_schedule_counted_elsewhere(m, d, *run.recorder, run.schedule, config.record_every, sink,
+                                                         control, inputs, watching, d_is_reset),
+                  m, scenario, config);
 }
 
 }  // namespace
@@ -72,23 +92,24 @@ double run_timestep(const Model& scene, const Scenario& scenario, const Scenario
 }
 
 void check_scenario(const Model& scene, const Scenario& scenario, const ScenarioConfig& config) {
-  const Model model = scene.for_run(run_timestep(scene, scenario, config), false);
+  const Model model = scene.for_run(run_timestep(scene, scenario, config), config.audit_energy);
   const PreparedRun run = prepare(model, scenario, config);  // names, schedule, columns
   detail::check_schedule_run(run.schedule.steps, config.record_every);
 }
 
 RunRecord run_scenario(const Model& scene, const Scenario& scenario, const ScenarioConfig& config, Data* workspace,
                        RowSink* sink, RunControl* control, const RunInputs& inputs) {
-  const Model model = scene.for_run(run_timestep(scene, scenario, config), false);
+  const Model model = scene.for_run(run_timestep(scene, scenario, config), config.audit_energy);
   std::optional<Data> own;
   if (workspace == nullptr) workspace = &own.emplace(model);
-  if (!workspace->fits(model)) throw InvalidArgument("workspace Data was made for a model of another size");
-  const PreparedRun run = prepare(model, scenario, config);
-  // The run's own scene parameters ([reset] params), on its own copy.
-  const Model with_params = with_scene_params(model, run.schedule.start.params);
-  return labelled(detail::run_schedule_with(with_params.get(), workspace->get(), *run.recorder, run.schedule,
-                                            config.record_every, sink, control, inputs),
-                  with_params.get(), scenario, config);
+  return run_watched(model, scenario, config, *workspace, sink, control, inputs, {}, true);
+}
+
+RunRecord detail::run_scenario_watched(const Model& scene, const Scenario& scenario, const ScenarioConfig& config,
+                                       Data& workspace, RowSink* sink, RunControl* control,
+                                       const std::vector<StepObserver*>& watching, bool announce) {
+  return run_watched(scene.for_run(run_timestep(scene, scenario, config), config.audit_energy), scenario, config,
+                     workspace, sink, control, {}, watching, announce);
 }
 
 std::vector<RunRecord> run_scenario_batch(const Model& scene, const Scenario& scenario,
@@ -104,6 +125,14 @@ std::vector<RunRecord> run_scenario_batch(const Model& scene, const Scenario& sc
                                           const std::vector<ScenarioConfig>& configs,
                                           const std::vector<RowSink*>& sinks, int threads, RunControl* control,
                                           const std::vector<RunInputs>& inputs) {
+  return detail::run_scenario_batch_watched(scene, scenario, configs, sinks, threads, control, inputs, {});
+}
+
+std::vector<RunRecord> detail::run_scenario_batch_watched(const Model& scene, const Scenario& scenario,
+                                                          const std::vector<ScenarioConfig>& configs,
+                                                          const std::vector<RowSink*>& sinks, int threads,
+                                                          RunControl* control, const std::vector<RunInputs>& inputs,
+                                                          const std::vector<std::vector<StepObserver*>>& watching) {
   if (sinks.size() != configs.size()) {
     throw InvalidArgument("sinks must hold one per config (" + std::to_string(configs.size()) + "), got " +
                           std::to_string(sinks.size()));
@@ -118,16 +147,20 @@ std::vector<RunRecord> run_scenario_batch(const Model& scene, const Scenario& sc
   // Up front, on this thread: one model per distinct timestep (the model is
   // frozen while the workers share it), every run's names, inputs and
   // columns, and the memory all the kept rows will take together.
-  std::list<std::pair<double, Model>> models;  // stable addresses for model_of
+  if (!watching.empty() && watching.size() != configs.size()) {
+    throw InvalidArgument("watching: one list of observers per config, got " + std::to_string(watching.size()) +
+                          " for " + std::to_string(configs.size()) + " configs");
+  }
+  std::list<std::pair<std::pair<double, bool>, Model>> models;  // stable addresses for model_of
   std::vector<const Model*> model_of;
   std::vector<PreparedRun> runs;
   std::vector<KeptRows> kept;
   for (std::size_t i = 0; i < configs.size(); ++i) {
     const ScenarioConfig& config = configs[i];
     detail::check_run(i, [&] {
-      const double timestep = run_timestep(scene, scenario, config);
-      auto it = std::find_if(models.begin(), models.end(), [&](const auto& m) { return m.first == timestep; });
-      if (it == models.end()) it = models.emplace(models.end(), timestep, scene.for_run(timestep, false));
+      const std::pair<double, bool> key{run_timestep(scene, scenario, config), config.audit_energy};
+      auto it = std::find_if(models.begin(), models.end(), [&](const auto& m) { return m.first == key; });
+      if (it == models.end()) it = models.emplace(models.end(), key, scene.for_run(key.first, key.second));
       model_of.push_back(&it->second);
       runs.push_back(prepare(it->second, scenario, config));
       detail::check_schedule_run(runs.back().schedule.steps, config.record_every);
@@ -146,8 +179,9 @@ std::vector<RunRecord> run_scenario_batch(const Model& scene, const Scenario& sc
     // copy, made here rather than up front: one at a time per worker.
     const Model with_params = with_scene_params(*model_of[i], runs[i].schedule.start.params);
     const mjModel* m = with_params.get();
-    results[i] = labelled(detail::run_schedule_counted_elsewhere(m, data.get(), *runs[i].recorder, runs[i].schedule,
-                                                                 configs[i].record_every, sinks[i], &ctl, inputs_of(i)),
+    results[i] = labelled(detail::run_schedule_counted_elsewhere(
+                              m, data.get(), *runs[i].recorder, runs[i].schedule, configs[i].record_every, sinks[i],
+                              &ctl, inputs_of(i), watching.empty() ? std::vector<StepObserver*>{} : watching[i]),
                           m, scenario, configs[i]);
   });
   return results;

@@ -9,8 +9,8 @@
 #include <utility>
 #include <vector>
 
+#include "chapter_detail.hpp"
 #include "divergence.hpp"
-#include "simloop/batch.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/number_format.hpp"
 
@@ -143,7 +143,7 @@ SweepResult sweep(const Model& model, std::vector<double> timesteps, double dura
   std::vector<SweepReducer> reducers(configs.size());
   std::vector<RowSink*> sinks;
   for (SweepReducer& r : reducers) sinks.push_back(&r);
-  const std::vector<RunResult> runs = run_batch(model, configs, sinks, threads, control);
+  const std::vector<RunResult> runs = detail::run_chapter_batch(model, configs, sinks, threads, control);
 
   SweepResult result;
   result.duration = duration;

@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "bindings_common.hpp"
-#include "simloop/batch.hpp"
+#include "chapter_detail.hpp"
 #include "simloop/model.hpp"
 #include "simloop/number_format.hpp"
 #include "simloop/output.hpp"
@@ -160,8 +160,7 @@ void bind_chapter(py::module_& m) {
         simloop::DiscardRows discard;  // stateless: shared by every run
         const std::vector<simloop::RowSink*> sinks(keep_rows ? 0 : configs.size(), &discard);
         return long_call(std::move(progress), what, [&](simloop::RunControl* control) {
-          return keep_rows ? simloop::run_batch(model, configs, threads, control)
-                           : simloop::run_batch(model, configs, sinks, threads, control);
+          return simloop::detail::run_chapter_batch(model, configs, sinks, threads, control);
         });
       },
       "model"_a, "configs"_a, "threads"_a, "keep_rows"_a = true, "progress"_a = py::none());

@@ -81,16 +81,20 @@ class RowRecorder {
 // sensor its value(s); per recorded tendon `_length` and `_vel` (m and m/s,
 // or rad for a fixed tendon of hinges); `contacts` (the contacts of the row's
 // state); `ncon` (the chapter's: the contacts found when the step began, the
-// row before's state's).
+// row before's state's); with `energy`, the energy audit's columns last
+// (kEnergyColumns: the audit fills them, as the run goes).
+inline constexpr int kEnergyColumns = 7;
 class Recorder final : public RowRecorder {
  public:
-  Recorder(const mjModel* m, const ResolvedScenario& scenario, const Schedule& schedule);
+  Recorder(const mjModel* m, const ResolvedScenario& scenario, const Schedule& schedule, bool energy = false);
 
   [[nodiscard]] const std::vector<Column>& columns() const noexcept override { return columns_; }
   void before_step(double* row, std::int64_t step, const mjModel* m, const mjData* d, bool inputs,
                    int ncon) const noexcept override;
   void after_step(double* row, const mjModel* m, const mjData* d) const noexcept override;
   [[nodiscard]] bool reads_acceleration_stage() const noexcept override { return reads_acceleration_stage_; }
+  // The first of the energy audit's columns, or -1 without them.
+  [[nodiscard]] int energy_column() const noexcept { return energy_column_; }
 
  private:
   struct Source {
@@ -119,6 +123,7 @@ class Recorder final : public RowRecorder {
   std::vector<Source> before_, after_;
   CtrlRange ctrl_range_;
   bool reads_acceleration_stage_ = false;  // an acceleration-stage sensor is recorded
+  int energy_column_ = -1;
 };
 
 // The schedule's inputs as the loop writes them, step by step: at each step,

@@ -12,6 +12,8 @@
 #include "simloop/model.hpp"
 #include "simloop/rows.hpp"
 #include "simloop/run_record.hpp"
+#include "simloop/scenario.hpp"
+#include "simloop/scenario_run.hpp"
 #include "simloop/shove.hpp"
 
 namespace simloop {
@@ -39,7 +41,7 @@ struct RunConfig {
 void validate(const RunConfig& config);
 
 // The rows a run keeps in memory without a RowSink: what check_kept_rows
-// (rows.hpp) weighs before run() and run_batch() start (the config must be valid).
+// (rows.hpp) weighs before run() starts (the config must be valid).
 [[nodiscard]] KeptRows kept_rows(const RunConfig& config) noexcept;
 
 // metrics.json: the chapter's keys, floats already rounded to 6 decimals.
@@ -130,18 +132,6 @@ struct ChapterColumns {
 // The chapter's first `count` columns (ChapterColumns::kNames).
 [[nodiscard]] std::vector<Column> chapter_columns(int count);
 
-// The energy audit's totals over a whole run (RunConfig::audit_energy), J.
-struct EnergyTotals {
-  double energy_start = 0.0;              // kinetic + potential at t = 0
-  double energy_end = 0.0;                // ... at the final state
-  double work_actuator = 0.0;             // by the motor
-  double work_shove = 0.0;                // by the shove (xfrc_applied)
-  double work_passive = 0.0;              // by joint damping (and springs, if any)
-  double work_constraint = 0.0;           // by contacts and other constraints
-  double work_constraint_positive = 0.0;  // the steps where they added energy
-  double unexplained = 0.0;               // (energy_end - energy_start) - all the work
-};
-
 // The chapter's run: the record any run leaves (its name the chapter
 // scenario's, its columns ChapterColumns, its schedule the motor's 1.0 and
 // the shove's window), with the chapter's report on top.
@@ -150,11 +140,22 @@ struct RunResult : RunRecord {
   Metrics metrics;
   Metrics unrounded_metrics;  // the same, floats as computed (tables; metrics.json rounds)
   Shove shove;                // the shove drawn for this run (applied only if perturb)
-  EnergyTotals energy;        // zeros unless config.audit_energy
 };
 
-// Runs the chapter's loop on `model` (a copy of it with config.timestep when
-// that differs from the model's) in a fresh mjData.
+// The chapter is a scenario: Scenario::chapter() fitted to `model` (any
+// scene with the chapter's layout, chapter_layout): full throttle on
+// actuator 0, the shove on the body "box", and recorded, the box, actuator
+// 0's joint and the chapter's ncon.
+[[nodiscard]] Scenario chapter_scenario(const Model& model);
+
+// What one chapter run asks of that scenario (its seed, generator,
+// timestep, steps, shove or none, rows, energy audit).
+[[nodiscard]] ScenarioConfig scenario_config(const RunConfig& config);
+
+// Runs chapter_scenario(model) with scenario_config(config) as run_scenario
+// runs it, seen through the chapter's view: the chapter's columns in its
+// order (the ctrl written, the shove's force, zeros when there is none),
+// its metrics and its report. In a fresh mjData.
 [[nodiscard]] RunResult run(const Model& model, const RunConfig& config);
 
 // The same, reusing `workspace` (reset first), which must fit the model:

@@ -15,6 +15,19 @@
 
 namespace simloop {
 
+// The energy audit's totals over a whole run (ScenarioConfig::audit_energy,
+// RunConfig::audit_energy), J.
+struct EnergyTotals {
+  double energy_start = 0.0;              // kinetic + potential at t = 0
+  double energy_end = 0.0;                // ... at the final state
+  double work_actuator = 0.0;             // by the actuators
+  double work_shove = 0.0;                // by xfrc_applied: the shove, a scenario's disturbances
+  double work_passive = 0.0;              // by joint damping (and springs, if any)
+  double work_constraint = 0.0;           // by contacts and other constraints
+  double work_constraint_positive = 0.0;  // the steps where they added energy
+  double unexplained = 0.0;               // (energy_end - energy_start) - all the work
+};
+
 struct RunRecord {
   std::string name;  // the scenario's
   std::uint64_t seed = 0;
@@ -30,6 +43,7 @@ struct RunRecord {
   std::vector<Warning> warnings;    // MuJoCo's, then simloop's divergence
   double timestep = 0.0;            // the model's timestep during the run
   double sim_time = 0.0;            // mjData::time at the end
+  EnergyTotals energy;              // with the energy audit; zeros without
 };
 
 // recorded_bodies(record.columns).

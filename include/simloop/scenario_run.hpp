@@ -26,6 +26,11 @@ struct ScenarioConfig {
   std::optional<std::int64_t> steps;     // instead of the scenario's length
   bool perturb = true;                   // false: no disturbances (the baseline)
   std::int64_t record_every = 1;         // a row every K steps, and the final state
+  // Account for every joule: the energy audit's columns after the others
+  // (energy, work_actuator, work_shove, work_passive, work_constraint,
+  // work_constraint_positive, energy_unexplained; docs/cli.md) and its
+  // totals in RunRecord::energy.
+  bool audit_energy = false;
 };
 
 // The scene a scenario names, compiled: its MJCF file, or the chapter's
@@ -45,15 +50,6 @@ struct ScenarioConfig {
                                      Data* workspace = nullptr, RowSink* sink = nullptr, RunControl* control = nullptr,
                                      const RunInputs& inputs = {});
 
-// Runs `scenario` once per config over one scene, with `threads` workers (0:
-// one per core), each stepping its own Data; the scene is compiled once per
-// distinct timestep, before any worker starts, and shared read-only. Result
-// i is bitwise identical to run_scenario(scene, scenario, configs[i]),
-// whatever the thread count. Every run is checked before any starts
-// (InvalidArgument naming its index: a bad timestep, an unknown name, steps
-// or record_every out of range, or kept rows that together would not fit in
-// memory). Failures, fewer threads, stopping and watching through `control`:
-// as for run_batch (batch.hpp).
 // Everything run_scenario() checks before its first step (the names, the
 // length, the recorded columns), without running: throws InvalidArgument as
 // run_scenario() would. The commands call it before touching --out.
@@ -63,7 +59,19 @@ void check_scenario(const Model& scene, const Scenario& scenario, const Scenario
 // config's, else the scenario's, else the scene's own.
 [[nodiscard]] double run_timestep(const Model& scene, const Scenario& scenario, const ScenarioConfig& config);
 
-//
+// Runs `scenario` once per config over one scene, with `threads` workers (0:
+// one per core), each stepping its own Data; the scene is compiled once per
+// distinct timestep (and energy audit), before any worker starts, and
+// shared read-only. Result i is bitwise identical to run_scenario(scene,
+// scenario, configs[i]), whatever the thread count. Every run is checked
+// before any starts (InvalidArgument naming its index: a bad timestep, an
+// unknown name, steps or record_every out of range, or kept rows that
+// together would not fit in memory). If runs fail, the failure of the lowest
+// index is rethrown after all workers have stopped, no new run starts once
+// one has failed, and the runs still going stop at their next chunk of
+// steps. If threads cannot be created, fewer workers do the work (the
+// results are the same). With a `control`, the batch can be stopped
+// (Interrupted) and watched; its poll runs on the calling thread.
 // inputs: empty, or one RunInputs per config (run i follows inputs[i]; runs
 // may share the same arrays, and the same policy, whose decide() is then
 // called from every worker thread and must allow that; each run's decisions

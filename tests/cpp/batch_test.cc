@@ -13,6 +13,7 @@
 #include <thread>
 #include <vector>
 
+#include "chapter_detail.hpp"
 #include "simloop/chapter_scene.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/output.hpp"
@@ -51,7 +52,7 @@ std::vector<simloop::RunConfig> mixed_configs() {
 TEST(Batch, EqualsSequentialRunsWhateverTheThreadCount) {
   const auto configs = mixed_configs();
   for (int threads : {1, 2, 3}) {
-    const auto batch = simloop::run_batch(scene(), configs, threads);
+    const auto batch = simloop::detail::run_chapter_batch(scene(), configs, {}, threads);
     ASSERT_EQ(batch.size(), configs.size());
     for (size_t i = 0; i < configs.size(); ++i) {
       const auto single = simloop::run(scene(), configs[i]);
@@ -66,13 +67,13 @@ TEST(Batch, RefusesBadConfigsBeforeRunningAny) {
   auto configs = mixed_configs();
   configs[4].timestep = -1.0;
   try {
-    (void)simloop::run_batch(scene(), configs, 2);
+    (void)simloop::detail::run_chapter_batch(scene(), configs, {}, 2);
     FAIL() << "accepted";
   } catch (const simloop::InvalidArgument& e) {
     EXPECT_STREQ(e.what(), "run 4: timestep must be a positive, finite number of seconds, got -1.0");
   }
-  EXPECT_THROW((void)simloop::run_batch(scene(), mixed_configs(), -1), simloop::InvalidArgument);
-  EXPECT_TRUE(simloop::run_batch(scene(), {}, 2).empty());
+  EXPECT_THROW((void)simloop::detail::run_chapter_batch(scene(), mixed_configs(), {}, -1), simloop::InvalidArgument);
+  EXPECT_TRUE(simloop::detail::run_chapter_batch(scene(), {}, {}, 2).empty());
   EXPECT_EQ(simloop::batch_workers(2, 1), 1);
   EXPECT_EQ(simloop::batch_workers(8, 100), 8);
   EXPECT_GE(simloop::batch_workers(0, 100), 1);

@@ -9,6 +9,7 @@
 #include <thread>
 #include <vector>
 
+#include "chapter_detail.hpp"
 #include "simloop/batch.hpp"
 #include "simloop/call_gate.hpp"
 #include "simloop/errors.hpp"
@@ -117,7 +118,7 @@ TEST(RunControl, StopsABatchAndASweepOnEveryWorker) {
   simloop::RunControl control([&](std::int64_t, std::int64_t) {
     if (++polls == 2) control.request_stop();
   });
-  EXPECT_THROW((void)simloop::run_batch(scene(), configs, 2, &control), simloop::Interrupted);
+  EXPECT_THROW((void)simloop::detail::run_chapter_batch(scene(), configs, {}, 2, &control), simloop::Interrupted);
   EXPECT_LT(control.steps_done(), 1'000'000);
 
   int sweep_polls = 0;
@@ -131,7 +132,7 @@ TEST(RunControl, CountsProgressOverABatch) {
   std::vector<simloop::RunConfig> configs(5);
   for (auto& c : configs) c.steps = 700;
   simloop::RunControl control;
-  const auto results = simloop::run_batch(scene(), configs, 2, &control);
+  const auto results = simloop::detail::run_chapter_batch(scene(), configs, {}, 2, &control);
   EXPECT_EQ(results.size(), 5u);
   EXPECT_EQ(control.steps_total(), 3500);
   EXPECT_EQ(control.steps_done(), 3500);
@@ -162,7 +163,9 @@ TEST(RunControl, WhatThePollThrowsReachesTheCallerOfRun) {
 
   std::vector<simloop::RunConfig> configs(4, config);
   simloop::RunControl batch_control([&](std::int64_t, std::int64_t) { throw FromThePoll("progress failed"); });
-  EXPECT_THROW(batch_control.run([&](simloop::RunControl* c) { return simloop::run_batch(scene(), configs, 2, c); }),
+  EXPECT_THROW(batch_control.run([&](simloop::RunControl* c) {
+    return simloop::detail::run_chapter_batch(scene(), configs, {}, 2, c);
+  }),
                FromThePoll);
   // Work that fails on its own keeps its own exception.
   simloop::RunControl quiet;

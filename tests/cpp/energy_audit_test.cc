@@ -11,6 +11,7 @@
 #include "expected.hpp"
 #include "simloop/output.hpp"
 #include "simloop/run.hpp"
+#include "simloop/scenario_run.hpp"
 
 namespace {
 
@@ -83,6 +84,47 @@ TEST(EnergyAudit, SeparatesTheStableRunFromTheUnstableOne) {
   EXPECT_LT(std::fabs(fine.energy.unexplained), 0.01);
   EXPECT_GT(std::fabs(coarse.energy.unexplained), 5 * std::fabs(fine.energy.unexplained));
   EXPECT_NE(simloop::summary_text(coarse).find("energy audit: change "), std::string::npos);
+}
+
+// The audit is the scenario's: a scenario run with it has the same columns,
+// bit for bit, as the chapter's, and the same totals, and a scenario with
+// two pushed bodies counts the work of both.
+TEST(EnergyAudit, AScenarioRunAuditsAsTheChapterDoes) {
+  simloop::RunConfig chapter;
+  chapter.seed = 3;
+  chapter.audit_energy = true;
+  const auto expected = simloop::run(scene(), chapter);
+  const simloop::RunRecord got =
+      simloop::run_scenario(scene(), simloop::Scenario::chapter(), simloop::scenario_config(chapter));
+  const auto column = [&](const simloop::RunRecord& r, const std::string& name) {
+    for (std::size_t c = 0; c < r.columns.size(); ++c) {
+      if (r.columns[c].name == name) return static_cast<int>(c);
+    }
+    return -1;
+  };
+  for (int c = ChapterColumns::kEnergy; c < ChapterColumns::kNumColumns; ++c) {
+    const int at = column(got, std::string(ChapterColumns::kNames[c]));
+    ASSERT_GE(at, 0) << ChapterColumns::kNames[c];
+    for (std::int64_t row = 0; row < got.trajectory.rows(); ++row) {
+      const double a = got.trajectory.at(row, at), b = expected.trajectory.at(row, c);
+      ASSERT_EQ(std::memcmp(&a, &b, sizeof a), 0) << ChapterColumns::kNames[c] << " row " << row;
+    }
+  }
+  EXPECT_EQ(std::memcmp(&got.energy, &expected.energy, sizeof got.energy), 0);
+  EXPECT_GT(got.energy.work_shove, 0.0);
+
+  simloop::Scenario both = simloop::Scenario::chapter();
+  both.disturbances.push_back(both.disturbances.front());
+  both.disturbances.back().body = "pusher";
+  both.disturbances.back().force = {1.0, 0.0, 0.0};  // along its slide: y would do no work
+  const simloop::RunRecord two = simloop::run_scenario(scene(), both, simloop::scenario_config(chapter));
+  EXPECT_NE(two.energy.work_shove, got.energy.work_shove);
+  EXPECT_LT(std::fabs(two.energy.unexplained), 0.05);  // the pusher's push is accounted for too
+  simloop::ScenarioConfig plain = simloop::scenario_config(chapter);
+  plain.audit_energy = false;
+  const simloop::RunRecord unaudited = simloop::run_scenario(scene(), simloop::Scenario::chapter(), plain);
+  EXPECT_EQ(column(unaudited, "energy"), -1);
+  EXPECT_EQ(unaudited.energy.energy_start, 0.0);
 }
 
 }  // namespace

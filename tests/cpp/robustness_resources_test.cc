@@ -15,6 +15,7 @@
 #include <thread>
 #include <vector>
 
+#include "chapter_detail.hpp"
 #include "expected.hpp"
 #include "mujoco_guard.hpp"
 #include "robustness_util.hpp"
@@ -132,10 +133,10 @@ struct ThreadLimit {
 
 TEST(Robustness, ABatchWithoutThreadsToBeHadStillFinishesWithTheSameResults) {
   const auto configs = four_runs();
-  const auto serial = simloop::run_batch(scene(), configs, 1);
+  const auto serial = simloop::detail::run_chapter_batch(scene(), configs, {}, 1);
   for (const int can_start : {0, 1}) {
     ThreadLimit limit(can_start);
-    const auto starved = simloop::run_batch(scene(), configs, 4);
+    const auto starved = simloop::detail::run_chapter_batch(scene(), configs, {}, 4);
     ASSERT_EQ(starved.size(), serial.size());
     for (std::size_t i = 0; i < serial.size(); ++i) {
       const Trajectory& a = serial[i].trajectory;
@@ -159,7 +160,7 @@ TEST(Robustness, UnderAProcessLimitABatchAndASweepStillFinishIdentically) {
   // exempt), std::thread cannot start, and the batch and the sweep must fall
   // back to the calling thread with the same results.
   const auto configs = four_runs();
-  const auto serial = simloop::run_batch(scene(), configs, 1);
+  const auto serial = simloop::detail::run_chapter_batch(scene(), configs, {}, 1);
   const std::vector<double> dts = {0.002, 0.05};
   const std::string sweep_expected = simloop::sweep_csv(simloop::sweep(scene(), dts, 0.5, 1));
   const pid_t pid = fork();
@@ -177,7 +178,7 @@ TEST(Robustness, UnderAProcessLimitABatchAndASweepStillFinishIdentically) {
     }
     if (started) _exit(4);
     try {
-      const auto starved = simloop::run_batch(scene(), configs, 4);
+      const auto starved = simloop::detail::run_chapter_batch(scene(), configs, {}, 4);
       for (std::size_t i = 0; i < serial.size(); ++i) {
         const Trajectory& a = serial[i].trajectory;
         const Trajectory& b = starved[i].trajectory;
@@ -241,13 +242,13 @@ TEST(Robustness, BatchSinksGetEveryRowAndTheResultsKeepNone) {
   std::vector<Count> counts(configs.size());
   std::vector<simloop::RowSink*> sinks;
   for (Count& c : counts) sinks.push_back(&c);
-  const auto results = simloop::run_batch(scene(), configs, sinks, 2);
+  const auto results = simloop::detail::run_chapter_batch(scene(), configs, sinks, 2);
   for (std::size_t i = 0; i < configs.size(); ++i) {
     EXPECT_EQ(results[i].trajectory.rows(), 0);
     EXPECT_EQ(counts[i].rows, 301);
     EXPECT_EQ(counts[i].announced, 301);
   }
-  EXPECT_THROW((void)simloop::run_batch(scene(), configs, {sinks[0]}, 2), simloop::InvalidArgument);
+  EXPECT_THROW((void)simloop::detail::run_chapter_batch(scene(), configs, {sinks[0]}, 2), simloop::InvalidArgument);
 }
 
 }  // namespace

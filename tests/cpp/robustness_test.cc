@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "chapter_detail.hpp"
 #include "model_detail.hpp"
 #include "mujoco_guard.hpp"
 #include "robustness_util.hpp"
@@ -109,7 +110,7 @@ TEST(Robustness, TheBudgetFollowsTheProcessLimit) {
 
 TEST(Robustness, BatchesRefuseTheirSumUpFrontButNotWhenRowsGoToSinks) {
   const std::vector<simloop::RunConfig> huge(3, config_with(4'000'000'000'000));
-  const std::string message = test::error_of([&] { (void)simloop::run_batch(scene(), huge, 1); });
+  const std::string message = test::error_of([&] { (void)simloop::detail::run_chapter_batch(scene(), huge, {}, 1); });
   EXPECT_NE(message.find("of 3 runs"), std::string::npos) << message;
   // With sinks nothing is kept: the batch starts (and stops when asked).
   struct Discard final : simloop::RowSink {
@@ -118,7 +119,7 @@ TEST(Robustness, BatchesRefuseTheirSumUpFrontButNotWhenRowsGoToSinks) {
   } discard;
   simloop::RunControl control;
   control.request_stop();
-  EXPECT_THROW((void)simloop::run_batch(scene(), huge, {&discard, &discard, &discard}, 1, &control),
+  EXPECT_THROW((void)simloop::detail::run_chapter_batch(scene(), huge, {&discard, &discard, &discard}, 1, &control),
                simloop::Interrupted);
 }
 

@@ -37,7 +37,7 @@ def client():
     if NO_WORKER_PROCESSES:
         pytest.skip(NO_WORKER_PROCESSES)
 
-    with LocalCluster(n_workers=2, processes=True, threads_per_worker=1, dashboard_address=None) as cluster:
+    with LocalCluster(n_workers=2, processes=True, threads_per_worker=1, dashboard_address=":0") as cluster:
         with Client(cluster) as c:
             yield c
 

@@ -42,6 +42,31 @@ def test_both_commands_and_python_write_the_same_bytes_twice(tmp_path, name):
     assert result.trajectory.shape == (result.rows, len(header))
 
 
+ENERGY_COLUMNS = ["energy", "work_actuator", "work_shove", "work_passive", "work_constraint"]
+ENERGY_COLUMNS += ["work_constraint_positive", "energy_unexplained"]
+
+
+def test_a_scenarios_energy_audit_adds_its_columns_and_changes_nothing_else(tmp_path):
+    flags = ["--scenario", str(SCENES / "pusht.toml"), "--steps", "400", "--no-rerun"]
+    plain = run_command([*flags, "--out", "plain"], tmp_path, python=False)
+    assert plain.returncode == 0, plain.stderr
+    tables = {}
+    for python in (False, True):
+        proc = run_command([*flags, "--energy-audit", "--out", f"audit{python}"], tmp_path, python=python)
+        assert proc.returncode == 0, proc.stderr
+        (line,) = [x for x in proc.stdout.splitlines() if x.startswith("energy audit: change ")]
+        assert "work by actuators " in line and "disturbances " in line and "unexplained " in line
+        tables[python] = outputs(tmp_path / f"audit{python}")
+    assert tables[False] == tables[True]
+    assert tables[False][0] == outputs(tmp_path / "plain")[0]  # the same metrics.json
+    audited = [row.split(",") for row in tables[False][1].decode().splitlines()]
+    unaudited = [row.split(",") for row in outputs(tmp_path / "plain")[1].decode().splitlines()]
+    width = len(unaudited[0])
+    assert audited[0] == unaudited[0] + ENERGY_COLUMNS
+    assert [row[:width] for row in audited] == unaudited  # the audit changes no physics
+    assert float(audited[1][width]) > 0 and float(audited[-1][width + 1]) > 0  # energy, the actuators' work
+
+
 def test_the_python_result_holds_what_the_scenario_asked():
     result = simloop.run_scenario(simloop.Scenario.from_file(SCENES / "pusht.toml"), seed=3)
     assert result.timestep == 0.002 and result.steps == 1000 and result.rows == 1001
@@ -203,10 +228,6 @@ def test_quick_flags_on_any_scene(tmp_path):
         (
             ["--ctrl", "push_motor=fast"],
             "--ctrl must be ACTUATOR=VALUE (an actuator's name or index, a finite number), got 'push_motor=fast'",
-        ),
-        (
-            ["--scenario", str(SCENES / "pusht.toml"), "--energy-audit"],
-            "--energy-audit accounts for the chapter's box and pusher only (not with --scenario, --body or --ctrl)",
         ),
     ]:
         for python in (False, True):
