@@ -309,13 +309,14 @@ def _drawings(command: Any, args: List[str]) -> "Tuple[Optional[_Drawings], str]
         if opts.rerun:
             rrd = Path(opts.out) / "sim_loop.rrd"
             try:
-                from .chapter_recording import ChapterRecording
-                from .recording import Recording, scenario_recording_id
+                from .recording import Recording
+                from .recording_views import chapter_view, scenario_recording_id, scenario_view
 
                 if scenario is None:
-                    drawings.append(ChapterRecording(opts.run, opts.model_path or None, model, rrd))
+                    view = chapter_view(opts.run, opts.model_path or None, model)
                 else:
-                    drawings.append(Recording(model, rrd, scenario_recording_id(_run_key(args, opts))))
+                    view = scenario_view(scenario_recording_id(_run_key(args, opts)))
+                drawings.append(Recording(model, rrd, view))
             except ImportError as e:
                 raise _HostFailure(
                     EXIT_RUN_FAILED, f"{e} (nothing was written; --no-rerun runs without the recording)"

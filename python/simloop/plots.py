@@ -81,12 +81,14 @@ def _shove_window(cols):
 
 def describe_run(cols, name: str = "") -> str:
     """'name: 2000 steps of 0.002 s, shove +7.0 N' from a trajectory's columns."""
-    steps = int(cols["step"][-1])
-    dt = _timestep(cols)
     window = _shove_window(cols)
-    shove = f"shove {window[2]:+.1f} N in y" if window else "no shove"
-    text = f"{steps} steps of {dt:.4g} s, {shove}"
+    text = _steps_of(cols) + (f", shove {window[2]:+.1f} N in y" if window else ", no shove")
     return f"{name}: {text}" if name else text
+
+
+def _steps_of(cols) -> str:
+    """'2000 steps of 0.002 s'."""
+    return f"{int(cols['step'][-1])} steps of {_timestep(cols):.4g} s"
 
 
 def _timestep(cols) -> float:
@@ -140,7 +142,6 @@ def trajectory_figure(csv: PathLike, compare: Iterable[PathLike] = (), x: str = 
     """
     import numpy as np
     from matplotlib.lines import Line2D
-    from matplotlib.patches import Patch
 
     paths = [Path(csv), *[Path(c) for c in compare]]
     scenarios = [_scenario_metrics(p) for p in paths]
@@ -152,10 +153,8 @@ def trajectory_figure(csv: PathLike, compare: Iterable[PathLike] = (), x: str = 
     runs = [(_read_csv(p), p.parent.name) for p in paths]
     comparing = len(runs) > 1
     x, timesteps = _x_axis(runs, x)
-    plt = _pyplot()
-    fig, (ax_x, ax_y, ax_z, ax_c) = plt.subplots(
-        4, 1, sharex=True, figsize=(9, 9), gridspec_kw={"height_ratios": [1.1, 1, 1.2, 0.7]}
-    )
+    fig, axes = _figure([1.1, 1, 1.2, 0.7], (9, 9))
+    ax_x, ax_y, ax_z, ax_c = axes
     legend: list = []  # one legend for the figure, above the axes: never on the data
     z_low, z_high = Z_RANGE
     for k, (cols, name) in enumerate(runs):
@@ -180,14 +179,8 @@ def trajectory_figure(csv: PathLike, compare: Iterable[PathLike] = (), x: str = 
         window = _shove_window(cols)
         if window:
             first, last, force = window
-            for ax in (ax_x, ax_y, ax_z, ax_c):
-                ax.axvspan(t[first], t[last], color=shade, alpha=0.15)
-            legend.append(
-                (
-                    Patch(color=shade, alpha=0.3),
-                    (f"{name}: " if comparing else "") + f"shove {force:+.1f} N in y, steps {first} to {last - 1}",
-                )
-            )
+            label = (f"{name}: " if comparing else "") + f"shove {force:+.1f} N in y"
+            legend.append(_shade(axes, t, first, last, shade, label))
         z = cols["box_z"]
         finite = z[np.isfinite(z)]
         if finite.size:
@@ -217,13 +210,7 @@ def trajectory_figure(csv: PathLike, compare: Iterable[PathLike] = (), x: str = 
     ax_x.set_ylabel("x (m)")
     ax_y.set_ylabel("box y (m)\nsideways")
     ax_z.set_ylabel("box z (m)\nheight of its centre")
-    ax_c.set_ylabel("contacts")
-    from matplotlib.ticker import MaxNLocator
-
-    ax_c.yaxis.set_major_locator(MaxNLocator(nbins=4, integer=True))  # a count: no 7.5 contacts
-    ax_c.set_xlabel(_x_label(x, timesteps))
-    for ax in (ax_x, ax_y, ax_z, ax_c):
-        ax.grid(alpha=0.3)
+    _label_axes(axes, ax_c, x, timesteps)
     title = "ch0.1-sim-loop: " + (" against ".join(name for _, name in runs) if comparing else describe_run(runs[0][0]))
     return _titled(fig, title, legend, anchor=0.955, row_height=0.022)
 
@@ -239,8 +226,6 @@ def scenario_trajectory_figure(runs, x: str = "auto"):
     """
     import numpy as np
     from matplotlib.lines import Line2D
-    from matplotlib.patches import Patch
-    from matplotlib.ticker import MaxNLocator
 
     x, timesteps = _x_axis(runs, x)
     bodies: list = []  # in the first run's column order; a body any run recorded
@@ -259,11 +244,8 @@ def scenario_trajectory_figure(runs, x: str = "auto"):
     # A scenario's own count (its row's state's), or the chapter's ncon.
     counted = [next((c for c in ("contacts", "ncon") if c in cols), None) for cols, _, _ in runs]
     contacts = any(counted)
-    plt = _pyplot()
     ratios = [1, 1, 1, 1] + ([0.6] if contacts else [])
-    fig, axes = plt.subplots(
-        len(ratios), 1, sharex=True, figsize=(10, 2.0 * sum(ratios) + 1.6), gridspec_kw={"height_ratios": ratios}
-    )
+    fig, axes = _figure(ratios, (10, 2.0 * sum(ratios) + 1.6))
     ax_pos, ax_v = axes[:3], axes[3]
     legend: list = []
     for k, (cols, name, metrics) in enumerate(runs):
@@ -285,35 +267,49 @@ def scenario_trajectory_figure(runs, x: str = "auto"):
             first, steps = int(d["start_step"]), int(d["steps"])
             if steps <= 0 or first >= len(t):
                 continue
-            last = min(first + steps, len(t) - 1)
-            shade = colour.get(d["body"], CONTACT_COLOR)
-            for ax in axes:
-                ax.axvspan(t[first], t[last], color=shade, alpha=0.15)
             force = ", ".join(f"{v:+.2f}" for v in d["force"])
             torque = ", ".join(f"{v:+.2f}" for v in d["torque"])
             torque = f", [{torque}] N m" if any(d["torque"]) else ""
-            legend.append(
-                (
-                    Patch(color=shade, alpha=0.3),
-                    (f"{name}: " if len(runs) > 1 else "")
-                    + f"disturbance on {d['body']}: [{force}] N{torque}, steps {first} to {last - 1}",
-                )
-            )
+            label = (f"{name}: " if len(runs) > 1 else "") + f"disturbance on {d['body']}: [{force}] N{torque}"
+            shade = colour.get(d["body"], CONTACT_COLOR)
+            legend.append(_shade(axes, t, first, min(first + steps, len(t) - 1), shade, label))
     legend = [(Line2D([], [], color=colour[b], lw=2), b) for b in bodies] + legend
     for ax, axis in zip(ax_pos, "xyz"):
         ax.set_ylabel(f"{axis} (m)")
     ax_v.set_ylabel("speed (m/s)")
-    if contacts:
-        axes[4].set_ylabel("contacts")
-        axes[4].yaxis.set_major_locator(MaxNLocator(nbins=4, integer=True))  # a count: no 7.5 contacts
-    axes[-1].set_xlabel(_x_label(x, timesteps))
-    for ax in axes:
-        ax.grid(alpha=0.3)
+    _label_axes(axes, axes[4] if contacts else None, x, timesteps)
     cols, name, metrics = runs[0]
     title = f"scenario {metrics.get('scenario', name)}: " + (
         " against ".join(n for _, n, _ in runs) if len(runs) > 1 else _describe_scenario(cols, metrics)
     )
     return _titled(fig, title, legend, anchor=0.96, row_height=0.018)
+
+
+def _figure(ratios: list, size: Tuple[float, float]):
+    """A figure of len(ratios) panels, stacked on one x axis, of these heights."""
+    return _pyplot().subplots(len(ratios), 1, sharex=True, figsize=size, gridspec_kw={"height_ratios": ratios})
+
+
+def _shade(axes, t, first: int, last: int, colour, label: str) -> tuple:
+    """Shades steps first to last on every panel (a shove's, a disturbance's
+    window) and gives its legend entry: the label with those steps."""
+    from matplotlib.patches import Patch
+
+    for ax in axes:
+        ax.axvspan(t[first], t[last], color=colour, alpha=0.15)
+    return Patch(color=colour, alpha=0.3), f"{label}, steps {first} to {last - 1}"
+
+
+def _label_axes(axes, contacts, x: str, timesteps: list) -> None:
+    """The contacts panel's label and whole-number ticks, the x axis's label, every panel's grid."""
+    from matplotlib.ticker import MaxNLocator
+
+    if contacts is not None:
+        contacts.set_ylabel("contacts")
+        contacts.yaxis.set_major_locator(MaxNLocator(nbins=4, integer=True))  # a count: no 7.5 contacts
+    axes[-1].set_xlabel(_x_label(x, timesteps))
+    for ax in axes:
+        ax.grid(alpha=0.3)
 
 
 def _many_colours(count: int) -> list:
@@ -327,7 +323,7 @@ def _many_colours(count: int) -> list:
 
 def _describe_scenario(cols, metrics) -> str:
     """'1000 steps of 0.002 s, seed 0' (no disturbance: 'no disturbance')."""
-    text = f"{int(cols['step'][-1])} steps of {_timestep(cols):.4g} s, seed {metrics.get('seed', '?')}"
+    text = f"{_steps_of(cols)}, seed {metrics.get('seed', '?')}"
     return text if metrics.get("disturbances") else text + ", no disturbance"
 
 

@@ -1,6 +1,7 @@
 """A run as a rerun recording (.rrd): one recorder for any scene, drawn from
-its own geometry; the chapter's run is one scene on it, with what the chapter
-says to look for added on top.
+its own geometry, and what a kind of run shows beyond it given as a view
+(recording_views: a scenario's, and the chapter's with what it says to look
+for); record() writes a chapter run held in memory as the command does.
 
 Layout (rerun-sdk 0.41), every recorded row (every step by default, the final
 state included) on two timelines, `sim_time` (seconds, as a duration; the
@@ -30,13 +31,14 @@ every moving body's pose (its frame in the world, read where the recorded
 bodies' poses are), which __main__._draw hands the recording once the run is
 done.
 
-The chapter's run adds its own on top (chapter_recording.ChapterRecording:
-its poses from its trajectory, the shove arrow, its series and panels).
+The chapter's run is drawn by the same recorder through its view
+(recording_views.chapter_view: its paths, its poses from its trajectory, the
+shove arrow, its series and panels, its recording id).
 
 The recording id is derived from what decides the run (the chapter's: seed,
 steps, timestep, shove, generator, record_every, energy audit and the model;
 a scenario's: the command line and the bytes of its scenario and scene
-files) and from the MuJoCo it steps on (mujoco_build: version and build), so
+files) and from the MuJoCo it steps on (recording_views.mujoco_build), so
 the same run on one build always gets the same id and two different runs, or
 the same run on the two builds, open as two recordings instead of merging
 into one. rerun does not let us make
@@ -50,7 +52,8 @@ Rows come in blocks and are sent as columns (rerun's send_columns, one call
 per entity) every BLOCK_ROWS rows, each block written before the next is
 gathered, so memory stays bounded however long the run; the planes, the
 blueprint (with the z axis's range) and the recording's name are logged at
-its end. rerun is imported only here, only when recording; its file sink
+its end. rerun is imported only here (and in _rerun_parts, the pieces it
+logs), only when recording; its file sink
 writes into a pipe whose bytes simloop writes to the file and checks
 (RrdFile), so no viewer is spawned, no connection is made, and a full disk is
 an error, not a hang or a truncated file.
@@ -59,169 +62,54 @@ an error, not a hang or a truncated file.
 from __future__ import annotations
 
 import os
-import uuid
 from pathlib import Path
-from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, List, Mapping, Sequence, Tuple, Union
 
 from . import _core
-from ._build import MUJOCO_BUILD
+from ._checks import ModelLike, load_model
 from ._command import signals_wait
+from ._rerun_parts import QUANTITIES, _eye, _layout, _plane_slab, _pose, _rgba, _rotate_into_body, _shape
 from ._rrd_file import RrdFile
+from .recording_views import Panel, View, chapter_view
 
-# rerun accepts these application ids as they are (no "/" or ".").
-SCENARIO_APPLICATION_ID = "simloop_scenario"
 # Rows gathered before they go to the file as columns: a few hundred kB of
 # numbers for a scene of tens of columns.
 BLOCK_ROWS = 4096
 POSE = ("_x", "_y", "_z", "_qw", "_qx", "_qy", "_qz")  # after a scenario's columns, per moving body
-PLANE_THICKNESS = 0.01
-PLANE_MARGIN = 0.5  # how far a plane reaches beyond where the bodies start
-
-
-def mujoco_build() -> str:
-    """The MuJoCo a run steps on, in its recording id: the same run on another
-    MuJoCo (2.2.2 and the PyPI build's 4.0.0) moves otherwise, so it is
-    another recording."""
-    return f"{_core.MUJOCO_VERSION} ({MUJOCO_BUILD})"
-
-
-def scenario_recording_id(run_key: str) -> str:
-    """A scenario run's recording id, from what decides the run (the command's
-    _run_key) and the MuJoCo it steps on."""
-    return str(uuid.uuid5(uuid.NAMESPACE_URL, "simloop-scenario:" + mujoco_build() + "\0" + run_key))
-
-
-def _rotate_into_body(quat_wxyz, vectors):
-    """Rotates world vectors into each body's frame (by the conjugate quaternion)."""
-    import numpy as np
-
-    w = quat_wxyz[:, :1]
-    u = -quat_wxyz[:, 1:]  # conjugate: the inverse rotation for a unit quaternion
-    t = 2.0 * np.cross(u, vectors)
-    return vectors + w * t + np.cross(u, t)
-
-
-def _rgba(colour) -> list:
-    return [int(round(255 * max(0.0, min(1.0, c)))) for c in colour]
-
-
-def _shape(rr, geom: Mapping[str, Any]):
-    """The rerun archetype that draws `geom` in its own frame (a plane: see _plane_slab)."""
-    kind, half, colour = geom["kind"], geom["half_size"], [_rgba(geom["rgba"])]
-    if kind == "box":
-        return rr.Boxes3D(half_sizes=[half], colors=colour, fill_mode="solid")
-    if kind == "mesh":
-        return rr.Boxes3D(half_sizes=[half], centers=[geom["mesh_center"]], colors=colour, fill_mode="solid")
-    if kind in ("sphere", "ellipsoid"):
-        return rr.Ellipsoids3D(half_sizes=[half], colors=colour, fill_mode="solid")
-    if kind == "capsule":  # rerun's capsule runs from its translation along +z
-        return rr.Capsules3D(lengths=[2 * half[2]], radii=[half[0]], translations=[[0, 0, -half[2]]], colors=colour)
-    if kind == "cylinder":
-        return rr.Cylinders3D(lengths=[2 * half[2]], radii=[half[0]], colors=colour, fill_mode="solid")
-    return None  # heightfields and the like: not drawn
-
-
-def _pose(rr, geom: Mapping[str, Any]):
-    w, x, y, z = geom["quat"]
-    return rr.Transform3D(translation=geom["pos"], quaternion=[x, y, z, w])
-
-
-def _plane_slab(geom: Mapping[str, Any], low: Any, high: Any) -> Tuple[list, list]:
-    """(centre, half sizes), in the plane's frame, of a slab whose top is the
-    plane: the plane's own size, widened to reach PLANE_MARGIN beyond the
-    world box [low, high] where the bodies start (None: nowhere finite)."""
-    import numpy as np
-
-    hi = np.asarray(geom["half_size"][:2], dtype=float)
-    lo = -hi
-    if low is not None:
-        corners = np.array([[x, y, z] for x in (low[0], high[0]) for y in (low[1], high[1]) for z in (low[2], high[2])])
-        local = _rotate_into_body(np.tile(geom["quat"], (len(corners), 1)), corners - geom["pos"])[:, :2]
-        lo = np.minimum(lo, local.min(axis=0) - PLANE_MARGIN)
-        hi = np.maximum(hi, local.max(axis=0) + PLANE_MARGIN)
-    return [*((lo + hi) / 2), -PLANE_THICKNESS / 2], [*((hi - lo) / 2), PLANE_THICKNESS / 2]
-
-
-def _layout(plots: Any, eye: Any = None) -> Any:
-    """The blueprint: the 3D view on the left (its camera `eye`), `plots` on
-    the right, on the sim_time timeline."""
-    import rerun.blueprint as rrb
-
-    return rrb.Blueprint(
-        rrb.Horizontal(
-            rrb.Spatial3DView(name="the scene", origin="/world", eye_controls=eye), plots, column_shares=[3, 2]
-        ),
-        rrb.TimePanel(timeline="sim_time"),
-        collapse_panels=False,
-    )
-
-
-def _eye(low: Any, high: Any, tracking: Optional[str] = None) -> Any:
-    """A camera on the region [low, high] where the moving bodies start, from
-    the front left and above, far enough to see all of it (at least a metre
-    across); following `tracking`'s entity if given."""
-    import numpy as np
-    import rerun.blueprint as rrb
-
-    if low is None:
-        return None
-    centre = (np.asarray(low) + np.asarray(high)) / 2
-    span = max(1.0, float(np.max(np.asarray(high) - np.asarray(low))))
-    position = centre + span * np.array([-0.6, -1.2, 0.7])
-    return rrb.EyeControls3D(look_target=centre.tolist(), position=position.tolist(), tracking_entity=tracking)
-
-
-# A scenario's panels: each column's quantity, by its name and unit, in this order.
-QUANTITIES = [
-    ("positions (m)", lambda name, unit: unit == "m" and name[-3:] not in ("_qw", "_qx", "_qy", "_qz")),
-    ("orientations (quaternion w x y z)", lambda name, unit: name[-3:] in ("_qw", "_qx", "_qy", "_qz")),
-    ("velocities (m/s, rad/s)", lambda name, unit: unit.startswith(("m/s", "rad/s"))),
-    ("forces (N, N m)", lambda name, unit: unit.startswith("N")),
-    ("controls", lambda name, unit: name.endswith("_ctrl")),
-    ("contacts", lambda name, unit: name in ("contacts", "ncon")),
-    ("the rest", lambda name, unit: True),
-]
 
 
 class Recording:
-    """The .rrd of one run of `model`'s scene, written as the run goes: the
-    run calls columns(names) once, rows(block) per block of rows and
+    """The .rrd of one run of `model`'s scene, drawn as `view` says
+    (recording_views: a scenario's, the chapter's), written as the run goes:
+    the run calls columns(names) once, rows(block) per block of rows and
     finish(result) once it is done, before it puts its outputs in place
-    together with `files`. close() abandons the file if it was not finished. `path` is
-    where the recording goes; it is written beside it and checked first
-    (RrdFile). `bodies`: the moving bodies the rows pose (None: all of them,
-    as the command's run gives them).
+    together with `files`. close() abandons the file if it was not finished.
+    `path` is where the recording goes; it is written beside it and checked
+    first (RrdFile)."""
 
-    The hooks below (_entity, _poses, _style, _send_more, _blueprint, _name)
-    are where a kind of run says what its rows hold and where it draws them;
-    chapter_recording.ChapterRecording is the one other."""
-
-    def __init__(
-        self,
-        model: _core.Model,
-        path: Union[str, "os.PathLike[str]"],
-        recording_id: str,
-        application_id: str = SCENARIO_APPLICATION_ID,
-        bodies: Optional[Sequence[str]] = None,
-    ) -> None:
+    def __init__(self, model: _core.Model, path: Union[str, "os.PathLike[str]"], view: View) -> None:
         import rerun as rr
 
         self._rr = rr
+        self.view = view
         self.moving_bodies: List[str] = list(_core.moving_bodies(model))
         self._nq = model.nq  # a scenario's drawn rows end with qpos (for pictures)
         self._names: List[str] = []  # the trajectory's columns
-        self._series: List[str] = []  # those plotted
+        self._series: List[str] = []  # those plotted, then the speeds
+        self._ranged: set = set()  # those whose panel sets its value axis from their range
         self._pending: list = []
         self._pending_rows = 0
         self._planes: list = []  # the world's planes: drawn once the bodies' start is known
         self._low: Any = None  # the smallest and largest finite x, y, z of a body at the start
         self._high: Any = None
         self._units: Dict[str, str] = {}  # column: unit, from the result
+        self._ranges: Dict[str, Tuple[float, float]] = {}  # (low, high) of each series whose panel sets its axis
+        self._time_end = 0.0  # the last row's sim time
         self.colours: Dict[str, list] = {}  # body: its first geom's colour
-        self.file = RrdFile(rr, application_id, recording_id, Path(os.fspath(path)))
+        self.file = RrdFile(rr, view.application_id, view.recording_id, Path(os.fspath(path)))
         self._rec: Any = self.file.rec
         try:
-            drawn = set(self.moving_bodies if bodies is None else bodies)
+            drawn = set(self.moving_bodies if view.paths is None else view.paths)
             for geom in _core.scene_geometry(model):
                 if geom["body_id"] == 0:
                     if geom["kind"] == "plane":
@@ -238,15 +126,56 @@ class Recording:
                 self.colours.setdefault(geom["body"], _rgba(geom["rgba"]))
                 self._rec.log(entity, _pose(rr, geom), static=True)
                 self._rec.log(entity, shape, static=True)
+            if view.arrow is not None:
+                arrow = view.arrow
+                self._rec.log(
+                    f"{self._entity(arrow.body)}/{arrow.name}",
+                    rr.Arrows3D.from_fields(colors=[arrow.colour], radii=[arrow.radius]),
+                    static=True,
+                )
+            if view.camera is not None:
+                # What the camera follows: rerun frames a tracked entity by its
+                # bounds, and the body alone (the chapter's box: 10 cm) would fill
+                # the view; this invisible frame around it keeps more in view.
+                body, half = view.camera
+                self._rec.log(
+                    f"{self._entity(body)}/camera_frame",
+                    rr.Boxes3D(
+                        half_sizes=[[half, half, half / 2]],
+                        colors=[[0, 0, 0, 0]],
+                        fill_mode="majorwireframe",
+                        radii=[0.0],
+                    ),
+                    static=True,
+                )
         except BaseException:
             self.file.close()
             raise
 
     # The drawing sink's three calls.
     def columns(self, names: Sequence[str]) -> None:
-        """The trajectory's columns, then x y z qw qx qy qz per moving body, then qpos."""
-        self._names = list(names[: len(names) - len(POSE) * len(self.moving_bodies) - self._nq])
-        self._plot([name for name in self._names if name not in ("step", "time")])
+        """The columns of the rows to come: the view's, or a scenario's
+        trajectory's, then x y z qw qx qy qz per moving body, then qpos."""
+        expected = self.view.columns
+        if expected is None:
+            self._names = list(names[: len(names) - len(POSE) * len(self.moving_bodies) - self._nq])
+        elif list(names) == expected:
+            self._names = list(names)
+        else:  # the run and the recording disagree on what a row holds
+            raise ValueError(f"the recording draws the columns {expected}, the run records {list(names)}")
+        series = self.view.series
+        plotted = [n for n in self._names if (n not in ("step", "time") if series is None else n in series)]
+        self._series = plotted + list(self.view.speeds)
+        self._ranged = {c for panel in self.view.panels or [] if panel.axis is not None for c in panel.columns}
+        for name in self._series:
+            label, colour = (name, None) if series is None else series[name]
+            if isinstance(colour, str):  # a body's
+                colour = self.colours.get(colour)
+            self._rec.log(
+                f"plots/{name}",
+                self._rr.SeriesLines(names=[label], colors=None if colour is None else [colour]),
+                static=True,
+            )
 
     def rows(self, block: Any) -> None:
         self._pending.append(block)
@@ -271,7 +200,7 @@ class Recording:
             )
         with signals_wait():  # rerun's blueprint passes through a MemorySink that warns if dropped full
             self._rec.send_blueprint(self._blueprint(), make_active=False, make_default=True)
-        self._rec.send_recording_name(self._name(result))
+        self._rec.send_recording_name(self.view.name(result))
         self.file.finish()
 
     @property
@@ -283,19 +212,21 @@ class Recording:
         """Abandons the file if it was not finished."""
         self.file.close()
 
-    def _plot(self, columns: Sequence[str]) -> None:
-        """The columns shown as series, plots/<column>, each named and coloured once."""
-        self._series = list(columns)
-        for name in self._series:
-            self._log_style(name)
+    def _entity(self, body: str) -> str:
+        """Where a moving body is drawn: the view's path, or world/bodies/<body>."""
+        paths = self.view.paths
+        return f"world/bodies/{body}" if paths is None else paths[body]
 
-    def _log_style(self, name: str) -> None:
-        label, colour = self._style(name)
-        self._rec.log(
-            f"plots/{name}",
-            self._rr.SeriesLines(names=[label], colors=None if colour is None else [colour]),
-            static=True,
-        )
+    def _poses(self, block: Any, cols: Mapping[str, Any]) -> Dict[str, Tuple[Any, Any]]:
+        """{body: (positions, w x y z quaternions)}, a row each: the view's, or the poses after the trajectory's
+        columns."""
+        if self.view.poses is not None:
+            return self.view.poses(cols, len(block))
+        at = len(self._names)
+        return {
+            body: (block[:, at + 7 * i : at + 7 * i + 3], block[:, at + 7 * i + 3 : at + 7 * (i + 1)])
+            for i, body in enumerate(self.moving_bodies)
+        }
 
     def _send(self) -> None:
         import numpy as np
@@ -306,12 +237,15 @@ class Recording:
         block = np.concatenate(self._pending)
         self._pending, self._pending_rows = [], 0
         cols = {name: block[:, c] for c, name in enumerate(self._names)}
+        for name, (vx, vy, vz) in self.view.speeds.items():
+            cols[name] = np.sqrt(cols[vx] ** 2 + cols[vy] ** 2 + cols[vz] ** 2)
         times = [
             rr.TimeColumn("sim_time", duration=cols["time"]),
             rr.TimeColumn("step", sequence=cols["step"].astype(np.int64)),
         ]
         starts = []  # where the bodies are in the run's first row
-        for body, (position, quat_wxyz) in self._poses(block, cols).items():
+        poses = self._poses(block, cols)
+        for body, (position, quat_wxyz) in poses.items():
             if self._low is None and len(position) and np.all(np.isfinite(position[0])):
                 starts.append(position[0])
             self._rec.send_columns(
@@ -324,64 +258,106 @@ class Recording:
         if starts:
             self._low, self._high = np.min(starts, axis=0), np.max(starts, axis=0)
         for name in self._series:
-            self._send_series(name, times, cols[name])
-        self._send_more(times, cols)
+            values = cols[name]
+            self._rec.send_columns(
+                f"plots/{name}", indexes=times, columns=rr.Scalars.columns(scalars=np.ascontiguousarray(values))
+            )
+            finite = values[np.isfinite(values)] if name in self._ranged else values[:0]
+            if finite.size:
+                low, high = float(finite.min()), float(finite.max())
+                seen = self._ranges.get(name)
+                self._ranges[name] = (low, high) if seen is None else (min(seen[0], low), max(seen[1], high))
+        if self.view.arrow is not None:
+            self._send_arrow(times, cols, poses)
+        self._time_end = max(self._time_end, float(np.nanmax(cols["time"])))
         # rerun writes the file on a thread of its own and queues what it has
         # not written yet: waiting for it here keeps that queue to one block
         # (10^6 rows of 35 columns sent as fast as they came: 280 MiB more without).
         self.file.flush()
 
-    def _send_series(self, name: str, times: list, values: Any) -> None:
+    def _send_arrow(self, times: list, cols: Mapping[str, Any], poses: Mapping[str, Tuple[Any, Any]]) -> None:
+        """The view's arrow, rotated into its body's frame (its parent's): the
+        vector, and its origin above the body's centre in the world's z."""
         import numpy as np
 
+        arrow = self.view.arrow
+        assert arrow is not None
+        # The final row has no step after it, so no shove (its input cells are NaN).
+        vectors = arrow.scale * np.nan_to_num(np.column_stack([cols[c] for c in arrow.columns]))
+        quat = poses[arrow.body][1]
+        above = np.tile([0.0, 0.0, arrow.height], (len(vectors), 1))
         self._rec.send_columns(
-            f"plots/{name}", indexes=times, columns=self._rr.Scalars.columns(scalars=np.ascontiguousarray(values))
+            f"{self._entity(arrow.body)}/{arrow.name}",
+            indexes=times,
+            columns=self._rr.Arrows3D.columns(
+                origins=_rotate_into_body(quat, above), vectors=_rotate_into_body(quat, vectors)
+            ),
         )
 
-    # What a kind of run says about its rows; these are a scenario's.
-    def _entity(self, body: str) -> str:
-        """Where a moving body is drawn: world/bodies/<body>."""
-        return f"world/bodies/{body}"
-
-    def _poses(self, block: Any, cols: Mapping[str, Any]) -> Dict[str, Tuple[Any, Any]]:
-        """{body: (positions, w x y z quaternions)}, a row each: here the poses after the trajectory's columns."""
-        at = len(self._names)
-        return {
-            body: (block[:, at + 7 * i : at + 7 * i + 3], block[:, at + 7 * i + 3 : at + 7 * (i + 1)])
-            for i, body in enumerate(self.moving_bodies)
-        }
-
-    def _style(self, name: str) -> Tuple[str, Optional[Sequence[int]]]:
-        """(label, colour) of the series plots/<name>; a colour of None is rerun's choice."""
-        return name, None
-
-    def _send_more(self, times: list, cols: Mapping[str, Any]) -> None:
-        """Whatever else a block of rows shows (the chapter's shove)."""
-
     def _blueprint(self) -> Any:
-        """The series in panels by quantity; the 3D view on where the bodies start."""
+        """The series in the view's panels (or by quantity) beside the 3D view,
+        whose camera looks at where the bodies start (following the view's
+        camera frame if it has one)."""
         import rerun.blueprint as rrb
 
+        view = self.view
+        panels = view.panels if view.panels is not None else self._panels_by_quantity()
+        time_axis = None
+        if view.open_on_run:  # rerun opened Break It's on empty negative time
+            time_axis = rrb.TimeAxis(
+                view_range=rrb.TimeRange(
+                    start=rrb.TimeRangeBoundary.absolute(seconds=0.0),
+                    end=rrb.TimeRangeBoundary.absolute(seconds=self._time_end),
+                )
+            )
+        views = []
+        for panel in panels:
+            spans = [self._ranges[c] for c in panel.columns if c in self._ranges]
+            span = (min(s[0] for s in spans), max(s[1] for s in spans)) if spans else None
+            axis_range = None if panel.axis is None else panel.axis(span)
+            views.append(
+                rrb.TimeSeriesView(
+                    name=panel.title,
+                    origin="/plots",
+                    contents=[f"/plots/{c}" for c in panel.columns],
+                    axis_x=time_axis,
+                    axis_y=rrb.ScalarAxis(range=axis_range) if axis_range else None,
+                    plot_legend=rrb.PlotLegend(corner=rrb.Corner2D.LeftTop, visible=panel.legend),
+                )
+            )
+        tracking = None if view.camera is None else f"{self._entity(view.camera[0])}/camera_frame"
+        return _layout(
+            rrb.Vertical(*views) if views else rrb.TimeSeriesView(name="what was recorded", origin="/plots"),
+            _eye(self._low, self._high, tracking),
+        )
+
+    def _panels_by_quantity(self) -> List[Panel]:
+        """A scenario's panels: its series by quantity (QUANTITIES), from their names and units."""
         panels: Dict[str, List[str]] = {}
         for name in self._series:
             unit = self._units.get(name, "")
             title = next(title for title, holds in QUANTITIES if holds(name, unit))
             panels.setdefault(title, []).append(name)
-        views = [
-            rrb.TimeSeriesView(
-                name=title,
-                origin="/plots",
-                contents=[f"/plots/{c}" for c in panels[title]],
-                plot_legend=rrb.PlotLegend(corner=rrb.Corner2D.LeftTop, visible=True),
-            )
-            for title, _ in QUANTITIES
-            if title in panels
-        ]
-        return _layout(
-            rrb.Vertical(*views) if views else rrb.TimeSeriesView(name="what was recorded", origin="/plots"),
-            _eye(self._low, self._high),
-        )
+        return [Panel(title, panels[title]) for title, _ in QUANTITIES if title in panels]
 
-    def _name(self, result: Any) -> str:
-        """A name for people, shown in the viewer's list of recordings."""
-        return f"{result.name or 'scenario'}: {result.steps} steps of {result.timestep:g} s, seed {result.seed}"
+
+def record(result: _core.RunResult, path: Union[str, "os.PathLike[str]"], model: ModelLike = None) -> Path:
+    """Writes an in-memory run of the chapter to `path` as an .rrd recording,
+    as the command does, and returns the path.
+
+    The file is written beside its destination and renamed into place, so a
+    failure leaves any earlier recording as it was. `model` is the one the
+    run used (None: the chapter's scene; a path identifies a file's model in
+    the recording id better than a Model object can); its geometry is drawn.
+    """
+    target = Path(path)
+    scene = load_model(model)
+    recording = Recording(scene, target, chapter_view(result.config, model, scene))
+    try:
+        recording.columns(result.column_names)
+        recording.rows(result.trajectory)
+        recording.finish(result)
+        _core.commit_files(recording.files)
+    finally:
+        recording.close()
+    return target

@@ -239,7 +239,7 @@ def test_ctrl_c_while_the_command_loads_its_modules_is_one_line_not_a_traceback(
 # is made to do the same.
 SWALLOWED = """
 import os, signal, sys, time
-import simloop.chapter_recording
+import simloop.recording
 from simloop.__main__ import main
 
 class Swallowing:
@@ -250,7 +250,7 @@ class Swallowing:
         except BaseException:
             raise ImportError("PyCapsule_Import could not import module datetime") from None
 
-simloop.chapter_recording.ChapterRecording = Swallowing
+simloop.recording.Recording = Swallowing
 sys.exit(main(["--steps", "50", "--out", "out"]))
 """
 

@@ -8,7 +8,9 @@ import pytest
 import rerun.chunk
 import simloop
 from conftest import run_command
-from simloop import chapter_recording as recording
+from simloop import recording
+from simloop import recording_views as views
+from simloop._rerun_parts import _rotate_into_body, value_axis_range
 
 # The box, the pusher and the shove at the chapter's own paths ("the same entity
 # paths every chapter uses").
@@ -172,9 +174,7 @@ def test_the_arrow_shows_the_shove_exactly_while_it_acts(recorded):
     # From 8 cm above the box's centre in the world (3 cm above its top face, in view for either sign), so in
     # the box's frame that offset rotated into it; the arrow's direction is the world's shove.
     quat = np.column_stack([result.column(c) for c in ("box_qw", "box_qx", "box_qy", "box_qz")])
-    np.testing.assert_allclose(
-        origins, recording._rotate_into_body(quat, np.tile([0.0, 0.0, 0.08], (2001, 1))), atol=1e-12
-    )
+    np.testing.assert_allclose(origins, _rotate_into_body(quat, np.tile([0.0, 0.0, 0.08], (2001, 1))), atol=1e-12)
     assert np.all(np.abs(origins[:, 2] - 0.08) < 1e-3)  # the box stays about flat in the default run
     assert np.all(np.abs(vectors[inside][:, 1]) > 0.9 * lengths[inside])  # sideways, as the shove
 
@@ -244,8 +244,8 @@ def test_the_recording_id_follows_the_run(tmp_path):
 
 def test_recording_id_sees_every_parameter_and_the_model(tmp_path):
     base = simloop.run(steps=20)
-    same = recording.recording_id(base)
-    assert recording.recording_id(simloop.run(steps=20)) == same
+    same = views.recording_id(base)
+    assert views.recording_id(simloop.run(steps=20)) == same
     for kwargs in (
         {"seed": 1},
         {"timestep": 0.001},
@@ -255,31 +255,29 @@ def test_recording_id_sees_every_parameter_and_the_model(tmp_path):
         {"audit_energy": True},
         {"steps": 21},
     ):
-        assert recording.recording_id(simloop.run(**{"steps": 20, **kwargs})) != same, kwargs
+        assert views.recording_id(simloop.run(**{"steps": 20, **kwargs})) != same, kwargs
     scene = tmp_path / "scene.xml"
     scene.write_text(simloop._core.PUSHER_SCENE_XML)
-    assert recording.recording_id(base, scene) != same  # a file is identified by its bytes
+    assert views.recording_id(base, scene) != same  # a file is identified by its bytes
     scene2 = tmp_path / "scene2.xml"
     scene2.write_text(simloop._core.PUSHER_SCENE_XML.replace('damping="4"', 'damping="5"'))
-    assert recording.recording_id(base, scene2) != recording.recording_id(base, scene)
+    assert views.recording_id(base, scene2) != views.recording_id(base, scene)
 
 
 def test_the_recording_id_sees_the_mujoco_build(monkeypatch):
     # The same run on Debian's 2.2.2 and on the PyPI build's 4.0.0 moves
     # otherwise: two recordings, not one merged ("one recording per run").
-    import simloop.recording as recorder
-
     config = simloop.run(steps=20).config
     ids = {}
     for version, build in (("MuJoCo 2.2.2", "system"), ("MuJoCo 4.0.0", "pypi")):
         monkeypatch.setattr(simloop._core, "MUJOCO_VERSION", version)
-        monkeypatch.setattr(recorder, "MUJOCO_BUILD", build)
-        assert recording.config_parameters(config)["mujoco"] == f"{version} ({build})"
+        monkeypatch.setattr(views, "MUJOCO_BUILD", build)
+        assert views.config_parameters(config)["mujoco"] == f"{version} ({build})"
         ids[version] = (
-            recording.config_recording_id(config),
-            recording.config_recording_id(config),
-            recorder.scenario_recording_id("key"),
-            recorder.scenario_recording_id("key"),
+            views.config_recording_id(config),
+            views.config_recording_id(config),
+            views.scenario_recording_id("key"),
+            views.scenario_recording_id("key"),
         )
     for same_build in ids.values():  # the same run on one build: one id
         assert same_build[0] == same_build[1] and same_build[2] == same_build[3]
@@ -339,6 +337,22 @@ def test_the_plots_open_on_the_run_legends_off_the_data_and_no_axis_narrower_tha
     legends = dict(fields["visible"])
     assert sorted(legends.values()) == [False, False, False, False, True]  # only the x panel has two series
     assert all(corner == 1 for _, corner in fields["corner"])  # the top left
-    assert recording.value_axis_range([(-1e-15, 2e-15)]) == pytest.approx((-0.005 + 5e-16, 0.005 + 5e-16))
-    assert recording.value_axis_range([(0.0, 0.2), (0.1, 0.3)]) is None  # wide enough: rerun fits the data
-    assert recording.value_axis_range([]) is None
+    assert value_axis_range((-1e-15, 2e-15)) == pytest.approx((-0.005 + 5e-16, 0.005 + 5e-16))
+    assert value_axis_range((0.0, 0.3)) is None  # wide enough: rerun fits the data
+    assert value_axis_range(None) is None
+
+
+def test_the_chapters_view_refuses_rows_it_does_not_draw_and_writes_nothing(tmp_path):
+    # The chapter's view draws the chapter's columns exactly: rows of other
+    # columns (the energy audit's, unasked) are an error, not a wrong drawing.
+    result = simloop.run(smoke=True, audit_energy=True)
+    model = simloop.load_model(None)
+    drawing = recording.Recording(
+        model, tmp_path / "r.rrd", views.chapter_view(simloop.run(smoke=True).config, None, model)
+    )
+    try:
+        with pytest.raises(ValueError, match="the recording draws the columns"):
+            drawing.columns(result.column_names)
+    finally:
+        drawing.close()
+    assert list(tmp_path.iterdir()) == []

@@ -151,7 +151,7 @@ def test_a_drawing_that_fails_writes_nothing(tmp_path, monkeypatch):
 def test_a_scenarios_plots_are_grouped_by_quantity_with_units():
     """One panel per quantity, named with its unit: a pose's quaternion is not
     plotted with its positions, nor a force with a velocity."""
-    from simloop.recording import QUANTITIES
+    from simloop._rerun_parts import QUANTITIES
 
     result = simloop.run_scenario(simloop.Scenario.from_file(ROOT / "tests/scenes/pusht.toml"), steps=2)
     panels = {}
