@@ -138,7 +138,8 @@ TEST(RecordBytes, BytesCutShortOrTooLongAreRefusedAsDamaged) {
 TEST(RecordBytes, AnotherVersionOrKindIsRefusedByName) {
   const std::string bytes = simloop::to_bytes(chapter_run(20));
   EXPECT_EQ(refusal([&] { (void)simloop::run_result_from_bytes(with<std::uint32_t>(bytes, 0, 3)); }),
-            "cannot unpickle a RunResult pickled by another simloop version (format 3; this one reads 4)");
+            "cannot unpickle a RunResult pickled by another simloop version (format 3; this one reads " +
+                std::to_string(simloop::kRecordBytesVersion) + ")");
   EXPECT_EQ(refusal([&] { (void)simloop::record_from_bytes(bytes); }),
             "cannot unpickle a ScenarioResult: the saved fields are a RunResult's");
   EXPECT_EQ(refusal([&] { (void)simloop::sweep_result_from_bytes(simloop::to_bytes(simloop::RunRecord{})); }),
