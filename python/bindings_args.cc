@@ -105,6 +105,28 @@ double check_real(const std::string& name, const py::handle& value) {
   return number;
 }
 
+void set_error_fs(PyObject* type, const char* what) {
+  std::string line;
+  bool line_break = false;
+  for (const char* c = what; *c; ++c) {
+    if (*c == '\n' || *c == '\r') {
+      line_break = true;
+      continue;
+    }
+    if (line_break && !line.empty() && line.back() != ' ' && *c != ' ') line += ' ';
+    line_break = false;
+    line += *c;
+  }
+  PyObject* message = PyUnicode_DecodeFSDefaultAndSize(line.data(), static_cast<py::ssize_t>(line.size()));
+  if (!message) {
+    PyErr_Clear();
+    PyErr_SetString(type, "(undecodable message)");
+    return;
+  }
+  PyErr_SetObject(type, message);
+  Py_DECREF(message);
+}
+
 void bind_args(py::module_& m) {
   m.def("_show", &show, "value"_a, "repr(value) for an error message: one line, at most 80 characters.");
   m.def("_describe", &describe, "value"_a, "show(value) and its type's name.");

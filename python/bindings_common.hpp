@@ -122,7 +122,7 @@ inline py::str fs_str(const std::string& text) {
 }
 
 // Sets a Python error whose message is `what` on one line (MuJoCo's own
-// messages can span several), decoded as fs_str does.
+// messages can span several), decoded as fs_str does (bindings_args.cc).
 void set_error_fs(PyObject* type, const char* what);
 
 inline py::array vec(const double* values, size_t n) {
