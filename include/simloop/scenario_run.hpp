@@ -45,6 +45,20 @@ struct ScenarioConfig {
                                      Data* workspace = nullptr, RowSink* sink = nullptr, RunControl* control = nullptr,
                                      const RunInputs& inputs = {});
 
+// Everything run_scenario() checks before its first step (the names, the
+// length, the recorded columns), without running: throws InvalidArgument as
+// run_scenario() would. The commands call it before touching --out.
+void check_scenario(const Model& scene, const Scenario& scenario, const ScenarioConfig& config);
+
+// The names of the columns such a run records ("step" and "time" first: a
+// policy's observation is a row of them), after check_scenario's checks.
+[[nodiscard]] std::vector<std::string> scenario_columns(const Model& scene, const Scenario& scenario,
+                                                        const ScenarioConfig& config);
+
+// The timestep a run of `scenario` on `scene` with `config` steps at:
+// config's, else the scenario's, else the scene's own.
+[[nodiscard]] double run_timestep(const Model& scene, const Scenario& scenario, const ScenarioConfig& config);
+
 // Runs `scenario` once per config over one scene, with `threads` workers (0:
 // one per core), each stepping its own Data; the scene is compiled once per
 // distinct timestep, before any worker starts, and shared read-only. Result
@@ -54,16 +68,6 @@ struct ScenarioConfig {
 // or record_every out of range, or kept rows that together would not fit in
 // memory). Failures, fewer threads, stopping and watching through `control`:
 // as for run_batch (batch.hpp).
-// Everything run_scenario() checks before its first step (the names, the
-// length, the recorded columns), without running: throws InvalidArgument as
-// run_scenario() would. The commands call it before touching --out.
-void check_scenario(const Model& scene, const Scenario& scenario, const ScenarioConfig& config);
-
-// The timestep a run of `scenario` on `scene` with `config` steps at:
-// config's, else the scenario's, else the scene's own.
-[[nodiscard]] double run_timestep(const Model& scene, const Scenario& scenario, const ScenarioConfig& config);
-
-//
 // inputs: empty, or one RunInputs per config (run i follows inputs[i]; runs
 // may share the same arrays, and the same policy, whose decide() is then
 // called from every worker thread and must allow that; each run's decisions
