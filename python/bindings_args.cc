@@ -10,6 +10,7 @@
 
 #include "bindings_common.hpp"
 #include "simloop/object_names.hpp"
+#include "simloop/rows.hpp"
 
 namespace simloop_py {
 
@@ -134,6 +135,8 @@ void bind_args(py::module_& m) {
   m.def("_check_text", &check_text, "name"_a, "value"_a);
   m.def("_check_real", &check_real, "name"_a, "value"_a);
   m.def("_did_you_mean", &simloop::did_you_mean, "name"_a, "candidates"_a, "The likely typo's fix, or '': one rule.");
+  m.attr("MAX_THREADS") = simloop::kMaxThreads;
+  m.def("check_threads", &simloop::check_threads, "threads"_a, "ValueError unless threads is from 0 to MAX_THREADS.");
 }
 
 }  // namespace simloop_py
