@@ -132,13 +132,9 @@ inline py::array vector_array(const std::vector<double>& values) { return vec(va
 inline std::string py_bool(bool b) { return b ? "True" : "False"; }
 inline std::string py_str_repr(const std::string& text) { return py::repr(py::str(text)).cast<std::string>(); }
 
-// A generator by its name, as every config's rng= takes it; ValueError for
-// any other.
-inline simloop::ShoveRng shove_rng(const std::string& name) {
-  const std::optional<simloop::ShoveRng> rng = simloop::parse_rng(name);
-  if (!rng) throw py::value_error("rng must be 'mt19937_64' or 'numpy', got '" + name + "'");
-  return *rng;
-}
+// A generator by its name, as every config's rng= takes it (ValueError for
+// any other).
+inline simloop::ShoveRng shove_rng(const std::string& name) { return simloop::rng_named(name); }
 
 // __repr__ as Name(field=value, ...), each field read back as the object's
 // Python attribute and spelled by repr(): a repr agrees with what it shows.
