@@ -155,10 +155,6 @@ inline py::array read_only(py::array view) {
   return view;
 }
 
-// A kind of MuJoCo object by its word ("body", "joint", "actuator", "sensor",
-// "keyframe"); ValueError for any other.
-mjtObj object_type(const std::string& kind);
-
 // A long call: Ctrl-C stops it within a chunk of steps (Interruptible);
 // progress(steps_done, steps_total), if given, is called from this thread at
 // most every 20 ms, and once at the end; `what` names the call in a
