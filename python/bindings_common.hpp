@@ -3,7 +3,6 @@
 // was being done, and the conversions several topics use.
 #pragma once
 
-#include <mujoco/mujoco.h>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl/filesystem.h>
@@ -25,6 +24,7 @@
 #include "simloop/control.hpp"
 #include "simloop/number_format.hpp"
 #include "simloop/output.hpp"
+#include "simloop/piped_file.hpp"
 #include "simloop/record_bytes.hpp"
 #include "simloop/run.hpp"
 
@@ -200,6 +200,17 @@ std::pair<std::filesystem::path, std::filesystem::path> write_result(const Resul
   const simloop::OutputFiles files =
       naming_failures("write(" + out.string() + ")", [&] { return simloop::write_outputs(r, out); });
   return {files.metrics, files.trajectory};
+}
+
+// The finished files (PipedFile, from Python's list) to put in place with a
+// run's own; ValueError for a None among them.
+inline std::vector<simloop::PendingFile*> pending_files(const std::vector<simloop::PipedFile*>& also) {
+  std::vector<simloop::PendingFile*> files;
+  for (simloop::PipedFile* f : also) {
+    if (f == nullptr) throw py::value_error("also: None is not a PipedFile");
+    files.push_back(&f->pending());
+  }
+  return files;
 }
 
 // py::pickle for a result: the library's bytes (record_bytes.hpp) and back.
