@@ -265,7 +265,7 @@ Options parse(int argc, const char* const* argv) {
       }
     } else if (arg == "--threads") {
       sweep_only();
-      opts.threads = static_cast<int>(parse_u64(arg, value(), 1, 4096));
+      opts.threads = static_cast<int>(parse_u64(arg, value(), 1, kMaxThreads));
     } else if (arg == "--plot") {
       no_value();
       opts.plot = true;

@@ -148,12 +148,6 @@ void detail::WorkerPool::wait_round(const std::function<void()>& poll) {
   }
 }
 
-void detail::check_threads(int threads) {
-  if (threads < 0) {
-    throw InvalidArgument("threads must be at least 1, or 0 for one per core, got " + std::to_string(threads));
-  }
-}
-
 int batch_workers(int threads, std::size_t jobs) noexcept {
   const int wanted = threads > 0 ? threads : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
   return static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(wanted), std::max<std::size_t>(jobs, 1)));

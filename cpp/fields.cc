@@ -84,6 +84,14 @@ FieldView data_field(const mjModel* m, const mjData* d, std::string_view name) {
   no_such("mjData", name, data_field_names());
 }
 
+std::vector<std::string> writable_model_field_names() {
+  std::vector<std::string> names;
+  for (const std::string& name : model_field_names()) {
+    if (model_field_writable(name)) names.push_back(name);
+  }
+  return names;
+}
+
 bool model_field_writable(std::string_view name) noexcept {
   static constexpr std::array<std::string_view, 19> kWritable{
       "body_mass",          "body_inertia",        "body_gravcomp",    "geom_friction",    "geom_solref",

@@ -95,4 +95,11 @@ void check_kept_rows(const std::vector<KeptRows>& runs, std::uint64_t budget) {
   throw InvalidArgument(msg.str());
 }
 
+void check_threads(std::int64_t threads) {
+  if (threads < 0 || threads > kMaxThreads) {
+    throw InvalidArgument("threads must be from 1 to " + std::to_string(kMaxThreads) + ", or 0 for one per core, got " +
+                          std::to_string(threads));
+  }
+}
+
 }  // namespace simloop

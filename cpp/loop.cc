@@ -93,6 +93,7 @@ LoopResult run_loop(const mjModel* m, mjData* d, const Schedule& schedule, const
   // Decision steps: 0, K, 2K, ... with a policy; none (the run's end) without.
   std::int64_t next_decision = policy ? 0 : steps;
   std::vector<double> observation(policy ? static_cast<std::size_t>(width) : 0);
+  std::vector<double> decision;
 
   // Row 0 is the true state at t = 0.
   core.reset(m, d, {-1, &schedule.start, inputs.initial_state, d_is_reset});
@@ -103,7 +104,10 @@ LoopResult run_loop(const mjModel* m, mjData* d, const Schedule& schedule, const
       recorder.before_step(observation.data(), step, m, d, true, core.entering_ncon(d));
       recorder.after_step(observation.data(), m, d);
       // Outside MuJoCo's guard: the policy may throw (a Python exception).
-      policy->decide(step, observation.data(), width, d->ctrl, nu);
+      decision.assign(d->ctrl, d->ctrl + nu);
+      policy->decide(step, observation.data(), width, decision);
+      Policy::check_ctrl(step, decision, nu);
+      std::copy(decision.begin(), decision.end(), d->ctrl);
       next_decision = steps - step > policy->every() ? step + policy->every() : steps;
     }
     core.run(m, d, step, next_decision, rhythm, control);

@@ -70,6 +70,14 @@ mjtObj object_type_named(std::string_view kind) noexcept {
   return mjOBJ_UNKNOWN;
 }
 
+mjtObj object_type_of_kind(std::string_view kind) {
+  const mjtObj type = object_type_named(kind);
+  if (type != mjOBJ_UNKNOWN) return type;
+  std::string words;
+  for (const std::string& k : object_kinds()) words += (words.empty() ? "'" : ", '") + k + "'";
+  throw InvalidArgument("kind must be one of " + words + ", got '" + std::string(kind) + "'");
+}
+
 const std::vector<std::string>& object_kinds() {
   static const std::vector<std::string> words = [] {
     std::vector<std::string> out;

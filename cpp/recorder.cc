@@ -11,6 +11,7 @@
 #include "mujoco_compat.hpp"
 #include "run_detail.hpp"
 #include "simloop/errors.hpp"
+#include "simloop/number_format.hpp"
 #include "simloop/object_names.hpp"
 #include "simloop/state.hpp"
 
@@ -248,6 +249,20 @@ Policy::Policy(std::int64_t every) : every_(every) {
   if (every < 1 || every > kMaxSteps) {
     throw InvalidArgument("control_every must be from 1 to " + std::to_string(kMaxSteps) + ", got " +
                           std::to_string(every));
+  }
+}
+
+void Policy::check_ctrl(std::int64_t step, const std::vector<double>& ctrl, int nu) {
+  const std::string at = " at decision step " + std::to_string(step);
+  if (ctrl.size() != static_cast<std::size_t>(nu)) {
+    throw InvalidArgument("the policy must return " + std::to_string(nu) + " ctrl values, got " +
+                          std::to_string(ctrl.size()) + at);
+  }
+  for (std::size_t a = 0; a < ctrl.size(); ++a) {
+    if (!std::isfinite(ctrl[a])) {
+      throw InvalidArgument("the policy returned a ctrl that is not finite" + at + ": ctrl[" + std::to_string(a) +
+                            "] is " + python_float_repr(ctrl[a]));
+    }
   }
 }
 

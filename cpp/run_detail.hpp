@@ -86,9 +86,9 @@ class StepObserver;
 // config.steps, its disturbances dropped unless config.perturb.
 [[nodiscard]] Scenario configured_scenario(const Scenario& scenario, const ScenarioConfig& config);
 
-// A batch's checks before any run starts: threads is at least 0 (0: one
-// per core), and run i's own checks, their InvalidArgument prefixed "run i: ".
-void check_threads(int threads);
+// A batch's checks before any run starts: threads (rows.hpp), and run i's
+// own checks, their InvalidArgument prefixed "run i: ".
+using simloop::check_threads;
 template <class Check>
 void check_run(std::size_t i, Check&& check) {
   try {

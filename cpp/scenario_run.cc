@@ -92,9 +92,16 @@ double run_timestep(const Model& scene, const Scenario& scenario, const Scenario
 }
 
 void check_scenario(const Model& scene, const Scenario& scenario, const ScenarioConfig& config) {
+  (void)scenario_columns(scene, scenario, config);
+}
+
+std::vector<std::string> scenario_columns(const Model& scene, const Scenario& scenario, const ScenarioConfig& config) {
   const Model model = scene.for_run(run_timestep(scene, scenario, config), config.audit_energy);
   const PreparedRun run = prepare(model, scenario, config);  // names, schedule, columns
   detail::check_schedule_run(run.schedule.steps, config.record_every);
+  std::vector<std::string> names;
+  for (const Column& c : run.recorder->columns()) names.push_back(c.name);
+  return names;
 }
 
 RunRecord run_scenario(const Model& scene, const Scenario& scenario, const ScenarioConfig& config, Data* workspace,

@@ -3,6 +3,9 @@
 #include <array>
 #include <random>
 
+#include "run_detail.hpp"
+#include "simloop/errors.hpp"
+
 namespace simloop {
 namespace {
 
@@ -164,6 +167,12 @@ std::optional<ShoveRng> parse_rng(std::string_view name) noexcept {
   return std::nullopt;
 }
 
+ShoveRng rng_named(std::string_view name) {
+  const std::optional<ShoveRng> rng = parse_rng(name);
+  if (!rng) throw InvalidArgument("rng must be 'mt19937_64' or 'numpy', got '" + std::string(name) + "'");
+  return *rng;
+}
+
 namespace {
 
 class NumpyDraws final : public Draws {
@@ -196,7 +205,8 @@ std::unique_ptr<Draws> make_draws(std::uint64_t seed, ShoveRng rng) {
   return std::make_unique<Mt19937Draws>(seed);
 }
 
-Shove draw_shove(std::uint64_t seed, std::int64_t num_steps, ShoveRng rng) noexcept {
+Shove draw_shove(std::uint64_t seed, std::int64_t num_steps, ShoveRng rng) {
+  detail::check_schedule_run(num_steps, 1);  // a run's steps
   Shove shove;
   // uniform(6.0, 12.0), then the sign: numpy's choice([-1.0, 1.0]), or u < 0.5.
   if (rng == ShoveRng::kNumpy) {

@@ -6,39 +6,11 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
-#include <string>
-
 #include "bindings_common.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/version.hpp"
 
 namespace py = pybind11;
-
-namespace simloop_py {
-
-void set_error_fs(PyObject* type, const char* what) {
-  std::string line;
-  bool line_break = false;
-  for (const char* c = what; *c; ++c) {
-    if (*c == '\n' || *c == '\r') {
-      line_break = true;
-      continue;
-    }
-    if (line_break && !line.empty() && line.back() != ' ' && *c != ' ') line += ' ';
-    line_break = false;
-    line += *c;
-  }
-  PyObject* message = PyUnicode_DecodeFSDefaultAndSize(line.data(), static_cast<py::ssize_t>(line.size()));
-  if (!message) {
-    PyErr_Clear();
-    PyErr_SetString(type, "(undecodable message)");
-    return;
-  }
-  PyErr_SetObject(type, message);
-  Py_DECREF(message);
-}
-
-}  // namespace simloop_py
 
 PYBIND11_MODULE(_core, m) {
   using simloop_py::OutOfMemory;

@@ -10,6 +10,7 @@
 
 #include "bindings_common.hpp"
 #include "simloop/object_names.hpp"
+#include "simloop/rows.hpp"
 
 namespace simloop_py {
 
@@ -105,6 +106,28 @@ double check_real(const std::string& name, const py::handle& value) {
   return number;
 }
 
+void set_error_fs(PyObject* type, const char* what) {
+  std::string line;
+  bool line_break = false;
+  for (const char* c = what; *c; ++c) {
+    if (*c == '\n' || *c == '\r') {
+      line_break = true;
+      continue;
+    }
+    if (line_break && !line.empty() && line.back() != ' ' && *c != ' ') line += ' ';
+    line_break = false;
+    line += *c;
+  }
+  PyObject* message = PyUnicode_DecodeFSDefaultAndSize(line.data(), static_cast<py::ssize_t>(line.size()));
+  if (!message) {
+    PyErr_Clear();
+    PyErr_SetString(type, "(undecodable message)");
+    return;
+  }
+  PyErr_SetObject(type, message);
+  Py_DECREF(message);
+}
+
 void bind_args(py::module_& m) {
   m.def("_show", &show, "value"_a, "repr(value) for an error message: one line, at most 80 characters.");
   m.def("_describe", &describe, "value"_a, "show(value) and its type's name.");
@@ -112,6 +135,8 @@ void bind_args(py::module_& m) {
   m.def("_check_text", &check_text, "name"_a, "value"_a);
   m.def("_check_real", &check_real, "name"_a, "value"_a);
   m.def("_did_you_mean", &simloop::did_you_mean, "name"_a, "candidates"_a, "The likely typo's fix, or '': one rule.");
+  m.attr("MAX_THREADS") = simloop::kMaxThreads;
+  m.def("check_threads", &simloop::check_threads, "threads"_a, "ValueError unless threads is from 0 to MAX_THREADS.");
 }
 
 }  // namespace simloop_py

@@ -113,9 +113,7 @@ void bind_command(py::module_& m) {
       .def(
           "commit",
           [](cli::Orchestration& o, const std::vector<simloop::PipedFile*>& also) {
-            std::vector<simloop::PendingFile*> files;
-            for (simloop::PipedFile* f : also) files.push_back(&f->pending());
-            o.commit(nullptr, files);
+            o.commit(nullptr, pending_files(also));
           },
           "also"_a)
       .def_property_readonly("committed", &cli::Orchestration::committed)

@@ -3,7 +3,6 @@
 // was being done, and the conversions several topics use.
 #pragma once
 
-#include <mujoco/mujoco.h>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl/filesystem.h>
@@ -25,6 +24,7 @@
 #include "simloop/control.hpp"
 #include "simloop/number_format.hpp"
 #include "simloop/output.hpp"
+#include "simloop/piped_file.hpp"
 #include "simloop/record_bytes.hpp"
 #include "simloop/run.hpp"
 
@@ -122,7 +122,7 @@ inline py::str fs_str(const std::string& text) {
 }
 
 // Sets a Python error whose message is `what` on one line (MuJoCo's own
-// messages can span several), decoded as fs_str does.
+// messages can span several), decoded as fs_str does (bindings_args.cc).
 void set_error_fs(PyObject* type, const char* what);
 
 inline py::array vec(const double* values, size_t n) {
@@ -132,13 +132,9 @@ inline py::array vector_array(const std::vector<double>& values) { return vec(va
 inline std::string py_bool(bool b) { return b ? "True" : "False"; }
 inline std::string py_str_repr(const std::string& text) { return py::repr(py::str(text)).cast<std::string>(); }
 
-// A generator by its name, as every config's rng= takes it; ValueError for
-// any other.
-inline simloop::ShoveRng shove_rng(const std::string& name) {
-  const std::optional<simloop::ShoveRng> rng = simloop::parse_rng(name);
-  if (!rng) throw py::value_error("rng must be 'mt19937_64' or 'numpy', got '" + name + "'");
-  return *rng;
-}
+// A generator by its name, as every config's rng= takes it (ValueError for
+// any other).
+inline simloop::ShoveRng shove_rng(const std::string& name) { return simloop::rng_named(name); }
 
 // __repr__ as Name(field=value, ...), each field read back as the object's
 // Python attribute and spelled by repr(): a repr agrees with what it shows.
@@ -158,10 +154,6 @@ inline py::array read_only(py::array view) {
   py::detail::array_proxy(view.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
   return view;
 }
-
-// A kind of MuJoCo object by its word ("body", "joint", "actuator", "sensor",
-// "keyframe"); ValueError for any other.
-mjtObj object_type(const std::string& kind);
 
 // A long call: Ctrl-C stops it within a chunk of steps (Interruptible);
 // progress(steps_done, steps_total), if given, is called from this thread at
@@ -208,6 +200,17 @@ std::pair<std::filesystem::path, std::filesystem::path> write_result(const Resul
   const simloop::OutputFiles files =
       naming_failures("write(" + out.string() + ")", [&] { return simloop::write_outputs(r, out); });
   return {files.metrics, files.trajectory};
+}
+
+// The finished files (PipedFile, from Python's list) to put in place with a
+// run's own; ValueError for a None among them.
+inline std::vector<simloop::PendingFile*> pending_files(const std::vector<simloop::PipedFile*>& also) {
+  std::vector<simloop::PendingFile*> files;
+  for (simloop::PipedFile* f : also) {
+    if (f == nullptr) throw py::value_error("also: None is not a PipedFile");
+    files.push_back(&f->pending());
+  }
+  return files;
 }
 
 // py::pickle for a result: the library's bytes (record_bytes.hpp) and back.

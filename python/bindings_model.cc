@@ -26,14 +26,6 @@ namespace simloop_py {
 
 using namespace pybind11::literals;
 
-mjtObj object_type(const std::string& kind) {
-  const mjtObj type = simloop::object_type_named(kind);
-  if (type != mjOBJ_UNKNOWN) return type;
-  std::string kinds;
-  for (const std::string& k : simloop::object_kinds()) kinds += (kinds.empty() ? "'" : ", '") + k + "'";
-  throw py::value_error("kind must be one of " + kinds + ", got '" + kind + "'");
-}
-
 namespace {
 
 // Arguments taken as objects: pybind11's own TypeError for a wrong type lists every signature over four lines.
@@ -128,7 +120,7 @@ void bind_model(py::module_& m) {
       .def(
           "names",
           [](const simloop::Model& model, const py::object& kind) {
-            return simloop::object_names(model.get(), object_type(kind_arg(kind)));
+            return simloop::object_names(model.get(), simloop::object_type_of_kind(kind_arg(kind)));
           },
           "kind"_a, "Every object's name of a kind, by index ('' for an unnamed one).")
       .def(
@@ -136,7 +128,7 @@ void bind_model(py::module_& m) {
           [](const simloop::Model& model, const py::object& kind, const py::object& index) {
             // The model's fixed facts the named views need, as plain values.
             const mjModel* raw = model.get();
-            const mjtObj type = object_type(kind_arg(kind));
+            const mjtObj type = simloop::object_type_of_kind(kind_arg(kind));
             const int id = simloop::checked_object_index(raw, type, index_arg("id", index));
             if (type == mjOBJ_BODY) {
               return py::dict("mass"_a = raw->body_mass[id], "mocapid"_a = raw->body_mocapid[id]);
@@ -199,11 +191,7 @@ void bind_model(py::module_& m) {
   m.attr("MODEL_FIELD_NAMES") = py::tuple(py::cast(simloop::model_field_names()));
   m.attr("DATA_FIELD_NAMES") = py::tuple(py::cast(simloop::data_field_names()));
   m.attr("OBJECT_KINDS") = py::tuple(py::cast(simloop::object_kinds()));
-  py::list writable;
-  for (const std::string& name : simloop::model_field_names()) {
-    if (simloop::model_field_writable(name)) writable.append(name);
-  }
-  m.attr("WRITABLE_MODEL_FIELDS") = py::tuple(writable);
+  m.attr("WRITABLE_MODEL_FIELDS") = py::tuple(py::cast(simloop::writable_model_field_names()));
 }
 
 }  // namespace simloop_py

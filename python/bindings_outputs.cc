@@ -22,16 +22,6 @@ namespace {
 
 using namespace pybind11::literals;
 
-// The finished files to put in place with the run's two.
-std::vector<simloop::PendingFile*> pending(const std::vector<simloop::PipedFile*>& also) {
-  std::vector<simloop::PendingFile*> files;
-  for (simloop::PipedFile* f : also) {
-    if (f == nullptr) throw py::value_error("also: None is not a PipedFile");
-    files.push_back(&f->pending());
-  }
-  return files;
-}
-
 // An OutputLock that Python can release when it chooses (a with block).
 struct PyOutputLock {
   std::optional<simloop::OutputLock> lock;
@@ -79,7 +69,7 @@ void bind_outputs(py::module_& m) {
   m.def(
       "commit_files",
       [](const std::vector<simloop::PipedFile*>& files) {
-        const std::vector<simloop::PendingFile*> list = pending(files);
+        const std::vector<simloop::PendingFile*> list = pending_files(files);
         py::gil_scoped_release release;
         simloop::commit_together(list);
       },

@@ -39,10 +39,10 @@ std::optional<simloop::InputArray> input_array(const std::optional<DoubleArray>&
 }
 
 // A Python callable as the loop's Policy: decide(step, row) -> ctrl, where
-// row is the recorder's row (a fresh float64 array) and ctrl an array of nu
-// float64 (simloop/policy.py's wrapper checks what the user's policy
-// returned and adds the decision step to its exceptions). Called from
-// whichever thread steps the run: it takes the GIL for the call only.
+// row is the recorder's row (a fresh float64 array) and ctrl a float64
+// vector (simloop/policy.py's wrapper turns the user's answer into one and
+// adds the decision step to its exceptions; the loop checks its values).
+// Called from whichever thread steps the run: it takes the GIL for the call.
 class PyPolicy final : public simloop::Policy {
  public:
   PyPolicy(py::object decide, std::int64_t every) : Policy(every), decide_(std::move(decide)) {}
@@ -53,16 +53,10 @@ class PyPolicy final : public simloop::Policy {
   PyPolicy(const PyPolicy&) = delete;
   PyPolicy& operator=(const PyPolicy&) = delete;
 
-  void decide(std::int64_t step, const double* observation, int width, double* ctrl, int nu) override {
+  void decide(std::int64_t step, const double* observation, int width, std::vector<double>& ctrl) override {
     py::gil_scoped_acquire gil;
-    const py::array_t<double> row(width, observation);
-    const py::array_t<double, py::array::c_style | py::array::forcecast> out(decide_(step, row));
-    if (out.size() != nu) {
-      throw simloop::InvalidArgument("policy at decision step " + std::to_string(step) + ": " +
-                                     std::to_string(out.size()) + " ctrl values for " + std::to_string(nu) +
-                                     " actuators");
-    }
-    std::copy(out.data(), out.data() + nu, ctrl);
+    const DoubleArray out(decide_(step, py::array_t<double>(width, observation)));
+    ctrl.assign(out.data(), out.data() + out.size());
   }
 
  private:
@@ -195,6 +189,8 @@ void bind_scenario(py::module_& m) {
       "decide"_a = py::none(), "control_every"_a = 1, "keep_rows"_a = true, "progress"_a = py::none());
   m.def("check_scenario", &simloop::check_scenario, "scene"_a, "scenario"_a, "config"_a,
         "Everything run_scenario checks before its first step, without running.");
+  m.def("scenario_columns", &simloop::scenario_columns, "scene"_a, "scenario"_a, "config"_a,
+        "The names of the columns such a run records, after check_scenario's checks.");
 
   py::class_<simloop::ScenarioSweepPoint>(m, "ScenarioSweepPoint", "One timestep of a scenario sweep.")
       .def_readonly("timestep", &simloop::ScenarioSweepPoint::timestep)

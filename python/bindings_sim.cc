@@ -159,11 +159,11 @@ void bind_sim(py::module_& m) {
       .def_property_readonly("state_layout", locked(&simloop::Sim::state_layout))
       // Names are looked up locked too: set_timestep may be swapping the model.
       .def("id", locked<const std::string&, const std::string&>([](auto& sim, const auto& kind, const auto& name) {
-             return sim.id(object_type(kind), name);
+             return sim.id(simloop::object_type_of_kind(kind), name);
            }),
            "kind"_a, "name"_a)
       .def("checked_index", locked<const std::string&, long long>([](auto& sim, const auto& kind, long long index) {
-             return sim.checked_index(object_type(kind), index);
+             return sim.checked_index(simloop::object_type_of_kind(kind), index);
            }),
            "kind"_a, "index"_a)
       .def("body_velocity", locked<int>([](auto& sim, int body) { return vec(sim.body_velocity(body).data(), 6); }),

@@ -46,5 +46,7 @@ struct FieldView {
 // contact softness, damping, armature, joint stiffness, actuator gains,
 // biases, gears and ranges, colours.
 [[nodiscard]] bool model_field_writable(std::string_view name) noexcept;
+// Those of model_field_names() that are writable, in its order.
+[[nodiscard]] std::vector<std::string> writable_model_field_names();
 
 }  // namespace simloop

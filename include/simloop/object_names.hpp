@@ -20,6 +20,8 @@ namespace simloop {
 // "tendon", "keyframe", ...), mjOBJ_UNKNOWN for another word; the words, in
 // MuJoCo's order of types; a type's word; how many the scene has.
 [[nodiscard]] mjtObj object_type_named(std::string_view kind) noexcept;
+// The same, or InvalidArgument "kind must be one of 'body', ..., got '...'".
+[[nodiscard]] mjtObj object_type_of_kind(std::string_view kind);
 [[nodiscard]] const std::vector<std::string>& object_kinds();
 [[nodiscard]] const char* object_kind(mjtObj type);
 [[nodiscard]] int object_count(const mjModel* m, mjtObj type);

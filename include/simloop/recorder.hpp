@@ -185,8 +185,12 @@ class Policy {
   virtual ~Policy() = default;
   [[nodiscard]] std::int64_t every() const noexcept { return every_; }
   // observation: `width` doubles (the recorder's row); ctrl: the nu doubles
-  // MuJoCo will apply from this step on, holding the ctrl in force now.
-  virtual void decide(std::int64_t step, const double* observation, int width, double* ctrl, int nu) = 0;
+  // MuJoCo will apply from this step on, holding the ctrl in force now. The
+  // loop takes what ctrl holds after the call through check_ctrl.
+  virtual void decide(std::int64_t step, const double* observation, int width, std::vector<double>& ctrl) = 0;
+  // A decision's ctrl as the loop takes it: nu values, each finite
+  // (InvalidArgument naming the decision step otherwise).
+  static void check_ctrl(std::int64_t step, const std::vector<double>& ctrl, int nu);
 
  private:
   std::int64_t every_;

@@ -15,6 +15,8 @@ namespace simloop {
 // derives from them (rows, steps + K) can overflow an int64.
 inline constexpr std::int64_t kMaxSteps = (std::int64_t{1} << 62) - 1;
 inline constexpr std::int64_t kMaxRecordEvery = kMaxSteps;
+// A batch's workers: threads from 1 to kMaxThreads, or 0 for one per core.
+inline constexpr int kMaxThreads = 4096;
 
 // A warning MuJoCo raised while stepping (mjData::warning). After some of
 // them, a bad acceleration for one, MuJoCo resets the state and goes on, so
@@ -153,5 +155,9 @@ struct KeptRows {
 // batch) the sum is weighed and the message names the largest. Every run of
 // the library that keeps its rows calls it before it allocates them.
 void check_kept_rows(const std::vector<KeptRows>& runs, std::uint64_t budget = trajectory_memory_budget());
+
+// Throws InvalidArgument unless threads is from 0 (one per core) to
+// kMaxThreads. Every batch calls it before any run starts.
+void check_threads(std::int64_t threads);
 
 }  // namespace simloop

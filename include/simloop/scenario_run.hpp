@@ -55,6 +55,11 @@ struct ScenarioConfig {
 // run_scenario() would. The commands call it before touching --out.
 void check_scenario(const Model& scene, const Scenario& scenario, const ScenarioConfig& config);
 
+// The names of the columns such a run records ("step" and "time" first: a
+// policy's observation is a row of them), after check_scenario's checks.
+[[nodiscard]] std::vector<std::string> scenario_columns(const Model& scene, const Scenario& scenario,
+                                                        const ScenarioConfig& config);
+
 // The timestep a run of `scenario` on `scene` with `config` steps at:
 // config's, else the scenario's, else the scene's own.
 [[nodiscard]] double run_timestep(const Model& scene, const Scenario& scenario, const ScenarioConfig& config);

@@ -29,6 +29,8 @@ enum class ShoveRng {
 [[nodiscard]] std::string_view rng_description(ShoveRng rng) noexcept;
 // The generator named `name` (as rng_name spells it), or nothing.
 [[nodiscard]] std::optional<ShoveRng> parse_rng(std::string_view name) noexcept;
+// The same, or InvalidArgument "rng must be 'mt19937_64' or 'numpy', got '...'".
+[[nodiscard]] ShoveRng rng_named(std::string_view name);
 
 // A run's one source of randomness: the draws a scenario's random
 // disturbances make, in order (the chapter's shove is one such disturbance).
@@ -69,7 +71,7 @@ struct Shove {
 // newtons = 6 + 6 * ((next64() >> 11) * 2^-53), numpy's uniform(6.0, 12.0);
 // sign from numpy's choice([-1.0, 1.0]): integers(0, 2) by Lemire's method
 // on the next 32-bit draw (the low half of the next 64-bit output).
-[[nodiscard]] Shove draw_shove(std::uint64_t seed, std::int64_t num_steps,
-                               ShoveRng rng = ShoveRng::kMt19937_64) noexcept;
+// num_steps: a run's, 1 to kMaxSteps (InvalidArgument otherwise).
+[[nodiscard]] Shove draw_shove(std::uint64_t seed, std::int64_t num_steps, ShoveRng rng = ShoveRng::kMt19937_64);
 
 }  // namespace simloop

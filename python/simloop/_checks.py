@@ -35,8 +35,8 @@ I64_MIN, I64_MAX = -(2**63), 2**63 - 1
 # (simloop::kMaxSteps, kMaxRecordEvery): steps + record_every fits in int64.
 MAX_STEPS = _core.MAX_STEPS
 MAX_RECORD_EVERY = _core.MAX_RECORD_EVERY
-# threads: None is one per core; Python's API takes 1 to this many.
-MAX_THREADS = 4096
+# threads: None (or 0) is one per core, else 1 to this many (simloop::kMaxThreads).
+MAX_THREADS = _core.MAX_THREADS
 # chunk_size (an executor's runs per chunk, the batch command's --chunk-size): 1 to this many.
 MAX_CHUNK_RUNS = 2**31 - 1
 
@@ -83,8 +83,13 @@ def _check_seed(name: str, value: object) -> int:
 
 
 def _check_threads(threads: object) -> int:
-    """threads for the core: None is 0 (one per core), else 1 to MAX_THREADS."""
-    return 0 if threads is None else _check_int("threads", threads, 1, MAX_THREADS)
+    """threads for the core: None is 0 (one per core), else an int the
+    library checks (1 to MAX_THREADS, or 0)."""
+    if threads is None:
+        return 0
+    number = _check_int("threads", threads)
+    _core.check_threads(number)
+    return number
 
 
 def _check_bool(name: str, value: object) -> bool:

@@ -27,6 +27,7 @@ SMOKE_STEPS: Final[int]
 SHOVE_STEPS: Final[int]
 MAX_STEPS: Final[int]
 MAX_RECORD_EVERY: Final[int]
+MAX_THREADS: Final[int]
 BOX_REST_Z: Final[float]
 # Every warning a run counts: MuJoCo's mjWARN_* and simloop_DIVERGED.
 WARNING_NAMES: Final[tuple[str, ...]]
@@ -308,7 +309,9 @@ def run_scenario_batch(
     keep_rows: bool = True,
     progress: _Progress = None,
 ) -> list[ScenarioResult]: ...
+def check_threads(threads: int) -> None: ...
 def check_scenario(scene: Model, scenario: Scenario, config: ScenarioConfig) -> None: ...
+def scenario_columns(scene: Model, scenario: Scenario, config: ScenarioConfig) -> list[str]: ...
 def commit_files(files: Sequence[PipedFile]) -> None: ...
 
 # The signals both commands stop on (include/simloop/signals.hpp).

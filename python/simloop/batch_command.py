@@ -159,10 +159,7 @@ def _parse_batch_args(args: List[str]) -> Dict[str, Any]:
         elif flag == "--seeds":
             opts["seeds"] = _parse_seeds(value)
         elif flag == "--timestep":
-            opts["timesteps"] = _parse_numbers(flag, value)
-            bad = [t for t in opts["timesteps"] if not t > 0]
-            if bad:
-                raise _BatchUsage(f"--timestep: {bad[0]!r} is not a positive number of seconds")
+            opts["timesteps"] = _parse_numbers(flag, value)  # their range: the library's (check_scenario)
         elif flag in ("--friction", "--mass", "--damping", "--gravity"):
             kind = flag[2:]
             name, has_name, values = value.rpartition("=")
@@ -186,9 +183,7 @@ def _parse_batch_args(args: List[str]) -> Dict[str, Any]:
                 raise _BatchUsage(f"{flag}: '{value}' is not a whole number from 1 to {most}")
             opts[flag[2:].replace("-", "_")] = int(value)
         elif flag == "--rng":
-            if value not in ("mt19937_64", "numpy"):
-                raise _BatchUsage(f"--rng: '{value}' is not mt19937_64 or numpy")
-            opts["rng"] = value
+            opts["rng"] = value  # the library's to check (ScenarioConfig)
         elif flag == "--scheduler":
             opts["scheduler"] = value
         elif flag == "--out":
@@ -245,14 +240,15 @@ def batch_command(args: List[str]) -> int:
                 return _fail(EXIT_USAGE, f"batch: --{kind}: {e}")
         axes.append([(kind, name, value) for value in values])
     try:
-        for t in opts["timesteps"]:
-            _core.check_scenario(
-                scene,
-                scenario._core,
-                _core.ScenarioConfig(0, opts["rng"], t, opts["steps"], opts["perturb"], _core.MAX_RECORD_EVERY),
-            )
+        _core.ScenarioConfig(0, opts["rng"], None, None, True, 1)
     except ValueError as e:
-        return _fail(EXIT_USAGE, f"batch: {e}")
+        return _fail(EXIT_USAGE, f"batch: --rng: {e}")
+    for t in opts["timesteps"]:
+        config = _core.ScenarioConfig(0, opts["rng"], t, opts["steps"], opts["perturb"], _core.MAX_RECORD_EVERY)
+        try:
+            _core.check_scenario(scene, scenario._core, config)
+        except ValueError as e:
+            return _fail(EXIT_USAGE, f"batch: {'' if t is None else '--timestep: '}{e}")
     count = math.prod([len(opts["seeds"]), len(opts["timesteps"]), *(len(axis) for axis in axes)])
     if count > MAX_BATCH_RUNS:
         return _fail(

@@ -179,8 +179,7 @@ def draw_shove(seed: int = 0, steps: int = 2000, rng: str = "mt19937_64") -> "_c
     The same Shove as run(seed=seed, steps=steps, rng=rng).shove: newtons,
     sign, force_y, start_step (steps // 2) and steps (50).
     """
-    # (the C++ draw takes any steps; a run's are from 1)
-    return _core.draw_shove(_check_seed("seed", seed), _check_int("steps", steps, 1), _check_str("rng", rng))
+    return _core.draw_shove(_check_seed("seed", seed), _check_int("steps", steps), _check_str("rng", rng))
 
 
 def run_batch(

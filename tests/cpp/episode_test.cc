@@ -58,8 +58,8 @@ int column(const std::vector<simloop::Column>& columns, const std::string& name)
 class Constant : public simloop::Policy {
  public:
   Constant(std::int64_t every, std::vector<double> ctrl) : Policy(every), ctrl_(std::move(ctrl)) {}
-  void decide(std::int64_t, const double*, int, double* ctrl, int nu) override {
-    std::copy(ctrl_.begin(), ctrl_.begin() + nu, ctrl);
+  void decide(std::int64_t, const double*, int, std::vector<double>& ctrl) override {
+    std::copy(ctrl_.begin(), ctrl_.begin() + static_cast<std::ptrdiff_t>(ctrl.size()), ctrl.begin());
   }
   int calls = 0;
 
@@ -71,12 +71,12 @@ class Constant : public simloop::Policy {
 class Steering : public simloop::Policy {
  public:
   Steering(std::int64_t every, int x_column) : Policy(every), x_(x_column) {}
-  void decide(std::int64_t step, const double* observation, int width, double* ctrl, int nu) override {
+  void decide(std::int64_t step, const double* observation, int width, std::vector<double>& ctrl) override {
     steps.push_back(step);
     observations.emplace_back(observation, observation + width);
     ctrl[0] = std::clamp(4.0 * (0.45 - observation[x_]), -1.0, 1.0);
     ctrl[1] = std::sin(5.0 * observation[1]);
-    actions.emplace_back(ctrl, ctrl + nu);
+    actions.push_back(ctrl);
   }
   std::vector<std::int64_t> steps;
   std::vector<std::vector<double>> observations, actions;
@@ -157,7 +157,7 @@ TEST(Policy, ForwardKeepingStateLeavesTheStateBitForBit) {
 TEST(Policy, AnExceptionStopsTheRunAndReachesTheCaller) {
   struct Failing : simloop::Policy {
     Failing() : Policy(10) {}
-    void decide(std::int64_t step, const double*, int, double*, int) override {
+    void decide(std::int64_t step, const double*, int, std::vector<double>&) override {
       if (step == 30) throw std::runtime_error("no idea at 30");
     }
   } policy;
@@ -168,6 +168,34 @@ TEST(Policy, AnExceptionStopsTheRunAndReachesTheCaller) {
                                            simloop::RunInputs::deciding(policy)),
                std::runtime_error);
   EXPECT_EQ(control.steps_done(), 30);
+}
+
+TEST(Policy, ItsCtrlIsCheckedNamingTheDecisionStep) {
+  struct Answering : simloop::Policy {
+    explicit Answering(std::vector<double> answer) : Policy(10), answer_(std::move(answer)) {}
+    void decide(std::int64_t step, const double*, int, std::vector<double>& ctrl) override {
+      if (step == 20) ctrl = answer_;
+    }
+    std::vector<double> answer_;
+  };
+  const simloop::Scenario scenario = constant_pusht();
+  const simloop::Model scene = simloop::load_scene(scenario);
+  const auto message = [&](std::vector<double> answer) -> std::string {
+    Answering policy(std::move(answer));
+    try {
+      (void)simloop::run_scenario(scene, scenario, {}, nullptr, nullptr, nullptr, simloop::RunInputs::deciding(policy));
+    } catch (const simloop::InvalidArgument& e) {
+      return e.what();
+    }
+    return "(no error)";
+  };
+  EXPECT_EQ(message({0.5}), "the policy must return 2 ctrl values, got 1 at decision step 20");
+  EXPECT_EQ(message({0.5, 0.5, 0.5}), "the policy must return 2 ctrl values, got 3 at decision step 20");
+  EXPECT_EQ(message({0.5, std::nan("")}),
+            "the policy returned a ctrl that is not finite at decision step 20: ctrl[1] is nan");
+  EXPECT_EQ(message({-HUGE_VAL, 0.0}),
+            "the policy returned a ctrl that is not finite at decision step 20: ctrl[0] is -inf");
+  EXPECT_EQ(message({0.5, -0.5}), "(no error)");
 }
 
 TEST(Policy, ControlEveryIsChecked) {
@@ -185,7 +213,7 @@ TEST(Policy, BatchesEqualSequentialRunsAtAnyThreadCount) {
   // A stateless policy (Steering keeps what it saw: not for several threads).
   struct Stateless : simloop::Policy {
     Stateless() : Policy(25) {}
-    void decide(std::int64_t, const double* o, int, double* ctrl, int) override {
+    void decide(std::int64_t, const double* o, int, std::vector<double>& ctrl) override {
       ctrl[0] = std::tanh(o[3]);
       ctrl[1] = -std::tanh(o[4]);
     }

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <string>
+#include <vector>
 
 #include "simloop/chapter_scene.hpp"
 #include "simloop/sim.hpp"
@@ -100,6 +101,14 @@ TEST(Fields, AWritableParameterIsTheSimsOwnAndChangesItsRun) {
   }
   EXPECT_GT(slippery.data()->qvel[0], 0.99);
   EXPECT_LT(rough.data()->qvel[0], 0.1);
+}
+
+TEST(Fields, TheWritableNamesAreTheWritableArraysInTheirOrder) {
+  const std::vector<std::string> writable = simloop::writable_model_field_names();
+  EXPECT_EQ(writable.front(), "body_mass");
+  for (const std::string& name : simloop::model_field_names()) {
+    EXPECT_EQ(std::count(writable.begin(), writable.end(), name), simloop::model_field_writable(name) ? 1 : 0) << name;
+  }
 }
 
 TEST(Fields, UnknownAndReadOnlyArraysAreRefusedNamingThem) {

@@ -58,6 +58,19 @@ TEST(ObjectNames, AnIndexOutOfRangeSaysHowManyTheSceneHas) {
   }
 }
 
+TEST(ObjectNames, AKindIsOneOfTheWordsOrAnErrorListingThem) {
+  EXPECT_EQ(simloop::object_type_of_kind("body"), mjOBJ_BODY);
+  EXPECT_EQ(simloop::object_type_of_kind("actuator"), mjOBJ_ACTUATOR);
+  try {
+    (void)simloop::object_type_of_kind("bodies");
+    FAIL() << "'bodies' was taken";
+  } catch (const simloop::InvalidArgument& e) {
+    const std::string message = e.what();
+    EXPECT_EQ(message.rfind("kind must be one of 'body', 'joint', ", 0), 0u) << message;
+    EXPECT_NE(message.find(", got 'bodies'"), std::string::npos) << message;
+  }
+}
+
 TEST(DidYouMean, SuggestsOnlyLikelyTypos) {
   EXPECT_EQ(simloop::did_you_mean("tblok", {"tblock", "pusher"}), "tblock");
   EXPECT_EQ(simloop::did_you_mean("PUSHER", {"tblock", "pusher"}), "pusher");

@@ -22,6 +22,7 @@
 #include "simloop/errors.hpp"
 #include "simloop/output.hpp"
 #include "simloop/run.hpp"
+#include "simloop/scenario_run.hpp"
 #include "simloop/sweep.hpp"
 #include "test_util.hpp"
 
@@ -68,6 +69,20 @@ TEST(Robustness, AKeptTrajectoryTooLargeIsRefusedSayingHowMuchAndWhatToChange) {
   // The same run with a coarser record fits.
   simloop::RunConfig sparse = config_with(10'000'000'000, 1'000'000'000);
   EXPECT_NO_THROW(simloop::check_kept_rows({simloop::kept_rows(sparse)}));
+}
+
+TEST(Robustness, ThreadsAreFromZeroToTheMostWeTake) {
+  EXPECT_NO_THROW(simloop::check_threads(0));
+  EXPECT_NO_THROW(simloop::check_threads(simloop::kMaxThreads));
+  EXPECT_EQ(test::error_of([] { simloop::check_threads(simloop::kMaxThreads + 1); }),
+            "threads must be from 1 to 4096, or 0 for one per core, got 4097");
+  EXPECT_EQ(test::error_of([] { simloop::check_threads(-1); }),
+            "threads must be from 1 to 4096, or 0 for one per core, got -1");
+  // A batch checks them before any run starts.
+  const simloop::Scenario scenario = simloop::Scenario::chapter();
+  const simloop::Model scene = simloop::load_scene(scenario);
+  EXPECT_THROW((void)simloop::run_scenario_batch(scene, scenario, {simloop::ScenarioConfig{}}, -1),
+               simloop::InvalidArgument);
 }
 
 TEST(Robustness, TheBudgetIsExactAndBatchesSumTheirRuns) {

@@ -64,6 +64,22 @@ void expect_equal_to_sequential(const char* file, const std::vector<simloop::Sce
   }
 }
 
+TEST(ScenarioColumns, AreTheRunsColumnsAndItsNamesAreChecked) {
+  simloop::Scenario scenario = scene_file("pusht.toml");
+  const simloop::Model scene = simloop::load_scene(scenario);
+  for (bool perturb : {true, false}) {
+    simloop::ScenarioConfig config;
+    config.steps = 5;
+    config.perturb = perturb;
+    const simloop::RunRecord run = simloop::run_scenario(scene, scenario, config);
+    std::vector<std::string> names;
+    for (const simloop::Column& c : run.columns) names.push_back(c.name);
+    EXPECT_EQ(simloop::scenario_columns(scene, scenario, config), names) << "perturb " << perturb;
+  }
+  scenario.record.bodies.push_back("no_such_body");
+  EXPECT_THROW((void)simloop::scenario_columns(scene, scenario, {}), simloop::InvalidArgument);
+}
+
 TEST(ScenarioBatch, PushTEqualsSequentialRunsWhateverTheThreadCount) {
   expect_equal_to_sequential("pusht.toml", configs({0, 1, 2, 3}, {0.002, 0.004}));
 }
@@ -155,9 +171,9 @@ TEST(ScenarioBatch, AFailingRunStopsTheOthersAtTheirNextChunk) {
   class Counting final : public simloop::Policy {
    public:
     explicit Counting(bool fail) : Policy(1), fail_(fail) {}
-    void decide(std::int64_t step, const double*, int, double* ctrl, int nu) override {
+    void decide(std::int64_t step, const double*, int, std::vector<double>& ctrl) override {
       if (fail_ && step == 2000) throw std::runtime_error("the policy failed (test)");
-      for (int a = 0; a < nu; ++a) ctrl[a] = 0.5;
+      std::fill(ctrl.begin(), ctrl.end(), 0.5);
     }
 
    private:

@@ -4,6 +4,9 @@
 
 #include <limits>
 
+#include "simloop/errors.hpp"
+#include "simloop/rows.hpp"
+
 namespace {
 
 struct Pin {
@@ -59,6 +62,13 @@ TEST(DrawShove, GeneratorNames) {
   EXPECT_EQ(simloop::parse_rng("numpy"), simloop::ShoveRng::kNumpy);
   EXPECT_EQ(simloop::parse_rng("mt19937_64"), simloop::ShoveRng::kMt19937_64);
   EXPECT_FALSE(simloop::parse_rng("pcg64").has_value());
+  EXPECT_EQ(simloop::rng_named("numpy"), simloop::ShoveRng::kNumpy);
+  try {
+    (void)simloop::rng_named("pcg64");
+    FAIL() << "pcg64 was taken";
+  } catch (const simloop::InvalidArgument& e) {
+    EXPECT_STREQ(e.what(), "rng must be 'mt19937_64' or 'numpy', got 'pcg64'");
+  }
   EXPECT_FALSE(simloop::parse_rng("").has_value());
 }
 
@@ -73,6 +83,17 @@ TEST(DrawShove, ScheduleFollowsTheChapter) {
   EXPECT_EQ(s.force_y(), s.sign * s.newtons);
   EXPECT_EQ(simloop::draw_shove(0, 301).start_step, 150);
   EXPECT_EQ(simloop::draw_shove(0, 1).start_step, 0);
+}
+
+TEST(DrawShove, TakesARunsSteps) {
+  try {
+    (void)simloop::draw_shove(0, 0);
+    FAIL() << "steps=0 was taken";
+  } catch (const simloop::InvalidArgument& e) {
+    EXPECT_STREQ(e.what(), "steps must be from 1 to 4611686018427387903, got 0");
+  }
+  EXPECT_THROW((void)simloop::draw_shove(0, simloop::kMaxSteps + 1), simloop::InvalidArgument);
+  EXPECT_EQ(simloop::draw_shove(0, simloop::kMaxSteps).start_step, simloop::kMaxSteps / 2);
 }
 
 TEST(DrawShove, StaysInTheChaptersRange) {

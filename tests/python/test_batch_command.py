@@ -163,6 +163,8 @@ def test_bad_input_is_one_line_exit_2_and_nothing_written(tmp_path):
         (["--damping", "pusher_slid=2"], "did you mean 'pusher_slide'?"),
         (["--seeds", "9:3"], "--seeds: '9:3' is an empty range"),
         (["--timestep", "0.002,x"], "--timestep: 'x' is not a number"),
+        (["--timestep", "0.002,-1"], "batch: --timestep: timestep must be a positive, finite number of seconds"),
+        (["--rng", "pcg"], "batch: --rng: rng must be 'mt19937_64' or 'numpy', got 'pcg'"),
         (["--scenario", "missing.toml"], "--scenario: missing.toml"),
         (["--threads", "0"], "--threads: '0' is not a whole number from 1"),
         (["--bogus"], "unknown argument '--bogus'"),

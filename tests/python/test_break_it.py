@@ -226,7 +226,7 @@ def test_plot_needs_a_python_with_simloop(tmp_path):
         ({"timesteps": []}, ValueError, "timesteps must not be empty"),
         ({"timesteps": [0.002, -1]}, ValueError, "timestep must be a positive, finite number of seconds, got -1.0"),
         ({"duration": 0}, ValueError, "duration must be a positive, finite number of seconds, got 0.0"),
-        ({"threads": 0}, ValueError, "threads must be an integer from 1 to 4096, got 0"),
+        ({"threads": 4097}, ValueError, "threads must be from 1 to 4096, or 0 for one per core, got 4097"),
     ],
 )
 def test_sweep_refuses_bad_arguments(kwargs, error, message):

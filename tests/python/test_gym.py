@@ -241,8 +241,8 @@ def test_the_docs_random_policy_runs():
 def test_vector_env_arguments_are_checked():
     with pytest.raises(ValueError, match="num_envs"):
         ScenarioVectorEnv(PUSHT_SCENARIO, 0)
-    with pytest.raises(ValueError, match="threads"):
-        ScenarioVectorEnv(PUSHT_SCENARIO, 2, threads=0)
+    with pytest.raises(ValueError, match=r"^threads must be from 1 to 4096, or 0 for one per core, got -1$"):
+        ScenarioVectorEnv(PUSHT_SCENARIO, 2, threads=-1)
     venv = ScenarioVectorEnv(PUSHT_SCENARIO, 2)
     with pytest.raises(ValueError, match="reset"):
         venv.step(np.zeros((2, 2)))

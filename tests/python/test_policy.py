@@ -102,9 +102,14 @@ def test_an_exception_in_the_policy_stops_the_run_and_names_the_decision_step():
 @pytest.mark.parametrize(
     "answer, error, words",
     [
-        ([0.0], ValueError, r"2 ctrl values .* got shape \(1,\) at decision step 20"),
+        ([0.0], ValueError, r"^the policy must return 2 ctrl values, got 1 at decision step 20$"),
+        ([0.0, 1.0, 2.0], ValueError, r"^the policy must return 2 ctrl values, got 3 at decision step 20$"),
         ([[0.0, 0.0]], ValueError, r"got shape \(1, 2\) at decision step 20"),
-        ([0.0, float("nan")], ValueError, r"not finite at decision step 20"),
+        (
+            [0.0, float("nan")],
+            ValueError,
+            r"^the policy returned a ctrl that is not finite at decision step 20: ctrl\[1\] is nan$",
+        ),
         ("left", ValueError, r"at decision step 20"),
         (None, ValueError, r"at decision step 20"),
     ],
@@ -193,3 +198,20 @@ def test_a_keyboard_interrupt_in_the_policy_stops_the_run():
 
     with pytest.raises(KeyboardInterrupt):
         simloop.run_scenario(constant_pusht(), policy=policy, control_every=10)
+
+
+def test_the_observation_names_are_the_runs_columns_checked_before_the_first_decision():
+    seen = []
+    for perturb in (True, False):
+        result = simloop.run_scenario(
+            constant_pusht(steps=30), perturb=perturb, policy=lambda obs: seen.append(obs.names) or [0, 0]
+        )
+        assert seen[-1] == tuple(result.column_names[2:])
+    assert len(seen[0]) > len(seen[-1])  # the disturbance's force columns come and go with it
+    calls = []
+    with pytest.raises(ValueError, match="no body named 'tblok'"):
+        simloop.run_scenario(
+            simloop.Scenario(scene=PUSHT, steps=30, record={"bodies": ["tblok"]}),
+            policy=lambda obs: calls.append(obs) or [0, 0],
+        )
+    assert calls == []

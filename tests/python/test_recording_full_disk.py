@@ -168,3 +168,14 @@ def test_waiting_for_the_recording_has_a_bound_and_hears_signals(tmp_path, sig):
         err = proc.stderr.read()
     assert line[:1] == ["KeyboardInterrupt" if sig == signal.SIGINT else "_Terminated"], err
     assert float(line[1]) - sent < 0.2
+
+
+def test_no_file_is_none():
+    # (The command's commit and commit_files share the conversion: a None
+    # among the files is refused, where the command's dereferenced it.)
+    from simloop import _core
+
+    with pytest.raises(ValueError, match=r"^also: None is not a PipedFile$"):
+        _core.commit_files([None])
+    with pytest.raises(ValueError, match=r"^also: None is not a PipedFile$"):
+        _core.Orchestration(["--smoke"]).commit([None])

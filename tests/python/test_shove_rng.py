@@ -119,3 +119,10 @@ def test_draw_shove_is_the_runs_shove_without_the_run():
         )
     with pytest.raises(ValueError, match="rng must be 'mt19937_64' or 'numpy', got 'pcg'"):
         simloop.draw_shove(rng="pcg")
+    # A run's steps, checked by the library (its words); Python checks the type.
+    with pytest.raises(ValueError, match=r"^steps must be from 1 to 4611686018427387903, got 0$"):
+        simloop.draw_shove(steps=0)
+    with pytest.raises(ValueError, match=r"^steps must be from 1 to 4611686018427387903, got 4611686018427387904$"):
+        simloop.draw_shove(steps=2**62)
+    with pytest.raises(TypeError, match=r"^steps must be an int, got 2.5 \(float\)$"):
+        simloop.draw_shove(steps=2.5)
