@@ -115,6 +115,11 @@ Json rounded(const double* values, int count) {
 
 std::map<std::string, std::size_t> recorded_bodies(const RunRecord& r) { return recorded_bodies(r.columns); }
 
+bool audited(const RunRecord& r) {
+  return std::any_of(r.columns.begin(), r.columns.end(),
+                     [](const Column& c) { return c.name == "energy_unexplained"; });
+}
+
 std::map<std::string, std::size_t> recorded_bodies(const std::vector<Column>& columns) {
   std::map<std::string, std::size_t> out;
   for (size_t c = 0; c < columns.size(); ++c) {

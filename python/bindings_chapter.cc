@@ -111,17 +111,6 @@ void bind_chapter(py::module_& m) {
       .def_property_readonly(
           "unrounded_metrics", [](const RunResult& r) { return metrics_dict(r.unrounded_metrics); },
           "metrics as computed, not rounded (metrics.json rounds to 6 decimals).")
-      .def_property_readonly(
-          "energy",
-          [](const RunResult& r) -> py::object {
-            if (!r.config.audit_energy) return py::none();
-            const simloop::EnergyTotals& e = r.energy;
-            return py::dict("energy_start"_a = e.energy_start, "energy_end"_a = e.energy_end,
-                            "work_actuator"_a = e.work_actuator, "work_shove"_a = e.work_shove,
-                            "work_passive"_a = e.work_passive, "work_constraint"_a = e.work_constraint,
-                            "work_constraint_positive"_a = e.work_constraint_positive, "unexplained"_a = e.unexplained);
-          },
-          "The energy audit's totals, J (None unless audit_energy).")
       .def_readonly("shove", &RunResult::shove)
       .def_readonly("config", &RunResult::config)
       .def("metrics_json", no_arguments<RunResult, &simloop::metrics_json>("RunResult.metrics_json"),

@@ -69,6 +69,17 @@ void bind_record(py::module_& m) {
       .def_readonly("sim_time", &RunRecord::sim_time)
       .def_readonly("warnings", &RunRecord::warnings)
       .def_property_readonly("steps", [](const RunRecord& r) { return r.schedule.steps; })
+      .def_property_readonly(
+          "energy",
+          [](const RunRecord& r) -> py::object {
+            if (!simloop::audited(r)) return py::none();
+            const simloop::EnergyTotals& e = r.energy;
+            return py::dict("energy_start"_a = e.energy_start, "energy_end"_a = e.energy_end,
+                            "work_actuator"_a = e.work_actuator, "work_shove"_a = e.work_shove,
+                            "work_passive"_a = e.work_passive, "work_constraint"_a = e.work_constraint,
+                            "work_constraint_positive"_a = e.work_constraint_positive, "unexplained"_a = e.unexplained);
+          },
+          "The energy audit's totals, J (None unless audit_energy).")
       .def_property_readonly("column_names",
                              [](const RunRecord& r) {
                                py::tuple names(r.columns.size());

@@ -134,15 +134,16 @@ void bind_scenario(py::module_& m) {
 
   py::class_<simloop::ScenarioConfig>(m, "ScenarioConfig")
       .def(py::init([](std::uint64_t seed, const std::string& rng, std::optional<double> timestep,
-                       std::optional<std::int64_t> steps, bool perturb, std::int64_t record_every) {
-             return simloop::ScenarioConfig{seed, shove_rng(rng), timestep, steps, perturb, record_every};
+                       std::optional<std::int64_t> steps, bool perturb, std::int64_t record_every, bool audit_energy) {
+             return simloop::ScenarioConfig{seed, shove_rng(rng), timestep, steps, perturb, record_every, audit_energy};
            }),
-           "seed"_a, "rng"_a, "timestep"_a, "steps"_a, "perturb"_a, "record_every"_a)
+           "seed"_a, "rng"_a, "timestep"_a, "steps"_a, "perturb"_a, "record_every"_a, "audit_energy"_a = false)
       .def("__repr__", [](const simloop::ScenarioConfig& c) {
         return "ScenarioConfig(seed=" + std::to_string(c.seed) + ", rng='" + std::string(simloop::rng_name(c.rng)) +
                "', timestep=" + (c.timestep ? simloop::python_float_repr(*c.timestep) : std::string("None")) +
                ", steps=" + (c.steps ? std::to_string(*c.steps) : std::string("None")) +
-               ", perturb=" + py_bool(c.perturb) + ", record_every=" + std::to_string(c.record_every) + ")";
+               ", perturb=" + py_bool(c.perturb) + ", record_every=" + std::to_string(c.record_every) +
+               (c.audit_energy ? ", audit_energy=True)" : ")");
       });
 
   // A run, or a batch, follows the scenario's controls; or the caller's

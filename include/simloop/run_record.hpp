@@ -46,6 +46,9 @@ struct RunRecord {
   EnergyTotals energy;              // with the energy audit; zeros without
 };
 
+// Whether the run had the energy audit (its columns are recorded).
+[[nodiscard]] bool audited(const RunRecord& record);
+
 // recorded_bodies(record.columns).
 [[nodiscard]] std::map<std::string, std::size_t> recorded_bodies(const RunRecord& record);
 

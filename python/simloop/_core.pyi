@@ -167,6 +167,11 @@ class _RunMetrics(TypedDict):
     steps: int
 
 class ScenarioResult(metaclass=_Pybind11Type):
+    # The energy audit's totals in J (energy_start, energy_end, work_actuator,
+    # work_shove, work_passive, work_constraint, work_constraint_positive,
+    # unexplained); None unless the run audited energy.
+    @property
+    def energy(self) -> Optional[dict[str, float]]: ...
     @property
     def name(self) -> str: ...
     @property
@@ -223,11 +228,6 @@ class RunResult(ScenarioResult):
     # metrics as computed, not rounded (metrics.json rounds to 6 decimals).
     @property
     def unrounded_metrics(self) -> _RunMetrics: ...
-    # The energy audit's totals in J (energy_start, energy_end, work_actuator,
-    # work_shove, work_passive, work_constraint, work_constraint_positive,
-    # unexplained); None unless the run audited energy.
-    @property
-    def energy(self) -> Optional[dict[str, float]]: ...
     @property
     def shove(self) -> Shove: ...
     @property
@@ -266,7 +266,14 @@ def check_scenario_names(scenario: Scenario, model: Model) -> None: ...
 
 class ScenarioConfig(metaclass=_Pybind11Type):
     def __init__(
-        self, seed: int, rng: str, timestep: Optional[float], steps: Optional[int], perturb: bool, record_every: int
+        self,
+        seed: int,
+        rng: str,
+        timestep: Optional[float],
+        steps: Optional[int],
+        perturb: bool,
+        record_every: int,
+        audit_energy: bool = False,
     ) -> None: ...
 
 # One of ScenarioResult.disturbances.

@@ -284,7 +284,13 @@ def _scenario_and_scene(scenario: ScenarioLike, model: ModelLike) -> Tuple[Scena
 
 
 def scenario_config(
-    seed: object, rng: object, timestep: object, steps: object, perturb: object, record_every: object
+    seed: object,
+    rng: object,
+    timestep: object,
+    steps: object,
+    perturb: object,
+    record_every: object,
+    audit_energy: object = False,
 ) -> _core.ScenarioConfig:
     """A scenario run's config: the types checked here; the values by the C++
     side (ScenarioConfig an unknown rng, the run the timestep, steps and
@@ -296,4 +302,5 @@ def scenario_config(
         None if steps is None else _check_int("steps", steps),
         _check_bool("perturb", perturb),
         _check_int("record_every", record_every),
+        _check_bool("audit_energy", audit_energy),
     )

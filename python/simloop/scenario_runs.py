@@ -64,6 +64,7 @@ def run_scenario(
     initial_state: Any = None,
     policy: Optional[Policy] = None,
     control_every: int = 1,
+    audit_energy: bool = False,
 ) -> ScenarioResult:
     """Runs a scenario (a Scenario or a scenario file's path) once.
 
@@ -103,9 +104,14 @@ def run_scenario(
     run and reaches the caller with "(policy at decision step N)" added to
     its message; a ctrl of the wrong shape or not finite raises ValueError
     naming the decision step.
+
+    audit_energy: account for every joule, as the chapter's run does: the
+    energy audit's seven columns after the scenario's own (energy and the
+    work of the actuators, the disturbances, passive forces and
+    constraints), its totals in result.energy; the physics is unchanged.
     """
     scenario, scene = _scenario_and_scene(scenario, model)
-    config = scenario_config(seed, rng, timestep, steps, perturb, record_every)
+    config = scenario_config(seed, rng, timestep, steps, perturb, record_every, audit_energy)
     own = _inputs_array("controls", controls, "shaped (steps, nu)")
     start = _inputs_array("initial_state", initial_state, "shaped (state_size,)")
     if policy is not None:
@@ -143,6 +149,7 @@ def run_scenario_batch(
     chunk_size: Optional[int] = None,
     policy: Optional[Policy] = None,
     control_every: int = 1,
+    audit_energy: bool = False,
 ) -> BatchTable[ScenarioResult]:
     """Runs a scenario once per (seed, timestep) pair, in parallel over one
     scene, and returns a simloop.BatchTable: one row per run.
@@ -179,8 +186,14 @@ def run_scenario_batch(
     others step on meanwhile). Results stay bitwise those of run_scenario()
     whatever `threads` is, as long as the policy's answer depends only on
     the observation it is given.
+
+    audit_energy: as for run_scenario(), each run's result (not the table's
+    metrics, which it does not change); not with an executor.
     """
+    audit = _check_bool("audit_energy", audit_energy)
     if executor is not None:
+        if audit:
+            raise ValueError("audit_energy is not sent to an executor: its batches keep metrics only")
         if model is not None:
             raise TypeError("model must be None with executor= (the scenario's scene is compiled on each worker)")
         if controls is not None or initial_state is not None or policy is not None:
@@ -213,7 +226,9 @@ def run_scenario_batch(
             chunk_size=chunk_size,
             progress=_check_progress(progress),
         )
-    configs = [_core.ScenarioConfig(s, rng, t, step_count, perturb, every) for s in seed_list for t in timestep_list]
+    configs = [
+        _core.ScenarioConfig(s, rng, t, step_count, perturb, every, audit) for s in seed_list for t in timestep_list
+    ]
     metrics_only = _check_bool("metrics_only", metrics_only)
     from .tables import _table  # numpy: `import simloop` does not load it
 

@@ -23,9 +23,10 @@ def same_bits(a, b):
 @pytest.mark.parametrize("seed", [0, 1, 2, 3])
 def test_every_column_the_chapter_and_its_scenario_both_name_holds_the_same_bits(seed, rng, audit):
     chapter = simloop.run(seed=seed, rng=rng, audit_energy=audit)
-    scenario = simloop.run_scenario(simloop.Scenario.chapter(), seed=seed, rng=rng)
+    scenario = simloop.run_scenario(simloop.Scenario.chapter(), seed=seed, rng=rng, audit_energy=audit)
     both = set(chapter.column_names) & set(scenario.column_names)
-    assert both >= SHARED, sorted(SHARED - both)
+    assert both >= SHARED | (set(simloop.ENERGY_COLUMN_NAMES) if audit else set()), sorted(SHARED - both)
+    assert chapter.energy == scenario.energy  # None without the audit
     assert chapter.rows == scenario.rows == 2001
     for name in sorted(both):
         assert same_bits(chapter.column(name), scenario.column(name)), name

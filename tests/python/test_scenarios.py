@@ -3,6 +3,7 @@ puck on two slides pushed by a two-link arm, a four-motor walker), from both
 commands and from Python: the same bytes, twice, and a recording of the
 scene's own shapes."""
 
+import concurrent.futures
 import json
 import subprocess
 from pathlib import Path
@@ -42,8 +43,7 @@ def test_both_commands_and_python_write_the_same_bytes_twice(tmp_path, name):
     assert result.trajectory.shape == (result.rows, len(header))
 
 
-ENERGY_COLUMNS = ["energy", "work_actuator", "work_shove", "work_passive", "work_constraint"]
-ENERGY_COLUMNS += ["work_constraint_positive", "energy_unexplained"]
+ENERGY_COLUMNS = list(simloop.ENERGY_COLUMN_NAMES)
 
 
 def test_a_scenarios_energy_audit_adds_its_columns_and_changes_nothing_else(tmp_path):
@@ -57,7 +57,12 @@ def test_a_scenarios_energy_audit_adds_its_columns_and_changes_nothing_else(tmp_
         (line,) = [x for x in proc.stdout.splitlines() if x.startswith("energy audit: change ")]
         assert "work by actuators " in line and "disturbances " in line and "unexplained " in line
         tables[python] = outputs(tmp_path / f"audit{python}")
-    assert tables[False] == tables[True]
+    result = simloop.run_scenario(SCENES / "pusht.toml", steps=400, audit_energy=True)
+    result.write(tmp_path / "api")
+    assert tables[False] == tables[True] == outputs(tmp_path / "api")
+    assert result.energy["unexplained"] == result.column("energy_unexplained")[-1]
+    with pytest.raises(ValueError, match="audit_energy is not sent to an executor"):
+        simloop.run_scenario_batch(SCENES / "pusht.toml", executor=concurrent.futures.Executor(), audit_energy=True)
     assert tables[False][0] == outputs(tmp_path / "plain")[0]  # the same metrics.json
     audited = [row.split(",") for row in tables[False][1].decode().splitlines()]
     unaudited = [row.split(",") for row in outputs(tmp_path / "plain")[1].decode().splitlines()]
