@@ -98,6 +98,13 @@ mjtObj object_type_counted_by(std::string_view size) noexcept {
 
 int object_count(const mjModel* m, mjtObj type) { return kind_of(type).count(m); }
 
+std::string object_name(const mjModel* m, mjtObj type, int id) {
+  const char* name = mj_id2name(m, type, id);
+  if (name && *name) return name;
+  if (type == mjOBJ_BODY && id == 0) return "world";
+  return kind_of(type).one + std::to_string(id);
+}
+
 std::vector<std::string> object_names(const mjModel* m, mjtObj type) {
   std::vector<std::string> names(static_cast<std::size_t>(object_count(m, type)));
   for (std::size_t i = 0; i < names.size(); ++i) {

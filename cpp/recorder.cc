@@ -20,12 +20,6 @@ namespace {
 
 constexpr double kNone = std::numeric_limits<double>::quiet_NaN();
 
-// "name", or "<kind><id>" for things the scene left unnamed.
-std::string name_of(const mjModel* m, mjtObj type, int id, const char* kind) {
-  const char* name = mj_id2name(m, type, id);
-  return name && *name ? std::string(name) : std::string(kind) + std::to_string(id);
-}
-
 std::vector<std::string> suffixed(const std::string& base, std::initializer_list<const char*> suffixes) {
   std::vector<std::string> out;
   for (const char* s : suffixes) out.push_back(base + s);
@@ -54,7 +48,7 @@ std::vector<std::string> joint_units(int type, bool velocity) {
 }  // namespace
 
 std::vector<std::string> joint_position_columns(const mjModel* m, int joint) {
-  return numbered(name_of(m, mjOBJ_JOINT, joint, "joint"), "_pos", joint_size(m->jnt_type[joint]).nq);
+  return numbered(object_name(m, mjOBJ_JOINT, joint), "_pos", joint_size(m->jnt_type[joint]).nq);
 }
 
 CtrlRange ctrl_range(const mjModel* m) {
@@ -91,16 +85,16 @@ Recorder::Recorder(const mjModel* m, const ResolvedScenario& scenario, const Sch
   for (const auto& c : scenario.controls) ctrl_of.insert(c.actuator);
   ctrl_of.insert(scenario.actuators.begin(), scenario.actuators.end());
   for (int a : ctrl_of) {
-    add(Source::kCtrl, a, 1, {name_of(m, mjOBJ_ACTUATOR, a, "actuator") + "_ctrl"}, {""}, false, true);
+    add(Source::kCtrl, a, 1, {object_name(m, mjOBJ_ACTUATOR, a) + "_ctrl"}, {""}, false, true);
   }
   std::set<int> pushed;
   for (const Schedule::Force& f : schedule.forces) pushed.insert(f.body);
   for (int b : pushed) {
-    add(Source::kXfrc, b, 6, suffixed(name_of(m, mjOBJ_BODY, b, "body"), {"_fx", "_fy", "_fz", "_tx", "_ty", "_tz"}),
+    add(Source::kXfrc, b, 6, suffixed(object_name(m, mjOBJ_BODY, b), {"_fx", "_fy", "_fz", "_tx", "_ty", "_tz"}),
         {"N", "N", "N", "N m", "N m", "N m"}, false, true);
   }
   for (int b : scenario.bodies) {
-    const std::string base = name_of(m, mjOBJ_BODY, b, "body");
+    const std::string base = object_name(m, mjOBJ_BODY, b);
     const std::vector<std::string> pose = suffixed(base, {"_x", "_y", "_z", "_qw", "_qx", "_qy", "_qz"});
     const std::vector<std::string> velocity = suffixed(base, {"_vx", "_vy", "_vz", "_wx", "_wy", "_wz"});
     // A free joint of the world holds exactly these numbers, as the chapter
@@ -117,23 +111,23 @@ Recorder::Recorder(const mjModel* m, const ResolvedScenario& scenario, const Sch
     }
   }
   for (int j : scenario.joints) {
-    const std::string base = name_of(m, mjOBJ_JOINT, j, "joint");
+    const std::string base = object_name(m, mjOBJ_JOINT, j);
     const int type = m->jnt_type[j];
     const auto [nq, nv] = joint_size(type);
     add(Source::kQpos, m->jnt_qposadr[j], nq, joint_position_columns(m, j), joint_units(type, false));
     add(Source::kQvel, m->jnt_dofadr[j], nv, numbered(base, "_vel", nv), joint_units(type, true));
   }
   for (int a : scenario.actuators) {
-    add(Source::kActuatorForce, a, 1, {name_of(m, mjOBJ_ACTUATOR, a, "actuator") + "_force"}, {"N or N m"});
+    add(Source::kActuatorForce, a, 1, {object_name(m, mjOBJ_ACTUATOR, a) + "_force"}, {"N or N m"});
   }
   for (int s : scenario.sensors) {
     add(Source::kSensor, m->sensor_adr[s], m->sensor_dim[s],
-        numbered(name_of(m, mjOBJ_SENSOR, s, "sensor"), "", m->sensor_dim[s]), {""});
+        numbered(object_name(m, mjOBJ_SENSOR, s), "", m->sensor_dim[s]), {""});
     reads_acceleration_stage_ = reads_acceleration_stage_ || m->sensor_needstage[s] == mjSTAGE_ACC;
   }
   for (int t : scenario.tendons) {  // a spatial tendon's metres, a fixed one's sum of its joints' coordinates
     const bool spatial = m->wrap_type[m->tendon_adr[t]] != mjWRAP_JOINT;
-    add(Source::kTendon, t, 2, suffixed(name_of(m, mjOBJ_TENDON, t, "tendon"), {"_length", "_vel"}),
+    add(Source::kTendon, t, 2, suffixed(object_name(m, mjOBJ_TENDON, t), {"_length", "_vel"}),
         spatial ? std::vector<std::string>{"m", "m/s"} : std::vector<std::string>{"m or rad", "m/s or rad/s"});
   }
   if (scenario.contacts) add(Source::kContacts, 0, 1, {"contacts"}, {""}, true);

@@ -14,6 +14,7 @@
 #include "run_detail.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/number_format.hpp"
+#include "simloop/object_names.hpp"
 #include "simloop/recorder.hpp"
 
 namespace simloop {
@@ -98,17 +99,12 @@ struct ChapterParts {
   double ctrl = 0.0;
 };
 
-std::string name_or(const mjModel* m, mjtObj type, int id, const char* kind) {
-  const char* name = mj_id2name(m, type, id);
-  return name && *name ? std::string(name) : std::string(kind) + std::to_string(id);
-}
-
 ChapterParts chapter_parts(const Model& model) {
   ChapterParts parts;
   parts.at = chapter_layout(model);
   parts.scenario = chapter_scenario(model);
-  parts.motor = name_or(model.get(), mjOBJ_ACTUATOR, 0, "actuator") + "_ctrl";
-  parts.pusher_joint = name_or(model.get(), mjOBJ_JOINT, parts.at.pusher_joint, "joint");
+  parts.motor = object_name(model.get(), mjOBJ_ACTUATOR, 0) + "_ctrl";
+  parts.pusher_joint = object_name(model.get(), mjOBJ_JOINT, parts.at.pusher_joint);
   parts.ctrl = parts.scenario.controls.front().schedule.front().second;
   return parts;
 }
@@ -129,7 +125,6 @@ RunResult chapter_result(RunRecord record, Trajectory trajectory, const ChapterR
   result.trajectory = std::move(trajectory);
   result.config = config;
   result.shove = draw_shove(config.seed, config.num_steps(), config.rng);
-  if (!config.perturb) result.disturbed_bodies.clear();
 
   // Inspect, as the chapter does: the box's free joint's position and linear
   // velocity, and the pusher's joint, in the final state.

@@ -52,8 +52,7 @@ RunRecord labelled(RunRecord result, const mjModel* m, const Scenario& scenario,
   result.rng = std::string(rng_name(config.rng));
   result.perturb = config.perturb;
   for (const Schedule::Force& f : result.schedule.forces) {
-    const char* name = mj_id2name(m, mjOBJ_BODY, f.body);
-    result.disturbed_bodies.push_back(name ? name : "body" + std::to_string(f.body));
+    result.disturbed_bodies.push_back(object_name(m, mjOBJ_BODY, f.body));
   }
   return result;
 }
@@ -213,8 +212,7 @@ std::vector<std::string> moving_bodies(const Model& scene) {
   const mjModel* m = scene.get();
   std::vector<std::string> out;
   for (int b : moving_body_ids(m)) {
-    const char* name = mj_id2name(m, mjOBJ_BODY, b);
-    out.push_back(name && *name ? std::string(name) : "body" + std::to_string(b));
+    out.push_back(object_name(m, mjOBJ_BODY, b));
   }
   return out;
 }

@@ -3,15 +3,10 @@
 #include <algorithm>
 #include <limits>
 
+#include "simloop/object_names.hpp"
+
 namespace simloop {
 namespace {
-
-std::string name_or(const mjModel* m, mjtObj type, int id, const char* kind) {
-  const char* name = mj_id2name(m, type, id);
-  if (name && *name) return name;
-  if (type == mjOBJ_BODY && id == 0) return "world";
-  return std::string(kind) + std::to_string(id);
-}
 
 GeomShape::Kind kind_of(int type) {
   switch (type) {
@@ -44,9 +39,9 @@ std::vector<GeomShape> scene_geometry(const mjModel* m) {
   for (int g = 0; g < m->ngeom; ++g) {
     if (m->geom_group[g] > 2) continue;  // hidden by default in MuJoCo's viewer
     GeomShape s;
-    s.name = name_or(m, mjOBJ_GEOM, g, "geom");
+    s.name = object_name(m, mjOBJ_GEOM, g);
     s.body_id = m->geom_bodyid[g];
-    s.body = name_or(m, mjOBJ_BODY, s.body_id, "body");
+    s.body = object_name(m, mjOBJ_BODY, s.body_id);
     s.kind = kind_of(m->geom_type[g]);
     const mjtNum* size = m->geom_size + 3 * g;
     switch (s.kind) {

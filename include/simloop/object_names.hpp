@@ -27,6 +27,10 @@ namespace simloop {
 [[nodiscard]] int object_count(const mjModel* m, mjtObj type);
 // Every object's name of a type, by id ("" for an unnamed one).
 [[nodiscard]] std::vector<std::string> object_names(const mjModel* m, mjtObj type);
+
+// One object's name, or its kind and index where the scene left it unnamed
+// ("body3", "joint0"): how columns, recordings and reports name it.
+[[nodiscard]] std::string object_name(const mjModel* m, mjtObj type, int id);
 // The kind an mjModel size counts ("ngeom": geoms, "nu": actuators),
 // mjOBJ_UNKNOWN for a size that counts no kind of object (nq, nv, nefc, ...).
 [[nodiscard]] mjtObj object_type_counted_by(std::string_view size) noexcept;
