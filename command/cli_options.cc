@@ -19,29 +19,6 @@
 namespace simloop::cli {
 namespace {
 
-// A plain decimal number: [-]digits[.digits][e[+-]digits], at least one
-// digit before the exponent. No spaces, '+' signs, hex, inf or nan: the same
-// strictness as the whole numbers get.
-bool plain_decimal(std::string_view s) {
-  size_t i = 0;
-  if (i < s.size() && s[i] == '-') ++i;
-  size_t digits = 0;
-  while (i < s.size() && s[i] >= '0' && s[i] <= '9') ++i, ++digits;
-  if (i < s.size() && s[i] == '.') {
-    ++i;
-    while (i < s.size() && s[i] >= '0' && s[i] <= '9') ++i, ++digits;
-  }
-  if (digits == 0) return false;
-  if (i < s.size() && (s[i] == 'e' || s[i] == 'E')) {
-    ++i;
-    if (i < s.size() && (s[i] == '+' || s[i] == '-')) ++i;
-    size_t exponent_digits = 0;
-    while (i < s.size() && s[i] >= '0' && s[i] <= '9') ++i, ++exponent_digits;
-    if (exponent_digits == 0) return false;
-  }
-  return i == s.size();
-}
-
 bool all_digits(std::string_view s) {
   if (s.empty()) return false;
   for (char c : s) {
@@ -202,6 +179,26 @@ Options parse_plot(int argc, const char* const* argv) {
 
 }  // namespace
 
+bool plain_decimal(std::string_view s) {
+  size_t i = 0;
+  if (i < s.size() && s[i] == '-') ++i;
+  size_t digits = 0;
+  while (i < s.size() && s[i] >= '0' && s[i] <= '9') ++i, ++digits;
+  if (i < s.size() && s[i] == '.') {
+    ++i;
+    while (i < s.size() && s[i] >= '0' && s[i] <= '9') ++i, ++digits;
+  }
+  if (digits == 0) return false;
+  if (i < s.size() && (s[i] == 'e' || s[i] == 'E')) {
+    ++i;
+    if (i < s.size() && (s[i] == '+' || s[i] == '-')) ++i;
+    size_t exponent_digits = 0;
+    while (i < s.size() && s[i] >= '0' && s[i] <= '9') ++i, ++exponent_digits;
+    if (exponent_digits == 0) return false;
+  }
+  return i == s.size();
+}
+
 Options parse(const std::vector<std::string>& args) {
   std::vector<const char*> argv = {"simloop"};
   for (const std::string& a : args) argv.push_back(a.c_str());
@@ -213,6 +210,7 @@ Options parse(int argc, const char* const* argv) {
   const char* timesteps_flag = "--duration";  // what set the sweep's timesteps
   int first = 1;
   if (argc > 1 && std::string_view(argv[1]) == "plot") return parse_plot(argc, argv);
+  if (argc > 1 && std::string_view(argv[1]) == "batch") return parse_batch(argc, argv);
   if (argc > 1 && std::string_view(argv[1]) == "sweep") {
     opts.command = Command::kSweep;
     first = 2;
@@ -347,10 +345,6 @@ Options parse(int argc, const char* const* argv) {
       opts.version = true;
     } else if (arg.rfind("-", 0) == 0) {
       throw UsageError("unknown option " + quoted_value(arg) + " (see --help)");
-    } else if (i == 1 && arg == "batch") {
-      // A command the Python package adds (pyarrow): not sim_loop's.
-      throw UsageError(std::string(arg) + " is a command of the Python package: python -m simloop " + std::string(arg) +
-                       " (see python -m simloop " + std::string(arg) + " --help)");
     } else {
       throw UsageError("unexpected argument " + quoted_value(arg) + " (see --help)");
     }

@@ -2,9 +2,11 @@
 // --model, --record-every, --help and --version, and the scenario flags
 // (--scenario, --body, --ctrl). Parsed in cli_options.cc; turned into what
 // runs (a scenario, its checks, its config) in cli_scenario.cc; --help in
-// cli_help.cc; what it was doing, for error lines, in cli_doing.cc.
+// cli_help.cc; what it was doing, for error lines, in cli_doing.cc; the
+// `batch` command's flags (python -m simloop's) in cli_batch.cc.
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
 #include <stdexcept>
 #include <string>
@@ -18,7 +20,47 @@
 
 namespace simloop::cli {
 
-enum class Command { kRun, kSweep, kPlot };
+enum class Command { kRun, kSweep, kPlot, kBatch };
+
+// The most runs one batch takes: python -m simloop holds each run's
+// parameters (196 bytes measured, so about 2 GB at this) before the first
+// starts. A larger study is split into batches.
+inline constexpr std::uint64_t kMaxBatchRuns = 10'000'000;
+// The most runs in one chunk (--chunk-size; an executor's chunk_size).
+inline constexpr std::int64_t kMaxChunkRuns = 2'147'483'647;
+
+// seeds first, first + step, ... up to last (inclusive: a range may end at 2^64-1).
+struct SeedRange {
+  std::uint64_t first = 0;
+  std::uint64_t last = 0;
+  std::uint64_t step = 1;
+  [[nodiscard]] std::uint64_t count() const noexcept { return (last - first) / step + 1; }
+};
+
+// One axis of a batch's grid: --friction, --mass, --damping or --gravity.
+struct BatchParam {
+  std::string kind;  // friction, mass, damping or gravity
+  std::string name;  // the geom, body or joint; "" : every one (gravity: always)
+  std::vector<double> values;
+};
+
+// `batch` (python -m simloop's): a scenario over seeds and a grid of scene
+// parameters. What the scene must check (names, values, the rng's name, the
+// timesteps' range) is the library's, once the scenario is loaded.
+struct BatchOptions {
+  std::string scenario;                 // --scenario FILE; "" : the chapter's run
+  std::vector<SeedRange> seeds = {{}};  // --seeds (default 0)
+  std::vector<double> timesteps;        // --timestep; empty: the scenario's own
+  std::vector<BatchParam> params;       // in the order given
+  std::int64_t steps = 0;               // --steps; 0: the scenario's length
+  std::string rng = "mt19937_64";       // --rng
+  bool perturb = true;                  // --no-perturb
+  std::string scheduler;                // --scheduler; "" : this machine's threads
+  int threads = 0;                      // --threads; 0: the command's default
+  std::int64_t chunk_size = 0;          // --chunk-size; 0: the command's default
+  std::filesystem::path out = "outputs/batch.parquet";
+  bool resume = false;
+};
 
 struct Options {
   Command command = Command::kRun;
@@ -33,7 +75,8 @@ struct Options {
   std::string plot_what;
   std::vector<std::filesystem::path> plot_compare;
   std::string plot_x = "auto";
-  bool plot = false;  // --plot: trajectory.png / sweep.png
+  BatchOptions batch;  // `batch`'s flags (cli_batch.cc)
+  bool plot = false;   // --plot: trajectory.png / sweep.png
   std::filesystem::path out = "outputs/ch0.1-sim-loop";
   std::string model_path;  // empty: the embedded pusher scene
   // Your scene, your loop (a scenario instead of the chapter's fixed run):
@@ -66,6 +109,13 @@ class UsageError : public std::runtime_error {
 [[nodiscard]] Options parse(int argc, const char* const* argv);
 // The same for the arguments alone, without the program's name.
 [[nodiscard]] Options parse(const std::vector<std::string>& args);
+// parse's for argv[1] == "batch" (cli_batch.cc). Its messages begin "batch: ".
+[[nodiscard]] Options parse_batch(int argc, const char* const* argv);
+
+// A plain decimal number: [-]digits[.digits][e[+-]digits], at least one
+// digit before the exponent. No spaces, '+' signs, hex, inf or nan: every
+// flag's numbers are read by this one rule.
+[[nodiscard]] bool plain_decimal(std::string_view s);
 
 // The scenario the quick flags describe (--body, --ctrl; a --scenario file
 // is read with Scenario::from_toml_file): the chapter's run on `scene` (the

@@ -38,10 +38,10 @@ std::string shape(const Result& result, bool scenario) {
 }  // namespace
 
 Orchestration::Orchestration(const std::vector<std::string>& args) : started_(std::chrono::steady_clock::now()) {
-  if (!args.empty() && args[0] == "plot") {  // parsed by the same parser, drawn by the Python package (matplotlib)
-    throw Failure(
-        kExitUsage,
-        "plot is a command of the Python package: python -m simloop plot (see python -m simloop plot --help)");
+  // Parsed by the same parser, run by the Python package (plot: matplotlib; batch: pyarrow, Dask).
+  if (!args.empty() && (args[0] == "plot" || args[0] == "batch")) {
+    throw Failure(kExitUsage, args[0] + " is a command of the Python package: python -m simloop " + args[0] +
+                                  " (see python -m simloop " + args[0] + " --help)");
   }
   try {
     opts_ = parse(args);

@@ -57,8 +57,54 @@ void bind_command(py::module_& m) {
       PyErr_SetObject(failure.ptr(), py::make_tuple(e.code, fs_str(e.what())).ptr());
     }
   });
+  m.attr("MAX_BATCH_RUNS") = cli::kMaxBatchRuns;
+  m.attr("MAX_CHUNK_RUNS") = cli::kMaxChunkRuns;
+  // `batch`'s flags, as python -m simloop batch takes them: None where the
+  // command's default (or the scenario's) applies.
+  py::class_<cli::BatchOptions>(m, "BatchCommandLine")
+      .def_property_readonly("scenario",
+                             [](const cli::BatchOptions& b) -> py::object {
+                               return b.scenario.empty() ? py::none() : py::object(fs_str(b.scenario));
+                             })
+      .def_property_readonly("seeds",
+                             [](const cli::BatchOptions& b) {
+                               py::list seeds;  // at most kMaxBatchRuns
+                               for (const cli::SeedRange& r : b.seeds) {
+                                 for (std::uint64_t s = r.first;; s += r.step) {
+                                   seeds.append(s);
+                                   if (r.last - s < r.step) break;  // (s + step may pass 2^64-1)
+                                 }
+                               }
+                               return seeds;
+                             })
+      .def_readonly("timesteps", &cli::BatchOptions::timesteps)
+      .def_property_readonly("params",
+                             [](const cli::BatchOptions& b) {
+                               py::list params;
+                               for (const cli::BatchParam& p : b.params) {
+                                 params.append(py::make_tuple(p.kind, fs_str(p.name), p.values));
+                               }
+                               return params;
+                             })
+      .def_property_readonly(
+          "steps", [](const cli::BatchOptions& b) { return b.steps ? py::cast(b.steps) : py::object(py::none()); })
+      .def_property_readonly("rng", [](const cli::BatchOptions& b) { return fs_str(b.rng); })
+      .def_readonly("perturb", &cli::BatchOptions::perturb)
+      .def_property_readonly("scheduler",
+                             [](const cli::BatchOptions& b) -> py::object {
+                               return b.scheduler.empty() ? py::none() : py::object(fs_str(b.scheduler));
+                             })
+      .def_property_readonly(
+          "threads",
+          [](const cli::BatchOptions& b) { return b.threads ? py::cast(b.threads) : py::object(py::none()); })
+      .def_property_readonly(
+          "chunk_size",
+          [](const cli::BatchOptions& b) { return b.chunk_size ? py::cast(b.chunk_size) : py::object(py::none()); })
+      .def_property_readonly("out", [](const cli::BatchOptions& b) { return fs_str(b.out.native()); })
+      .def_readonly("resume", &cli::BatchOptions::resume);
   // The command line, parsed by sim_loop's own parser, as the recording reads it.
   py::class_<cli::Options>(m, "CommandLine")
+      .def_readonly("batch", &cli::Options::batch)
       .def_readonly("sweep_timesteps", &cli::Options::sweep_timesteps)
       .def_readonly("run", &cli::Options::run)
       .def_readonly("rerun", &cli::Options::rerun)

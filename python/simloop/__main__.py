@@ -6,7 +6,8 @@ report and failures. This process adds its part: its report through
 sys.stdout, its progress bar, and, as in the chapter, a rerun recording
 sim_loop.rrd by default (--no-rerun to skip), drawn from the rows the run
 kept, and --plot drawn here. `plot` and `batch` are its own
-commands.
+commands, their flags parsed by the same parser (command/cli_options.cc,
+command/cli_batch.cc).
 """
 
 from __future__ import annotations

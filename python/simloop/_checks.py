@@ -37,8 +37,9 @@ MAX_STEPS = _core.MAX_STEPS
 MAX_RECORD_EVERY = _core.MAX_RECORD_EVERY
 # threads: None (or 0) is one per core, else 1 to this many (simloop::kMaxThreads).
 MAX_THREADS = _core.MAX_THREADS
-# chunk_size (an executor's runs per chunk, the batch command's --chunk-size): 1 to this many.
-MAX_CHUNK_RUNS = 2**31 - 1
+# chunk_size (an executor's runs per chunk, the batch command's --chunk-size): 1 to this many
+# (simloop::cli::kMaxChunkRuns).
+MAX_CHUNK_RUNS = _core.MAX_CHUNK_RUNS
 
 # One wording for an argument's type, the compiled methods' and the
 # package's (python/bindings_args.cc): repr on one line, with the type's name;

@@ -13,7 +13,6 @@ import time
 from typing import TYPE_CHECKING, Any, Dict, List
 
 from . import _core
-from ._checks import MAX_CHUNK_RUNS, MAX_STEPS, MAX_THREADS
 from ._command import EXIT_RUN_FAILED, EXIT_USAGE, _fail, _peak_memory_mib, _ReportLost, _stopped_by
 from .scenario import Scenario
 
@@ -53,144 +52,31 @@ chunks already done stay in FILE.parts/ for --resume, and FILE is written only
 once it is complete."""
 
 
-class _BatchUsage(ValueError):
-    pass
-
-
-# The most runs one batch takes: the client holds each run's parameters (196
-# bytes measured, so about 2 GB at this) before the first starts. Split a
-# larger study into batches.
-MAX_BATCH_RUNS = 10**7
-
-
-def _is_whole(text: str) -> bool:
-    """ASCII digits only (str.isdigit also takes '²', which int() refuses)."""
-    return text.isascii() and text.isdigit()
-
-
-def _parse_seeds(text: str) -> List[int]:
-    ranges: List[range] = []
-    for part in text.split(","):
-        fields = part.split(":")
-        if not all(_is_whole(f) for f in fields) or len(fields) > 3 or not part:
-            raise _BatchUsage(f"--seeds: '{text}' is not seeds (N, A:B for A to B-1, A:B:STEP, joined by commas)")
-        numbers = [int(f) for f in fields]
-        if len(numbers) == 1:
-            ranges.append(range(numbers[0], numbers[0] + 1))
-        else:
-            step = numbers[2] if len(numbers) == 3 else 1
-            if step == 0 or numbers[1] <= numbers[0]:
-                raise _BatchUsage(f"--seeds: '{part}' is an empty range (A:B runs A to B-1)")
-            ranges.append(range(numbers[0], numbers[1], step))
-        if ranges[-1][-1] > 2**64 - 1:
-            raise _BatchUsage(f"--seeds: '{text}': seeds go from 0 to 2^64-1")
-    count = sum(len(r) for r in ranges)  # before any list is made of them
-    if count > MAX_BATCH_RUNS:
-        raise _BatchUsage(f"--seeds: '{text}' is {count} seeds; a batch runs at most {MAX_BATCH_RUNS} (split it)")
-    return [seed for r in ranges for seed in r]
-
-
-def _parse_numbers(flag: str, text: str) -> List[float]:
-    values = []
-    for item in text.split(","):
-        try:
-            value = float(item)
-        except ValueError:
-            raise _BatchUsage(f"{flag}: '{item}' is not a number (values are joined by commas)") from None
-        if not math.isfinite(value):
-            raise _BatchUsage(f"{flag}: '{item}' is not a finite number")
-        values.append(value)
-    return values
+# The most runs one batch takes (the client holds each run's parameters):
+# command/cli_options.hpp's, as the parser that counts the seeds has it.
+MAX_BATCH_RUNS = _core.MAX_BATCH_RUNS
 
 
 def _parse_batch_args(args: List[str]) -> Dict[str, Any]:
-    # Any: each option's own type (str, list of seeds, timesteps, parameters, bool, ...), checked as parsed.
-    opts: Dict[str, Any] = {
-        "scenario": None,
-        "seeds": [0],
-        "timesteps": [None],
-        "params": [],
-        "steps": None,
-        "rng": "mt19937_64",
-        "perturb": True,
-        "scheduler": None,
-        "threads": None,
-        "chunk_size": None,
-        "out": "outputs/batch.parquet",
-        "resume": False,
-        "help": False,
+    """The flags, parsed and refused by the commands' one parser
+    (command/cli_batch.cc): ValueError in one line naming the flag and the value."""
+    parsed = _core.parse_command_line(["batch", *args])
+    b = parsed.batch
+    return {
+        "scenario": b.scenario,
+        "seeds": b.seeds,
+        "timesteps": b.timesteps or [None],
+        "params": b.params,
+        "steps": b.steps,
+        "rng": b.rng,
+        "perturb": b.perturb,
+        "scheduler": b.scheduler,
+        "threads": b.threads,
+        "chunk_size": b.chunk_size,
+        "out": b.out,
+        "resume": b.resume,
+        "help": parsed.help,
     }
-    with_value = {
-        "--scenario",
-        "--seeds",
-        "--timestep",
-        "--friction",
-        "--mass",
-        "--damping",
-        "--gravity",
-        "--steps",
-        "--rng",
-        "--scheduler",
-        "--threads",
-        "--chunk-size",
-        "--out",
-    }
-    i = 0
-    while i < len(args):
-        flag, eq, value = args[i].partition("=") if args[i].startswith("--") else (args[i], "", "")
-        if flag in ("--resume", "--no-perturb", "--help", "-h"):
-            if eq:
-                raise _BatchUsage(f"{flag} takes no value, got '{args[i]}'")
-            opts["resume" if flag == "--resume" else "perturb" if flag == "--no-perturb" else "help"] = (
-                flag != "--no-perturb"
-            )
-            i += 1
-            continue
-        if flag not in with_value:
-            raise _BatchUsage(f"unknown argument '{args[i]}' (see batch --help)")
-        if not eq:
-            if i + 1 >= len(args):
-                raise _BatchUsage(f"{flag} needs a value")
-            i += 1
-            value = args[i]
-        i += 1
-        if flag == "--scenario":
-            opts["scenario"] = value
-        elif flag == "--seeds":
-            opts["seeds"] = _parse_seeds(value)
-        elif flag == "--timestep":
-            opts["timesteps"] = _parse_numbers(flag, value)  # their range: the library's (check_scenario)
-        elif flag in ("--friction", "--mass", "--damping", "--gravity"):
-            kind = flag[2:]
-            name, has_name, values = value.rpartition("=")
-            if kind == "mass" and not has_name:
-                raise _BatchUsage(f"--mass: '{value}' needs a body: --mass BODY=KG,KG,...")
-            if kind == "gravity" and has_name:
-                raise _BatchUsage(
-                    f"--gravity: '{value}': gravity is the whole scene's, give values only: --gravity G,G,..."
-                )
-            if has_name and not name:
-                raise _BatchUsage(f"{flag}: '{value}' has an empty name before '='")
-            if any((k, n) == (kind, name) for k, n, _ in opts["params"]):
-                raise _BatchUsage(
-                    f"{flag}: '{value}': {kind} {('of ' + repr(name)) if name else 'of everything'} is given twice"
-                )
-            opts["params"].append((kind, name, _parse_numbers(flag, values)))
-        elif flag in ("--steps", "--threads", "--chunk-size"):
-            # The most each takes: as the API's steps, threads and chunk_size.
-            most = {"--steps": MAX_STEPS, "--threads": MAX_THREADS, "--chunk-size": MAX_CHUNK_RUNS}[flag]
-            if not _is_whole(value) or not 1 <= int(value) <= most:
-                raise _BatchUsage(f"{flag}: '{value}' is not a whole number from 1 to {most}")
-            opts[flag[2:].replace("-", "_")] = int(value)
-        elif flag == "--rng":
-            opts["rng"] = value  # the library's to check (ScenarioConfig)
-        elif flag == "--scheduler":
-            opts["scheduler"] = value
-        elif flag == "--out":
-            if not value:
-                raise _BatchUsage("--out: '' names no file")
-            opts["out"] = value
-    return opts
 
 
 def batch_command(args: List[str]) -> int:
@@ -198,8 +84,8 @@ def batch_command(args: List[str]) -> int:
     started = time.perf_counter()
     try:
         opts = _parse_batch_args(args)
-    except _BatchUsage as e:
-        return _fail(EXIT_USAGE, f"batch: {e}")
+    except ValueError as e:
+        return _fail(EXIT_USAGE, str(e))
     if opts["help"]:
         print(BATCH_USAGE)
         return 0

@@ -2,7 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdint>
 #include <initializer_list>
+#include <limits>
+#include <string>
 #include <vector>
 
 #include "simloop/errors.hpp"
@@ -196,6 +199,170 @@ TEST(CliOptions, AHugeRunIsTheLibrarysToRefuseOnlyIfItKeepsItsRows) {
   } catch (const simloop::InvalidArgument& e) {
     EXPECT_NE(std::string(e.what()).find("raise record_every"), std::string::npos) << e.what();
   }
+}
+
+// `batch` (python -m simloop's): parse_batch, command/cli_batch.cc.
+std::vector<std::uint64_t> seeds(const simloop::cli::BatchOptions& b) {
+  std::vector<std::uint64_t> out;
+  for (const auto& r : b.seeds) {
+    for (std::uint64_t s = r.first;; s += r.step) {
+      out.push_back(s);
+      if (r.last - s < r.step) break;  // (s + step may pass 2^64-1)
+    }
+  }
+  return out;
+}
+
+TEST(CliBatch, DefaultsAreOneRunOfTheScenario) {
+  const auto o = parse({"batch"});
+  EXPECT_EQ(o.command, simloop::cli::Command::kBatch);
+  EXPECT_EQ(seeds(o.batch), std::vector<std::uint64_t>{0});
+  EXPECT_TRUE(o.batch.timesteps.empty());
+  EXPECT_TRUE(o.batch.params.empty());
+  EXPECT_EQ(o.batch.steps, 0);
+  EXPECT_EQ(o.batch.rng, "mt19937_64");
+  EXPECT_TRUE(o.batch.perturb);
+  EXPECT_EQ(o.batch.out, "outputs/batch.parquet");
+  EXPECT_FALSE(o.batch.resume);
+  EXPECT_FALSE(o.help);
+}
+
+TEST(CliBatch, TakesEveryFlagWithOrWithoutEquals) {
+  const auto o = parse({"batch",
+                        "--scenario",
+                        "s.toml",
+                        "--seeds=0:6,40,10:20:5",
+                        "--timestep",
+                        "0.002,1e-3",
+                        "--friction",
+                        "0.5,1",
+                        "--friction=box_geom=2",
+                        "--mass",
+                        "box=3",
+                        "--damping",
+                        "j=0",
+                        "--gravity",
+                        "9.81",
+                        "--steps",
+                        "300",
+                        "--rng",
+                        "numpy",
+                        "--no-perturb",
+                        "--scheduler",
+                        "tcp://h:8786",
+                        "--threads",
+                        "2",
+                        "--chunk-size=7",
+                        "--out",
+                        "b.parquet",
+                        "--resume",
+                        "-h"});
+  const simloop::cli::BatchOptions& b = o.batch;
+  EXPECT_EQ(b.scenario, "s.toml");
+  EXPECT_EQ(seeds(b), (std::vector<std::uint64_t>{0, 1, 2, 3, 4, 5, 40, 10, 15}));
+  EXPECT_EQ(b.timesteps, (std::vector<double>{0.002, 0.001}));
+  ASSERT_EQ(b.params.size(), 5u);
+  EXPECT_EQ(b.params[0].kind, "friction");
+  EXPECT_EQ(b.params[0].name, "");
+  EXPECT_EQ(b.params[0].values, (std::vector<double>{0.5, 1.0}));
+  EXPECT_EQ(b.params[1].name, "box_geom");
+  EXPECT_EQ(b.params[2].kind, "mass");
+  EXPECT_EQ(b.params[2].name, "box");
+  EXPECT_EQ(b.params[4].kind, "gravity");
+  EXPECT_EQ(b.steps, 300);
+  EXPECT_EQ(b.rng, "numpy");  // the library's to check, once the scenario is loaded
+  EXPECT_FALSE(b.perturb);
+  EXPECT_EQ(b.scheduler, "tcp://h:8786");
+  EXPECT_EQ(b.threads, 2);
+  EXPECT_EQ(b.chunk_size, 7);
+  EXPECT_EQ(b.out, "b.parquet");
+  EXPECT_TRUE(b.resume);
+  EXPECT_TRUE(o.help);
+}
+
+TEST(CliBatch, SeedsRunToTheLastOne) {
+  const auto b = parse({"batch", "--seeds", "18446744073709551614:18446744073709551616"}).batch;
+  EXPECT_EQ(seeds(b).size(), 2u);
+  EXPECT_EQ(b.seeds[0].last, std::numeric_limits<std::uint64_t>::max());
+  EXPECT_EQ(parse({"batch", "--seeds", "5:6:99999999999999999999999"}).batch.seeds[0].count(), 1u);
+  EXPECT_EQ(usage_error({"batch", "--seeds", "18446744073709551616"}),
+            "batch: --seeds: '18446744073709551616': seeds go from 0 to 2^64-1");
+  EXPECT_EQ(usage_error({"batch", "--seeds", "0:18446744073709551617"}),
+            "batch: --seeds: '0:18446744073709551617': seeds go from 0 to 2^64-1");
+}
+
+TEST(CliBatch, RefusesSeedsInOneLineNamingThem) {
+  for (const char* bad : {"", "1,", "a", "\xc2\xb2", "1:2:3:4", "0::2", "-1", "+1", " 1"}) {
+    EXPECT_EQ(
+        usage_error({"batch", "--seeds", bad}),
+        "batch: --seeds: '" + std::string(bad) + "' is not seeds (N, A:B for A to B-1, A:B:STEP, joined by commas)");
+  }
+  EXPECT_EQ(usage_error({"batch", "--seeds", "0:4,9:3"}),
+            "batch: --seeds: '9:3' is an empty range (A:B runs A to B-1)");
+  EXPECT_EQ(usage_error({"batch", "--seeds", "0:4:0"}),
+            "batch: --seeds: '0:4:0' is an empty range (A:B runs A to B-1)");
+  // Counted before any is listed, over every range.
+  EXPECT_EQ(usage_error({"batch", "--seeds", "0:10000000000"}),
+            "batch: --seeds: '0:10000000000' is 10000000000 seeds; a batch runs at most 10000000 (split it)");
+  EXPECT_EQ(usage_error({"batch", "--seeds", "0:18446744073709551616,0:18446744073709551616"}),
+            "batch: --seeds: '0:18446744073709551616,0:18446744073709551616' is 36893488147419103232 seeds; a batch "
+            "runs at most 10000000 (split it)");
+  EXPECT_EQ(parse({"batch", "--seeds", "0:10000000"}).batch.seeds[0].count(), simloop::cli::kMaxBatchRuns);
+}
+
+TEST(CliBatch, RefusesNumbersThatAreNotFinite) {
+  EXPECT_EQ(usage_error({"batch", "--timestep", "0.002,x"}),
+            "batch: --timestep: 'x' is not a number (values are joined by commas)");
+  EXPECT_EQ(usage_error({"batch", "--friction", "1,"}),
+            "batch: --friction: '' is not a number (values are joined by commas)");
+  EXPECT_EQ(usage_error({"batch", "--gravity", "0x10"}),
+            "batch: --gravity: '0x10' is not a number (values are joined by commas)");
+  for (const char* bad : {"inf", "-Infinity", "nan", "1e999"}) {
+    EXPECT_EQ(usage_error({"batch", "--damping", bad}),
+              "batch: --damping: '" + std::string(bad) + "' is not a finite number");
+  }
+  // A value's range is the library's: a negative timestep or friction parses.
+  EXPECT_EQ(parse({"batch", "--timestep", "-1", "--friction", "-1"}).batch.timesteps, std::vector<double>{-1.0});
+}
+
+TEST(CliBatch, RefusesParametersWithoutTheirName) {
+  EXPECT_EQ(usage_error({"batch", "--mass", "3"}), "batch: --mass: '3' needs a body: --mass BODY=KG,KG,...");
+  EXPECT_EQ(usage_error({"batch", "--gravity", "g=9"}),
+            "batch: --gravity: 'g=9': gravity is the whole scene's, give values only: --gravity G,G,...");
+  EXPECT_EQ(usage_error({"batch", "--friction", "=1"}), "batch: --friction: '=1' has an empty name before '='");
+  EXPECT_EQ(usage_error({"batch", "--friction", "1", "--friction", "2"}),
+            "batch: --friction: '2': friction of everything is given twice");
+  EXPECT_EQ(usage_error({"batch", "--mass", "box=1", "--mass=box=2"}),
+            "batch: --mass: 'box=2': mass of 'box' is given twice");
+  // The last '=' ends the name.
+  const auto b = parse({"batch", "--damping", "a=b=1", "--damping", "1"}).batch;
+  EXPECT_EQ(b.params[0].name, "a=b");
+  EXPECT_EQ(b.params[1].name, "");
+}
+
+TEST(CliBatch, RefusesCountsOutsideTheirRange) {
+  EXPECT_EQ(usage_error({"batch", "--threads", "0"}), "batch: --threads: '0' is not a whole number from 1 to 4096");
+  EXPECT_EQ(usage_error({"batch", "--threads", "4611686018427387903"}),
+            "batch: --threads: '4611686018427387903' is not a whole number from 1 to 4096");
+  EXPECT_EQ(usage_error({"batch", "--chunk-size", "2147483648"}),
+            "batch: --chunk-size: '2147483648' is not a whole number from 1 to 2147483647");
+  EXPECT_EQ(usage_error({"batch", "--steps", "\xc2\xb2"}),
+            "batch: --steps: '\xc2\xb2' is not a whole number from 1 to " + std::to_string(simloop::kMaxSteps));
+  EXPECT_EQ(parse({"batch", "--steps", "4611686018427387903"}).batch.steps, simloop::kMaxSteps);
+}
+
+TEST(CliBatch, RefusesWhatIsNotAFlagOrLacksItsValue) {
+  EXPECT_EQ(usage_error({"batch", "--bogus"}), "batch: unknown argument '--bogus' (see batch --help)");
+  EXPECT_EQ(usage_error({"batch", "seeds"}), "batch: unknown argument 'seeds' (see batch --help)");
+  EXPECT_EQ(usage_error({"batch", "--seed", "1"}), "batch: unknown argument '--seed' (see batch --help)");
+  EXPECT_EQ(usage_error({"batch", "--out"}), "batch: --out needs a value");
+  EXPECT_EQ(usage_error({"batch", "--out="}), "batch: --out: '' names no file");
+  EXPECT_EQ(usage_error({"batch", "--scenario", ""}), "batch: --scenario: '' names no file");
+  EXPECT_EQ(usage_error({"batch", "--resume=yes"}), "batch: --resume takes no value, got '--resume=yes'");
+  EXPECT_EQ(usage_error({"batch", "--seeds", "\x1b[2J"}),
+            "batch: --seeds: '\\x1b[2J' is not seeds (N, A:B for A to B-1, A:B:STEP, joined by commas)");
+  // A value may begin with --, as the flag's next argument.
+  EXPECT_EQ(parse({"batch", "--out", "--resume"}).batch.out, "--resume");
 }
 
 }  // namespace

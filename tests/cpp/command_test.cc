@@ -49,6 +49,18 @@ TEST(Command, PlotIsThePythonPackagesCommand) {
   EXPECT_FALSE(fs::exists(dir.path() / "outputs"));
 }
 
+// So is batch (pyarrow, Dask).
+TEST(Command, BatchIsThePythonPackagesCommand) {
+  test::TempDir dir;
+  const Outcome o = sim_loop(dir.path(), {"batch", "--seeds", "0:4"});
+  EXPECT_EQ(o.exit_code, 2);
+  EXPECT_EQ(o.err,
+            "sim_loop: batch is a command of the Python package: python -m simloop batch (see python -m simloop "
+            "batch --help)\n");
+  EXPECT_TRUE(o.out.empty());
+  EXPECT_FALSE(fs::exists(dir.path() / "outputs"));
+}
+
 TEST(Command, VersionIsTheProjectVersion) {
   test::TempDir dir;
   const Outcome o = sim_loop(dir.path(), {"--version"});
