@@ -28,6 +28,8 @@ inline constexpr double kStableSink = 0.001;      // m
 inline constexpr double kBoxRestZ = 0.05;         // m, the chapter's box at rest
 inline constexpr double kBreakItTimestep = 0.05;  // s, Break It's: 25 times the chapter's
 
+// A point of the chapter's sweep: its scenario's point (ScenarioSweepPoint)
+// as the chapter reads it, judged by the criterion above.
 struct SweepPoint {
   double timestep = 0.0;
   std::int64_t steps = 0;
