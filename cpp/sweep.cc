@@ -98,8 +98,8 @@ int sweep_edge(const std::vector<Point>& points, Passes passes) {
 class BodyExtremes final : public RowSink {
  public:
   void describe(const std::vector<Column>& columns) override {
-    for (const auto& [name, column] : recorded_bodies(columns)) bodies_.push_back(column);
-    std::sort(bodies_.begin(), bodies_.end());  // the columns' order, as ScenarioSweepResult::bodies
+    for (const auto& [name, column] : recorded_bodies(columns)) bodies_.push_back({column, name});
+    std::sort(bodies_.begin(), bodies_.end());  // the columns' order
     peak_z_.assign(bodies_.size(), -INFINITY);
     max_abs_y_.assign(bodies_.size(), 0.0);
   }
@@ -107,7 +107,7 @@ class BodyExtremes final : public RowSink {
   void write(const double* rows, std::int64_t count) override {
     for (std::int64_t i = 0; i < count; ++i) {
       for (std::size_t b = 0; b < bodies_.size(); ++b) {
-        const double* body = rows + i * columns_ + bodies_[b];  // x y z, qw qx qy qz, vx vy vz, wx wy wz
+        const double* body = rows + i * columns_ + bodies_[b].first;  // x y z, qw qx qy qz, vx vy vz, wx wy wz
         peak_z_[b] = std::max(peak_z_[b], body[2]);
         max_abs_y_[b] = std::max(max_abs_y_[b], std::fabs(body[1]));
         const double speed = std::sqrt(body[7] * body[7] + body[8] * body[8] + body[9] * body[9]);
@@ -116,6 +116,8 @@ class BodyExtremes final : public RowSink {
       }
     }
   }
+  // Each recorded body's first column and its name, in the columns' order.
+  [[nodiscard]] const std::vector<std::pair<std::size_t, std::string>>& bodies() const noexcept { return bodies_; }
   void fill(ScenarioSweepPoint& p) const {
     p.peak_speed = peak_speed_;
     p.peak_z = peak_z_;
@@ -123,7 +125,7 @@ class BodyExtremes final : public RowSink {
   }
 
  private:
-  std::vector<std::size_t> bodies_;  // each one's first column
+  std::vector<std::pair<std::size_t, std::string>> bodies_;
   std::int64_t columns_ = 0;
   std::vector<double> peak_z_, max_abs_y_;
   double peak_speed_ = 0.0;
@@ -159,9 +161,7 @@ ScenarioSweepResult sweep_scenario(const Model& scene, const Scenario& scenario,
   result.scene_size = scene.get()->stat.extent;
   result.tolerance = kScenarioSweepTolerance * result.scene_size;
   result.columns = runs.front().columns;
-  std::vector<std::pair<std::size_t, std::string>> bodies;  // in the columns' order
-  for (const auto& [name, column] : recorded_bodies(runs.front().columns)) bodies.push_back({column, name});
-  std::sort(bodies.begin(), bodies.end());
+  const auto& bodies = reducers.front().bodies();
   for (const auto& body : bodies) result.bodies.push_back(body.second);
   for (std::size_t i = 0; i < runs.size(); ++i) {
     const RunRecord& r = runs[i];
