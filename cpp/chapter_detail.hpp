@@ -1,6 +1,7 @@
 // What the chapter's view (run.cc) shares with the sweep and the bindings.
 #pragma once
 
+#include <string>
 #include <vector>
 
 #include "simloop/control.hpp"
@@ -21,5 +22,9 @@ namespace simloop::detail {
 [[nodiscard]] std::vector<RunResult> run_chapter_batch(const Model& model, const std::vector<RunConfig>& configs,
                                                        const std::vector<RowSink*>& sinks, int threads = 0,
                                                        RunControl* control = nullptr);
+
+// Actuator 0's joint, the chapter's pusher, by the name that stems its
+// columns ("<name>_pos", "<name>_vel") in a run of chapter_scenario(model).
+[[nodiscard]] std::string pusher_joint_name(const Model& model);
 
 }  // namespace simloop::detail

@@ -104,7 +104,7 @@ ChapterParts chapter_parts(const Model& model) {
   parts.at = chapter_layout(model);
   parts.scenario = chapter_scenario(model);
   parts.motor = object_name(model.get(), mjOBJ_ACTUATOR, 0) + "_ctrl";
-  parts.pusher_joint = object_name(model.get(), mjOBJ_JOINT, parts.at.pusher_joint);
+  parts.pusher_joint = detail::pusher_joint_name(model);
   parts.ctrl = parts.scenario.controls.front().schedule.front().second;
   return parts;
 }
@@ -164,6 +164,10 @@ struct ChapterRun {
 };
 
 }  // namespace
+
+std::string detail::pusher_joint_name(const Model& model) {
+  return object_name(model.get(), mjOBJ_JOINT, chapter_layout(model).pusher_joint);
+}
 
 std::vector<Column> chapter_columns(int count) {
   static constexpr const char* kUnits[ChapterColumns::kNumColumns] = {

@@ -60,30 +60,27 @@ std::int64_t sweep_steps(double duration, double timestep) {
   return steps;
 }
 
-namespace {
-
-// What every sweep shares, whatever its kind of run and its criterion: the
-// grid of points, and where the edge lies.
-struct GridPoint {
-  double timestep;
-  std::int64_t steps;  // sweep_steps(duration, timestep)
-};
-
-// The timesteps with their steps over `duration` (sweep_steps refuses a point
-// that cannot be run faithfully), ascending, duplicates dropped. Ascending
-// timesteps put the longest runs first, which keeps a batch's workers evenly
-// loaded to the end.
-std::vector<GridPoint> sweep_grid(const std::vector<double>& timesteps, double duration) {
-  check_positive_seconds("duration", duration);
-  if (timesteps.empty()) throw InvalidArgument("timesteps must not be empty");
-  std::vector<GridPoint> grid;
-  for (const double dt : timesteps) grid.push_back({dt, sweep_steps(duration, dt)});
-  const auto earlier = [](const GridPoint& a, const GridPoint& b) { return a.timestep < b.timestep; };
-  const auto same = [](const GridPoint& a, const GridPoint& b) { return a.timestep == b.timestep; };
-  std::sort(grid.begin(), grid.end(), earlier);
-  grid.erase(std::unique(grid.begin(), grid.end(), same), grid.end());
-  return grid;
+double scenario_duration(const Model& scene, const Scenario& scenario) {
+  switch (scenario.length.unit) {
+    case When::Unit::kSeconds:
+      return scenario.length.value;
+    case When::Unit::kSteps:
+      return static_cast<double>(scenario.length.count) * scenario.timestep.value_or(scene.timestep());
+    default:
+      break;
+  }
+  throw InvalidArgument("scenario " + scenario.name + ": its length is a fraction of itself; give a duration");
 }
+
+std::vector<double> default_scenario_sweep_timesteps(double duration) {
+  std::vector<double> out;
+  for (double dt : default_sweep_timesteps()) {
+    if (std::isfinite(duration) && duration > 0.0 && std::llround(duration / dt) >= kMinSweepSteps) out.push_back(dt);
+  }
+  return out;
+}
+
+namespace {
 
 // The edge: the last of the points (ascending timesteps) before the first
 // that fails the criterion; -1 if even the first fails.
@@ -94,68 +91,132 @@ int sweep_edge(const std::vector<Point>& points, Passes passes) {
   return edge;
 }
 
-// Reduces a run's rows to a sweep point's figures as they come, so a sweep
-// keeps no trajectories, however many timesteps it has.
-class SweepReducer final : public RowSink {
+// Reduces a run's rows, as they come, to what a sweep's criteria read of each
+// recorded body besides its final position (in the run's final row): its peak
+// z and its largest |y|; and the largest speed of any body. A sweep keeps no
+// trajectories, however many timesteps it has.
+class BodyExtremes final : public RowSink {
  public:
+  void describe(const std::vector<Column>& columns) override {
+    for (const auto& [name, column] : recorded_bodies(columns)) bodies_.push_back({column, name});
+    std::sort(bodies_.begin(), bodies_.end());  // the columns' order
+    peak_z_.assign(bodies_.size(), -INFINITY);
+    max_abs_y_.assign(bodies_.size(), 0.0);
+  }
   void start(int columns, std::int64_t /*rows*/) override { columns_ = columns; }
   void write(const double* rows, std::int64_t count) override {
     for (std::int64_t i = 0; i < count; ++i) {
-      const double* row = rows + i * columns_;
-      peak_box_z_ = std::max(peak_box_z_, row[ChapterColumns::kBoxZ]);
-      max_abs_box_y_ = std::max(max_abs_box_y_, std::fabs(row[ChapterColumns::kBoxY]));
-    }
-    if (count > 0) {
-      const double* last = rows + (count - 1) * columns_;
-      final_ = {last[ChapterColumns::kBoxX], last[ChapterColumns::kBoxY], last[ChapterColumns::kBoxZ],
-                last[ChapterColumns::kPusherX]};
+      for (std::size_t b = 0; b < bodies_.size(); ++b) {
+        const double* body = rows + i * columns_ + bodies_[b].first;  // x y z, qw qx qy qz, vx vy vz, wx wy wz
+        peak_z_[b] = std::max(peak_z_[b], body[2]);
+        max_abs_y_[b] = std::max(max_abs_y_[b], std::fabs(body[1]));
+        const double speed = std::sqrt(body[7] * body[7] + body[8] * body[8] + body[9] * body[9]);
+        // A NaN speed (a state gone bad) is the largest of all.
+        if (!(speed <= peak_speed_)) peak_speed_ = std::isnan(peak_speed_) ? peak_speed_ : speed;
+      }
     }
   }
-  void fill(SweepPoint& p) const {
-    p.peak_box_z = peak_box_z_;
-    p.max_abs_box_y = max_abs_box_y_;
-    p.final_box_x = final_[0];
-    p.final_box_y = final_[1];
-    p.final_box_z = final_[2];
-    p.final_pusher_x = final_[3];
+  // Each recorded body's first column and its name, in the columns' order.
+  [[nodiscard]] const std::vector<std::pair<std::size_t, std::string>>& bodies() const noexcept { return bodies_; }
+  void fill(ScenarioSweepPoint& p) const {
+    p.peak_speed = peak_speed_;
+    p.peak_z = peak_z_;
+    p.max_abs_y = max_abs_y_;
   }
 
  private:
+  std::vector<std::pair<std::size_t, std::string>> bodies_;
   std::int64_t columns_ = 0;
-  double peak_box_z_ = -INFINITY;
-  double max_abs_box_y_ = 0.0;
-  std::array<double, 4> final_{};
+  std::vector<double> peak_z_, max_abs_y_;
+  double peak_speed_ = 0.0;
 };
 
 }  // namespace
 
-SweepResult sweep(const Model& model, std::vector<double> timesteps, double duration, int threads,
-                  RunControl* control) {
-  std::vector<RunConfig> configs;
-  for (const GridPoint& point : sweep_grid(timesteps, duration)) {
-    RunConfig c;
-    c.timestep = point.timestep;
-    c.steps = point.steps;
-    c.perturb = false;
-    c.audit_energy = true;
+ScenarioSweepResult sweep_scenario(const Model& scene, const Scenario& scenario, std::vector<double> timesteps,
+                                   double duration, const ScenarioConfig& config, int threads, RunControl* control) {
+  check_positive_seconds("duration", duration);
+  if (timesteps.empty()) throw InvalidArgument("timesteps must not be empty");
+  for (const double dt : timesteps) (void)sweep_steps(duration, dt);  // each refused as given, before sorting
+  // Ascending timesteps put the longest runs first, which keeps a batch's
+  // workers evenly loaded to the end.
+  std::sort(timesteps.begin(), timesteps.end());
+  timesteps.erase(std::unique(timesteps.begin(), timesteps.end()), timesteps.end());
+  std::vector<ScenarioConfig> configs;
+  for (const double dt : timesteps) {
+    ScenarioConfig c = config;
+    c.timestep = dt;
+    c.steps = sweep_steps(duration, dt);
+    c.record_every = 1;  // every step is read (peaks)
     configs.push_back(c);
   }
-  std::vector<SweepReducer> reducers(configs.size());
+  std::vector<BodyExtremes> reducers(configs.size());
   std::vector<RowSink*> sinks;
-  for (SweepReducer& r : reducers) sinks.push_back(&r);
-  const std::vector<RunResult> runs = detail::run_chapter_batch(model, configs, sinks, threads, control);
+  for (BodyExtremes& r : reducers) sinks.push_back(&r);
+  const std::vector<RunRecord> runs = run_scenario_batch(scene, scenario, configs, sinks, threads, control);
 
+  ScenarioSweepResult result;
+  result.name = scenario.name;
+  result.duration = duration;
+  result.scene_size = scene.get()->stat.extent;
+  result.tolerance = kScenarioSweepTolerance * result.scene_size;
+  result.columns = runs.front().columns;
+  const auto& bodies = reducers.front().bodies();
+  for (const auto& body : bodies) result.bodies.push_back(body.second);
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    const RunRecord& r = runs[i];
+    ScenarioSweepPoint p;
+    p.timestep = r.timestep;
+    p.steps = r.schedule.steps;
+    reducers[i].fill(p);
+    for (const Warning& w : r.warnings)
+      (w.name == detail::kDivergedWarning ? p.diverged : p.mujoco_warnings) += w.count;
+    p.energy = r.energy;
+    p.final_row = r.final_row;
+    for (const auto& body : bodies) {
+      const double* pos = r.final_row.data() + body.first;
+      p.final_positions.push_back({pos[0], pos[1], pos[2]});
+    }
+    result.points.push_back(std::move(p));
+  }
+  const ScenarioSweepPoint& reference = result.points.front();
+  for (ScenarioSweepPoint& p : result.points) {
+    for (std::size_t b = 0; b < p.final_positions.size(); ++b) {
+      const auto& a = p.final_positions[b];
+      const auto& ref = reference.final_positions[b];
+      const double offset = std::sqrt((a[0] - ref[0]) * (a[0] - ref[0]) + (a[1] - ref[1]) * (a[1] - ref[1]) +
+                                      (a[2] - ref[2]) * (a[2] - ref[2]));
+      p.offsets.push_back(offset);
+      if (!(offset <= p.max_offset)) p.max_offset = std::isnan(p.max_offset) ? p.max_offset : offset;
+    }
+    p.blew_up = p.mujoco_warnings > 0 || p.diverged > 0 || !(p.max_offset <= result.tolerance);
+  }
+  result.edge_index = sweep_edge(result.points, [](const ScenarioSweepPoint& p) { return !p.blew_up; });
+  return result;
+}
+
+// ---------------------------------------------------------------------------
+// The chapter's sweep: its scenario's, seen as the chapter sees it.
+
+SweepResult sweep(const Model& model, std::vector<double> timesteps, double duration, int threads,
+                  RunControl* control) {
+  ScenarioConfig baseline;
+  baseline.perturb = false;
+  baseline.audit_energy = true;
+  const ScenarioSweepResult swept =
+      sweep_scenario(model, chapter_scenario(model), std::move(timesteps), duration, baseline, threads, control);
+  const auto box =
+      static_cast<std::size_t>(std::find(swept.bodies.begin(), swept.bodies.end(), "box") - swept.bodies.begin());
+  const std::string pusher = detail::pusher_joint_name(model) + "_pos";
+  const auto pusher_x = static_cast<std::size_t>(
+      std::find_if(swept.columns.begin(), swept.columns.end(), [&](const Column& c) { return c.name == pusher; }) -
+      swept.columns.begin());
   SweepResult result;
   result.duration = duration;
-  for (std::size_t i = 0; i < runs.size(); ++i) {
-    const RunResult& r = runs[i];
-    SweepPoint p;
-    p.timestep = r.timestep;
-    p.steps = r.metrics.steps;
-    reducers[i].fill(p);
-    for (const Warning& w : r.warnings) p.warnings += w.count;
-    p.energy = r.energy;
-    result.points.push_back(p);
+  for (const ScenarioSweepPoint& p : swept.points) {
+    const std::array<double, 3>& final_box = p.final_positions.at(box);
+    result.points.push_back({p.timestep, p.steps, p.peak_z.at(box), p.max_abs_y.at(box), final_box[0], final_box[1],
+                             final_box[2], p.final_row.at(pusher_x), p.mujoco_warnings + p.diverged, p.energy});
   }
   judge_sweep(result);
   return result;
@@ -186,114 +247,6 @@ SweepResult join_sweeps(const std::vector<SweepResult>& parts) {
   }
   judge_sweep(joined);
   return joined;
-}
-
-// ---------------------------------------------------------------------------
-// A scenario, swept.
-
-double scenario_duration(const Model& scene, const Scenario& scenario) {
-  switch (scenario.length.unit) {
-    case When::Unit::kSeconds:
-      return scenario.length.value;
-    case When::Unit::kSteps:
-      return static_cast<double>(scenario.length.count) * scenario.timestep.value_or(scene.timestep());
-    default:
-      break;
-  }
-  throw InvalidArgument("scenario " + scenario.name + ": its length is a fraction of itself; give a duration");
-}
-
-std::vector<double> default_scenario_sweep_timesteps(double duration) {
-  std::vector<double> out;
-  for (double dt : default_sweep_timesteps()) {
-    if (std::isfinite(duration) && duration > 0.0 && std::llround(duration / dt) >= kMinSweepSteps) out.push_back(dt);
-  }
-  return out;
-}
-
-namespace {
-
-// Reduces a scenario run's rows to the largest speed of any recorded body,
-// as they come (the final positions are in the result's final row).
-class PeakSpeed final : public RowSink {
- public:
-  void describe(const std::vector<Column>& columns) override {
-    for (const auto& [name, column] : recorded_bodies(columns)) velocity_columns_.push_back(column + 7);
-  }
-  void start(int columns, std::int64_t /*rows*/) override { columns_ = columns; }
-  void write(const double* rows, std::int64_t count) override {
-    for (std::int64_t i = 0; i < count; ++i) {
-      const double* row = rows + i * columns_;
-      for (std::size_t c : velocity_columns_) {
-        const double* v = row + c;
-        const double speed = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-        // A NaN speed (a state gone bad) is the largest of all.
-        if (!(speed <= peak_)) peak_ = std::isnan(peak_) ? peak_ : speed;
-      }
-    }
-  }
-  [[nodiscard]] double peak() const noexcept { return peak_; }
-
- private:
-  std::vector<std::size_t> velocity_columns_;
-  std::int64_t columns_ = 0;
-  double peak_ = 0.0;
-};
-
-}  // namespace
-
-ScenarioSweepResult sweep_scenario(const Model& scene, const Scenario& scenario, std::vector<double> timesteps,
-                                   double duration, const ScenarioConfig& config, int threads, RunControl* control) {
-  std::vector<ScenarioConfig> configs;
-  for (const GridPoint& point : sweep_grid(timesteps, duration)) {
-    ScenarioConfig c = config;
-    c.timestep = point.timestep;
-    c.steps = point.steps;
-    c.record_every = 1;  // every step's speed is read
-    configs.push_back(c);
-  }
-  std::vector<PeakSpeed> reducers(configs.size());
-  std::vector<RowSink*> sinks;
-  for (PeakSpeed& r : reducers) sinks.push_back(&r);
-  const std::vector<RunRecord> runs = run_scenario_batch(scene, scenario, configs, sinks, threads, control);
-
-  ScenarioSweepResult result;
-  result.name = scenario.name;
-  result.duration = duration;
-  result.scene_size = scene.get()->stat.extent;
-  result.tolerance = kScenarioSweepTolerance * result.scene_size;
-  std::vector<std::pair<std::size_t, std::string>> bodies;  // in the columns' order
-  for (const auto& [name, column] : recorded_bodies(runs.front().columns)) bodies.push_back({column, name});
-  std::sort(bodies.begin(), bodies.end());
-  for (const auto& body : bodies) result.bodies.push_back(body.second);
-  for (std::size_t i = 0; i < runs.size(); ++i) {
-    const RunRecord& r = runs[i];
-    ScenarioSweepPoint p;
-    p.timestep = r.timestep;
-    p.steps = r.schedule.steps;
-    p.peak_speed = reducers[i].peak();
-    for (const Warning& w : r.warnings)
-      (w.name == detail::kDivergedWarning ? p.diverged : p.mujoco_warnings) += w.count;
-    for (const auto& body : bodies) {
-      const double* pos = r.final_row.data() + body.first;
-      p.final_positions.push_back({pos[0], pos[1], pos[2]});
-    }
-    result.points.push_back(std::move(p));
-  }
-  const ScenarioSweepPoint& reference = result.points.front();
-  for (ScenarioSweepPoint& p : result.points) {
-    for (std::size_t b = 0; b < p.final_positions.size(); ++b) {
-      const auto& a = p.final_positions[b];
-      const auto& ref = reference.final_positions[b];
-      const double offset = std::sqrt((a[0] - ref[0]) * (a[0] - ref[0]) + (a[1] - ref[1]) * (a[1] - ref[1]) +
-                                      (a[2] - ref[2]) * (a[2] - ref[2]));
-      p.offsets.push_back(offset);
-      if (!(offset <= p.max_offset)) p.max_offset = std::isnan(p.max_offset) ? p.max_offset : offset;
-    }
-    p.blew_up = p.mujoco_warnings > 0 || p.diverged > 0 || !(p.max_offset <= result.tolerance);
-  }
-  result.edge_index = sweep_edge(result.points, [](const ScenarioSweepPoint& p) { return !p.blew_up; });
-  return result;
 }
 
 }  // namespace simloop

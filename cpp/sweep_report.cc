@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <initializer_list>
 #include <string>
 #include <vector>
 
@@ -10,34 +11,15 @@
 #include "simloop/sweep.hpp"
 
 namespace simloop {
-
-std::string sweep_csv(const SweepResult& result) {
-  std::string out =
-      "timestep,steps,peak_box_z,max_abs_box_y,final_box_x,final_box_y,final_box_z,final_pusher_x,warnings,"
-      "energy_change,work_actuator,work_passive,work_constraint,work_constraint_positive,energy_unexplained,"
-      "stable\n";
-  for (const SweepPoint& p : result.points) {
-    const double values[] = {p.timestep,    p.peak_box_z,  p.max_abs_box_y, p.final_box_x,
-                             p.final_box_y, p.final_box_z, p.final_pusher_x};
-    append_shortest(out, values[0]);
-    out += ',' + std::to_string(p.steps);
-    for (size_t i = 1; i < std::size(values); ++i) {
-      out += ',';
-      append_shortest(out, values[i]);
-    }
-    out += ',' + std::to_string(p.warnings);
-    const EnergyTotals& e = p.energy;
-    for (double v : {e.energy_end - e.energy_start, e.work_actuator, e.work_passive, e.work_constraint,
-                     e.work_constraint_positive, e.unexplained}) {
-      out += ',';
-      append_shortest(out, v);
-    }
-    out += p.stable ? ",1\n" : ",0\n";
-  }
-  return out;
-}
-
 namespace {
+
+// Each value after a comma, as the shortest text that reads back the same.
+void append_cells(std::string& out, std::initializer_list<double> values) {
+  for (const double v : values) {
+    out += ',';
+    append_shortest(out, v);
+  }
+}
 
 // Every cell as text first, then each column as wide as its widest cell,
 // right-aligned, so the table stays aligned whatever the numbers are; the
@@ -102,6 +84,24 @@ std::string chapter_marks(const SweepPoint& point, bool edge) {
 
 }  // namespace
 
+std::string sweep_csv(const SweepResult& result) {
+  std::string out =
+      "timestep,steps,peak_box_z,max_abs_box_y,final_box_x,final_box_y,final_box_z,final_pusher_x,warnings,"
+      "energy_change,work_actuator,work_passive,work_constraint,work_constraint_positive,energy_unexplained,"
+      "stable\n";
+  for (const SweepPoint& p : result.points) {
+    append_shortest(out, p.timestep);
+    out += ',' + std::to_string(p.steps);
+    append_cells(out, {p.peak_box_z, p.max_abs_box_y, p.final_box_x, p.final_box_y, p.final_box_z, p.final_pusher_x});
+    out += ',' + std::to_string(p.warnings);
+    const EnergyTotals& e = p.energy;
+    append_cells(out, {e.energy_end - e.energy_start, e.work_actuator, e.work_passive, e.work_constraint,
+                       e.work_constraint_positive, e.unexplained});
+    out += p.stable ? ",1\n" : ",0\n";
+  }
+  return out;
+}
+
 std::string sweep_summary(const SweepResult& result) {
   char line[256];
   std::string out;
@@ -136,19 +136,12 @@ std::string sweep_csv(const ScenarioSweepResult& result) {
   out += ",max_offset,tolerance,blew_up\n";
   for (const ScenarioSweepPoint& p : result.points) {
     append_shortest(out, p.timestep);
-    out += ',' + std::to_string(p.steps) + ',' + std::to_string(p.mujoco_warnings) + ',' + std::to_string(p.diverged) +
-           ',';
-    append_shortest(out, p.peak_speed);
+    out += ',' + std::to_string(p.steps) + ',' + std::to_string(p.mujoco_warnings) + ',' + std::to_string(p.diverged);
+    append_cells(out, {p.peak_speed});
     for (std::size_t b = 0; b < p.final_positions.size(); ++b) {
-      for (double v : {p.final_positions[b][0], p.final_positions[b][1], p.final_positions[b][2], p.offsets[b]}) {
-        out += ',';
-        append_shortest(out, v);
-      }
+      append_cells(out, {p.final_positions[b][0], p.final_positions[b][1], p.final_positions[b][2], p.offsets[b]});
     }
-    out += ',';
-    append_shortest(out, p.max_offset);
-    out += ',';
-    append_shortest(out, result.tolerance);
+    append_cells(out, {p.max_offset, result.tolerance});
     out += p.blew_up ? ",1\n" : ",0\n";
   }
   return out;

@@ -28,6 +28,8 @@ inline constexpr double kStableSink = 0.001;      // m
 inline constexpr double kBoxRestZ = 0.05;         // m, the chapter's box at rest
 inline constexpr double kBreakItTimestep = 0.05;  // s, Break It's: 25 times the chapter's
 
+// A point of the chapter's sweep: its scenario's point (ScenarioSweepPoint)
+// as the chapter reads it, judged by the criterion above.
 struct SweepPoint {
   double timestep = 0.0;
   std::int64_t steps = 0;
@@ -65,12 +67,13 @@ inline constexpr std::int64_t kMinSweepSteps = 4;
 // 1-2-5 would have nothing there to find it with.
 [[nodiscard]] std::vector<double> default_sweep_timesteps();
 
-// Runs the baseline at every timestep (sorted, duplicates dropped) for
-// round(duration / timestep) steps (sweep_steps), in parallel over one
-// model, with the energy audit on. Each run's rows are reduced as they come
-// (peak, extremes, final values): a sweep keeps no trajectories. Throws
-// InvalidArgument naming a bad timestep, duration or thread count, before
-// any run starts. With a `control`, it can be stopped (Interrupted) and watched.
+// The chapter's sweep: sweep_scenario on chapter_scenario(model), the
+// baseline (no shove) with the energy audit on, seen as the chapter sees it:
+// the box's figures, the pusher's final position (actuator 0's joint, from
+// each run's final row), every warning as one count, then judged
+// (judge_sweep). Throws InvalidArgument naming a bad timestep, duration or
+// thread count, before any run starts. With a `control`, it can be stopped
+// (Interrupted) and watched.
 [[nodiscard]] SweepResult sweep(const Model& model, std::vector<double> timesteps, double duration = 4.0,
                                 int threads = 0, RunControl* control = nullptr);
 
@@ -121,12 +124,19 @@ struct ScenarioSweepPoint {
   std::vector<double> offsets;                         // each one's distance from the reference's final position, m
   double max_offset = 0.0;                             // the largest of them (NaN if any is not finite)
   bool blew_up = false;
+  // What other criteria read (the chapter's hop): per recorded body, the
+  // highest its centre got and the furthest from y = 0, m; the energy
+  // audit's totals (zeros unless config.audit_energy); the run's final row.
+  std::vector<double> peak_z, max_abs_y;
+  EnergyTotals energy;
+  std::vector<double> final_row;  // in ScenarioSweepResult::columns
 };
 
 struct ScenarioSweepResult {
   std::string name;                        // the scenario's
   double duration = 0.0;                   // sim seconds each run covers
   std::vector<std::string> bodies;         // the recorded bodies, in the columns' order
+  std::vector<Column> columns;             // the runs' columns
   double scene_size = 0.0;                 // mjModel::stat.extent, m
   double tolerance = 0.0;                  // kScenarioSweepTolerance * scene_size, m
   std::vector<ScenarioSweepPoint> points;  // ascending timesteps; points[0] is the reference

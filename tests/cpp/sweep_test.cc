@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -45,6 +46,58 @@ TEST(Sweep, FindsTheEdgeWhereTheHopBegins) {
   EXPECT_EQ(summary.rfind("swept 8 timesteps, 4.0 s of sim time each", 0), 0u) << summary;
   const std::string one = simloop::sweep_summary(simloop::sweep(scene(), {0.002}, 0.1));
   EXPECT_EQ(one.rfind("swept 1 timestep, 0.1 s of sim time each", 0), 0u) << one;
+}
+
+bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+
+TEST(Sweep, IsTheChaptersScenarioSweptSeenAsTheChapter) {
+  // The chapter's sweep is sweep_scenario on chapter_scenario(), the
+  // baseline with the energy audit on: each point is the engine's box
+  // figures, and what the chapter's own run at that timestep shows, bit for
+  // bit. 0.002 s is stable, 0.005 s hops, 0.5 s sinks and warns.
+  const std::vector<double> dts = {0.002, 0.005, 0.5};
+  const simloop::SweepResult chapter = simloop::sweep(scene(), dts, 4.0, 2);
+  simloop::ScenarioConfig baseline;
+  baseline.perturb = false;
+  baseline.audit_energy = true;
+  const simloop::ScenarioSweepResult swept =
+      simloop::sweep_scenario(scene(), simloop::chapter_scenario(scene()), dts, 4.0, baseline, 2);
+  ASSERT_EQ(swept.bodies, std::vector<std::string>{"box"});
+  ASSERT_EQ(chapter.points.size(), 3u);
+  ASSERT_EQ(swept.points.size(), 3u);
+  for (size_t i = 0; i < dts.size(); ++i) {
+    const simloop::SweepPoint& p = chapter.points[i];
+    const simloop::ScenarioSweepPoint& q = swept.points[i];
+    simloop::RunConfig config;
+    config.timestep = dts[i];
+    config.steps = simloop::sweep_steps(4.0, dts[i]);
+    config.perturb = false;
+    config.audit_energy = true;
+    const simloop::RunResult run = simloop::run(scene(), config);
+    double peak_z = -INFINITY, max_abs_y = 0.0;
+    for (std::int64_t r = 0; r < run.trajectory.rows(); ++r) {
+      peak_z = std::max(peak_z, run.trajectory.row(r)[simloop::ChapterColumns::kBoxZ]);
+      max_abs_y = std::max(max_abs_y, std::fabs(run.trajectory.row(r)[simloop::ChapterColumns::kBoxY]));
+    }
+    std::int64_t warnings = 0;
+    for (const simloop::Warning& w : run.warnings) warnings += w.count;
+    const double* last = run.final_row.data();
+    EXPECT_EQ(p.timestep, q.timestep);
+    EXPECT_EQ(p.steps, q.steps);
+    EXPECT_EQ(p.steps, run.metrics.steps);
+    EXPECT_TRUE(same_bits(p.peak_box_z, q.peak_z[0]) && same_bits(p.peak_box_z, peak_z)) << p.timestep;
+    EXPECT_TRUE(same_bits(p.max_abs_box_y, q.max_abs_y[0]) && same_bits(p.max_abs_box_y, max_abs_y)) << p.timestep;
+    const double final_box[] = {p.final_box_x, p.final_box_y, p.final_box_z};
+    EXPECT_EQ(std::memcmp(final_box, q.final_positions[0].data(), sizeof final_box), 0) << p.timestep;
+    EXPECT_EQ(std::memcmp(final_box, last + simloop::ChapterColumns::kBoxX, sizeof final_box), 0) << p.timestep;
+    EXPECT_TRUE(same_bits(p.final_pusher_x, last[simloop::ChapterColumns::kPusherX])) << p.timestep;
+    EXPECT_EQ(p.warnings, q.mujoco_warnings + q.diverged);
+    EXPECT_EQ(p.warnings, warnings);
+    EXPECT_EQ(std::memcmp(&p.energy, &run.energy, sizeof p.energy), 0) << p.timestep;
+    EXPECT_EQ(std::memcmp(&p.energy, &q.energy, sizeof p.energy), 0) << p.timestep;
+  }
+  EXPECT_GT(chapter.points[2].warnings, 0);
+  EXPECT_EQ(chapter.edge_index, 0);
 }
 
 TEST(Sweep, NamesTheChaptersTimestepsByWhatTheyRanHere) {
