@@ -54,11 +54,21 @@ class ChapterRows final : public RowSink {
       const auto it = std::find_if(columns.begin(), columns.end(), [&](const Column& c) { return c.name == name; });
       return it == columns.end() ? -1 : static_cast<int>(it - columns.begin());
     };
-    from_.assign(static_cast<std::size_t>(width_), -1);
-    for (int c = 0; c < width_; ++c) from_[static_cast<std::size_t>(c)] = at(std::string(ChapterColumns::kNames[c]));
-    for (int i = 0; i < 3; ++i) from_[ChapterColumns::kShoveX + i] = at(std::string("box_f") + "xyz"[i]);
-    from_[ChapterColumns::kPusherX] = at(pusher_joint_ + "_pos");
-    from_[ChapterColumns::kPusherVx] = at(pusher_joint_ + "_vel");
+    std::vector<int> from(static_cast<std::size_t>(width_), -1);
+    for (int c = 0; c < width_; ++c) from[static_cast<std::size_t>(c)] = at(std::string(ChapterColumns::kNames[c]));
+    for (int i = 0; i < 3; ++i) from[ChapterColumns::kShoveX + i] = at(std::string("box_f") + "xyz"[i]);
+    from[ChapterColumns::kPusherX] = at(pusher_joint_ + "_pos");
+    from[ChapterColumns::kPusherVx] = at(pusher_joint_ + "_vel");
+    copies_.clear();
+    absent_.clear();
+    for (int c = 0; c < width_; ++c) {
+      if (c == ChapterColumns::kCtrl) continue;
+      if (from[static_cast<std::size_t>(c)] >= 0) {
+        copies_.push_back({c, from[static_cast<std::size_t>(c)]});
+      } else {
+        absent_.push_back(c);  // a shove column of a run without the shove
+      }
+    }
     motor_column_ = at(motor_);
     source_width_ = static_cast<int>(columns.size());
     to_.describe(chapter_columns(width_));
@@ -72,11 +82,9 @@ class ChapterRows final : public RowSink {
 
   // One row in the chapter's columns.
   void view(const double* row, double* out) const noexcept {
+    for (const auto& [to, from] : copies_) out[to] = row[from];
     const bool inputs = !std::isnan(row[motor_column_]);  // the final row has none
-    for (int c = 0; c < width_; ++c) {
-      const int from = from_[static_cast<std::size_t>(c)];
-      out[c] = from >= 0 ? row[from] : inputs ? 0.0 : kNone;  // (a shove column of a run without the shove)
-    }
+    for (const int c : absent_) out[c] = inputs ? 0.0 : kNone;
     out[ChapterColumns::kCtrl] = inputs ? ctrl_ : kNone;
   }
 
@@ -85,7 +93,8 @@ class ChapterRows final : public RowSink {
   int width_;
   std::string motor_, pusher_joint_;
   double ctrl_;
-  std::vector<int> from_;
+  std::vector<std::pair<int, int>> copies_;  // (chapter column, scenario column)
+  std::vector<int> absent_;
   int motor_column_ = 0;
   int source_width_ = 0;
   std::vector<double> buffer_;
