@@ -113,7 +113,7 @@ ChapterParts chapter_parts(const Model& model) {
   parts.at = chapter_layout(model);
   parts.scenario = chapter_scenario(model);
   parts.motor = object_name(model.get(), mjOBJ_ACTUATOR, 0) + "_ctrl";
-  parts.pusher_joint = detail::pusher_joint_name(model);
+  parts.pusher_joint = object_name(model.get(), mjOBJ_JOINT, parts.at.pusher_joint);
   parts.ctrl = parts.scenario.controls.front().schedule.front().second;
   return parts;
 }
@@ -122,18 +122,35 @@ int chapter_width(const RunConfig& config) {
   return config.audit_energy ? ChapterColumns::kNumColumns : ChapterColumns::kNumBaseColumns;
 }
 
+// One chapter run's parts: the shove drawn for it, its rows' view and its
+// observer.
+struct ChapterRun {
+  ChapterRun(const ChapterParts& parts, const RunConfig& asked, RowSink* sink)
+      : config(asked),
+        shove(draw_shove(asked.seed, asked.num_steps(), asked.rng)),
+        keep(trajectory),
+        rows(sink ? *sink : keep, chapter_width(asked), parts.motor, parts.pusher_joint, parts.ctrl),
+        origin(parts.at.box_body, shove.start_step) {}
+  const RunConfig& config;  // the caller's, which outlives the run
+  Shove shove;
+  Trajectory trajectory;  // the rows, unless they go to a sink
+  detail::KeepRows keep;
+  ChapterRows rows;
+  ShoveOrigin origin;
+};
+
 // The chapter's report on a run of its scenario.
-RunResult chapter_result(RunRecord record, Trajectory trajectory, const ChapterRows& rows, const RunConfig& config,
-                         double box_y_at_shove) {
+RunResult chapter_result(RunRecord record, ChapterRun& run) {
+  const RunConfig& config = run.config;
   RunResult result;
   std::vector<double> final_row(static_cast<std::size_t>(chapter_width(config)));
-  rows.view(record.final_row.data(), final_row.data());
+  run.rows.view(record.final_row.data(), final_row.data());
   static_cast<RunRecord&>(result) = std::move(record);
   result.columns = chapter_columns(chapter_width(config));
   result.final_row = std::move(final_row);
-  result.trajectory = std::move(trajectory);
+  result.trajectory = std::move(run.trajectory);
   result.config = config;
-  result.shove = draw_shove(config.seed, config.num_steps(), config.rng);
+  result.shove = run.shove;
 
   // Inspect, as the chapter does: the box's free joint's position and linear
   // velocity, and the pusher's joint, in the final state.
@@ -141,7 +158,7 @@ RunResult chapter_result(RunRecord record, Trajectory trajectory, const ChapterR
   const double* box_v = result.final_row.data() + ChapterColumns::kBoxVx;
   const double pusher_x = result.final_row[ChapterColumns::kPusherX];
   const double speed = std::sqrt(box_v[0] * box_v[0] + box_v[1] * box_v[1] + box_v[2] * box_v[2]);
-  const double drift = std::fabs(box_q[1] - box_y_at_shove);
+  const double drift = std::fabs(box_q[1] - run.origin.y());
   Metrics& metrics = result.metrics;
   metrics.steps = config.num_steps();
   metrics.seed = config.seed;
@@ -159,18 +176,6 @@ RunResult chapter_result(RunRecord record, Trajectory trajectory, const ChapterR
   exact.lateral_drift = drift;
   return result;
 }
-
-// One chapter run's parts: its rows' view and its observer.
-struct ChapterRun {
-  ChapterRun(const ChapterParts& parts, const RunConfig& config, RowSink* sink)
-      : keep(trajectory),
-        rows(sink ? *sink : keep, chapter_width(config), parts.motor, parts.pusher_joint, parts.ctrl),
-        origin(parts.at.box_body, draw_shove(config.seed, config.num_steps(), config.rng).start_step) {}
-  Trajectory trajectory;  // the rows, unless they go to a sink
-  detail::KeepRows keep;
-  ChapterRows rows;
-  ShoveOrigin origin;
-};
 
 }  // namespace
 
@@ -246,7 +251,7 @@ RunResult detail::run_counted_elsewhere(const Model& model, const RunConfig& con
   ChapterRun run(parts, config, sink);
   RunRecord record = run_scenario_watched(model, parts.scenario, scenario_config(config), workspace, &run.rows, control,
                                           {&run.origin}, false);
-  return chapter_result(std::move(record), std::move(run.trajectory), run.rows, config, run.origin.y());
+  return chapter_result(std::move(record), run);
 }
 
 std::vector<RunResult> detail::run_chapter_batch(const Model& model, const std::vector<RunConfig>& configs,
@@ -277,8 +282,7 @@ std::vector<RunResult> detail::run_chapter_batch(const Model& model, const std::
   std::vector<RunResult> results;
   results.reserve(records.size());
   for (std::size_t i = 0; i < records.size(); ++i) {
-    results.push_back(chapter_result(std::move(records[i]), std::move(runs[i]->trajectory), runs[i]->rows, configs[i],
-                                     runs[i]->origin.y()));
+    results.push_back(chapter_result(std::move(records[i]), *runs[i]));
   }
   return results;
 }
