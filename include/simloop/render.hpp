@@ -43,7 +43,8 @@ struct RenderStyle {
   // Planes drawn to the horizon, as the physics has them (a plane collides
   // everywhere), rather than to their size: a body that travels off the
   // drawn floor (the chapter's box, 4.9 m out by the end of a run; Break
-  // It's hop, at 9 m) still has it under it. A video's frames have them.
+  // It's hop, at 9 m) still has it under it: out to the far clipping plane,
+  // moved under the camera for each picture. A video's frames have them.
   bool endless_planes = false;
   // The shadow map's side, in texels: 0, about 2 a pixel of the picture's
   // larger side (at least 512); else this many (kMinShadowSize to

@@ -92,6 +92,15 @@ def test_a_videos_style_floor_to_the_horizon_no_multisampling_and_a_camera_on_a_
     assert video[floor].min() > 40  # the floor, drawn to the horizon
     assert red(video)[16:30, 42:54].any()  # the box, 20 cm above where the camera looks: above the middle
     assert not red(video)[40:, :].any()
+    # Further out than the far clipping plane reaches from the scene's centre (50 times its extent: 34 m), the
+    # floor is still under the box: moved under the camera, as MuJoCo moves a plane of no size.
+    sim.qpos[:3] = (60.0, 5.0, 0.25)
+    sim.forward()
+    far = simloop.Renderer(sim, **SIZE, multisample=False, endless_planes=True).render(
+        sim, lookat=(60.0, 5.0, 0.05), distance=1.5
+    )
+    assert far[floor].min() > 40
+    assert red(far)[16:30, 42:54].any()
     # At rest, a camera on the box's centre is the camera that tracks it; without
     # multisampling the box's edges change and nothing else.
     sim = simloop.Sim()

@@ -34,8 +34,8 @@ def apng_frames(path):
             first += body
         at += 12 + size
     rows = np.frombuffer(zlib.decompress(first), np.uint8).reshape(height, 1 + 3 * width)
-    assert (rows[:, 0] == 2).all()  # each row filtered "Up"
-    picture = np.cumsum(rows[:, 1:], axis=0, dtype=np.uint8).reshape(height, width, 3)  # undo it (mod 256)
+    assert (rows[:, 0] == 1).all()  # each row filtered "Sub"
+    picture = np.cumsum(rows[:, 1:].reshape(height, width, 3), axis=1, dtype=np.uint8)  # undo it (mod 256)
     return frames, delays, picture
 
 
