@@ -110,7 +110,7 @@ void follow_camera(const EndlessPlanes& planes, mjvScene& scene) {
       for (int side : {0, 1}) {
         const float axis[3] = {geom.mat[side], geom.mat[3 + side], geom.mat[6 + side]};  // a column of mat
         const float along = to_eye[0] * axis[0] + to_eye[1] * axis[1] + to_eye[2] * axis[2];
-        const float step = static_cast<float>(plane.step[side]);
+        const float step = static_cast<float>(plane.step);
         const float moved = step * std::round(along / step);
         for (int j = 0; j < 3; ++j) shift[j] += moved * axis[j];
       }
@@ -135,11 +135,11 @@ struct Renderer::Impl {
   std::vector<float> depth;
   std::mutex mutex;
   RenderStyle style;
-  // Endless planes, by geom id, with the steps (m, along the plane's x and
-  // y) in which each picture moves them under the camera.
+  // The endless planes we move under the camera, by geom id, with the step
+  // (m) they move in: a quad's side, so that the picture does not shift.
   struct EndlessPlane {
     int geom;
-    mjtNum step[2];
+    mjtNum step;
   };
   std::vector<EndlessPlane> endless;
 
@@ -184,29 +184,25 @@ Renderer::Renderer(const Model& model, int width, int height, const RenderStyle&
   if (!style.multisample) sized.vis.quality.offsamples = 0;
   // MuJoCo builds each plane's drawing with the context: a grid of quads,
   // lit at their corners, of the plane's size and its third size value's
-  // spacing. Endless, a plane is drawn out to the far clipping plane in
-  // kEndlessPlaneGrid quads a side and moved under the camera for each
-  // picture, as MuJoCo does a plane of no size; but MuJoCo draws that in
-  // mjMAXPLANEGRID (200) a side: on Mesa's software rasteriser 13 ms of a
-  // 640 x 480 picture, where 100 took 6 and look the same.
+  // spacing. A plane of no size it draws out to the far clipping plane in
+  // mjMAXPLANEGRID (200) quads a side, moved under the camera for each
+  // picture in whole repeats of its texture. Endless, a plane is drawn so;
+  // without a material (no texture to repeat), in kEndlessPlaneGrid quads a
+  // side that we move: on Mesa's software rasteriser 200 took 13 ms of a
+  // 640 x 480 picture where 100 took 6, for a floor that looks the same.
   std::vector<mjtNum> geom_size(m->geom_size, m->geom_size + 3 * m->ngeom);
   if (style.endless_planes) {
     const mjtNum reach = m->vis.map.zfar * m->stat.extent;
     for (int g = 0; g < m->ngeom; ++g) {
       if (m->geom_type[g] != mjGEOM_PLANE) continue;
       mjtNum* size = geom_size.data() + 3 * g;
+      if (m->geom_matid[g] >= 0) {
+        size[0] = size[1] = 0;
+        continue;
+      }
       size[0] = size[1] = reach;
       size[2] = std::max(size[2], 2 * reach / kEndlessPlaneGrid);
-      // Moved in whole quads, or (as MuJoCo moves a plane of no size) in
-      // whole repeats of its texture: the picture does not shift with it.
-      Impl::EndlessPlane plane{g, {size[2], size[2]}};
-      const int material = m->geom_matid[g];
-      for (int side : {0, 1}) {
-        if (material >= 0 && m->mat_texrepeat[2 * material + side] > 0) {
-          plane.step[side] = 2 / m->mat_texrepeat[2 * material + side];
-        }
-      }
-      r.endless.push_back(plane);
+      r.endless.push_back({g, size[2]});
     }
     sized.geom_size = geom_size.data();
   }
