@@ -1,6 +1,7 @@
 #include "loop.hpp"
 
 #include <algorithm>
+#include <limits>
 
 #include "mujoco_compat.hpp"
 #include "run_detail.hpp"
@@ -90,13 +91,17 @@ LoopResult run_loop(const mjModel* m, mjData* d, const Schedule& schedule, const
   ScheduledInputs scheduled(schedule, policy == nullptr && inputs.controls == nullptr);
   Stepper core(m, recorder.reads_acceleration_stage());
   Rhythm rhythm(m, scheduled, inputs, recorder, record_every, observers, block, rows, core);
+  // A sink that keeps only the final row, with nothing watching the rows
+  // (a metrics-only batch), is given only that one: no other is recorded.
+  const bool record_rows = rows.keeps_rows() || !observers.empty();
+  if (!record_rows) rhythm.until_record = std::numeric_limits<std::int64_t>::max();
   // Decision steps: 0, K, 2K, ... with a policy; none (the run's end) without.
   std::int64_t next_decision = policy ? 0 : steps;
   std::vector<double> observation(policy ? static_cast<std::size_t>(width) : 0);
   std::vector<double> decision;
 
   // Row 0 is the true state at t = 0.
-  core.reset(m, d, {-1, &schedule.start, inputs.initial_state, d_is_reset});
+  core.reset(m, d, {-1, &schedule.start, inputs.initial_state, d_is_reset, record_rows || policy != nullptr});
   for (std::int64_t step = 0; step < steps;) {
     if (step == next_decision) {
       scheduled.write(step, d);  // the disturbances the observation sees

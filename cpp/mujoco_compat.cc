@@ -166,6 +166,11 @@ void put_state(const mjModel* m, mjData* d, const double* state) noexcept {
 #endif
 }
 
+bool state_all_awake(const mjModel* m, const double* state) noexcept {
+  const double* asleep = state + mujoco_state_size(m);
+  return std::all_of(asleep, asleep + sleep_size(m), [](double counter) { return counter < 0; });
+}
+
 void put_state_awake(const mjModel* m, mjData* d, const double* state) noexcept {
   mj_setState(m, d, state, kStateSignature);
 #if mjVERSION_HEADER >= 340
@@ -294,6 +299,8 @@ void put_state(const mjModel* m, mjData* d, const double* state) noexcept {
     state += size[i];
   }
 }
+
+bool state_all_awake(const mjModel*, const double*) noexcept { return true; }
 
 void put_state_awake(const mjModel* m, mjData* d, const double* state) noexcept { put_state(m, d, state); }
 

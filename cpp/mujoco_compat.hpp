@@ -96,6 +96,9 @@ void put_state(const mjModel* m, mjData* d, const double* state) noexcept;
 // put_state with every kinematic tree awake (no sleep on 2.2: the same), so
 // that an mj_forward after it derives every body's pose, sleeping or not.
 void put_state_awake(const mjModel* m, mjData* d, const double* state) noexcept;
+// No kinematic tree of `state` is asleep (always, on 2.2): an mj_step from it
+// derives every body's pose itself, from stale poses or not.
+[[nodiscard]] bool state_all_awake(const mjModel* m, const double* state) noexcept;
 
 // One of mjModel's or mjData's arrays as mjxmacro.h lists it: its rows (in
 // use now, for the contacts' and constraints') and the size that counts

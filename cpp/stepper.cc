@@ -38,14 +38,24 @@ void Stepper::reset(const mjModel* m, mjData* d, const StartAt& at) {
   stepped_.resize(entering_.size());
   begun_ = held_ = observed_ = false;
   guarded_steps(m, 0, 0, [&] {
+    if (at.state) {
+      // A full state is everything mj_step reads that is not the model
+      // (state.hpp), so no reset first: of the last run only MuJoCo's
+      // warning counters would be left (as mujoco.rollout, which zeroes
+      // them). mj_resetData was a twentieth of a 100-step PushT run.
+      std::fill_n(d->warning, mjNWARNING, mjWarningStat{});
+      // (A sleeping tree's poses the step does not derive: they must be.)
+      if (at.read_at_start || !compat::state_all_awake(m, at.state)) {
+        simloop::set_state(m, d, at.state);  // forward, keeping the state as given
+      } else {
+        compat::put_state(m, d, at.state);
+      }
+      return;
+    }
     if (at.keyframe >= 0) {
       mj_resetDataKeyframe(m, d, at.keyframe);
     } else if (!at.d_is_reset) {
       mj_resetData(m, d);
-    }
-    if (at.state) {
-      simloop::set_state(m, d, at.state);  // forward, keeping the state as given
-      return;
     }
     if (at.start && !at.start->qpos.empty()) {
       // Noise or a caller's qpos may leave quaternions off unit length.

@@ -89,6 +89,10 @@ struct StartAt {
   const Schedule::Start* start = nullptr;  // qpos, qvel over the reset's (either may be empty)
   const double* state = nullptr;           // instead: a full state (state.hpp's layout), kept as given
   bool d_is_reset = false;                 // d is as mj_resetData left it (a fresh Data): not again
+  // Something reads the state at t = 0 (a row, an observer, a policy): its
+  // derived quantities are made then. Else a whole state is put in place
+  // as it is, and the first step derives them, as mujoco.rollout's does.
+  bool read_at_start = true;
 };
 
 class Stepper {

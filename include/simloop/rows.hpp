@@ -95,6 +95,9 @@ class RowSink {
   virtual void start(int columns, std::int64_t rows) = 0;
   // `count` rows, each `columns` adjacent doubles, in order.
   virtual void write(const double* rows, std::int64_t count) = 0;
+  // False: only the final row is wanted (a run with no observers then
+  // records no other, and is given only that one).
+  [[nodiscard]] virtual bool keeps_rows() const { return true; }
 };
 
 // A RowSink that keeps nothing: for runs whose metrics are all that is
@@ -105,6 +108,7 @@ class DiscardRows final : public RowSink {
  public:
   void start(int /*columns*/, std::int64_t /*rows*/) override {}
   void write(const double* /*rows*/, std::int64_t /*count*/) override {}
+  [[nodiscard]] bool keeps_rows() const override { return false; }
 };
 
 // Rows to `first` and, if given, to `second` too (a run's trajectory.csv and

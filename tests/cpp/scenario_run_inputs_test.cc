@@ -142,6 +142,40 @@ TEST(BatchControls, AnInitialStateContinuesARunBitForBit) {
   EXPECT_FALSE(same(half.final_state, whole.final_state));
 }
 
+TEST(BatchControls, ALeanRunFromAStateIsNeitherResetNorDerivedFirstAndKeepsItsBits) {
+  // Without rows kept or observers, a run from a whole state is put in place
+  // as it is (no mj_resetData, no forward pass: the first step derives), on
+  // a Data other runs used before it: the bits of the same run kept whole.
+  const simloop::Scenario scenario = pusht();
+  const simloop::Model scene = simloop::load_scene(scenario);
+  const int nu = scene.get()->nu;
+  const std::vector<double> u = random_controls(7, 200, nu);
+  const auto half = simloop::run_scenario(scene, scenario, config(0, 150, false), nullptr, nullptr, nullptr,
+                                          controls_input(u, 150, nu));
+  std::vector<double> later = half.final_state;
+  later[0] += 0.25;  // the time
+  std::vector<simloop::ScenarioConfig> cs;
+  std::vector<simloop::RunInputs> inputs;
+  for (std::uint64_t s = 0; s < 4; ++s) {
+    cs.push_back(config(s, 200, true));
+    inputs.push_back(controls_input(u, 200, nu));
+    if (s % 2 == 1) continue;  // from the scene's reset pose, between runs from states
+    inputs.back().initial_state = (s == 0 ? half.final_state : later).data();
+    inputs.back().state_size = later.size();
+  }
+  const auto kept = simloop::run_scenario_batch(scene, scenario, cs, 1, nullptr, inputs);
+  const auto lean = simloop::run_scenario_batch(scene, scenario, cs, 1, nullptr, inputs, false);
+  for (size_t i = 0; i < cs.size(); ++i) {
+    EXPECT_TRUE(same(lean[i].final_state, kept[i].final_state)) << i;
+    ASSERT_EQ(lean[i].final_row.size(), kept[i].final_row.size());
+    EXPECT_EQ(
+        std::memcmp(lean[i].final_row.data(), kept[i].final_row.data(), sizeof(double) * kept[i].final_row.size()), 0)
+        << i;
+    EXPECT_EQ(simloop::metrics_json(lean[i]), simloop::metrics_json(kept[i])) << i;
+  }
+  EXPECT_FALSE(same(kept[0].final_state, kept[2].final_state));
+}
+
 TEST(BatchControls, BadInputsAreRefusedByNameBeforeAnyStep) {
   const simloop::Scenario scenario = pusht();
   const simloop::Model scene = simloop::load_scene(scenario);

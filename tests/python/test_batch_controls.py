@@ -86,6 +86,24 @@ def test_a_batch_of_own_controls_and_states_is_each_run_alone(threads):
         assert same(r, simloop.run_scenario(PUSHT, seed=s, steps=steps, controls=u[0], initial_state=start))
 
 
+@pytest.mark.parametrize("threads", [1, 2])
+def test_a_metrics_only_batch_from_states_gives_the_kept_batchs_bits(threads):
+    # A run from a whole state that nothing reads at t = 0 (metrics only) is neither reset nor derived first, and
+    # records only its final row: the same bits as runs that record every row, whatever ran before in the same
+    # Data (here runs from the scene's reset pose and from states alternate, the odd ones later in time).
+    u = controls(5, 100, runs=6)
+    start = simloop.run_scenario(PUSHT, steps=50, perturb=False).final_state
+    starts = np.stack([start] * 6)
+    starts[1::2, 0] += 0.25
+    seeds = [0, 1, 2]
+    for initial_state in (starts, None):
+        asked = dict(seeds=seeds, timesteps=[0.002, 0.004], steps=100, controls=u, threads=threads)
+        kept = simloop.run_scenario_batch(PUSHT, initial_state=initial_state, **asked).to_pandas()
+        only = simloop.run_scenario_batch(PUSHT, initial_state=initial_state, metrics_only=True, **asked).to_pandas()
+        assert kept.equals(only)
+        assert len(set(kept["pusher_final_pos_x"])) == 6  # six runs, six places
+
+
 def test_a_run_continued_from_its_final_state_is_one_longer_run():
     u = controls(3, 400)
     whole = simloop.run_scenario(PUSHT, steps=400, perturb=False, controls=u)
