@@ -69,9 +69,9 @@ def main() -> None:
         import mujoco
     except ImportError:
         mujoco = None
+    m = mujoco.MjModel.from_xml_string(xml) if mujoco else None  # compiled once, as `model`
 
     def mj_step():
-        m = mujoco.MjModel.from_xml_string(xml)
         d = mujoco.MjData(m)
         d.ctrl[:] = u
         for _ in range(n):
