@@ -210,17 +210,17 @@ void bind_sim(py::module_& m) {
            "name"_a, "start"_a, "count"_a, "A copy of values start .. start+count-1 of array(name), flattened.")
       .def(
           "step",
-          [](PySim& s, std::int64_t n, py::object progress) {
+          [](PySim& s, StepCount n, StepProgress progress) {
             SimLock lock(s);
-            if (progress.is_none() && n <= simloop::RunControl::kChunkSteps) {
+            if (progress.callable.is_none() && n.value <= simloop::RunControl::kChunkSteps) {
               // One chunk: nothing to interrupt, so no RunControl to pay for
               // (Python checks for Ctrl-C between the calls of a tight loop).
               py::gil_scoped_release release;
-              s.sim.step(n);
+              s.sim.step(n.value);  // which checks n
               return;
             }
-            Interruptible work(std::move(progress));
-            work.run([&](simloop::RunControl* control) { s.sim.step(n, control); });
+            Interruptible work(std::move(progress.callable));
+            work.run([&](simloop::RunControl* control) { s.sim.step(n.value, control); });
             work.finish();
           },
           "n"_a, "progress"_a = py::none())

@@ -5,6 +5,7 @@
 #include <pybind11/pybind11.h>
 
 #include <cstddef>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -51,6 +52,17 @@ struct SimLock : CallLock {
   explicit SimLock(PySim& s) : CallLock(s, "this Sim is") {}
 };
 
+// Sim.step's arguments as pybind11 takes them without a look from Python:
+// a Python int (not a bool) an int64 holds, and None or a callable. Anything
+// else is refused as pybind11 refuses a wrong type; simloop.Sim.step then
+// converts it or names it in one line (simloop._checks).
+struct StepCount {
+  std::int64_t value = 0;
+};
+struct StepProgress {
+  py::object callable;  // None or a callable
+};
+
 // Observations live in one (count, width) buffer the Python side reads
 // after each call (copied out: a returned array never changes later).
 struct PyEpisodes : Lockable {
@@ -67,3 +79,28 @@ struct EpisodesLock : CallLock {
 };
 
 }  // namespace simloop_py
+
+namespace pybind11::detail {
+
+template <>
+struct type_caster<simloop_py::StepCount> {
+  PYBIND11_TYPE_CASTER(simloop_py::StepCount, const_name("int"));
+  bool load(handle src, bool /*convert*/) {
+    if (!PyLong_CheckExact(src.ptr())) return false;
+    int overflow = 0;
+    value.value = PyLong_AsLongLongAndOverflow(src.ptr(), &overflow);
+    return overflow == 0;
+  }
+};
+
+template <>
+struct type_caster<simloop_py::StepProgress> {
+  PYBIND11_TYPE_CASTER(simloop_py::StepProgress, const_name("Optional[Callable[[int, int], None]]"));
+  bool load(handle src, bool /*convert*/) {
+    if (!src.is_none() && PyCallable_Check(src.ptr()) == 0) return false;
+    value.callable = reinterpret_borrow<object>(src);
+    return true;
+  }
+};
+
+}  // namespace pybind11::detail

@@ -14,6 +14,8 @@ if TYPE_CHECKING:  # (importing numpy would cost every `import simloop` ~50 ms)
 
 from . import _core
 from ._checks import (
+    I64_MAX,
+    I64_MIN,
     ModelLike,
     Progress,
     _check_int,
@@ -257,9 +259,16 @@ class Sim:
         numbers (every actuator). Ctrl-C stops a long step promptly
         (KeyboardInterrupt; the steps taken stay taken). progress: as for run().
         """
+        if ctrl is None:
+            try:  # one call: the C++ Sim checks n's value
+                return self._sim.step(n, progress)
+            except TypeError:  # n or progress refused as given, or progress's own TypeError
+                if type(n) is int and I64_MIN <= n <= I64_MAX and (progress is None or callable(progress)):
+                    raise
+        # n or progress to convert or name in one line (outside the except: no pybind11 message chained)
         count = _check_int("n", n)
-        self._sim.check_steps(count)  # before ctrl is written: a refused call changes nothing
         if ctrl is not None:
+            self._sim.check_steps(count)  # before ctrl is written: a refused call changes nothing
             self.ctrl = ctrl
         self._sim.step(count, _check_progress(progress))
 

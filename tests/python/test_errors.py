@@ -99,6 +99,41 @@ def test_a_refused_step_with_a_ctrl_writes_no_ctrl():
         assert sim.ctrl == 0.0 and sim.steps_taken == 0
 
 
+def test_step_converts_what_python_calls_an_int_and_names_the_rest_in_one_line():
+    # Sim.step hands n and progress to the core as given; what the core does
+    # not take as it is, Python converts (numpy's ints) or names.
+    sim = simloop.Sim()
+    sim.step(np.int64(3))
+    sim.step(np.int32(2), progress=None)
+    assert sim.steps_taken == 5
+    for n, progress, error, message in (
+        (True, None, TypeError, "n must be an int, got True (bool)"),
+        ("2", None, TypeError, "n must be an int, got '2' (str)"),
+        (2**63, None, ValueError, f"n must be an integer from {-(2**63)} to {2**63 - 1}, got {2**63}"),
+        (-(2**64), None, ValueError, f"n must be an integer from {-(2**63)} to {2**63 - 1}, got {-(2**64)}"),
+        (1, 3, TypeError, "progress must be None or a callable progress(steps_done, steps_total), got 3 (int)"),
+        (np.int64(1), "p", TypeError, "progress must be None or a callable"),
+    ):
+        with pytest.raises(error) as caught:
+            sim.step(n, progress=progress)
+        assert str(caught.value).startswith(message)
+        assert caught.value.__context__ is None  # no pybind11 "incompatible function arguments" behind it
+    assert sim.steps_taken == 5
+
+
+def test_a_typeerror_from_progress_reaches_the_caller_once():
+    sim = simloop.Sim()
+    calls = []
+
+    def progress(done, total):
+        calls.append(done)
+        raise TypeError("the callback's own")
+
+    with pytest.raises(TypeError, match="the callback's own"):
+        sim.step(10, progress=progress)
+    assert sim.steps_taken == 10 and calls == [10]  # the steps taken once, not retried
+
+
 def test_a_scenarios_steps_are_worded_as_the_chapters():
     for steps, message in (
         (0, "steps must be at least 1, got 0"),
