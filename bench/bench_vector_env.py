@@ -15,10 +15,20 @@ alone. The threads then sleep between calls, and waking them costs the
 calling thread (cpp/worker_pool.hpp): on a VM, 2 threads can be slower than
 1 for calls of under a millisecond of work.
 
+--overhead: the Python each step() call adds, at 1 and 64 envs (--sizes),
+one physics step a call, one thread: CPU time per call of env.step against
+the C++ step it makes (Episodes.step, the bare loop of calls), in
+interleaved rounds of --calls calls. --only K: just K step() calls of --envs
+envs (--bare: of Episodes.step), for instruction counts: run it under
+valgrind --tool=callgrind with K and 2K and take the difference.
+
     .venv/bin/python bench/bench_vector_env.py [--rounds 15] [--envs 32] [--every 50] [--calls 20] [--pause 0]
+    .venv-pypi/bin/python bench/bench_vector_env.py --overhead [--sizes 1,64] [--rounds 15] [--calls 2000]
+    valgrind --tool=callgrind .venv-pypi/bin/python bench/bench_vector_env.py --only 2000 --envs 64 [--bare]
 """
 
 import argparse
+import os
 import statistics
 import time
 
@@ -33,7 +43,15 @@ def main() -> int:
     parser.add_argument("--every", type=int, default=50)
     parser.add_argument("--calls", type=int, default=20)
     parser.add_argument("--pause", type=float, default=0.0, help="microseconds between calls")
+    parser.add_argument("--overhead", action="store_true", help="step()'s Python per call, at --sizes envs")
+    parser.add_argument("--sizes", default="1,64")
+    parser.add_argument("--only", type=int, default=0, help="just this many step() calls (for callgrind)")
+    parser.add_argument("--bare", action="store_true", help="with --only: Episodes.step calls instead")
     args = parser.parse_args()
+    if args.only:
+        return only(args.envs, args.only, args.bare)
+    if args.overhead:
+        return overhead([int(n) for n in args.sizes.split(",")], args.rounds, args.calls)
     envs = {t: ScenarioVectorEnv(PUSHT_SCENARIO, args.envs, control_every=args.every, threads=t) for t in (1, 2)}
     actions = np.random.default_rng(0).uniform(-1, 1, size=(args.calls, args.envs, 2))
     steps = args.envs * args.every * args.calls
@@ -73,6 +91,51 @@ def main() -> int:
         )
     ratio = statistics.median(one[0] / two[0] for one, two in zip(times[1], times[2]))
     print(f"  2 threads / 1 thread: {ratio:.3f} x the steps per second (median of per-round ratios; target >= 1.8)")
+    return 0
+
+
+def stepper(n, bare):
+    """One env.step call of n envs (or the bare C++ step it makes), reset."""
+    env = ScenarioVectorEnv(PUSHT_SCENARIO, n, threads=1, steps=10**6)
+    env.reset(seed=0)
+    if bare:
+        episodes = env._setup.episodes
+        return lambda a: episodes.step(a, 1, None, 1)
+    return env.step
+
+
+def only(n, calls, bare):
+    step, action = stepper(n, bare), np.zeros((n, 2))
+    for _ in range(calls):
+        step(action)
+    return 0
+
+
+def overhead(sizes, rounds, calls):
+    print(
+        f"ScenarioVectorEnv(PushT) step() against the C++ step it makes (Episodes.step), 1 physics step a call, "
+        f"1 thread, {calls} calls a round, {rounds} rounds, load average {os.getloadavg()[0]:.2f}"
+    )
+    for n in sizes:
+        steppers = {"env.step": stepper(n, False), "bare": stepper(n, True)}
+        actions = np.random.default_rng(0).uniform(-1, 1, size=(calls, n, 2))
+        times = {name: [] for name in steppers}
+        for r in range(rounds + 1):
+            for name in list(steppers) if r % 2 else list(steppers)[::-1]:
+                step = steppers[name]
+                wall, cpu = time.perf_counter(), time.process_time()
+                for a in actions:
+                    step(a)
+                if r:  # (round 0 warms up)
+                    times[name].append((time.perf_counter() - wall, time.process_time() - cpu))
+        cpu = {name: statistics.median(t[1] for t in ts) / calls * 1e6 for name, ts in times.items()}
+        wall = {name: statistics.median(t[0] for t in ts) / calls * 1e6 for name, ts in times.items()}
+        print(
+            f"  {n:3d} envs: env.step {cpu['env.step']:7.2f} us CPU ({wall['env.step']:7.2f} wall), bare "
+            f"{cpu['bare']:7.2f} us CPU ({wall['bare']:7.2f} wall) a call: Python {cpu['env.step'] - cpu['bare']:6.2f} "
+            f"us CPU a call; env.step makes {cpu['bare'] / cpu['env.step']:.3f} x the bare loop's calls a CPU second"
+        )
+    print(f"  load average after: {os.getloadavg()[0]:.2f}")
     return 0
 
 

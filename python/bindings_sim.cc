@@ -56,6 +56,18 @@ auto episodes_locked(Fn fn) {
   };
 }
 
+// Each episode's physics steps since its reset and sim time: (steps, times).
+py::tuple progress_of(const simloop::Episodes& episodes) {
+  const auto n = static_cast<py::ssize_t>(episodes.count());
+  py::array_t<std::int64_t> steps(n);
+  py::array_t<double> times(n);
+  for (py::ssize_t i = 0; i < n; ++i) {
+    steps.mutable_data()[i] = episodes.steps_taken(static_cast<std::size_t>(i));
+    times.mutable_data()[i] = episodes.time(static_cast<std::size_t>(i));
+  }
+  return py::make_tuple(steps, times);
+}
+
 // A numpy view of one of MuJoCo's arrays, of its element type, (rows, cols)
 // or (rows,) when cols is 1, kept alive by `owner` through its base (safe:
 // a Sim's mjData never moves, nor does a model the owner holds); read-only
@@ -292,7 +304,7 @@ void bind_sim(py::module_& m) {
           "step",
           [](PyEpisodes& e, const Doubles& actions, std::int64_t every,
              const std::optional<py::array_t<std::uint8_t, py::array::c_style | py::array::forcecast>>& active,
-             int threads) {
+             int threads, bool progress) -> py::tuple {
             EpisodesLock lock(e);
             const std::size_t n = e.episodes.count();
             const auto width = static_cast<std::size_t>(e.episodes.width());
@@ -323,21 +335,12 @@ void bind_sim(py::module_& m) {
               const double* row = e.observations.data() + i * width;
               out = std::copy(row + kRowLabels, row + width, out);
             }
-            return py::make_tuple(observations, terminated, truncated);
+            if (!progress) return py::make_tuple(observations, terminated, truncated);
+            const py::tuple steps_times = progress_of(e.episodes);  // (the vector env's infos, in the same call)
+            return py::make_tuple(observations, terminated, truncated, steps_times[0], steps_times[1]);
           },
-          "actions"_a, "every"_a, "active"_a = py::none(), "threads"_a = 1)
-      .def("progress",
-           [](PyEpisodes& e) {
-             EpisodesLock lock(e);
-             const std::size_t n = e.episodes.count();
-             py::array_t<std::int64_t> steps(static_cast<py::ssize_t>(n));
-             py::array_t<double> times(static_cast<py::ssize_t>(n));
-             for (std::size_t i = 0; i < n; ++i) {
-               steps.mutable_data()[i] = e.episodes.steps_taken(i);
-               times.mutable_data()[i] = e.episodes.time(i);
-             }
-             return py::make_tuple(steps, times);
-           })
+          "actions"_a, "every"_a, "active"_a = py::none(), "threads"_a = 1, "progress"_a = false)
+      .def("progress", episodes_locked(progress_of))
       .def("steps_taken", episodes_locked<std::size_t>(&simloop::Episodes::steps_taken), "i"_a)
       .def("time", episodes_locked<std::size_t>(&simloop::Episodes::time), "i"_a)
       .def("warnings", episodes_locked<std::size_t>(&simloop::Episodes::warnings), "i"_a);

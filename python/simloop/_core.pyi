@@ -370,10 +370,16 @@ class Episodes(metaclass=_Pybind11Type):
     def ctrl_range(self) -> tuple[_Float64Array, _Float64Array]: ...
     # Episode i's first observation: its recorder row after step and time.
     def reset(self, i: int, seed: int, reset: Optional[str] = None) -> _Float64Array: ...
-    # (observations, terminated, truncated): a row of each episode's, after step and time.
+    # (observations, terminated, truncated): a row of each episode's, after step and time;
+    # progress=True: then (steps_taken, time) of every episode too, as progress() gives them.
     def step(
-        self, actions: _ArrayLike, every: int, active: Optional[ArrayLike] = None, threads: int = 1
-    ) -> tuple[_Float64Array, NDArray[np.bool_], NDArray[np.bool_]]: ...
+        self,
+        actions: _ArrayLike,
+        every: int,
+        active: Optional[ArrayLike] = None,
+        threads: int = 1,
+        progress: bool = False,
+    ) -> tuple[Any, ...]: ...
     # (steps_taken, time) of every episode.
     def progress(self) -> tuple[NDArray[np.int64], _Float64Array]: ...
     def steps_taken(self, i: int) -> int: ...

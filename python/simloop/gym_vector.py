@@ -28,6 +28,13 @@ from .render import RENDER_MODES
 from .scenario import RESET_KEYS, ScenarioLike
 
 
+def _refuse_non_finite(values: np.ndarray) -> None:
+    """A ValueError naming the first env and action that is not finite, if any."""
+    if not np.isfinite(values).all():
+        env, index = np.argwhere(~np.isfinite(values))[0]
+        raise ValueError(f"env {env}: action {index} is not finite, got {float(values[env, index])!r}")
+
+
 class ScenarioVectorEnv(VectorEnv):
     """num_envs episodes of a scenario over one compiled model, one MuJoCo
     data each, stepped together on `threads` C++ threads (None: one per
@@ -110,6 +117,9 @@ class ScenarioVectorEnv(VectorEnv):
         self._obs: Optional[np.ndarray] = None
         self._decisions = np.zeros(self.num_envs, dtype=np.int64)
         self._ended = np.zeros(self.num_envs, dtype=bool)  # ended, not reset yet
+        self._any_ended = False  # self._ended.any(), or True (then step() looks)
+        self._everyone = np.ones(self.num_envs, dtype=bool)
+        self._action_shape = (self.num_envs, self._setup.nu)
 
     def _reset_one(self, i: int, seed: Optional[int], infos: Dict[str, Any], start: Optional[str] = None) -> np.ndarray:
         rng = self._rngs[i]
@@ -162,34 +172,67 @@ class ScenarioVectorEnv(VectorEnv):
         for i in np.flatnonzero(mask):
             obs[i] = self._reset_one(int(i), seeds[i], infos, start)
         self._obs = obs
+        self._any_ended = bool(self._ended.any())
         return obs.copy(), infos
 
     def step(self, actions: object) -> Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, Dict[str, Any]]:
         if self._obs is None:
             raise ValueError("reset() the environment before step()")
-        values = self._setup.actions(actions, (self.num_envs, self._setup.nu))
-        if not np.isfinite(values).all():  # (before any autoreset: a refused step changes nothing)
-            env, index = np.argwhere(~np.isfinite(values))[0]
-            raise ValueError(f"env {env}: action {index} is not finite, got {float(values[env, index])!r}")
+        setup = self._setup
+        values = setup.actions(actions, self._action_shape)
+        if self._any_ended:  # an autoreset due, or a refusal (Disabled)
+            return self._step_ended(values)
+        # Every env steps: one call into C++, which checks the actions
+        # before it steps any and hands back the flags and each env's step
+        # and time with the observations.
+        try:
+            obs, terminated, truncated, steps, times = setup.episodes.step(
+                values, self.control_every, None, self._threads, True
+            )
+        except ValueError:
+            _refuse_non_finite(values)  # (in Python's words: which env)
+            raise
+        before, self._obs = self._obs, obs  # stepped: a hook that raises below leaves the envs where they are
+        flagged = terminated.any() or truncated.any()
+        if flagged:
+            self._any_ended = True
+            self._ended |= terminated | truncated
+        if self.max_episode_steps is not None:  # (only _ended_by reads the count, and only then)
+            self._decisions += 1
+        rewards = setup.rewards(before, values, obs)
+        infos: Dict[str, Any] = {}
+        if flagged or setup.terminates or self.max_episode_steps is not None:
+            hooked = setup.terminations(obs) if setup.terminates else np.zeros(self.num_envs, dtype=bool)
+            steps, times = self._end(obs, terminated, truncated, hooked, self._everyone, infos, steps, times)
+        infos.update({"step": steps, "_step": self._everyone.copy(), "time": times, "_time": self._everyone.copy()})
+        return obs.copy(), rewards, terminated, truncated, infos
+
+    def _step_ended(self, values: np.ndarray) -> Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, Dict[str, Any]]:
+        """step() when some env has ended: Disabled refuses it, NextStep
+        resets it (ignoring its action), and only the others step."""
+        _refuse_non_finite(values)  # (before any autoreset: a refused step changes nothing)
         infos: Dict[str, Any] = {}
         if self.autoreset_mode == AutoresetMode.DISABLED and self._ended.any():
             raise ValueError(
                 f"env {int(np.flatnonzero(self._ended)[0])} has ended: reset it first "
                 "(reset(options={'reset_mask': mask}); autoreset_mode is Disabled)"
             )
+        assert self._obs is not None
         resetting = self._ended.copy() if self.autoreset_mode == AutoresetMode.NEXT_STEP else np.zeros_like(self._ended)
         for i in np.flatnonzero(resetting):
             self._obs[i] = self._reset_one(int(i), None, infos)
         active = ~resetting
         mask = None if not resetting.any() else active.astype(np.uint8)
-        obs, terminated, truncated = self._setup.episodes.step(values, self.control_every, mask, self._threads)
+        setup = self._setup
+        obs, terminated, truncated, steps, times = setup.episodes.step(
+            values, self.control_every, mask, self._threads, True
+        )
         obs[resetting] = self._obs[resetting]
         before, self._obs = self._obs, obs  # stepped: a hook that raises below leaves the envs where they are
         self._decisions[active] += 1
         terminated &= active
         truncated &= active
         self._ended |= terminated | truncated
-        setup = self._setup
         rewards = np.zeros(self.num_envs)
         hooked = np.zeros(self.num_envs, dtype=bool)
         if active.all():
@@ -200,9 +243,33 @@ class ScenarioVectorEnv(VectorEnv):
             rewards[active] = setup.rewards(before[active], values[active], obs[active])
             if setup.terminates:
                 hooked[active] = setup.terminations(obs[active])
+        steps, times = self._end(obs, terminated, truncated, hooked, active, infos, steps, times)
+        self._any_ended = bool(self._ended.any())
+        # Every env stepped or was reset: each has its step and time (as
+        # _add_info would lay them out, env by env).
+        infos.update({"step": steps, "_step": self._everyone.copy(), "time": times, "_time": self._everyone.copy()})
+        return obs.copy(), rewards, terminated, truncated, infos
+
+    def _end(
+        self,
+        obs: np.ndarray,
+        terminated: np.ndarray,
+        truncated: np.ndarray,
+        hooked: np.ndarray,
+        active: np.ndarray,
+        infos: Dict[str, Any],
+        steps: np.ndarray,
+        times: np.ndarray,
+    ) -> Tuple[np.ndarray, np.ndarray]:
+        """Ends the episodes that end on this step (each info says why; SameStep
+        resets them at once); gives each env's step and time after that."""
         ending = terminated | truncated | hooked
         if self.max_episode_steps is not None:
             ending |= active & (self._decisions >= self.max_episode_steps)
+        if not ending.any():
+            return steps, times
+        self._any_ended = True
+        setup = self._setup
         for i in np.flatnonzero(ending):  # each ended episode's info says why
             ended_by = _ended_by(
                 bool(terminated[i]),
@@ -220,12 +287,10 @@ class ScenarioVectorEnv(VectorEnv):
                 obs[i] = self._reset_one(int(i), None, infos)
             else:
                 self._add_info(infos, info, int(i))
-        # Every env stepped or was reset: each has its step and time (as
-        # _add_info would lay them out, env by env).
-        steps, times = setup.episodes.progress()
-        everyone = np.ones(self.num_envs, dtype=bool)
-        infos.update({"step": steps, "_step": everyone, "time": times, "_time": everyone.copy()})
-        return obs.copy(), rewards, terminated, truncated, infos
+        if self.autoreset_mode == AutoresetMode.SAME_STEP:  # (reset since the step)
+            steps, times = setup.episodes.progress()
+            self._any_ended = bool(self._ended.any())
+        return steps, times
 
     def render(self) -> Optional[Tuple[np.ndarray, ...]]:
         """Every env's current state as a picture, one per env (as

@@ -75,8 +75,11 @@ def test_every_vectorization_runs_through_autoresets_and_agrees(env_id):
 
 @pytest.mark.parametrize("mode", list(AutoresetMode))
 @pytest.mark.parametrize("threads", [1, 2])
-def test_the_vector_env_is_sync_vector_env_over_single_envs_in_every_autoreset_mode(mode, threads):
+@pytest.mark.parametrize("hooks", [True, False])  # without: episodes end by the scenario's length alone
+def test_the_vector_env_is_sync_vector_env_over_single_envs_in_every_autoreset_mode(mode, threads, hooks):
     n, kwargs = 4, dict(control_every=10, steps=60, max_episode_steps=4, reward=lambda o, a, p: float(p[0] - o[0]))
+    if not hooks:
+        kwargs = dict(control_every=30, steps=60)
     ours = ScenarioVectorEnv(PUSHT_SCENARIO, n, autoreset_mode=mode, threads=threads, **kwargs)
     theirs = SyncVectorEnv([lambda: ScenarioEnv(PUSHT_SCENARIO, **kwargs)] * n, autoreset_mode=mode)
     assert ours.metadata["autoreset_mode"] == mode
@@ -124,6 +127,25 @@ def test_a_refused_step_changes_nothing_even_with_an_autoreset_due():
     refused, clean = run(True), run(False)
     np.testing.assert_array_equal(refused[0], clean[0])
     assert refused[4]["seed"].tolist() == clean[4]["seed"].tolist()
+
+
+@pytest.mark.parametrize("n", [1, 2])
+def test_a_refused_step_changes_nothing(n):
+    def run(refuse):
+        venv = ScenarioVectorEnv(PUSHT_SCENARIO, n)
+        venv.reset(seed=3)
+        venv.step(np.zeros((n, 2)))
+        if refuse:
+            bad = np.zeros((n, 2))
+            bad[n - 1, 1] = np.inf
+            with pytest.raises(ValueError, match=rf"^env {n - 1}: action 1 is not finite, got inf$"):
+                venv.step(bad)
+        return venv.step(np.full((n, 2), 0.5))
+
+    refused, clean = run(True), run(False)
+    for x, y in zip(refused[:-1], clean[:-1]):
+        np.testing.assert_array_equal(x, y)
+    same_infos(refused[-1], clean[-1])
 
 
 @pytest.mark.parametrize("mode", ["NextStep", "SameStep"])
