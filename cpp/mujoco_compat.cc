@@ -8,7 +8,6 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
-#include <iterator>
 #include <mutex>
 #include <system_error>
 #include <type_traits>
@@ -167,8 +166,7 @@ void put_state(const mjModel* m, mjData* d, const double* state) noexcept {
 }
 
 bool state_all_awake(const mjModel* m, const double* state) noexcept {
-  const double* asleep = state + mujoco_state_size(m);
-  return std::all_of(asleep, asleep + sleep_size(m), [](double counter) { return counter < 0; });
+  return std::all_of(state + mujoco_state_size(m), state + state_size(m), [](double counter) { return counter < 0; });
 }
 
 void put_state_awake(const mjModel* m, mjData* d, const double* state) noexcept {
@@ -301,7 +299,6 @@ void put_state(const mjModel* m, mjData* d, const double* state) noexcept {
 }
 
 bool state_all_awake(const mjModel*, const double*) noexcept { return true; }
-
 void put_state_awake(const mjModel* m, mjData* d, const double* state) noexcept { put_state(m, d, state); }
 
 void load_plugins_once() {}
