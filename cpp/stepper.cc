@@ -42,7 +42,7 @@ void Stepper::reset(const mjModel* m, mjData* d, const StartAt& at) {
       // A full state is everything mj_step reads that is not the model
       // (state.hpp), so no reset first: of the last run only MuJoCo's
       // warning counters would be left (as mujoco.rollout, which zeroes
-      // them). mj_resetData was a twentieth of a 100-step PushT run.
+      // them). mj_resetData was about 2 % of a 100-step PushT run.
       std::fill_n(d->warning, mjNWARNING, mjWarningStat{});
       // (A sleeping tree's poses the step does not derive: they must be.)
       if (at.read_at_start || !compat::state_all_awake(m, at.state)) {
