@@ -197,8 +197,7 @@ class ScenarioVectorEnv(VectorEnv):
         if flagged:
             self._any_ended = True
             self._ended |= terminated | truncated
-        if self.max_episode_steps is not None:  # (only _ended_by reads the count, and only then)
-            self._decisions += 1
+        self._decisions += 1
         rewards = setup.rewards(before, values, obs)
         infos: Dict[str, Any] = {}
         if flagged or setup.terminates or self.max_episode_steps is not None:

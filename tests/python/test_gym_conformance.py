@@ -114,6 +114,16 @@ def test_stepping_an_ended_env_without_autoreset_is_refused():
     venv.step(np.zeros((2, 2)))
 
 
+def test_a_step_limit_set_after_the_env_was_made_counts_the_steps_already_taken():
+    venv = ScenarioVectorEnv(PUSHT_SCENARIO, 2)
+    venv.reset(seed=0)
+    for _ in range(2):
+        assert not venv.step(np.zeros((2, 2)))[3].any()
+    venv.max_episode_steps = 3
+    _, _, _, truncated, infos = venv.step(np.zeros((2, 2)))  # the third
+    assert truncated.all() and list(infos["ended_by"]) == ["max_episode_steps"] * 2
+
+
 def test_a_refused_step_changes_nothing_even_with_an_autoreset_due():
     def run(refuse_first):
         venv = ScenarioVectorEnv(PUSHT_SCENARIO, 2, max_episode_steps=1)
