@@ -93,10 +93,16 @@ mjvCamera camera_for(const mjModel* m, const mjData* d, const CameraView& view) 
   return camera;
 }
 
+// An endless plane we move under the camera, by geom id, with the step (m)
+// it moves in: a quad's side, so that the picture does not shift.
+struct EndlessPlane {
+  int geom;
+  mjtNum step;
+};
+
 // Each endless plane moved in its steps to lie under the camera (the
 // scene's eye, between its two: there is one unless stereo).
-template <typename EndlessPlanes>
-void follow_camera(const EndlessPlanes& planes, mjvScene& scene) {
+void follow_camera(const std::vector<EndlessPlane>& planes, mjvScene& scene) {
   if (planes.empty()) return;
   float eye[3];
   for (int i = 0; i < 3; ++i) eye[i] = 0.5f * (scene.camera[0].pos[i] + scene.camera[1].pos[i]);
@@ -106,11 +112,11 @@ void follow_camera(const EndlessPlanes& planes, mjvScene& scene) {
     for (const auto& plane : planes) {
       if (plane.geom != geom.objid) continue;
       const float to_eye[3] = {eye[0] - geom.pos[0], eye[1] - geom.pos[1], eye[2] - geom.pos[2]};
+      const float step = static_cast<float>(plane.step);
       float shift[3] = {0, 0, 0};
       for (int side : {0, 1}) {
         const float axis[3] = {geom.mat[side], geom.mat[3 + side], geom.mat[6 + side]};  // a column of mat
         const float along = to_eye[0] * axis[0] + to_eye[1] * axis[1] + to_eye[2] * axis[2];
-        const float step = static_cast<float>(plane.step);
         const float moved = step * std::round(along / step);
         for (int j = 0; j < 3; ++j) shift[j] += moved * axis[j];
       }
@@ -135,13 +141,7 @@ struct Renderer::Impl {
   std::vector<float> depth;
   std::mutex mutex;
   RenderStyle style;
-  // The endless planes we move under the camera, by geom id, with the step
-  // (m) they move in: a quad's side, so that the picture does not shift.
-  struct EndlessPlane {
-    int geom;
-    mjtNum step;
-  };
-  std::vector<EndlessPlane> endless;
+  std::vector<EndlessPlane> endless;  // (with a style's endless_planes)
 
   Impl(const Model& m, int w, int h, const RenderStyle& s) : model(m), width(w), height(h), style(s) {
     mjv_defaultScene(&scene);
