@@ -50,16 +50,6 @@ std::optional<Wide> whole(std::string_view s) {
   return n;
 }
 
-std::vector<std::string_view> split(std::string_view s, char by) {
-  std::vector<std::string_view> parts;
-  for (size_t start = 0;;) {
-    const size_t at = s.find(by, start);
-    parts.push_back(s.substr(start, at == std::string_view::npos ? at : at - start));
-    if (at == std::string_view::npos) return parts;
-    start = at + 1;
-  }
-}
-
 // N, A:B (A to B-1) and A:B:STEP, joined by commas; at most kMaxBatchRuns
 // seeds, counted before any is listed.
 std::vector<SeedRange> parse_seeds(std::string_view value) {

@@ -71,14 +71,7 @@ std::pair<std::string, double> parse_ctrl(std::string_view flag, std::string_vie
 
 std::vector<double> parse_timestep_list(std::string_view flag, std::string_view value) {
   std::vector<double> out;
-  size_t start = 0;
-  while (true) {
-    const size_t comma = value.find(',', start);
-    const std::string_view item = value.substr(start, comma == std::string_view::npos ? comma : comma - start);
-    out.push_back(parse_timestep(flag, item));
-    if (comma == std::string_view::npos) break;
-    start = comma + 1;
-  }
+  for (const std::string_view item : split(value, ',')) out.push_back(parse_timestep(flag, item));
   return out;
 }
 
@@ -178,6 +171,16 @@ Options parse_plot(int argc, const char* const* argv) {
 }
 
 }  // namespace
+
+std::vector<std::string_view> split(std::string_view s, char by) {
+  std::vector<std::string_view> parts;
+  for (size_t start = 0;;) {
+    const size_t at = s.find(by, start);
+    parts.push_back(s.substr(start, at == std::string_view::npos ? at : at - start));
+    if (at == std::string_view::npos) return parts;
+    start = at + 1;
+  }
+}
 
 bool plain_decimal(std::string_view s) {
   size_t i = 0;

@@ -117,6 +117,10 @@ class UsageError : public std::runtime_error {
 // flag's numbers are read by this one rule.
 [[nodiscard]] bool plain_decimal(std::string_view s);
 
+// `s`'s parts between each `by` (one part, `s`, when it has none; empty
+// parts kept): how every flag's list (a,b,c) and range (A:B:STEP) is read.
+[[nodiscard]] std::vector<std::string_view> split(std::string_view s, char by);
+
 // The scenario the quick flags describe (--body, --ctrl; a --scenario file
 // is read with Scenario::from_toml_file): the chapter's run on `scene` (the
 // --model, or the chapter's): the chapter's shove on --body, a body's name
