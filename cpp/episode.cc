@@ -108,6 +108,8 @@ int Episodes::width() const noexcept { return impl_->recorder->width(); }
 const std::vector<Column>& Episodes::columns() const noexcept { return impl_->recorder->columns(); }
 const Model& Episodes::model() const noexcept { return impl_->model; }
 
+const Scenario& Episodes::scenario() const noexcept { return impl_->scenario; }
+
 std::int64_t Episodes::steps() const noexcept { return impl_->length; }
 
 namespace {

@@ -308,7 +308,9 @@ ResetSpec read_reset(const TableReader& t, const toml::table& table, std::string
   }
   if (const toml::node* node = table.get("param")) {
     const auto* array = node->as_array();
-    if (array == nullptr || !array->is_array_of_tables()) t.fail("param", "expected [[reset.param]] tables");
+    if (array == nullptr || (!array->empty() && !array->is_array_of_tables())) {
+      t.fail("param", "expected [[reset.param]] tables (or param = [] for none)");
+    }
     for (std::size_t i = 0; i < array->size(); ++i) {
       const TableReader p(*array->get(i)->as_table(), std::string(source), "reset.param[" + std::to_string(i) + "]");
       p.allow_only({"kind", "name", "value", "uniform"});
@@ -410,6 +412,20 @@ Scenario Scenario::from_toml_string(std::string_view text, std::string_view sour
     s.reset = read_reset(TableReader(*table, std::string(source), "reset"), *table, source);
   }
   return s;
+}
+
+ResetSpec reset_over(const ResetSpec& own, std::string_view text, std::string_view source) {
+  const ResetSpec given = Scenario::from_toml_string(text, source).reset;  // (checks the text)
+  const toml::table root = toml::parse(text, source);
+  ResetSpec r = own;
+  const toml::table* table = root.get_as<toml::table>("reset");
+  if (table == nullptr) return r;
+  if (table->contains("qpos")) r.qpos = given.qpos;
+  if (table->contains("qvel")) r.qvel = given.qvel;
+  if (table->contains("qpos_noise")) r.qpos_noise = given.qpos_noise;
+  if (table->contains("qvel_noise")) r.qvel_noise = given.qvel_noise;
+  if (table->contains("param")) r.params = given.params;
+  return r;
 }
 
 }  // namespace simloop

@@ -292,9 +292,9 @@ void bind_sim(py::module_& m) {
               throw py::index_error("episode " + std::to_string(i) + " does not exist: there are " +
                                     std::to_string(e.episodes.count()));
             }
-            // This episode's start, as a scenario file's [reset] table says it.
+            // This episode's start: the keys its [reset] table names over the scenario's own.
             std::optional<simloop::ResetSpec> spec;
-            if (reset) spec = simloop::Scenario::from_toml_string(*reset, "reset options").reset;
+            if (reset) spec = simloop::reset_over(e.episodes.scenario().reset, *reset, "reset options");
             double* row = e.observations.data() + i * width;
             e.episodes.reset(i, seed, row, spec ? &*spec : nullptr);
             return vec(row + kRowLabels, width - kRowLabels);

@@ -85,6 +85,11 @@ if ((with_tree)); then
   cmake --build "$build" -j "$(nproc)"
 fi
 
+# stable-baselines3 (the sb3 extra, for simloop.sb3 and its tests) brings
+# torch, gigabytes: only the PyPI build's test install adds it (CI installs it
+# once, there); SIMLOOP_SB3=0 leaves it out. torch from PyPI runs on the CPU
+# where there is no GPU.
+if [[ $mujoco == pypi && $extras == ".[test]" && ${SIMLOOP_SB3:-1} != 0 ]]; then extras=.[test,sb3]; fi
 if ((with_python)); then
   [[ -x $venv/bin/python ]] || "$python" -m venv "$venv"
   echo "setup: pip install $extras into $venv (builds the module: a few minutes the first time)"

@@ -47,6 +47,8 @@ class Episodes {
   // The model the episodes step (the scene at the run's timestep); an
   // episode started with scene parameters steps its own copy (model(i)).
   [[nodiscard]] const Model& model() const noexcept;
+  // The scenario as configured: its [reset] is what reset options start from (reset_over).
+  [[nodiscard]] const Scenario& scenario() const noexcept;
   [[nodiscard]] const Model& model(std::size_t i) const;
   // Episode i's state, as its last reset or step left it: what MuJoCo derives
   // from its positions and velocities is current (what a Renderer draws);
@@ -55,7 +57,8 @@ class Episodes {
 
   // Starts episode i afresh (t = 0, the model's initial state, ctrl 0) with
   // its disturbances drawn from `seed`, then its start (the scenario's
-  // ResetSpec, or `reset` for this episode instead when given: its state,
+  // ResetSpec, or `reset` for this episode instead when given (reset_over: the
+  // scenario's with the keys the options name replaced): its state,
   // noise and scene parameters, drawn from the same seed after the
   // disturbances), and writes its first observation into
   // observation[0 .. width()). A bad `reset` throws InvalidArgument

@@ -197,6 +197,13 @@ struct Schedule {
 [[nodiscard]] Schedule build_schedule(const ResolvedScenario& scenario, const Scenario& spec, double timestep,
                                       Draws& draws);
 
+// One episode's reset options over the scenario's own start: `text` is a
+// scenario file's text holding a [reset] table; each key that table names
+// (qpos, qvel, qpos_noise, qvel_noise, param: the whole list, `param = []`
+// for none) replaces own's, and the keys it leaves out keep own's. Throws
+// InvalidArgument naming `source` as from_toml_string does.
+[[nodiscard]] ResetSpec reset_over(const ResetSpec& own, std::string_view text, std::string_view source);
+
 // Checks a ResetSpec against the resolved scene: qpos of nq values, qvel of
 // nv, every value finite, noise finite and >= 0, each param's low <= high
 // and its name and values valid for the scene (InvalidArgument naming the

@@ -236,8 +236,9 @@ def _check_options(options: object, known: Sequence[str]) -> Dict[str, Any]:
 
 def _start(options: Dict[str, Any]) -> Optional[str]:
     """The episode's start from reset's options, as a [reset] table (None:
-    the scenario's own). Given, it replaces the scenario's [reset] for that
-    episode."""
+    the scenario's own). Each key it names replaces the scenario's [reset]
+    key for that episode (params: the whole list, [] for none); the keys it
+    leaves out stay the scenario's (the C++ reset_over)."""
     reset = {k: v for k, v in options.items() if k in RESET_KEYS}
     return reset_toml(reset) if reset else None
 

@@ -36,8 +36,9 @@ Episodes, include/simloop/episode.hpp):
   qpos_noise, qvel_noise (half-widths of uniform noise, drawn from the
   episode's seed after its disturbances) and params (scene parameters for
   this episode: [{"kind": "friction" | "mass" | "damping" | "gravity",
-  "name": ..., "value": v or "uniform": [low, high]}]): the scenario's
-  [reset] table, for this episode (given, they replace the scenario's).
+  "name": ..., "value": v or "uniform": [low, high]}]): over the
+  scenario's [reset] table, for this episode: each key given replaces the
+  scenario's (params: the whole list, [] for none), the others stay.
   Unknown keys, wrong sizes and names are errors; the env stays usable.
 - render_mode "rgb_array" or "depth_array": render() draws the episode's
   state offscreen (simloop.Renderer), width x height pixels, from `view`

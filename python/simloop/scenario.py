@@ -141,6 +141,8 @@ def reset_toml(reset: Mapping[str, Any]) -> str:
     _check_keys("reset", reset, RESET_KEYS)
     text = _toml_table("[reset]", {k: v for k, v in reset.items() if k != "params"})
     params = reset.get("params") or ()
+    if isinstance(reset.get("params"), (list, tuple)) and not params:
+        text += "param = []\n"  # none: reset options that name params replace the scenario's
     if isinstance(params, Mapping) or not isinstance(params, Iterable):
         raise TypeError(f"reset params must be a list of dicts, got {_describe(params)}")
     for param in params:

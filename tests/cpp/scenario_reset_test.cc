@@ -182,4 +182,26 @@ TEST(ScenarioReset, BadResetsNameTheKey) {
   EXPECT_EQ(episodes.steps_taken(0), 0);
 }
 
+TEST(ScenarioReset, OptionsOverTheScenariosResetReplaceOnlyTheKeysTheyName) {
+  const Scenario own = Scenario::from_toml_string(
+      "[reset]\nqpos = [1, 2]\nqpos_noise = 0.1\n[[reset.param]]\nkind = 'gravity'\nvalue = 5.0\n", "own");
+  const simloop::ResetSpec noise = simloop::reset_over(own.reset, "[reset]\nqvel_noise = 0.5\n", "options");
+  EXPECT_EQ(noise.qpos, own.reset.qpos);
+  EXPECT_EQ(noise.qpos_noise, 0.1);
+  EXPECT_EQ(noise.qvel_noise, 0.5);
+  ASSERT_EQ(noise.params.size(), 1U);
+  EXPECT_EQ(noise.params[0].low, 5.0);
+  const simloop::ResetSpec none = simloop::reset_over(own.reset, "[reset]\nparam = []\nqpos_noise = 0.0\n", "options");
+  EXPECT_TRUE(none.params.empty());
+  EXPECT_EQ(none.qpos_noise, 0.0);
+  EXPECT_EQ(none.qpos, own.reset.qpos);
+  const simloop::ResetSpec mass =
+      simloop::reset_over(own.reset, "[[reset.param]]\nkind = 'mass'\nname = 'box'\nvalue = 2.0\n", "options");
+  ASSERT_EQ(mass.params.size(), 1U);
+  EXPECT_EQ(mass.params[0].name, "box");
+  EXPECT_EQ(mass.qpos_noise, 0.1);
+  EXPECT_EQ(error_of([&] { (void)simloop::reset_over(own.reset, "[reset]\nqpos_noise = -1\n", "options"); }),
+            "options: reset.qpos_noise: must not be negative (the half-width of a uniform noise), got -1.0");
+}
+
 }  // namespace

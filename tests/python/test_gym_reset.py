@@ -115,3 +115,36 @@ def test_bad_options_are_named_and_the_env_stays_usable(options, error, message)
     fresh = ScenarioEnv(PUSHT_SCENARIO)
     fresh.reset(seed=0)
     assert np.array_equal(stepped, fresh.step([0.0, 0.0])[0])
+
+
+OWN = {"qpos": QPOS, "qpos_noise": 0.01, "params": [{"kind": "gravity", "value": 5.0}]}
+MASS = [{"kind": "mass", "name": "tblock", "value": 0.5}]
+
+
+@pytest.mark.parametrize(
+    "options, same_as",
+    [
+        # The keys named replace the scenario's; the others stay its own.
+        ({"params": MASS}, {**OWN, "params": MASS}),
+        ({"qpos_noise": 0.0}, {**OWN, "qpos_noise": 0.0}),
+        ({"params": []}, {"qpos": QPOS, "qpos_noise": 0.01}),
+        ({"qvel_noise": 0.05}, {**OWN, "qvel_noise": 0.05}),
+        ({}, OWN),
+    ],
+)
+def test_options_override_only_the_keys_they_name(options, same_as):
+    def scenario(reset):
+        return simloop.Scenario(scene="tests/scenes/pusht.xml", steps=40, reset=reset)
+
+    def episode(env, **reset):
+        obs, _ = env.reset(seed=4, **reset)
+        return [obs] + [env.step([0.8, 0.2])[0] for _ in range(3)]
+
+    env = ScenarioEnv(scenario(OWN), control_every=10)
+    shaped = episode(env, options=options)
+    assert abs(column(env, shaped[0], "tblock_x") - 0.3) <= 0.01  # the scenario's own qpos: not named
+    expected = episode(ScenarioEnv(scenario(same_as), control_every=10))
+    assert all(np.array_equal(a, b) for a, b in zip(shaped, expected))
+    # A key named with another value than the scenario's changes the episode.
+    own = episode(env)
+    assert all(np.array_equal(a, b) for a, b in zip(shaped, own)) == (options == {})

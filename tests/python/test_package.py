@@ -44,10 +44,11 @@ def test_result_shape_and_views():
 
 def test_import_simloop_loads_neither_numpy_nor_the_optional_libraries():
     # The command's --no-rerun path and `import simloop` stay quick: numpy
-    # (~80 ms), pandas, pyarrow, gymnasium, dask, tqdm and rerun load when used.
+    # (~80 ms), pandas, pyarrow, gymnasium, dask, tqdm, rerun, torch and
+    # stable-baselines3 load when used.
     code = (
         "import sys, simloop; heavy = [m for m in ('numpy', 'pandas', 'pyarrow', 'gymnasium', 'dask', 'tqdm',"
-        " 'rerun') if m in sys.modules]; print(heavy)"
+        " 'rerun', 'torch', 'stable_baselines3') if m in sys.modules]; print(heavy)"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "[]"
