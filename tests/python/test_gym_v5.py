@@ -16,9 +16,14 @@ import simloop  # noqa: E402
 
 def gymnasium_env(env_id: str, **kwargs):
     try:
-        return gymnasium.make(env_id, **kwargs)
+        env = gymnasium.make(env_id, **kwargs)
     except Exception as e:  # Gymnasium's MuJoCo envs need the mujoco package and imageio
         pytest.skip(f"Gymnasium's {env_id} does not make here: {type(e).__name__}: {e}")
+    import mujoco
+
+    if simloop.MUJOCO_VERSION.split()[-1] != mujoco.__version__:  # the bits are one MuJoCo build's
+        pytest.skip(f"Gymnasium steps mujoco {mujoco.__version__}, simloop {simloop.MUJOCO_VERSION}")
+    return env
 
 
 class Columns:
@@ -70,7 +75,8 @@ TASKS = {  # env id: (XML, frame_skip, ctrl_cost_weight, healthy, qvel clipped i
 
 
 @pytest.mark.parametrize("env_id", list(TASKS))
-def test_a_task_steps_as_gymnasiums_bit_for_bit(env_id):
+def test_a_task_steps_as_gymnasiums_bit_for_bit(env_id, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)  # MuJoCo's default handler writes Gymnasium's load warnings to MUJOCO_LOG.TXT here
     # Both start at the XML's initial state (reset_noise_scale=0: Gymnasium's noise is 0 * uniform and 0 * normal)
     # and take the same 1,000 seeded actions (float64, inside the ctrlrange), reset together when an episode ends.
     # Gymnasium writes ctrl and calls mj_step frame_skip times; simloop takes the same steps, the first begun as the
