@@ -1,10 +1,14 @@
 #include "simloop/fields.hpp"
 
+#include <mujoco/mjxmacro.h>
+
 #include <algorithm>
 #include <array>
 #include <string>
+#include <type_traits>
 
 #include "mujoco_compat.hpp"
+#include "mujoco_guard.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/object_names.hpp"
 
@@ -38,7 +42,26 @@ const mjModel* any_model() {
   return &empty;
 }
 
+template <class T>
+DataNumbers numbers_only(T* mjData::*member) noexcept {
+  if constexpr (std::is_same_v<T, mjtNum>) {
+    return member;
+  } else {
+    return nullptr;
+  }
+}
+
 }  // namespace
+
+DataNumbers data_numbers(std::string_view name) noexcept {
+#define X(type, array, rows, cols) \
+  if (name == #array) return numbers_only(&mjData::array);
+#define XNV X
+  MJDATA_POINTERS
+#undef XNV
+#undef X
+  return nullptr;
+}
 
 const std::vector<std::string>& model_field_names() {
   static const std::vector<std::string> names = names_of([](const std::function<bool(const RawArray&)>& visit) {
@@ -82,6 +105,14 @@ FieldView data_field(const mjModel* m, const mjData* d, std::string_view name) {
         "forces) instead");
   }
   no_such("mjData", name, data_field_names());
+}
+
+bool filled_after_constraint(std::string_view name) noexcept {
+  return name == "cacc" || name == "cfrc_int" || name == "cfrc_ext";
+}
+
+void fill_after_constraint(const mjModel* m, mjData* d) {
+  detail::mujoco_call([&] { mj_rnePostConstraint(m, d); });
 }
 
 std::vector<std::string> writable_model_field_names() {

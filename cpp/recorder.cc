@@ -45,6 +45,21 @@ std::vector<std::string> joint_units(int type, bool velocity) {
                   : std::vector<std::string>{"m", "m", "m", "", "", "", ""};
 }
 
+// mjData's arrays that an observation's first half of a step (mj_step1 and
+// mj_fwdActuation: Stepper::observe) derives; a recorded array not among
+// them makes observations take a whole forward pass.
+bool derived_before_acceleration(std::string_view array) {
+  for (const char* name :
+       {"xpos",           "xquat",         "xmat",       "xipos",        "ximat",           "xanchor",
+        "xaxis",          "geom_xpos",     "geom_xmat",  "site_xpos",    "site_xmat",       "cam_xpos",
+        "cam_xmat",       "light_xpos",    "light_xdir", "subtree_com",  "cinert",          "cdof",
+        "cvel",           "cdof_dot",      "ten_length", "ten_velocity", "actuator_length", "actuator_velocity",
+        "actuator_force", "qfrc_actuator", "qfrc_bias",  "qfrc_passive"}) {
+    if (array == name) return true;
+  }
+  return false;
+}
+
 }  // namespace
 
 std::vector<std::string> joint_position_columns(const mjModel* m, int joint) {
@@ -71,7 +86,8 @@ void Recorder::add(Source::Kind kind, int id, int count, const std::vector<std::
   }
   // (kNcon is read before the step: it is the count the step begins with.)
   const bool derived = kind == Source::kBodyPose || kind == Source::kBodyVelocity || kind == Source::kActuatorForce ||
-                       kind == Source::kSensor || kind == Source::kTendon || kind == Source::kContacts;
+                       kind == Source::kSensor || kind == Source::kTendon || kind == Source::kData ||
+                       kind == Source::kContacts;
   (derived ? after_ : before_).push_back(source);
 }
 
@@ -130,6 +146,14 @@ Recorder::Recorder(const mjModel* m, const ResolvedScenario& scenario, const Sch
     add(Source::kTendon, t, 2, suffixed(object_name(m, mjOBJ_TENDON, t), {"_length", "_vel"}),
         spatial ? std::vector<std::string>{"m", "m/s"} : std::vector<std::string>{"m or rad", "m/s or rad/s"});
   }
+  for (const ResolvedScenario::DataValues& v : scenario.data) {
+    add(Source::kData, static_cast<int>(data_.size()), v.count,
+        numbered(object_name(m, v.type, v.id) + "_", v.array.c_str(), v.count), {""});
+    data_.emplace_back(data_numbers(v.array), v.first);
+    fill_after_constraint_ = fill_after_constraint_ || filled_after_constraint(v.array);
+    fill_subtree_velocity_ = fill_subtree_velocity_ || v.array == "subtree_linvel" || v.array == "subtree_angmom";
+    reads_acceleration_stage_ = reads_acceleration_stage_ || !derived_before_acceleration(v.array);
+  }
   if (scenario.contacts) add(Source::kContacts, 0, 1, {"contacts"}, {""}, true);
   if (scenario.ncon) add(Source::kNcon, 0, 1, {"ncon"}, {""}, true);
   if (energy) {  // no Source: the energy audit (energy_audit.hpp) fills them
@@ -181,7 +205,10 @@ void Recorder::before_step(double* row, std::int64_t step, const mjModel* m, con
   }
 }
 
-void Recorder::after_step(double* row, const mjModel* m, const mjData* d) const noexcept {
+void Recorder::after_step(double* row, const mjModel* m, mjData* d) const noexcept {
+  // (Inside MuJoCo's error guard, as every call of the loop's.)
+  if (fill_after_constraint_) mj_rnePostConstraint(m, d);
+  if (fill_subtree_velocity_) mj_subtreeVel(m, d);
   for (const Source& s : after_) {
     double* out = row + s.column;
     switch (s.kind) {
@@ -209,6 +236,11 @@ void Recorder::after_step(double* row, const mjModel* m, const mjData* d) const 
         out[0] = d->ten_length[s.id];
         out[1] = d->ten_velocity[s.id];
         break;
+      case Source::kData: {
+        const auto& [array, first] = data_[static_cast<std::size_t>(s.id)];
+        std::copy_n(d->*array + first, s.count, out);
+        break;
+      }
       case Source::kContacts:
         out[0] = d->ncon;
         break;

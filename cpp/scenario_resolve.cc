@@ -10,6 +10,7 @@
 
 #include "mujoco_compat.hpp"
 #include "simloop/errors.hpp"
+#include "simloop/fields.hpp"
 #include "simloop/number_format.hpp"
 #include "simloop/object_names.hpp"
 #include "simloop/scenario.hpp"
@@ -51,6 +52,53 @@ int find_actuator(const mjModel* m, const std::string& name, const std::string& 
     return static_cast<int>(index);
   }
   return find(m, mjOBJ_ACTUATOR, name, context);
+}
+
+// mjData's arrays a run writes or steps (the state and the inputs), which
+// record.data refuses: joints, actuators and disturbances record them.
+bool state_or_input(std::string_view array) {
+  for (const char* name : {"qpos", "qvel", "act", "qacc_warmstart", "ctrl", "qfrc_applied", "xfrc_applied", "mocap_pos",
+                           "mocap_quat", "userdata", "plugin_state"}) {
+    if (array == name) return true;
+  }
+  return false;
+}
+
+// record.data's [array, object]: the values of the object's row.
+ResolvedScenario::DataValues data_values(const mjModel* m, const std::string& array, const std::string& object,
+                                         const std::string& context) {
+  static const mjData no_data{};  // the arrays' shapes are the model's: nothing of a run's is read
+  FieldView f;
+  try {
+    f = data_field(m, &no_data, array);
+  } catch (const InvalidArgument& e) {
+    throw InvalidArgument(context + ": " + e.what());
+  }
+  if (state_or_input(array)) {
+    throw InvalidArgument(context + ": mjData's " + array +
+                          " is the state or an input: record joints, actuators or disturbances instead");
+  }
+  if (f.element != Element::kFloat64) throw InvalidArgument(context + ": mjData's " + array + " is not numbers");
+  ResolvedScenario::DataValues v{array, f.rows_are, -1, 0, static_cast<int>(f.cols)};
+  if (f.rows_are != mjOBJ_UNKNOWN) {
+    v.id = find(m, f.rows_are, object, context);
+    v.first = v.id * f.cols;
+  } else if (f.rows_count == "nq" || f.rows_count == "nv") {
+    v.type = mjOBJ_JOINT;
+    v.id = find(m, mjOBJ_JOINT, object, context);
+    const JointSize size = joint_size(m->jnt_type[v.id]);
+    v.first = f.rows_count == "nq" ? m->jnt_qposadr[v.id] : m->jnt_dofadr[v.id];
+    v.count = f.rows_count == "nq" ? size.nq : size.nv;
+  } else if (f.rows_count == "nsensordata") {
+    v.type = mjOBJ_SENSOR;
+    v.id = find(m, mjOBJ_SENSOR, object, context);
+    v.first = m->sensor_adr[v.id];
+    v.count = m->sensor_dim[v.id];
+  } else {
+    throw InvalidArgument(context + ": mjData's " + array + "'s rows are not objects (its rows: " + f.rows_count +
+                          "); record arrays with a row per body, geom, site, joint, sensor, ...");
+  }
+  return v;
 }
 
 }  // namespace
@@ -97,6 +145,10 @@ ResolvedScenario resolve(const Scenario& scenario, const mjModel* m) {
   for (const std::string& n : rec.tendons) {
     r.tendons.push_back(find(m, mjOBJ_TENDON, n, "record.tendons"));
   }
+  for (std::size_t i = 0; i < rec.data.size(); ++i) {
+    const auto& [array, object] = rec.data[i];
+    r.data.push_back(data_values(m, array, object, "record.data[" + std::to_string(i) + "]"));
+  }
   const auto every = [m](std::vector<int>& out, int first, int count, bool keep(const mjModel*, int)) {
     for (int i = first; i < count; ++i) {
       if (keep(m, i) && std::find(out.begin(), out.end(), i) == out.end()) out.push_back(i);
@@ -110,7 +162,8 @@ ResolvedScenario resolve(const Scenario& scenario, const mjModel* m) {
   if (rec.all_tendons) every(r.tendons, 0, detail::compat::as_int(m->ntendon), any);
   // Defaults when nothing is named: every body on a free joint, every actuator.
   if (rec.bodies.empty() && rec.joints.empty() && rec.actuators.empty() && rec.sensors.empty() && rec.tendons.empty() &&
-      !rec.all_bodies && !rec.all_joints && !rec.all_actuators && !rec.all_sensors && !rec.all_tendons) {
+      rec.data.empty() && !rec.all_bodies && !rec.all_joints && !rec.all_actuators && !rec.all_sensors &&
+      !rec.all_tendons) {
     for (int b = 1; b < m->nbody; ++b) {
       if (m->body_jntnum[b] >= 1 && m->jnt_type[m->body_jntadr[b]] == mjJNT_FREE) r.bodies.push_back(b);
     }

@@ -147,6 +147,26 @@ class TableReader {
     return out;
   }
 
+  // [[a, b], ...]: pairs of names (record's data: [array, object]).
+  [[nodiscard]] std::vector<std::pair<std::string, std::string>> name_pairs(std::string_view key,
+                                                                            std::string_view what) const {
+    const toml::node* node = table_.get(key);
+    if (node == nullptr) return {};
+    const auto* array = node->as_array();
+    if (array == nullptr) fail(key, "expected an array of " + std::string(what) + ", got " + type_name(*node));
+    std::vector<std::pair<std::string, std::string>> out;
+    for (const toml::node& item : *array) {
+      const auto* pair = item.as_array();
+      const auto* first = pair && pair->size() == 2 ? pair->get(0)->as_string() : nullptr;
+      const auto* second = pair && pair->size() == 2 ? pair->get(1)->as_string() : nullptr;
+      if (first == nullptr || second == nullptr) {
+        fail(key, "expected an array of " + std::string(what) + ", found " + type_name(item));
+      }
+      out.emplace_back(first->get(), second->get());
+    }
+    return out;
+  }
+
   // [[t, value], ...] pairs, `t` in the unit the key implies.
   [[nodiscard]] std::vector<std::pair<double, double>> pairs(std::string_view key) const {
     const toml::node* node = table_.get(key);
@@ -393,7 +413,7 @@ Scenario Scenario::from_toml_string(std::string_view text, std::string_view sour
     const auto* table = node->as_table();
     if (table == nullptr) top.fail("record", "expected a [record] table");
     const TableReader r(*table, std::string(source), "record");
-    r.allow_only({"bodies", "joints", "actuators", "sensors", "tendons", "contacts", "ncon"});
+    r.allow_only({"bodies", "joints", "actuators", "sensors", "tendons", "data", "contacts", "ncon"});
     for (const auto& [key, names, all] : {std::tuple{"bodies", &s.record.bodies, &s.record.all_bodies},
                                           std::tuple{"joints", &s.record.joints, &s.record.all_joints},
                                           std::tuple{"actuators", &s.record.actuators, &s.record.all_actuators},
@@ -403,6 +423,7 @@ Scenario Scenario::from_toml_string(std::string_view text, std::string_view sour
       *all = given != nullptr && given->value<std::string>() == "all";
       if (!*all) *names = r.strings(key, "or \"all\"");
     }
+    s.record.data = r.name_pairs("data", "[array, object] pairs (\"cfrc_ext\", \"torso\")");
     s.record.contacts = r.boolean("contacts").value_or(true);
     s.record.ncon = r.boolean("ncon").value_or(false);
   }

@@ -203,7 +203,11 @@ std::vector<Contact> Sim::contacts() const {
 
 ArrayView Sim::array(std::string_view name) { return array_of(model_.get(), data_.get(), name); }
 
-FieldView Sim::data_field(std::string_view name) const { return simloop::data_field(model_.get(), data_.get(), name); }
+FieldView Sim::data_field(std::string_view name) {
+  FieldView field = simloop::data_field(model_.get(), data_.get(), name);
+  if (filled_after_constraint(name)) fill_after_constraint(model_.get(), data_.get());
+  return field;
+}
 
 FieldView Sim::model_field(std::string_view name) const { return simloop::model_field(model_.get(), name); }
 

@@ -41,6 +41,22 @@ struct FieldView {
 // ("contact": see Sim::contacts).
 [[nodiscard]] FieldView data_field(const mjModel* m, const mjData* d, std::string_view name);
 
+// mjData's array of numbers `name` as a member (d->*member), for reading
+// it in a loop without looking it up: nullptr if mjData has none of that
+// name or its elements are not mjtNum.
+using DataNumbers = mjtNum* mjData::*;
+[[nodiscard]] DataNumbers data_numbers(std::string_view name) noexcept;
+
+// Whether mjData's array `name` is one MuJoCo fills only in
+// mj_rnePostConstraint (cacc, cfrc_int, cfrc_ext), which no step calls:
+// read without it, they hold zeros or an older state's values.
+[[nodiscard]] bool filled_after_constraint(std::string_view name) noexcept;
+// mj_rnePostConstraint on `d`: cacc, cfrc_int and cfrc_ext for the state
+// d's derived quantities describe (after a step, the state it started
+// from, as Gymnasium's MujocoEnv reads them). Changes nothing a step reads.
+// Called where those arrays are read or recorded, not every step.
+void fill_after_constraint(const mjModel* m, mjData* d);
+
 // The model parameters a trainer randomises, which a Sim lets a caller
 // write (in its own copy of the model): masses and inertias, friction,
 // contact softness, damping, armature, joint stiffness, actuator gains,

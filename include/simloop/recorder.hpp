@@ -9,9 +9,11 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "simloop/control.hpp"
+#include "simloop/fields.hpp"
 #include "simloop/rows.hpp"
 #include "simloop/run_record.hpp"
 #include "simloop/scenario.hpp"
@@ -46,7 +48,9 @@ class RowRecorder {
                            int ncon) const noexcept = 0;
   // After mj_step (the final row: after mj_forward): what MuJoCo derived
   // from the row's state.
-  virtual void after_step(double* row, const mjModel* m, const mjData* d) const noexcept = 0;
+  // It may fill what MuJoCo computes only on request (mj_rnePostConstraint's
+  // cfrc_ext, say) when a column reads it.
+  virtual void after_step(double* row, const mjModel* m, mjData* d) const noexcept = 0;
   // Whether after_step reads anything of MuJoCo's acceleration stage but
   // the actuator forces (an acceleration-stage sensor, say): a decision's
   // observation then takes a whole forward pass (stepper.hpp's Stepper::observe).
@@ -91,7 +95,7 @@ class Recorder final : public RowRecorder {
   [[nodiscard]] const std::vector<Column>& columns() const noexcept override { return columns_; }
   void before_step(double* row, std::int64_t step, const mjModel* m, const mjData* d, bool inputs,
                    int ncon) const noexcept override;
-  void after_step(double* row, const mjModel* m, const mjData* d) const noexcept override;
+  void after_step(double* row, const mjModel* m, mjData* d) const noexcept override;
   [[nodiscard]] bool reads_acceleration_stage() const noexcept override { return reads_acceleration_stage_; }
   // The first of the energy audit's columns, or -1 without them.
   [[nodiscard]] int energy_column() const noexcept { return energy_column_; }
@@ -108,6 +112,7 @@ class Recorder final : public RowRecorder {
       kActuatorForce,
       kSensor,
       kTendon,
+      kData,
       kContacts,
       kNcon
     } kind;
@@ -121,6 +126,8 @@ class Recorder final : public RowRecorder {
            const std::string& body = "");
   std::vector<Column> columns_;
   std::vector<Source> before_, after_;
+  std::vector<std::pair<DataNumbers, long long>> data_;  // kData's id: an mjData array and its first value
+  bool fill_after_constraint_ = false, fill_subtree_velocity_ = false;
   CtrlRange ctrl_range_;
   bool reads_acceleration_stage_ = false;  // an acceleration-stage sensor is recorded
   int energy_column_ = -1;

@@ -26,6 +26,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "simloop/model.hpp"
@@ -88,8 +89,12 @@ struct RecordSpec {
   std::vector<std::string> actuators;  // ctrl as applied (after ctrlrange clamping), force
   std::vector<std::string> sensors;    // sensordata
   std::vector<std::string> tendons;    // length, rate of change
-  bool contacts = true;                // `contacts`: the contacts of each row's state
-  bool ncon = false;                   // `ncon`: the contacts when its step began (the chapter's)
+  // Any of mjData's arrays of numbers by object, as MuJoCo derives it for
+  // the row's state: [array, object] ("cfrc_ext", "torso"; "site_xpos",
+  // "tip"; "sensordata", a sensor; "qfrc_actuator", a joint).
+  std::vector<std::pair<std::string, std::string>> data;
+  bool contacts = true;  // `contacts`: the contacts of each row's state
+  bool ncon = false;     // `ncon`: the contacts when its step began (the chapter's)
   // "all" in a scenario file instead of a list: every one the scene has, by
   // index (every body that can move), after any named above.
   bool all_bodies = false, all_joints = false, all_actuators = false, all_sensors = false, all_tendons = false;
@@ -151,6 +156,16 @@ struct ResolvedScenario {
   std::vector<Control> controls;
   std::vector<Disturbance> disturbances;
   std::vector<int> bodies, joints, actuators, sensors, tendons;  // to record
+  // A RecordSpec::data entry: values first .. first + count - 1 of mjData's
+  // array `array` (the row of object `id` of `type`), its columns named from it.
+  struct DataValues {
+    std::string array;
+    mjtObj type = mjOBJ_UNKNOWN;
+    int id = -1;
+    long long first = 0;
+    int count = 0;
+  };
+  std::vector<DataValues> data;
   bool contacts = true, ncon = false;
   // What the start draws against: the scene's qpos0 and its nv.
   std::vector<double> qpos0;

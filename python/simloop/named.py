@@ -21,7 +21,9 @@ stiffness, actuator gears, gains, biases and ranges, colours): the first
 write gives the Sim a model of its own (other Sims and runs keep theirs).
 The rest is read-only (MuJoCo derives it, or changing it would leave the
 model inconsistent). The contacts' and constraints' arrays (efc_*) hold
-this step's rows: take them again after stepping.
+this step's rows: take them again after stepping. cacc, cfrc_int and
+cfrc_ext, which no step computes, are filled (mj_rnePostConstraint) each
+time they are taken: take them again after stepping too.
 """
 
 from __future__ import annotations

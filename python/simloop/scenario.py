@@ -167,7 +167,9 @@ class Scenario:
     name or index. disturbances: a list of dicts with the scenario file's keys (body,
     force, torque, newtons, direction, random_sign, start, start_step,
     start_fraction, duration, steps). record: a dict with bodies, joints,
-    actuators, sensors, tendons (lists of names, or "all"), contacts (bool:
+    actuators, sensors, tendons (lists of names, or "all"), data ([array,
+    object] pairs: any of mjData's arrays of numbers by object, as
+    [("cfrc_ext", "torso"), ("site_xpos", "tip")]), contacts (bool:
     the contacts of each row's state, default True) and ncon (bool: the
     chapter's count, as each step began) (None: every body on a free joint
     and every actuator). reset: how

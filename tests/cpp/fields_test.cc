@@ -30,7 +30,7 @@ TEST(Fields, EveryArrayOfMujocosListsIsThereByName) {
 }
 
 TEST(Fields, AViewIsTheArrayWithItsRowsAndWhatTheyAre) {
-  const simloop::Sim sim(simloop::pusher_scene());
+  simloop::Sim sim(simloop::pusher_scene());
   const simloop::FieldView friction = sim.model_field("geom_friction");
   EXPECT_EQ(friction.rows, 3);  // floor, box, pusher
   EXPECT_EQ(friction.cols, 3);
@@ -71,6 +71,19 @@ TEST(Fields, ContactsCarryTheirForcesInTheirFrames) {
     if (c.geom2 == "box_geom") box_normal += c.force[0];
   }
   EXPECT_NEAR(box_normal, 0.5 * 9.81, 1e-3);  // the box's weight, spread over its corners
+}
+
+TEST(Fields, TheForcesMujocoFillsAfterTheConstraintsAreFilledWhenRead) {
+  simloop::Sim sim(simloop::pusher_scene());
+  sim.step(200);  // at rest: the floor carries the box's weight
+  EXPECT_TRUE(simloop::filled_after_constraint("cfrc_ext"));
+  EXPECT_FALSE(simloop::filled_after_constraint("xpos"));
+  EXPECT_EQ(sim.data()->cfrc_ext[6 + 5], 0.0);  // no step fills it (mj_rnePostConstraint)
+  const simloop::FieldView cfrc_ext = sim.data_field("cfrc_ext");
+  // (torque, force) per body: the box's force from the floor carries its weight.
+  EXPECT_NEAR(static_cast<const double*>(cfrc_ext.data)[6 + 5], 0.5 * 9.81, 1e-3);
+  const simloop::FieldView cacc = sim.data_field("cacc");  // (gravity's, as MuJoCo counts it)
+  EXPECT_NEAR(static_cast<const double*>(cacc.data)[6 + 5], 9.81, 1e-3);
 }
 
 TEST(Fields, AWritableParameterIsTheSimsOwnAndChangesItsRun) {
