@@ -101,7 +101,9 @@ LoopResult run_loop(const mjModel* m, mjData* d, const Schedule& schedule, const
   std::vector<double> decision;
 
   // Row 0 is the true state at t = 0.
-  core.reset(m, d, {-1, &schedule.start, inputs.initial_state, d_is_reset, record_rows || policy != nullptr});
+  core.reset(
+      m, d,
+      {-1, &schedule.start, inputs.initial_state, d_is_reset, record_rows || policy != nullptr, inputs.state_size});
   for (std::int64_t step = 0; step < steps;) {
     if (step == next_decision) {
       scheduled.write(step, d);  // the disturbances the observation sees

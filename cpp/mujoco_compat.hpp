@@ -93,6 +93,11 @@ inline constexpr int kWarningCount = mjNWARNING;
 [[nodiscard]] std::size_t state_size(const mjModel* m) noexcept;
 void get_state(const mjModel* m, const mjData* d, double* state) noexcept;
 void put_state(const mjModel* m, mjData* d, const double* state) noexcept;
+// MuJoCo's own state, mj_getState(mjSTATE_INTEGRATION): state_size's first
+// mujoco_state_size values (the rest are 3.4's sleep counters). 0 on 2.2,
+// which has no mj_getState (get_mujoco_state then writes nothing).
+[[nodiscard]] std::size_t mujoco_state_size(const mjModel* m) noexcept;
+void get_mujoco_state(const mjModel* m, const mjData* d, double* state) noexcept;
 // put_state with every kinematic tree awake (no sleep on 2.2: the same), so
 // that an mj_forward after it derives every body's pose, sleeping or not.
 void put_state_awake(const mjModel* m, mjData* d, const double* state) noexcept;

@@ -323,9 +323,9 @@ void check_inputs(const mjModel* m, const RunInputs& inputs, std::int64_t steps)
     }
   }
   if (inputs.initial_state) {
-    if (inputs.state_size != state_size(m)) {
-      throw InvalidArgument("initial_state must hold state_size = " + std::to_string(state_size(m)) +
-                            " numbers for this scene (state.hpp's layout), got " + std::to_string(inputs.state_size));
+    if (!takes_state_size(m, inputs.state_size)) {
+      throw InvalidArgument("initial_state must hold " + state_sizes_text(m) + " for this scene, got " +
+                            std::to_string(inputs.state_size));
     }
     const double* end = inputs.initial_state + inputs.state_size;
     const double* bad = std::find_if(inputs.initial_state, end, [](double v) { return !std::isfinite(v); });

@@ -145,6 +145,17 @@ void Sim::forward() {
 
 std::vector<double> Sim::state() const { return get_state(model_.get(), data_.get()); }
 
+std::vector<double> Sim::mujoco_state() const {
+  const mjModel* m = model_.get();
+  if (mujoco_state_size(m) == 0) {
+    throw InvalidArgument("MuJoCo's own state (mj_getState) needs MuJoCo 3.3 or later; this simloop is built on " +
+                          detail::compat::version_string() + ": use simloop's state");
+  }
+  std::vector<double> state(mujoco_state_size(m));
+  detail::compat::get_mujoco_state(m, data_.get(), state.data());
+  return state;
+}
+
 std::size_t Sim::state_size() const noexcept { return simloop::state_size(model_.get()); }
 
 std::vector<std::pair<std::string, std::size_t>> Sim::state_layout() const {
@@ -153,13 +164,11 @@ std::vector<std::pair<std::string, std::size_t>> Sim::state_layout() const {
 
 void Sim::set_state(const double* state, std::size_t size) {
   const mjModel* m = model_.get();
-  if (size != state_size()) {
-    throw InvalidArgument("state must have " + std::to_string(state_size()) + " values for this model (" +
-                          "time, qpos, qvel, act, qacc_warmstart, ctrl, qfrc_applied, xfrc_applied, mocap, " +
-                          "userdata), got " + std::to_string(size));
+  if (!takes_state_size(m, size)) {
+    throw InvalidArgument("state must have " + state_sizes_text(m) + " for this model, got " + std::to_string(size));
   }
   mjData* d = data_.get();
-  detail::mujoco_call([&] { simloop::set_state(m, d, state); });
+  detail::mujoco_call([&] { simloop::set_state(m, d, state, size); });
 }
 
 std::array<double, 6> Sim::body_velocity(int body) const {
@@ -190,10 +199,19 @@ std::vector<Contact> Sim::contacts() const {
   out.reserve(static_cast<std::size_t>(d->ncon));
   for (int i = 0; i < d->ncon; ++i) {
     const mjContact& c = d->contact[i];
-    const char* g1 = mj_id2name(m, mjOBJ_GEOM, c.geom1);
-    const char* g2 = mj_id2name(m, mjOBJ_GEOM, c.geom2);
-    Contact contact{g1 ? g1 : "", g2 ? g2 : "", c.dist, {c.pos[0], c.pos[1], c.pos[2]}, {}, {}};
+    Contact contact;
+    contact.dist = c.dist;
+    std::copy_n(c.pos, 3, contact.pos.data());
     std::copy_n(c.frame, 9, contact.frame.data());
+    const auto side = [m](int geom, std::string& name, int& id, std::string& body, int& body_id) {
+      if (geom < 0 || geom >= m->ngeom) return;  // a flex's side of the contact
+      id = geom;
+      name = object_name(m, mjOBJ_GEOM, geom);
+      body_id = m->geom_bodyid[geom];
+      body = object_name(m, mjOBJ_BODY, body_id);
+    };
+    side(c.geom1, contact.geom1, contact.geom1_id, contact.body1, contact.body1_id);
+    side(c.geom2, contact.geom2, contact.geom2_id, contact.body2, contact.body2_id);
     double* force = contact.force.data();
     detail::mujoco_call([&] { mj_contactForce(m, d, i, force); });
     out.push_back(std::move(contact));

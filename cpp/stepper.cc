@@ -45,10 +45,11 @@ void Stepper::reset(const mjModel* m, mjData* d, const StartAt& at) {
       // them). mj_resetData was about 2 % of a 100-step PushT run.
       std::fill_n(d->warning, mjNWARNING, mjWarningStat{});
       // (A sleeping tree's poses the step does not derive: they must be.)
-      if (at.read_at_start || !compat::state_all_awake(m, at.state)) {
-        simloop::set_state(m, d, at.state);  // forward, keeping the state as given
+      const bool awake = at.state_size != compat::state_size(m) || compat::state_all_awake(m, at.state);
+      if (at.read_at_start || !awake) {
+        simloop::set_state(m, d, at.state, at.state_size);  // forward, keeping the state as given
       } else {
-        compat::put_state(m, d, at.state);
+        simloop::put_state(m, d, at.state, at.state_size);
       }
       return;
     }

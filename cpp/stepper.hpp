@@ -93,6 +93,8 @@ struct StartAt {
   // derived quantities are made then. Else a whole state is put in place
   // as it is, and the first step derives them, as mujoco.rollout's does.
   bool read_at_start = true;
+  // The state's length: state_size(m), or MuJoCo's own state's (state.hpp).
+  std::size_t state_size = 0;
 };
 
 class Stepper {

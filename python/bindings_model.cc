@@ -47,6 +47,27 @@ long long index_arg(const std::string& name, const py::object& value) {
 }  // namespace
 
 void bind_model(py::module_& m) {
+  py::class_<simloop::Contact>(m, "Contact")
+      .def_readonly("geom1", &simloop::Contact::geom1)
+      .def_readonly("geom2", &simloop::Contact::geom2)
+      .def_readonly("geom1_id", &simloop::Contact::geom1_id)
+      .def_readonly("geom2_id", &simloop::Contact::geom2_id)
+      .def_readonly("body1", &simloop::Contact::body1)
+      .def_readonly("body2", &simloop::Contact::body2)
+      .def_readonly("body1_id", &simloop::Contact::body1_id)
+      .def_readonly("body2_id", &simloop::Contact::body2_id)
+      .def_readonly("dist", &simloop::Contact::dist)
+      .def_property_readonly("pos", [](const simloop::Contact& c) { return vec(c.pos.data(), 3); })
+      .def_property_readonly("frame",
+                             [](const simloop::Contact& c) {
+                               py::array out = vec(c.frame.data(), 9);
+                               return out.attr("reshape")(3, 3);
+                             })
+      .def_property_readonly("force", [](const simloop::Contact& c) { return vec(c.force.data(), 6); })
+      .def("__repr__", [](const simloop::Contact& c) {
+        return "Contact(" + c.geom1 + ", " + c.geom2 + ", dist=" + simloop::python_float_repr(c.dist) + ")";
+      });
+
   py::class_<simloop::Model>(m, "Model", "A compiled MuJoCo world: read-only, shared by every run on it.")
       .def_static("pusher_scene", &simloop::pusher_scene, "The chapter's scene.")
       .def_static(

@@ -188,6 +188,13 @@ void bind_scenario(py::module_& m) {
       },
       "scene"_a, "scenario"_a, "configs"_a, "threads"_a, "controls"_a = py::none(), "initial_state"_a = py::none(),
       "decide"_a = py::none(), "control_every"_a = 1, "keep_rows"_a = true, "progress"_a = py::none());
+  m.def(
+      "check_batch_inputs",
+      [](std::size_t runs, std::optional<DoubleArray> controls, std::optional<DoubleArray> initial_state) {
+        (void)simloop::split_inputs(runs, true, input_array(controls), input_array(initial_state));
+      },
+      "runs"_a, "controls"_a = py::none(), "initial_state"_a = py::none(),
+      "What run_scenario_batch checks of its inputs' shapes against its runs, alone (before they go out in chunks).");
   m.def("check_scenario", &simloop::check_scenario, "scene"_a, "scenario"_a, "config"_a,
         "Everything run_scenario checks before its first step, without running.");
   m.def("scenario_columns", &simloop::scenario_columns, "scene"_a, "scenario"_a, "config"_a,

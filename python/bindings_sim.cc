@@ -120,21 +120,6 @@ py::tuple field_rows(const simloop::FieldView& f) {
 }  // namespace
 
 void bind_sim(py::module_& m) {
-  py::class_<simloop::Contact>(m, "Contact")
-      .def_readonly("geom1", &simloop::Contact::geom1)
-      .def_readonly("geom2", &simloop::Contact::geom2)
-      .def_readonly("dist", &simloop::Contact::dist)
-      .def_property_readonly("pos", [](const simloop::Contact& c) { return vec(c.pos.data(), 3); })
-      .def_property_readonly("frame",
-                             [](const simloop::Contact& c) {
-                               py::array out = vec(c.frame.data(), 9);
-                               return out.attr("reshape")(3, 3);
-                             })
-      .def_property_readonly("force", [](const simloop::Contact& c) { return vec(c.force.data(), 6); })
-      .def("__repr__", [](const simloop::Contact& c) {
-        return "Contact(" + c.geom1 + ", " + c.geom2 + ", dist=" + simloop::python_float_repr(c.dist) + ")";
-      });
-
   // Every call holds the Sim's lock (PySim, SimLock): safe from any thread.
   // The arrays (array()) are views into the Sim's mjData and take no lock:
   // see simloop.Sim's docstring for what that means across threads.
@@ -163,7 +148,9 @@ void bind_sim(py::module_& m) {
            "body"_a, "force"_a, "torque"_a)
       .def("clear_forces", locked(&simloop::Sim::clear_forces))
       .def("forward", locked(&simloop::Sim::forward))
-      .def("get_state", locked([](const simloop::Sim& sim) { return vector_array(sim.state()); }))
+      .def("get_state",
+           locked<bool>([](auto& sim, bool mujoco) { return vector_array(mujoco ? sim.mujoco_state() : sim.state()); }),
+           "mujoco"_a = false)
       .def("set_state", locked<const py::array_t<double, py::array::c_style>&>([](auto& sim, const auto& state) {
              sim.set_state(state.data(), static_cast<size_t>(state.size()));
            }),

@@ -20,7 +20,9 @@
 namespace simloop {
 
 struct Contact {
-  std::string geom1;  // geom names ("" if unnamed)
+  // The geoms' names, an unnamed one by kind and index ("geom12", as
+  // object_name names it); "" for a side that is no geom (a flex's).
+  std::string geom1;
   std::string geom2;
   double dist = 0.0;            // signed distance; negative is penetration, m
   std::array<double, 3> pos{};  // contact point, world frame, m
@@ -30,6 +32,13 @@ struct Contact {
   // torques; N and N m; zero for what the contact's condim does not model).
   std::array<double, 9> frame{};
   std::array<double, 6> force{};
+  // The geoms' ids and their bodies' ids and names (-1 and "" for no geom).
+  int geom1_id = -1;
+  int geom2_id = -1;
+  int body1_id = -1;
+  int body2_id = -1;
+  std::string body1;
+  std::string body2;
 };
 
 // One of mjData's arrays, as Sim::array names it: `rows` values, or rows x
@@ -106,9 +115,12 @@ class Sim {
   // at the start of the step just taken, as in MuJoCo.
   void forward();
 
-  // The full physics state (state.hpp's layout) and back. set_state throws
-  // InvalidArgument unless the size is state_size(); it leaves steps_taken.
+  // The full physics state (state.hpp's layout) and back. set_state takes
+  // it or MuJoCo's own (mj_getState(mjSTATE_INTEGRATION)), and throws
+  // InvalidArgument for any other size; it leaves steps_taken.
+  // mujoco_state() is MuJoCo's own state (InvalidArgument on MuJoCo 2.2).
   [[nodiscard]] std::vector<double> state() const;
+  [[nodiscard]] std::vector<double> mujoco_state() const;
   void set_state(const double* state, std::size_t size);
   [[nodiscard]] std::size_t state_size() const noexcept;
   [[nodiscard]] std::vector<std::pair<std::string, std::size_t>> state_layout() const;

@@ -16,6 +16,16 @@
 //
 // The warmstart is part of it because MuJoCo's constraint solver starts from
 // it: leave it out and a restored run differs in the last bits.
+//
+// MuJoCo's own state, a buffer of mj_getState(m, d, s, mjSTATE_INTEGRATION)
+// from the same MuJoCo, is taken wherever a state is (set_state, a run's
+// initial_state): by its length, mujoco_state_size(m). That is unambiguous by
+// construction: simloop's state is MuJoCo's followed by ntree sleep counters,
+// so the two lengths differ by ntree, and where ntree is 0 (or on 3.3, which
+// has no sleep) the two are the same values in the same order; no other
+// signature of mj_getState is longer than mjSTATE_INTEGRATION's. A MuJoCo
+// state has every kinematic tree awake. MuJoCo 2.2 has no mj_getState, so
+// there only simloop's layout is taken.
 #pragma once
 
 #include <mujoco/mujoco.h>
@@ -33,6 +43,18 @@ namespace simloop {
 // The number of doubles in a state of `m`.
 [[nodiscard]] std::size_t state_size(const mjModel* m) noexcept;
 
+// The number of doubles in MuJoCo's mj_getState(mjSTATE_INTEGRATION) state
+// of `m`: simloop's first values; 0 on MuJoCo 2.2 (no mj_getState).
+[[nodiscard]] std::size_t mujoco_state_size(const mjModel* m) noexcept;
+
+// Whether set_state takes `size` values for `m`: state_size(m), or
+// mujoco_state_size(m) where MuJoCo has mj_getState.
+[[nodiscard]] bool takes_state_size(const mjModel* m, std::size_t size) noexcept;
+
+// What takes_state_size takes, in words, for an error: "171 values
+// (simloop's state, state_layout) or 170 (MuJoCo's mj_getState(...))".
+[[nodiscard]] std::string state_sizes_text(const mjModel* m);
+
 // Copies d's state into state[0 .. state_size(m)).
 void get_state(const mjModel* m, const mjData* d, double* state) noexcept;
 [[nodiscard]] std::vector<double> get_state(const mjModel* m, const mjData* d);
@@ -43,6 +65,10 @@ void get_state(const mjModel* m, const mjData* d, double* state) noexcept;
 // is data MuJoCo itself produced, or the caller's responsibility). Inside
 // MuJoCo's error guard, as forward_keeping_state.
 void set_state(const mjModel* m, mjData* d, const double* state);
+// The same for `size` values: simloop's state or MuJoCo's (every tree awake).
+void set_state(const mjModel* m, mjData* d, const double* state, std::size_t size);
+// put_state without deriving anything: `size` values, as set_state's.
+void put_state(const mjModel* m, mjData* d, const double* state, std::size_t size) noexcept;
 
 // mj_forward without its side effects on the next step: MuJoCo 2.2's
 // mj_forward writes its constraint solution into qacc_warmstart, where the

@@ -21,7 +21,7 @@ if TYPE_CHECKING:  # (importing numpy would cost every `import simloop` ~50 ms)
 
 from . import _core
 from ._core import MUJOCO_VERSION, Model
-from ._mujoco_check import is_mujoco_model, mujoco_model_address
+from ._mujoco_check import is_mujoco_model, usable_mujoco_model
 
 ModelLike = Union[None, Model, str, "os.PathLike[str]"]
 PathLike = Union[str, bytes, "os.PathLike[str]"]
@@ -168,7 +168,8 @@ def _pusher_scene() -> Model:
 
 def load_model(model: ModelLike = None) -> Model:
     """The model to run: None for the chapter's scene, a Model, an MJCF path,
-    or a mujoco.MjModel (copied; on simloop built on the same PyPI mujoco).
+    or a mujoco.MjModel or MjSpec (compiled; copied; on simloop built on the
+    same PyPI mujoco).
 
     A file that is missing raises OSError; one MuJoCo cannot parse raises
     simloop.MujocoError with MuJoCo's message; one without a body "box" on a
@@ -181,7 +182,10 @@ def load_model(model: ModelLike = None) -> Model:
     if isinstance(model, (str, bytes, os.PathLike)):
         return Model.from_file(_check_path("model", model, "an MJCF file"))
     if is_mujoco_model(model):
-        return Model._copy_of_address(mujoco_model_address(model, MUJOCO_VERSION), "mujoco.MjModel")
+        kind = f"mujoco.{type(model).__name__}"
+        compiled = usable_mujoco_model(model, MUJOCO_VERSION)  # held while its mjModel is copied
+        return Model._copy_of_address(compiled._address, kind)
     raise TypeError(
-        f"model must be None, a simloop.Model, a mujoco.MjModel or a path to an MJCF file, got {_describe(model)}"
+        "model must be None, a simloop.Model, a mujoco.MjModel or MjSpec, or a path to an MJCF file, "
+        f"got {_describe(model)}"
     )

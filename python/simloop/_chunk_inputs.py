@@ -42,6 +42,11 @@ def scenario_source(scenario: Any) -> Tuple[str, str, str, str]:
     against, its name): a file's scenario is named for the file unless its text names it, and may be empty."""
     if scenario._chapter:
         return ("chapter", "", "", "")
+    if scenario._compiled is not None:
+        raise TypeError(
+            "a scenario whose scene was given compiled (a simloop.Model, mujoco.MjModel or MjSpec) does not "
+            "travel to an executor's workers, as model= does not: give the scene's MJCF path"
+        )
     return ("toml", scenario.toml, scenario._base, scenario.name)
 
 

@@ -14,6 +14,7 @@ import glob
 import importlib
 import importlib.util
 import os
+from typing import Any, cast
 
 from ._build import MUJOCO_BUILD, MUJOCO_LIBRARY_VERSION
 
@@ -59,13 +60,15 @@ def load_failure_message(error: ImportError) -> str | None:
 
 
 def is_mujoco_model(value: object) -> bool:
-    """True for a mujoco.MjModel (checked without importing mujoco)."""
+    """True for a mujoco.MjModel or mujoco.MjSpec (checked without importing mujoco)."""
     kind = type(value)
-    return kind.__name__ == "MjModel" and kind.__module__.split(".")[0] == "mujoco"
+    return kind.__name__ in ("MjModel", "MjSpec") and kind.__module__.split(".")[0] == "mujoco"
 
 
-def mujoco_model_address(model: object, simloop_mujoco: str) -> int:
-    """The address of the mjModel behind a mujoco.MjModel that simloop can use.
+def usable_mujoco_model(model: object, simloop_mujoco: str) -> Any:
+    """A mujoco.MjModel that simloop can copy (its `_address` checked): the
+    model itself, or a mujoco.MjSpec compiled by mujoco (its errors, a
+    ValueError, as they are). Hold it while its mjModel is copied.
 
     simloop_mujoco is simloop's own MuJoCo ("MuJoCo 4.0.0"). The model must
     come from the very libmujoco simloop runs: the PyPI build, and the same
@@ -74,17 +77,20 @@ def mujoco_model_address(model: object, simloop_mujoco: str) -> int:
     mujoco = importlib.import_module("mujoco")  # loaded already: the model is one of its objects
 
     theirs = f"MuJoCo {mujoco.mj_versionString()}"
+    kind = f"mujoco.{type(model).__name__}"
     if MUJOCO_BUILD != "pypi":
         raise TypeError(
-            f"a mujoco.MjModel ({theirs}) cannot be run by this simloop, built on the system's {simloop_mujoco}: "
+            f"a {kind} ({theirs}) cannot be run by this simloop, built on the system's {simloop_mujoco}: "
             "pass the scene's MJCF path, or build simloop on the mujoco package (SIMLOOP_MUJOCO=pypi)"
         )
     if theirs != simloop_mujoco:
         raise TypeError(
-            f"a mujoco.MjModel from {theirs} cannot be run by this simloop, built on {simloop_mujoco}: "
+            f"a {kind} from {theirs} cannot be run by this simloop, built on {simloop_mujoco}: "
             f"pip install mujoco=={MUJOCO_LIBRARY_VERSION}, or rebuild simloop against {theirs}"
         )
+    if kind == "mujoco.MjSpec":
+        model = cast(Any, model).compile()
     address = getattr(model, "_address", None)
     if not isinstance(address, int) or address == 0:
-        raise TypeError(f"this mujoco.MjModel ({theirs}) does not give its address; simloop cannot copy it")
-    return address
+        raise TypeError(f"this {kind} ({theirs}) does not give its address; simloop cannot copy it")
+    return model

@@ -72,10 +72,27 @@ def _check_versions(expected: Sequence[str]) -> None:
 # ---- The chunk: runs on a worker, returns only metrics -------------------
 
 
-def run_chunk(job: Dict[str, Any], runs: Sequence[Run]) -> BatchTable[Any]:
+# A scenario batch's own inputs ("controls", "initial_state": arrays or
+# None), a chunk's: a per-run array's rows for the chunk's runs, or a shared one whole.
+Inputs = Dict[str, Optional[np.ndarray]]
+_PER_RUN_DIMS = {"controls": 3, "initial_state": 2}  # (runs, steps, nu), (runs, state_size)
+
+
+def _rows_of(inputs: Optional[Inputs], rows: Union[slice, List[int]]) -> Optional[Inputs]:
+    """`inputs` for the runs `rows` of those they were given for."""
+    if not inputs:
+        return None
+    return {
+        name: None if a is None else np.ascontiguousarray(a[rows]) if a.ndim == _PER_RUN_DIMS[name] else a
+        for name, a in inputs.items()
+    }
+
+
+def run_chunk(job: Dict[str, Any], runs: Sequence[Run], inputs: Optional[Inputs] = None) -> BatchTable[Any]:
     """Runs `runs` of `job` as a metrics-only C++ batch (job["threads"]
     threads; no trajectory kept) and returns their table (metrics_table).
-    Runs sharing scene parameters share one modified model."""
+    Runs sharing scene parameters share one modified model. inputs: the
+    chunk's controls and initial states (a scenario's, _rows_of)."""
     _check_versions(job["versions"])
     groups: Dict[Tuple[SceneParam, ...], List[int]] = {}
     for i, run in enumerate(runs):
@@ -107,7 +124,16 @@ def run_chunk(job: Dict[str, Any], runs: Sequence[Run]) -> BatchTable[Any]:
                 _core.ScenarioConfig(runs[i][1], job["rng"], runs[i][2], job["steps"], job["perturb"], 1)
                 for i in members
             ]
-            out = _core.run_scenario_batch(model, scenario, scenario_configs, job["threads"], keep_rows=False)
+            own = _rows_of(inputs, members) or {}
+            out = _core.run_scenario_batch(
+                model,
+                scenario,
+                scenario_configs,
+                job["threads"],
+                controls=own.get("controls"),
+                initial_state=own.get("initial_state"),
+                keep_rows=False,
+            )
         for i, result in zip(members, out):
             results[i] = result
     return metrics_table(runs, results)
@@ -240,15 +266,21 @@ def iter_chunks(
     *,
     chunk_size: Optional[int] = None,
     skip: Iterable[int] = (),
+    inputs: Optional[Inputs] = None,
 ) -> Iterator[Tuple[int, BatchTable[Any]]]:
     """Runs `runs` in chunks on `executor` and yields (chunk index, columns)
     as chunks finish (not in order). Chunks whose index is in `skip` are
-    not run."""
+    not run. inputs: a scenario batch's, for `runs` in order; each chunk
+    takes its own."""
     pool = _Pool(executor)
     pool.check_workers()
     size = chunk_size or default_chunk_size(len(runs), pool.workers())
     skipped = set(skip)
-    tasks = ((k, (job, list(runs[a:b]))) for k, (a, b) in enumerate(chunk_ranges(len(runs), size)) if k not in skipped)
+    tasks = (
+        (k, (job, list(runs[a:b]), _rows_of(inputs, slice(a, b))))
+        for k, (a, b) in enumerate(chunk_ranges(len(runs), size))
+        if k not in skipped
+    )
     yield from pool.map_unordered(run_chunk, tasks, window=max(8, 4 * pool.workers()))
 
 
@@ -259,11 +291,12 @@ def run_table(
     *,
     chunk_size: Optional[int] = None,
     progress: Optional[Callable[[int, int], object]] = None,
+    inputs: Optional[Inputs] = None,
 ) -> BatchTable[Any]:
     """Every run's metrics, in the order of `runs`. progress(runs_done, runs_total) after each chunk."""
     chunks: Dict[int, BatchTable[Any]] = {}
     done = 0
-    for index, chunk in iter_chunks(job, runs, executor, chunk_size=chunk_size):
+    for index, chunk in iter_chunks(job, runs, executor, chunk_size=chunk_size, inputs=inputs):
         chunks[index] = chunk
         done += len(chunk)
         if progress is not None:
@@ -322,11 +355,12 @@ def run_scenario_batch_on(
     threads: Optional[int],
     chunk_size: Optional[int],
     progress: Optional[Callable[[int, int], object]],
+    inputs: Optional[Inputs] = None,
 ) -> BatchTable["_core.ScenarioResult"]:
-    """simloop.run_scenario_batch(..., executor=...)."""
+    """simloop.run_scenario_batch(..., executor=...); inputs: its controls and initial_state, shapes checked."""
     job = scenario_job(scenario, rng=rng, steps=steps, perturb=perturb, threads=_threads(threads))
     runs = [(i, s, t, ()) for i, (s, t) in enumerate(itertools.product(seeds, timesteps))]
-    return run_table(job, runs, executor, chunk_size=_chunk_size(chunk_size), progress=progress)
+    return run_table(job, runs, executor, chunk_size=_chunk_size(chunk_size), progress=progress, inputs=inputs)
 
 
 def scenario_job(

@@ -10,7 +10,8 @@ as dm_control's physics.named does.
 A NamedArray is a numpy view (np.asarray(it), or .array) whose first index
 also takes names: of the objects its rows are ("nbody" rows: bodies, "ngeom":
 geoms, ...), of joints for the nq rows (a joint's positions) and the nv
-rows (its velocities), and of sensors for sensordata (a sensor's values).
+rows (its velocities), and of sensors for sensordata (a sensor's values);
+a list of names takes their rows in turn (qpos[["hip", "knee"]]).
 Names are resolved once per array, so a named read costs about what a numpy
 one does.
 
@@ -84,15 +85,17 @@ class NamedArray:
                 return self._rows[key]
             except KeyError:
                 raise KeyError(self._unknown(key)) from None
-        if isinstance(key, (list, tuple)) and any(isinstance(k, str) for k in key):
-            return [self._one_row(k) for k in key]
+        if isinstance(key, list) and any(isinstance(k, str) for k in key):
+            return [row for k in key for row in self._rows_of(k)]
         return key
 
-    def _one_row(self, key: Union[str, int]) -> int:
+    def _rows_of(self, key: Union[str, int]) -> List[int]:
+        """A list's item as rows: a name's row, or all its rows in order (a
+        joint's of qpos, a sensor's of sensordata), as dm_control's named does."""
         row = self._index(key)
         if isinstance(row, slice):
-            raise KeyError(f"{self.name}: {key!r} names several rows (a joint's slice): index it alone")
-        return int(row)
+            return list(range(len(self._view))[row])
+        return [int(row)]
 
     def _unknown(self, key: str) -> str:
         if not self._rows:

@@ -20,7 +20,7 @@ from __future__ import annotations
 import math
 import numbers
 import os
-from typing import Any, Dict, Iterable, Mapping, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, Iterable, Mapping, Optional, Sequence, Tuple, Union, cast
 
 from . import _core
 from ._checks import (
@@ -157,7 +157,9 @@ class Scenario:
     Scenario.from_file(path) reads a TOML file; Scenario.chapter() is the
     chapter's run.
 
-    scene: an MJCF file (None: the chapter's scene). timestep: seconds per
+    scene: an MJCF file (None: the chapter's scene), or a compiled scene: a
+    simloop.Model, or on the PyPI build a mujoco.MjModel or MjSpec (copied
+    when the Scenario is made, as Sim(model) copies it). timestep: seconds per
     step (None: the scene's own). steps or duration (seconds): the length
     (neither: 2000 steps).
     controls: {actuator: value} for a constant, {actuator: [(seconds,
@@ -181,7 +183,7 @@ class Scenario:
 
     def __init__(
         self,
-        scene: Union[str, "os.PathLike[str]", None] = None,
+        scene: Union[ModelLike, object] = None,
         *,
         name: str = "",
         timestep: Optional[float] = None,
@@ -197,6 +199,9 @@ class Scenario:
                 raise TypeError(f"{what} must be a dict or None, got {_describe(given)}")
         if isinstance(disturbances, (str, bytes, Mapping)) or not isinstance(disturbances, Iterable):
             raise TypeError(f"disturbances must be a list of dicts, got {_describe(disturbances)}")
+        compiled = None  # a scene given compiled: the TOML names none (load_model: TypeError naming it)
+        if scene is not None and not isinstance(scene, (str, bytes, os.PathLike)):
+            compiled, scene = load_model(cast(ModelLike, scene)), None
         text = _toml_table(
             "", {"name": name or None, "scene": scene, "timestep": timestep, "steps": steps, "duration": duration}
         )
@@ -211,16 +216,25 @@ class Scenario:
         if reset is not None:
             text += "\n" + reset_toml(reset)
         base = os.getcwd()  # where its relative paths resolve (sent along to workers)
-        self._made(_core.Scenario.from_toml(text, "Scenario(...)", base), base, text, (_from_toml, (text, base)))
+        core = _core.Scenario.from_toml(text, "Scenario(...)", base)
+        self._made(core, base, text, (_from_toml, (text, base, compiled)), compiled=compiled)
 
     def _made(
-        self, core: _core.Scenario, base: str, toml: str, remake: Tuple[Any, ...], chapter: bool = False
+        self,
+        core: _core.Scenario,
+        base: str,
+        toml: str,
+        remake: Tuple[Any, ...],
+        chapter: bool = False,
+        compiled: Optional[_core.Model] = None,
     ) -> "Scenario":
         """Every way of making a Scenario ends here: its compiled form, the
         folder its relative paths resolve against, its TOML ("" for the
-        chapter's, and for an empty file's), how a pickle makes it again, and
-        whether it is the chapter's (which travels as itself, not as TOML)."""
+        chapter's, and for an empty file's), how a pickle makes it again,
+        whether it is the chapter's (which travels as itself, not as TOML),
+        and its scene when given compiled (a Model, which pickles)."""
         self._core, self._base, self.toml, self._remake, self._chapter = core, base, toml, remake, chapter
+        self._compiled = compiled
         return self
 
     @classmethod
@@ -256,7 +270,7 @@ class Scenario:
 
     @property
     def scene(self) -> str:
-        """The scene's MJCF file ("" for the chapter's embedded scene)."""
+        """The scene's MJCF file ("" for the chapter's embedded scene, and for a scene given compiled)."""
         return self._core.scene
 
     @property
@@ -265,17 +279,16 @@ class Scenario:
 
     def model(self) -> _core.Model:
         """The scene, compiled."""
-        return _core.load_scene(self._core)
+        return self._compiled if self._compiled is not None else _core.load_scene(self._core)
 
     def __repr__(self) -> str:
         return repr(self._core)
 
 
-def _from_toml(text: str, base: str) -> Scenario:
+def _from_toml(text: str, base: str, compiled: Optional[_core.Model] = None) -> Scenario:
     """A keyword Scenario made again (for pickling)."""
-    return Scenario.__new__(Scenario)._made(
-        _core.Scenario.from_toml(text, "Scenario(...)", base), base, text, (_from_toml, (text, base))
-    )
+    core = _core.Scenario.from_toml(text, "Scenario(...)", base)
+    return Scenario.__new__(Scenario)._made(core, base, text, (_from_toml, (text, base, compiled)), compiled=compiled)
 
 
 def _scenario_and_scene(scenario: ScenarioLike, model: ModelLike) -> Tuple[Scenario, _core.Model]:

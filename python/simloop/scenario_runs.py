@@ -5,7 +5,7 @@ a policy deciding them (policy=).
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any, Iterable, Optional
+from typing import TYPE_CHECKING, Any, Iterable, Optional, Tuple
 
 from . import _core
 from ._checks import (
@@ -47,6 +47,14 @@ def _inputs_array(name: str, value: object, described: str) -> Optional[np.ndarr
     if array.dtype.kind not in "iuf":
         raise TypeError(f"{name} must be an array of numbers {described}, got an array of dtype {array.dtype}")
     return np.ascontiguousarray(array, dtype=np.float64)
+
+
+def _batch_inputs(controls: Any, initial_state: Any) -> "Tuple[Optional[np.ndarray], Optional[np.ndarray]]":
+    """A batch's controls and initial_state as arrays (_inputs_array), or None."""
+    return (
+        _inputs_array("controls", controls, "shaped (runs, steps, nu) or (steps, nu)"),
+        _inputs_array("initial_state", initial_state, "shaped (runs, state_size) or (state_size,)"),
+    )
 
 
 def run_scenario(
@@ -178,8 +186,9 @@ def run_scenario_batch(
 
     executor: a dask.distributed Client or a concurrent.futures.Executor, as
     for run_batch(): chunks on workers, metrics only, no results back (the
-    scenario travels as its TOML text; model must be None; controls,
-    initial_state and policy are refused).
+    scenario travels as its TOML text; model must be None; controls and
+    initial_state go with the chunks, each chunk its runs' rows of a
+    per-run array; a policy is refused).
 
     policy, control_every: as for run_scenario(); one policy for every run,
     called with the GIL held from whichever worker reaches a decision (the
@@ -196,8 +205,8 @@ def run_scenario_batch(
             raise ValueError("audit_energy is not sent to an executor: its batches keep metrics only")
         if model is not None:
             raise TypeError("model must be None with executor= (the scenario's scene is compiled on each worker)")
-        if controls is not None or initial_state is not None or policy is not None:
-            raise ValueError("controls, initial_state and policy are not sent to an executor: run such batches locally")
+        if policy is not None:
+            raise ValueError("policy is not sent to an executor: run such batches locally")
     scenario, scene = _scenario_and_scene(scenario, model)  # with executor=, compiled here too: see below
     seed_list = [_check_seed("seeds[%d]" % i, s) for i, s in enumerate(_sequence("seeds", seeds))]
     timestep_list = [
@@ -214,6 +223,8 @@ def run_scenario_batch(
         # here, once per timestep, before any work goes out.
         for t in dict.fromkeys(timestep_list):
             _core.check_scenario(scene, scenario._core, _core.ScenarioConfig(0, rng, t, step_count, perturb, every))
+        own, start = _batch_inputs(controls, initial_state)
+        _core.check_batch_inputs(len(seed_list) * len(timestep_list), own, start)  # their values: on the workers
         return run_scenario_batch_on(
             executor,
             scenario,
@@ -225,6 +236,7 @@ def run_scenario_batch(
             threads=threads,
             chunk_size=chunk_size,
             progress=_check_progress(progress),
+            inputs={"controls": own, "initial_state": start},
         )
     configs = [
         _core.ScenarioConfig(s, rng, t, step_count, perturb, every, audit) for s in seed_list for t in timestep_list
@@ -254,8 +266,7 @@ def run_scenario_batch(
             keep_results=True,
         )
     _check_no_control_every(control_every)
-    own = _inputs_array("controls", controls, "shaped (runs, steps, nu) or (steps, nu)")
-    start = _inputs_array("initial_state", initial_state, "shaped (runs, state_size) or (state_size,)")
+    own, start = _batch_inputs(controls, initial_state)
     results = _core.run_scenario_batch(
         scene,
         scenario._core,

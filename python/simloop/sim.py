@@ -342,16 +342,19 @@ class Sim:
 
     # --- State.
 
-    def get_state(self) -> NDArray[np.float64]:
-        """The full physics state as a flat float64 array (a copy): time, qpos,
-        qvel, act, qacc_warmstart, ctrl, qfrc_applied, xfrc_applied, mocap_pos,
-        mocap_quat, userdata (see state_layout()). set_state() of it continues
-        bit for bit, in this Sim or another on the same model."""
-        return self._sim.get_state()
+    def get_state(self, layout: str = "simloop") -> NDArray[np.float64]:
+        """The full physics state as a flat float64 array (a copy), in simloop's
+        layout (state_layout()); layout="mujoco": MuJoCo's own,
+        mj_getState(m, d, s, mjSTATE_INTEGRATION) (MuJoCo 3.3 and later).
+        set_state() of either continues bit for bit, here or in another Sim."""
+        if layout not in ("simloop", "mujoco"):
+            raise ValueError(f"layout must be 'simloop' or 'mujoco', got {layout!r}")
+        return self._sim.get_state(layout == "mujoco")
 
     def set_state(self, state: object) -> None:
-        """Restores a state from get_state() (a float64 array of state_size values).
-        steps_taken and warnings are left as they are."""
+        """Restores a state: get_state()'s, or a buffer of MuJoCo's own
+        mj_getState(m, d, s, mjSTATE_INTEGRATION), told apart by length (see
+        docs/python.md). steps_taken and warnings are left as they are."""
         import numpy as np
 
         if not isinstance(state, np.ndarray):
@@ -359,7 +362,7 @@ class Sim:
         if state.dtype != np.float64:
             raise ValueError(f"state must have dtype float64, got {state.dtype}")
         if state.ndim != 1:  # its length: the C++ Sim's check
-            raise ValueError(f"state must have shape ({self.state_size},) for this model, got shape {state.shape}")
+            raise ValueError(f"state must be one-dimensional (state_size values), got shape {state.shape}")
         bad = np.flatnonzero(~np.isfinite(state))  # a check the C++ Sim does not make
         if bad.size:
             raise ValueError(f"state must be finite, got {float(state[bad[0]])!r} at index {int(bad[0])}")
@@ -425,7 +428,8 @@ class Sim:
 
     @property
     def contacts(self) -> List[_core.Contact]:
-        """The contacts of MuJoCo's last collision pass (geom1, geom2, dist, pos)."""
+        """The contacts of MuJoCo's last collision pass: geom1, geom2 (an unnamed
+        one as "geom12"), their ids, their bodies' names and ids, dist, pos, frame, force."""
         return self._sim.contacts
 
     @property

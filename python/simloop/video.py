@@ -7,15 +7,17 @@ without multisampling, planes to the horizon, and for the chapter a camera
 that follows the box along the floor, backing off as it rises (a hop shows
 as the box rising in the frame, the floor beneath it still in view).
 A frame every 1/25 s of simulated time (every row when rows are sparser):
-the video plays in real time. FILE.mp4 is encoded by ffmpeg when it is on
-PATH; otherwise, and for FILE.png, the frames go into an animated PNG (APNG,
-which browsers play) beside it. Like the recording, the file is written
+the video plays in real time. FILE.mp4 is encoded by ffmpeg: imageio-ffmpeg's
+bundled binary when that package is installed (simloop's `video` extra),
+else the ffmpeg on PATH; without either, and for FILE.png, the frames go
+into an animated PNG (APNG, which browsers play) beside it. Like the recording, the file is written
 beside its target and put in place with the run's other outputs, or not at
 all.
 """
 
 from __future__ import annotations
 
+import importlib
 import os
 import shutil
 import struct
@@ -37,6 +39,26 @@ WIDTH, HEIGHT = 640, 480
 COMPRESSION = 3
 CHAPTER_DISTANCE = 1.5  # m from the box at rest, as simloop/Chapter-v0's pictures look at it
 FINISH_TIMEOUT = 60.0
+
+
+NO_FFMPEG = (
+    "ffmpeg, which .mp4 needs, is neither installed with Python (pip install 'simloop[video]') "
+    "nor on PATH (apt install ffmpeg)"
+)
+
+
+def find_ffmpeg() -> Optional[str]:
+    """The ffmpeg to encode with: imageio-ffmpeg's (its bundled binary, or the
+    one its IMAGEIO_FFMPEG_EXE names) when that package is installed, else
+    the one on PATH; None without either."""
+    try:
+        imageio_ffmpeg = importlib.import_module("imageio_ffmpeg")
+    except ImportError:
+        return shutil.which("ffmpeg")
+    try:
+        return str(imageio_ffmpeg.get_ffmpeg_exe())
+    except RuntimeError:  # installed without a binary for this machine
+        return shutil.which("ffmpeg")
 
 
 def _chunk(kind: bytes, data: bytes) -> bytes:
@@ -136,11 +158,11 @@ class VideoRecording:
         self._lookat_z: Optional[float] = None  # the box's height at the first frame: the floor's, for the camera
         requested = Path(path)
         mp4 = requested.suffix.lower() == ".mp4"
-        self.ffmpeg = shutil.which("ffmpeg") if mp4 else None
+        self.ffmpeg = find_ffmpeg() if mp4 else None
         self.target = requested if self.ffmpeg or requested.suffix.lower() == ".png" else requested.with_suffix(".png")
         suffix = requested.suffix.lower()
         if mp4 and not self.ffmpeg:
-            self.note = " (an animated PNG: ffmpeg, which .mp4 needs, is not on PATH)"
+            self.note = f" (an animated PNG: {NO_FFMPEG})"
         elif suffix not in (".mp4", ".png"):  # asked for a GIF, say, or no format at all
             self.note = (
                 f" (an animated PNG: {suffix or 'a name without a suffix'} is not a format --video writes; "

@@ -196,8 +196,8 @@ TEST(BatchControls, BadInputsAreRefusedByNameBeforeAnyStep) {
   std::vector<double> state = simloop::get_state(scene.get(), simloop::Data(scene).get());
   simloop::RunInputs in;
   in.initial_state = state.data();
-  in.state_size = state.size() - 1;
-  refused(in, "initial_state must hold state_size = " + std::to_string(state.size()));
+  in.state_size = state.size() + 1;  // (MuJoCo's own state, where there is one, is shorter: state.hpp)
+  refused(in, "initial_state must hold " + std::to_string(state.size()) + " values (simloop's state, state_layout)");
   in.state_size = state.size();
   state[3] = INFINITY;
   refused(in, "initial_state must be finite, got inf at index 3");

@@ -16,6 +16,7 @@
 #include "simloop/errors.hpp"
 #include "simloop/model.hpp"
 #include "simloop/run.hpp"
+#include "simloop/state.hpp"
 #include "test_util.hpp"
 
 namespace {
@@ -198,8 +199,19 @@ TEST(SimAny, AStateRestoredIntoAnotherSimGoesOnBitForBit) {
     b.set_state(saved.data(), saved.size());
     drive(b, 200);
     EXPECT_TRUE(same_bits(a.state(), b.state())) << file;
+    // MuJoCo's own state (mj_getState's, where MuJoCo has one): its first values, every tree awake.
+    if (const std::size_t mujocos = simloop::mujoco_state_size(model.get()); mujocos > 0) {
+      Sim c(model);
+      c.set_state(saved.data(), mujocos);
+      drive(c, 200);
+      EXPECT_TRUE(same_bits(a.state(), c.state())) << file;
+      const std::vector<double> state = c.state();
+      EXPECT_TRUE(same_bits(c.mujoco_state(), std::vector<double>(state.begin(), state.begin() + mujocos))) << file;
+    } else {
+      EXPECT_NE(test::error_of([&] { (void)b.mujoco_state(); }).find("needs MuJoCo 3.3 or later"), std::string::npos);
+    }
     EXPECT_NE(test::error_of([&] {
-                b.set_state(saved.data(), saved.size() - 1);
+                b.set_state(saved.data(), saved.size() + 1);
               }).find("state must have " + std::to_string(saved.size()) + " values"),
               std::string::npos);
   }

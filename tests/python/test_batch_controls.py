@@ -149,7 +149,7 @@ def test_the_controls_array_is_read_in_place_and_left_unchanged():
             ValueError,
             "controls must be finite, got nan at step 37, actuator 1",
         ),
-        (dict(initial_state=np.zeros(3)), ValueError, "initial_state must hold state_size = "),
+        (dict(initial_state=np.zeros(3)), ValueError, "initial_state must hold "),
         (
             dict(initial_state=np.zeros((1, 3))),
             ValueError,

@@ -105,6 +105,52 @@ def test_scenario_batches_and_sweeps_on_a_cluster_are_the_local_bits(client):
     assert swept.csv() == alone.csv() and swept.edge == alone.edge and swept.summary() == alone.summary()
 
 
+def own_inputs(runs, steps):
+    """Per-run controls and initial states for PushT: fixed test data (not a run's draws), states from a Sim."""
+    controls = np.random.default_rng(5).uniform(-1, 1, size=(runs, steps, 2))
+    sim = simloop.Sim(simloop.Scenario.from_file(PUSHT))
+    states = []
+    for i in range(runs):
+        sim.step(10 + i, ctrl=np.array([0.6, 0.1 * i]))
+        states.append(sim.get_state())
+    return controls, np.array(states)
+
+
+def test_controls_and_initial_states_go_to_a_cluster_in_chunks_with_the_local_bits(client):
+    steps, seeds, timesteps = 150, range(4), [None, 0.004]
+    controls, states = own_inputs(8, steps)
+    kwargs = dict(seeds=seeds, timesteps=timesteps, steps=steps, controls=controls, initial_state=states)
+    local = simloop.run_scenario_batch(PUSHT, **kwargs)
+    table = simloop.run_scenario_batch(PUSHT, executor=client, chunk_size=3, **kwargs)
+    assert table == local and not table.has_results  # chunks of 3, 3 and 2 runs: each its own rows
+    assert np.array_equal(table["tblock_final_pos_x"], [r.column("tblock_x")[-1] for r in local.results])
+    alone = simloop.run_scenario_batch(PUSHT, seeds=seeds, timesteps=timesteps, steps=steps)
+    assert not np.array_equal(table["pusher_final_pos_x"], alone["pusher_final_pos_x"])  # the inputs were used
+
+
+def test_shared_controls_and_states_go_to_an_executor_and_bad_shapes_are_refused_before_any_work():
+    steps = 120
+    controls, states = own_inputs(6, steps)
+    kwargs = dict(seeds=range(3), timesteps=[None, 0.004], steps=steps, controls=controls[2], initial_state=states[4])
+    local = simloop.run_scenario_batch(PUSHT, metrics_only=True, **kwargs)
+    with ThreadPoolExecutor(2) as pool:
+        assert simloop.run_scenario_batch(PUSHT, executor=pool, chunk_size=4, **kwargs) == local
+        per_run = dict(kwargs, controls=controls, initial_state=states)
+        assert simloop.run_scenario_batch(PUSHT, executor=pool, chunk_size=4, **per_run) == (
+            simloop.run_scenario_batch(PUSHT, metrics_only=True, **per_run)
+        )
+        started = []
+        with pytest.raises(ValueError, match=r"^controls: 5 runs' controls for 6 runs$"):
+            simloop.run_scenario_batch(
+                PUSHT, executor=pool, progress=lambda *a: started.append(a), **dict(per_run, controls=controls[:5])
+            )
+        with pytest.raises(ValueError, match=r"^initial_state must be shaped \(runs, state_size\) or \(state_size,\)"):
+            simloop.run_scenario_batch(PUSHT, executor=pool, **dict(kwargs, initial_state=states[None, None]))
+        assert started == []
+        with pytest.raises(ValueError, match="^policy is not sent to an executor"):
+            simloop.run_scenario_batch(PUSHT, executor=pool, policy=lambda step, row: [0.0, 0.0])
+
+
 def test_a_worker_killed_mid_batch_loses_nothing(client):
     seeds, steps = range(48), 2000
     local = simloop.run_batch(seeds, [0.002], steps=steps, threads=2)

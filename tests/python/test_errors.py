@@ -28,7 +28,7 @@ BAD_RUN_ARGUMENTS = [
     (
         {"model": 3},
         TypeError,
-        "model must be None, a simloop.Model, a mujoco.MjModel or a path to an MJCF file, got 3 (int)",
+        "model must be None, a simloop.Model, a mujoco.MjModel or MjSpec, or a path to an MJCF file, got 3 (int)",
     ),
     ({"steps": 4_000_000_000_000}, ValueError, "raise record_every"),
     ({"rng": "pcg64"}, ValueError, "rng must be 'mt19937_64' or 'numpy', got 'pcg64'"),
@@ -82,7 +82,7 @@ def test_sim_refuses_bad_arguments():
         (lambda: sim.apply_force([0.0, "1", 0.0]), TypeError, "force[1] must be a number, got '1' (str)"),
         (lambda: sim.apply_force(5.0), TypeError, "force must be a sequence, got 5.0 (float)"),
         (lambda: setattr(sim, "timestep", -1), ValueError, "timestep must be a positive, finite number"),
-        (lambda: simloop.Sim(model=[]), TypeError, "model must be None, a simloop.Model, a mujoco.MjModel or a path"),
+        (lambda: simloop.Sim(model=[]), TypeError, "model must be None, a simloop.Model, a mujoco.MjModel or MjSpec"),
     ]
     for call, error, message in cases:
         with pytest.raises(error) as caught:

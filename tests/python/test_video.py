@@ -2,9 +2,12 @@
 as an animated PNG (or an MP4 with ffmpeg), the same bytes every run, put in
 place with the run's outputs or not at all; sim_loop refuses it."""
 
+import importlib.util
 import os
 import shutil
 import struct
+import sys
+import types
 import zlib
 
 import numpy as np
@@ -77,11 +80,23 @@ def test_a_scenarios_video_draws_its_qpos_with_the_recording_beside(tmp_path):
     assert first.std() > 10  # a picture, not a blank
 
 
-def test_without_ffmpeg_an_mp4_becomes_an_animated_png_and_says_so(tmp_path, monkeypatch):
+def without_imageio_ffmpeg(tmp_path, monkeypatch):
+    """The command's Python, in a child, finds no imageio_ffmpeg (a package of that name that fails to import)."""
+    hidden = tmp_path / "hidden" / "imageio_ffmpeg"
+    hidden.mkdir(parents=True)
+    (hidden / "__init__.py").write_text("raise ImportError('hidden by the test')\n")
+    monkeypatch.setenv("PYTHONPATH", os.pathsep.join(filter(None, [str(hidden.parent), os.environ.get("PYTHONPATH")])))
+
+
+def test_without_ffmpeg_an_mp4_becomes_an_animated_png_and_says_how_to_get_it(tmp_path, monkeypatch):
     monkeypatch.setenv("PATH", "/nonexistent")
+    without_imageio_ffmpeg(tmp_path, monkeypatch)
     run = run_command(["--smoke", "--no-rerun", "--video", "clip.mp4", "--out", "out"], tmp_path)
     assert run.returncode == 0, run.stderr
-    assert "video: clip.png (an animated PNG: ffmpeg, which .mp4 needs, is not on PATH)\n" in run.stdout
+    assert (
+        "video: clip.png (an animated PNG: ffmpeg, which .mp4 needs, is neither installed with Python "
+        "(pip install 'simloop[video]') nor on PATH (apt install ffmpeg))\n"
+    ) in run.stdout
     assert not (tmp_path / "clip.mp4").exists()
     assert apng_frames(tmp_path / "clip.png")[0] == 16  # 300 steps of 2 ms: 0.6 s, a frame each 0.04 s
 
@@ -96,8 +111,44 @@ def test_a_video_asked_in_another_format_is_an_animated_png_and_says_so(asked, n
     assert apng_frames(tmp_path / "clip.png")[0] > 1
 
 
+def test_ffmpeg_is_imageio_ffmpegs_when_installed_else_the_one_on_path(tmp_path, monkeypatch):
+    from simloop import video
+
+    bundled = tmp_path / "bundled-ffmpeg"
+    fake = types.ModuleType("imageio_ffmpeg")
+    fake.get_ffmpeg_exe = lambda: str(bundled)
+    monkeypatch.setitem(sys.modules, "imageio_ffmpeg", fake)
+    assert video.find_ffmpeg() == str(bundled)
+    on_path = tmp_path / "bin" / "ffmpeg"
+    on_path.parent.mkdir()
+    on_path.write_text("#!/bin/sh\n")
+    on_path.chmod(0o755)
+    monkeypatch.setenv("PATH", str(on_path.parent))
+
+    def no_binary():
+        raise RuntimeError("No ffmpeg exe could be found")
+
+    fake.get_ffmpeg_exe = no_binary  # installed, but without a binary for this machine: PATH's
+    assert video.find_ffmpeg() == str(on_path)
+    monkeypatch.setitem(sys.modules, "imageio_ffmpeg", None)  # absent: import fails
+    assert video.find_ffmpeg() == str(on_path)
+    monkeypatch.setenv("PATH", "/nonexistent")
+    assert video.find_ffmpeg() is None
+
+
+@pytest.mark.skipif(importlib.util.find_spec("imageio_ffmpeg") is None, reason="imageio-ffmpeg is not installed")
+def test_with_imageio_ffmpeg_an_mp4_is_written_without_ffmpeg_on_path(tmp_path, monkeypatch):
+    monkeypatch.setenv("PATH", "/nonexistent")
+    run = run_command(["--smoke", "--no-rerun", "--video", "clip.mp4", "--out", "out"], tmp_path)
+    assert run.returncode == 0, run.stderr
+    assert "video: clip.mp4\n" in run.stdout
+    data = (tmp_path / "clip.mp4").read_bytes()
+    assert data[4:8] == b"ftyp" and b"moof" in data  # a fragmented MP4: written front to back into its pipe
+
+
 @pytest.mark.skipif(shutil.which("ffmpeg") is None, reason="ffmpeg is not on PATH")
-def test_with_ffmpeg_an_mp4_is_written(tmp_path):
+def test_with_ffmpeg_on_path_an_mp4_is_written(tmp_path, monkeypatch):
+    without_imageio_ffmpeg(tmp_path, monkeypatch)
     run = run_command(["--smoke", "--no-rerun", "--video", "clip.mp4", "--out", "out"], tmp_path)
     assert run.returncode == 0, run.stderr
     assert "video: clip.mp4\n" in run.stdout
