@@ -157,12 +157,9 @@ class TableReader {
     std::vector<std::pair<std::string, std::string>> out;
     for (const toml::node& item : *array) {
       const auto* pair = item.as_array();
-      const auto* first = pair && pair->size() == 2 ? pair->get(0)->as_string() : nullptr;
-      const auto* second = pair && pair->size() == 2 ? pair->get(1)->as_string() : nullptr;
-      if (first == nullptr || second == nullptr) {
-        fail(key, "expected an array of " + std::string(what) + ", found " + type_name(item));
-      }
-      out.emplace_back(first->get(), second->get());
+      const bool ok = pair && pair->size() == 2 && pair->get(0)->is_string() && pair->get(1)->is_string();
+      if (!ok) fail(key, "expected an array of " + std::string(what) + ", found " + type_name(item));
+      out.emplace_back(pair->get(0)->as_string()->get(), pair->get(1)->as_string()->get());
     }
     return out;
   }
