@@ -82,6 +82,15 @@ class StepObserver;
     const std::vector<RowSink*>& sinks, int threads, RunControl* control, const std::vector<RunInputs>& inputs,
     const std::vector<std::vector<StepObserver*>>& watching);
 
+// The same batch with each run's record handed to done(i, record) by the
+// worker that ran it, as the run ends (from any worker thread, each i once),
+// instead of kept in a list.
+void for_each_scenario_run(const Model& scene, const Scenario& scenario, const std::vector<ScenarioConfig>& configs,
+                           const std::vector<RowSink*>& sinks, int threads, RunControl* control,
+                           const std::vector<RunInputs>& inputs,
+                           const std::vector<std::vector<StepObserver*>>& watching,
+                           const std::function<void(std::size_t i, RunRecord&& record)>& done);
+
 // A scenario as one run of `config` sees it: its length replaced by
 // config.steps, its disturbances dropped unless config.perturb.
 [[nodiscard]] Scenario configured_scenario(const Scenario& scenario, const ScenarioConfig& config);

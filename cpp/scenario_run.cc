@@ -139,6 +139,17 @@ std::vector<RunRecord> detail::run_scenario_batch_watched(const Model& scene, co
                                                           const std::vector<RowSink*>& sinks, int threads,
                                                           RunControl* control, const std::vector<RunInputs>& inputs,
                                                           const std::vector<std::vector<StepObserver*>>& watching) {
+  std::vector<RunRecord> results(configs.size());
+  for_each_scenario_run(scene, scenario, configs, sinks, threads, control, inputs, watching,
+                        [&](std::size_t i, RunRecord&& record) { results[i] = std::move(record); });
+  return results;
+}
+
+void detail::for_each_scenario_run(const Model& scene, const Scenario& scenario,
+                                   const std::vector<ScenarioConfig>& configs, const std::vector<RowSink*>& sinks,
+                                   int threads, RunControl* control, const std::vector<RunInputs>& inputs,
+                                   const std::vector<std::vector<StepObserver*>>& watching,
+                                   const std::function<void(std::size_t i, RunRecord&& record)>& done) {
   if (sinks.size() != configs.size()) {
     throw InvalidArgument("sinks must hold one per config (" + std::to_string(configs.size()) + "), got " +
                           std::to_string(sinks.size()));
@@ -150,47 +161,65 @@ std::vector<RunRecord> detail::run_scenario_batch_watched(const Model& scene, co
   }
   const RunInputs no_inputs;
   const auto inputs_of = [&](std::size_t i) -> const RunInputs& { return inputs.empty() ? no_inputs : inputs[i]; };
-  // Up front, on this thread: one model per distinct timestep (the model is
-  // frozen while the workers share it), every run's names, inputs and
-  // columns, and the memory all the kept rows will take together.
   if (!watching.empty() && watching.size() != configs.size()) {
     throw InvalidArgument("watching: one list of observers per config, got " + std::to_string(watching.size()) +
                           " for " + std::to_string(configs.size()) + " configs");
   }
-  std::list<std::pair<std::pair<double, bool>, Model>> models;  // stable addresses for model_of
+  // Up front, on this thread: one model per distinct timestep (the model is
+  // frozen while the workers share it), every run's checks, and the memory
+  // all the kept rows will take together. What the checks need (names,
+  // length, columns) does not depend on the seed, so a run is prepared here
+  // once per distinct configuration but its seed; each run is drawn and
+  // prepared again by the worker that runs it and dropped with it, so the
+  // batch holds no more runs than it has workers.
+  struct Shape {
+    double timestep;
+    bool audit_energy, perturb;
+    std::optional<std::int64_t> steps;
+    std::int64_t schedule_steps;
+    int width;
+  };
+  std::list<std::pair<Shape, Model>> models;  // stable addresses for model_of
   std::vector<const Model*> model_of;
-  std::vector<PreparedRun> runs;
+  std::vector<std::int64_t> steps;
   std::vector<KeptRows> kept;
   for (std::size_t i = 0; i < configs.size(); ++i) {
     const ScenarioConfig& config = configs[i];
     detail::check_run(i, [&] {
-      const std::pair<double, bool> key{run_timestep(scene, scenario, config), config.audit_energy};
-      auto it = std::find_if(models.begin(), models.end(), [&](const auto& m) { return m.first == key; });
-      if (it == models.end()) it = models.emplace(models.end(), key, scene.for_run(key.first, key.second));
+      const double timestep = run_timestep(scene, scenario, config);
+      auto it = std::find_if(models.begin(), models.end(), [&](const auto& m) {
+        const Shape& s = m.first;
+        return s.timestep == timestep && s.audit_energy == config.audit_energy && s.perturb == config.perturb &&
+               s.steps == config.steps;
+      });
+      if (it == models.end()) {
+        Model model = scene.for_run(timestep, config.audit_energy);
+        const PreparedRun run = prepare(model, scenario, config);
+        const Shape shape{timestep,     config.audit_energy, config.perturb,
+                          config.steps, run.schedule.steps,  run.recorder->width()};
+        it = models.emplace(models.end(), shape, std::move(model));
+      }
+      const Shape& shape = it->first;
       model_of.push_back(&it->second);
-      runs.push_back(prepare(it->second, scenario, config));
-      detail::check_schedule_run(runs.back().schedule.steps, config.record_every);
-      check_inputs(it->second.get(), inputs_of(i), runs.back().schedule.steps);
-      const PreparedRun& run = runs.back();
-      if (sinks[i] == nullptr) kept.push_back({run.schedule.steps, config.record_every, run.recorder->width()});
+      steps.push_back(shape.schedule_steps);
+      detail::check_schedule_run(shape.schedule_steps, config.record_every);
+      check_inputs(it->second.get(), inputs_of(i), shape.schedule_steps);
+      if (sinks[i] == nullptr) kept.push_back({shape.schedule_steps, config.record_every, shape.width});
     });
   }
   if (!kept.empty()) check_kept_rows(kept);
 
-  std::vector<RunRecord> results(configs.size());
-  std::vector<std::int64_t> steps;
-  for (const PreparedRun& r : runs) steps.push_back(r.schedule.steps);
   detail::run_jobs(scene, configs.size(), threads, steps, control, [&](std::size_t i, Data& data, RunControl& ctl) {
+    const PreparedRun run = prepare(*model_of[i], scenario, configs[i]);
     // A run with scene parameters of its own ([reset] params) runs on its own
     // copy, made here rather than up front: one at a time per worker.
-    const Model with_params = with_scene_params(*model_of[i], runs[i].schedule.start.params);
+    const Model with_params = with_scene_params(*model_of[i], run.schedule.start.params);
     const mjModel* m = with_params.get();
-    results[i] = labelled(detail::run_schedule_counted_elsewhere(
-                              m, data.get(), *runs[i].recorder, runs[i].schedule, configs[i].record_every, sinks[i],
-                              &ctl, inputs_of(i), watching.empty() ? std::vector<StepObserver*>{} : watching[i]),
-                          m, scenario, configs[i]);
+    done(i, labelled(detail::run_schedule_counted_elsewhere(
+                         m, data.get(), *run.recorder, run.schedule, configs[i].record_every, sinks[i], &ctl,
+                         inputs_of(i), watching.empty() ? std::vector<StepObserver*>{} : watching[i]),
+                     m, scenario, configs[i]));
   });
-  return results;
 }
 
 // ---------------------------------------------------------------------------

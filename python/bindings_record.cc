@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "bindings_common.hpp"
+#include "simloop/batch_table.hpp"
 #include "simloop/number_format.hpp"
 #include "simloop/output.hpp"
 #include "simloop/run_record.hpp"
@@ -174,6 +175,40 @@ void bind_record(py::module_& m) {
                     ", warnings=" + std::to_string(r.warnings.size()) + ")";
            })
       .def(pickle_as_bytes<RunRecord, &simloop::record_from_bytes>());
+
+  // A batch's table (batch_table.hpp) as arrays, from which tables.py lays out its BatchTable.
+  py::class_<simloop::ScenarioTable>(m, "ScenarioTable", "One row per run of a batch, as numbers.")
+      .def("arrays", [](const simloop::ScenarioTable& t) {
+        const std::size_t n = t.rows.size();
+        py::array_t<std::uint64_t> seed(n);
+        py::array_t<double> timestep(n), sim_time(n);
+        py::array_t<std::int64_t> steps(n), layout(n);
+        py::array_t<bool> perturb(n);
+        const std::size_t width = n ? t.rows[0].warnings.size() : 0;
+        py::array_t<std::int64_t> warnings({n, width});
+        py::list scenario, rng, layouts, values;
+        std::vector<std::vector<double>> by_layout(t.layouts.size());
+        for (std::size_t i = 0; i < n; ++i) {
+          const simloop::TableRow& row = t.rows[i];
+          scenario.append(row.scenario), rng.append(row.rng);
+          seed.mutable_at(i) = row.seed, timestep.mutable_at(i) = row.timestep, steps.mutable_at(i) = row.steps;
+          perturb.mutable_at(i) = row.perturb, sim_time.mutable_at(i) = row.sim_time;
+          layout.mutable_at(i) = static_cast<std::int64_t>(row.layout);
+          std::copy(row.warnings.begin(), row.warnings.end(), warnings.mutable_data(i, 0));
+          by_layout[row.layout].insert(by_layout[row.layout].end(), row.values.begin(), row.values.end());
+        }
+        for (std::size_t k = 0; k < t.layouts.size(); ++k) {
+          py::list columns;
+          for (const simloop::TableColumn& c : t.layouts[k]) columns.append(py::make_tuple(c.name, c.integer));
+          layouts.append(columns);
+          const std::size_t cols = t.layouts[k].size(), rows = cols ? by_layout[k].size() / cols : 0;
+          values.append(py::array_t<double>({rows, cols}, by_layout[k].data()));
+        }
+        return py::dict("scenario"_a = scenario, "seed"_a = seed, "rng"_a = rng, "timestep"_a = timestep,
+                        "steps"_a = steps, "perturb"_a = perturb, "sim_time"_a = sim_time, "layout"_a = layout,
+                        "layouts"_a = layouts, "values"_a = values, "warnings"_a = warnings);
+      });
+  m.def("scenario_table", &simloop::scenario_table, "records"_a, "The table of these ScenarioResults.");
 }
 
 }  // namespace simloop_py

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "bindings_common.hpp"
+#include "simloop/batch_table.hpp"
 #include "simloop/model.hpp"
 #include "simloop/number_format.hpp"
 #include "simloop/output.hpp"
@@ -36,6 +37,13 @@ using DoubleArray = py::array_t<double, py::array::c_style | py::array::forcecas
 std::optional<simloop::InputArray> input_array(const std::optional<DoubleArray>& array) {
   if (!array) return std::nullopt;
   return simloop::InputArray{array->data(), std::vector<std::int64_t>(array->shape(), array->shape() + array->ndim())};
+}
+
+// A batch's inputs: none, or each run's slice of the caller's arrays.
+std::vector<simloop::RunInputs> batch_inputs(std::size_t runs, const std::optional<DoubleArray>& controls,
+                                             const std::optional<DoubleArray>& initial_state) {
+  if (!controls && !initial_state) return {};
+  return simloop::split_inputs(runs, true, input_array(controls), input_array(initial_state));
 }
 
 // A Python callable as the loop's Policy: decide(step, row) -> ctrl, where
@@ -172,10 +180,7 @@ void bind_scenario(py::module_& m) {
          const std::vector<simloop::ScenarioConfig>& configs, int threads, std::optional<DoubleArray> controls,
          std::optional<DoubleArray> initial_state, py::object decide, std::int64_t control_every, bool keep_rows,
          py::object progress) {
-        std::vector<simloop::RunInputs> inputs;
-        if (controls || initial_state) {
-          inputs = simloop::split_inputs(configs.size(), true, input_array(controls), input_array(initial_state));
-        }
+        std::vector<simloop::RunInputs> inputs = batch_inputs(configs.size(), controls, initial_state);
         std::optional<PyPolicy> policy;
         if (!decide.is_none()) {
           inputs.assign(configs.size(), simloop::RunInputs::deciding(policy.emplace(std::move(decide), control_every)));
@@ -188,6 +193,20 @@ void bind_scenario(py::module_& m) {
       },
       "scene"_a, "scenario"_a, "configs"_a, "threads"_a, "controls"_a = py::none(), "initial_state"_a = py::none(),
       "decide"_a = py::none(), "control_every"_a = 1, "keep_rows"_a = true, "progress"_a = py::none());
+  m.def(
+      "run_scenario_table",
+      [](const simloop::Model& scene, const simloop::Scenario& scenario,
+         const std::vector<simloop::ScenarioConfig>& configs, int threads, std::optional<DoubleArray> controls,
+         std::optional<DoubleArray> initial_state, py::object progress) {
+        const std::vector<simloop::RunInputs> inputs = batch_inputs(configs.size(), controls, initial_state);
+        const std::string what = "run_scenario_batch(" + scenario.name + ", metrics_only=True) x " +
+                                 std::to_string(configs.size()) + " runs";
+        return long_call(std::move(progress), what, [&](simloop::RunControl* control) {
+          return simloop::run_scenario_table(scene, scenario, configs, threads, control, inputs);
+        });
+      },
+      "scene"_a, "scenario"_a, "configs"_a, "threads"_a, "controls"_a = py::none(), "initial_state"_a = py::none(),
+      "progress"_a = py::none(), "run_scenario_batch(keep_rows=False) reduced to its table, run by run.");
   m.def(
       "check_batch_inputs",
       [](std::size_t runs, std::optional<DoubleArray> controls, std::optional<DoubleArray> initial_state) {

@@ -318,6 +318,20 @@ def run_scenario_batch(
     keep_rows: bool = True,
     progress: _Progress = None,
 ) -> list[ScenarioResult]: ...
+def run_scenario_table(
+    scene: Model,
+    scenario: Scenario,
+    configs: Sequence[ScenarioConfig],
+    threads: int,
+    controls: Optional[_ArrayLike] = None,
+    initial_state: Optional[_ArrayLike] = None,
+    progress: _Progress = None,
+) -> ScenarioTable: ...
+def scenario_table(records: Sequence[ScenarioResult]) -> ScenarioTable: ...
+
+class ScenarioTable(metaclass=_Pybind11Type):
+    def arrays(self) -> dict[str, Any]: ...
+
 def check_threads(threads: int) -> None: ...
 def check_batch_inputs(
     runs: int, controls: Optional[_ArrayLike] = None, initial_state: Optional[_ArrayLike] = None

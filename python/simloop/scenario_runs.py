@@ -242,7 +242,7 @@ def run_scenario_batch(
         _core.ScenarioConfig(s, rng, t, step_count, perturb, every, audit) for s in seed_list for t in timestep_list
     ]
     metrics_only = _check_bool("metrics_only", metrics_only)
-    from .tables import _table  # numpy: `import simloop` does not load it
+    from .tables import _core_table, _table  # numpy: `import simloop` does not load it
 
     if policy is not None:
         if controls is not None or initial_state is not None or metrics_only:
@@ -267,14 +267,13 @@ def run_scenario_batch(
         )
     _check_no_control_every(control_every)
     own, start = _batch_inputs(controls, initial_state)
+    if metrics_only:  # each run reduced to its row as it ends: no per-run result, in C++ or Python
+        return _core_table(
+            _core.run_scenario_table(
+                scene, scenario._core, configs, workers, own, start, progress=_check_progress(progress)
+            )
+        )
     results = _core.run_scenario_batch(
-        scene,
-        scenario._core,
-        configs,
-        workers,
-        controls=own,
-        initial_state=start,
-        keep_rows=not metrics_only,
-        progress=_check_progress(progress),
+        scene, scenario._core, configs, workers, controls=own, initial_state=start, progress=_check_progress(progress)
     )
-    return _table(results, keep_results=not metrics_only)
+    return _table(results, keep_results=True)

@@ -275,41 +275,48 @@ def param_column(kind: str, name: str) -> str:
     return f"{kind}_{name}" if name else kind
 
 
-def _scenario_row(r: Any) -> Dict[str, Any]:
-    row: Dict[str, Any] = {
-        "scenario": r.name,
-        "seed": np.uint64(r.seed),
-        "rng": r.rng,
-        "timestep": r.timestep,
-        "steps": r.steps,
-        "perturb": r.perturb,
-        "sim_time": r.sim_time,
+def _scenario_columns(arrays: Dict[str, Any]) -> Dict[str, np.ndarray]:
+    """A scenario batch's columns from its ScenarioTable's arrays (include/simloop/batch_table.hpp: one row per
+    run, reduced in C++): the ones every row has, then each layout's (a column that some runs lack is NaN there),
+    then the warnings' counts, sorted by name, and `diverged`."""
+    n = len(arrays["seed"])
+    columns: Dict[str, np.ndarray] = {
+        "scenario": np.array(arrays["scenario"], dtype=object),
+        "seed": arrays["seed"],
+        "rng": np.array(arrays["rng"], dtype=object),
+        "timestep": arrays["timestep"],
+        "steps": arrays["steps"],
+        "perturb": arrays["perturb"],
+        "sim_time": arrays["sim_time"],
     }
-    final = r.final_row
-    for body, c in sorted(r.bodies.items()):
-        for i, axis in enumerate("xyz"):
-            row[f"{body}_final_pos_{axis}"] = float(final[c + i])
-        row[f"{body}_final_speed"] = _speed([float(v) for v in final[c + 7 : c + 10]])
-    for i, d in enumerate(r.disturbances):
-        for axis, value in zip(("fx", "fy", "fz"), d["force"]):
-            row[f"disturbance{i}_{axis}"] = float(value)
-        for axis, value in zip(("tx", "ty", "tz"), d["torque"]):
-            row[f"disturbance{i}_{axis}"] = float(value)
-        row[f"disturbance{i}_start_step"] = d["start_step"]
-        row[f"disturbance{i}_steps"] = d["end_step"] - d["start_step"]
-    for p in r.params:  # drawn at reset
-        row[param_column(p["kind"], p["name"])] = p["value"]
-    _warning_counts(row, r.warnings)
-    return row
+    layout, integers = arrays["layout"], set()
+    for k, (names, values) in enumerate(zip(arrays["layouts"], arrays["values"])):
+        rows = np.flatnonzero(layout == k)
+        for c, (name, integer) in enumerate(names):
+            if name not in columns:
+                columns[name] = np.full(n, np.nan)
+            columns[name][rows] = values[:, c]
+            if integer:
+                integers.add(name)
+    for name in integers:  # counts of steps, where every run has one
+        if not np.isnan(columns[name]).any():
+            columns[name] = columns[name].astype(np.int64)
+    counts = arrays["warnings"]
+    for w in sorted(range(len(WARNING_NAMES)), key=lambda w: WARNING_NAMES[w]):
+        columns["warning_" + WARNING_NAMES[w]] = counts[:, w].copy() if n else np.zeros(0, dtype=np.int64)
+    diverged = [WARNING_NAMES.index(name) for name in DIVERGENCE_WARNINGS]
+    columns["diverged"] = (counts[:, diverged] > 0).any(axis=1) if n else np.zeros(0, dtype=bool)
+    return columns
 
 
-def _speed(velocity: List[float]) -> float:
-    """|v|, as sqrt of the sum of squares (the bits every table has had); a square past float's range (a run
-    that blew up) would raise OverflowError, so such a speed is hypot's (or inf)."""
-    try:
-        return math.sqrt(sum(v**2 for v in velocity))
-    except OverflowError:
-        return math.hypot(*velocity)
+def _core_table(core: Any, results: Optional[List[Any]] = None) -> BatchTable[Any]:
+    """The BatchTable of a C++ ScenarioTable, with `results` kept or none."""
+    columns = _scenario_columns(core.arrays())
+    if len(columns["seed"]):  # an empty table has no columns at all, not even `run`
+        columns = {"run": np.arange(len(columns["seed"]), dtype=np.int64), **columns}
+    else:
+        columns = {}
+    return BatchTable(columns) if results is None else BatchTable(columns, results)
 
 
 def _column(name: str, values: List[Any]) -> np.ndarray:
@@ -388,7 +395,7 @@ def _table(results: Iterable[Any], keep_results: bool) -> BatchTable[Any]:
     if run_results == len(items) and items:
         rows = [_run_row(r) for r in items]
     elif not run_results and all(isinstance(r, _core.ScenarioResult) for r in items):
-        rows = [_scenario_row(r) for r in items]
+        return _core_table(_core.scenario_table(items), items if keep_results else None)
     else:
         kinds = {type(r).__name__ for r in items}
         raise TypeError(

@@ -237,3 +237,18 @@ def test_the_docs_batches_example_runs(capsys, monkeypatch):
     exec(compile(code, "docs/scaling.md: Batches, tables", "exec"), {})
     last = capsys.readouterr().out.splitlines()[-1]
     assert last.startswith("ScenarioResult(name='pusht', seed=0, steps=1000,") and last.endswith(") 25")
+
+
+def test_a_table_of_runs_with_different_columns_leaves_a_gap_as_nan():
+    # A perturbed run has its disturbance's columns; a baseline run (perturb=False) has none: the table of both
+    # has the union, NaN where a run has no such value, and a count of steps stays an integer where every run has it.
+    pushed = simloop.run_scenario(PUSHT, seed=0, steps=200)
+    baseline = simloop.run_scenario(PUSHT, seed=1, steps=200, perturb=False)
+    t = simloop.table([baseline, pushed])
+    assert t["disturbance0_fy"][1] == pushed.disturbances[0]["force"][1] and np.isnan(t["disturbance0_fy"][0])
+    assert t["disturbance0_start_step"].dtype == np.float64 and np.isnan(t["disturbance0_start_step"][0])
+    assert t.column_names.index("tblock_final_pos_x") < t.column_names.index("disturbance0_fx")
+    assert t["tblock_final_pos_x"].tolist() == [r.trajectory[-1, r.bodies["tblock"]] for r in (baseline, pushed)]
+    alone = simloop.table([pushed, pushed])
+    assert alone["disturbance0_start_step"].dtype == np.int64 and alone["steps"].tolist() == [200, 200]
+    assert not t["diverged"].any() and t["warning_simloop_DIVERGED"].tolist() == [0, 0]
