@@ -77,7 +77,8 @@ struct Episodes::Impl {
   [[nodiscard]] bool terminated(const Episode& e) const noexcept { return e.core.health().broken(); }
 };
 
-Episodes::Episodes(const Model& scene, const Scenario& scenario, const ScenarioConfig& config, std::size_t count)
+Episodes::Episodes(const Model& scene, const Scenario& scenario, const ScenarioConfig& config, std::size_t count,
+                   bool read_state)
     : impl_(std::make_unique<Impl>(Impl{scene.for_run(run_timestep(scene, scenario, config), false),
                                         detail::configured_scenario(scenario, config),
                                         config,
@@ -95,7 +96,7 @@ Episodes::Episodes(const Model& scene, const Scenario& scenario, const ScenarioC
   s.length = schedule.steps;
   s.episodes.reserve(count);
   for (std::size_t i = 0; i < count; ++i) {
-    s.episodes.emplace_back(s.model, s.recorder->reads_acceleration_stage());
+    s.episodes.emplace_back(s.model, read_state || s.recorder->reads_acceleration_stage());
     if (i == 0) check_episodes_memory(count, detail::compat::data_bytes(s.episodes.front().data.get()));
   }
 }
@@ -151,6 +152,16 @@ const Model& Episodes::model(std::size_t i) const {
 const mjData* Episodes::data(std::size_t i) const {
   check_index(i, impl_->episodes.size());
   return impl_->episodes[i].data.get();
+}
+
+FieldView Episodes::data_field(std::size_t i, std::string_view name) {
+  check_index(i, impl_->episodes.size());
+  Episode& e = impl_->episodes[i];
+  FieldView field = simloop::data_field(e.model.get(), e.data.get(), name);
+  if (filled_on_request(name)) {
+    detail::mujoco_call([&] { fill_derived(e.model.get(), e.data.get(), name); });
+  }
+  return field;
 }
 
 void Episodes::step(const double* actions, std::size_t action_count, std::int64_t every, const std::uint8_t* active,

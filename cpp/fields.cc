@@ -8,7 +8,6 @@
 #include <type_traits>
 
 #include "mujoco_compat.hpp"
-#include "mujoco_guard.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/object_names.hpp"
 
@@ -111,8 +110,16 @@ bool filled_after_constraint(std::string_view name) noexcept {
   return name == "cacc" || name == "cfrc_int" || name == "cfrc_ext";
 }
 
-void fill_after_constraint(const mjModel* m, mjData* d) {
-  detail::mujoco_call([&] { mj_rnePostConstraint(m, d); });
+bool filled_on_request(std::string_view name) noexcept {
+  return filled_after_constraint(name) || name == "subtree_linvel" || name == "subtree_angmom";
+}
+
+void fill_derived(const mjModel* m, mjData* d, std::string_view name) noexcept {
+  if (filled_after_constraint(name)) {
+    mj_rnePostConstraint(m, d);
+  } else if (filled_on_request(name)) {
+    mj_subtreeVel(m, d);
+  }
 }
 
 std::vector<std::string> writable_model_field_names() {

@@ -150,8 +150,10 @@ Recorder::Recorder(const mjModel* m, const ResolvedScenario& scenario, const Sch
     add(Source::kData, static_cast<int>(data_.size()), v.count,
         numbered(object_name(m, v.type, v.id) + "_", v.array.c_str(), v.count), {""});
     data_.emplace_back(data_numbers(v.array), v.first);
-    fill_after_constraint_ = fill_after_constraint_ || filled_after_constraint(v.array);
-    fill_subtree_velocity_ = fill_subtree_velocity_ || v.array == "subtree_linvel" || v.array == "subtree_angmom";
+    const bool same_fill = std::any_of(fills_.begin(), fills_.end(), [&](const std::string& f) {
+      return filled_after_constraint(f) == filled_after_constraint(v.array);
+    });
+    if (filled_on_request(v.array) && !same_fill) fills_.push_back(v.array);
     reads_acceleration_stage_ = reads_acceleration_stage_ || !derived_before_acceleration(v.array);
   }
   if (scenario.contacts) add(Source::kContacts, 0, 1, {"contacts"}, {""}, true);
@@ -207,8 +209,7 @@ void Recorder::before_step(double* row, std::int64_t step, const mjModel* m, con
 
 void Recorder::after_step(double* row, const mjModel* m, mjData* d) const noexcept {
   // (Inside MuJoCo's error guard, as every call of the loop's.)
-  if (fill_after_constraint_) mj_rnePostConstraint(m, d);
-  if (fill_subtree_velocity_) mj_subtreeVel(m, d);
+  for (const std::string& array : fills_) fill_derived(m, d, array);
   for (const Source& s : after_) {
     double* out = row + s.column;
     switch (s.kind) {

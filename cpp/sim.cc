@@ -223,7 +223,9 @@ ArrayView Sim::array(std::string_view name) { return array_of(model_.get(), data
 
 FieldView Sim::data_field(std::string_view name) {
   FieldView field = simloop::data_field(model_.get(), data_.get(), name);
-  if (filled_after_constraint(name)) fill_after_constraint(model_.get(), data_.get());
+  if (filled_on_request(name)) {
+    detail::mujoco_call([&] { fill_derived(model_.get(), data_.get(), name); });
+  }
   return field;
 }
 

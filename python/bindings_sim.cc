@@ -68,6 +68,8 @@ py::tuple progress_of(const simloop::Episodes& episodes) {
   return py::make_tuple(steps, times);
 }
 
+}  // namespace
+
 // A numpy view of one of MuJoCo's arrays, of its element type, (rows, cols)
 // or (rows,) when cols is 1, kept alive by `owner` through its base (safe:
 // a Sim's mjData never moves, nor does a model the owner holds); read-only
@@ -116,8 +118,6 @@ py::object model_owner(const simloop::Model& model) {
 py::tuple field_rows(const simloop::FieldView& f) {
   return py::make_tuple(f.rows_count, f.rows_are == mjOBJ_UNKNOWN ? std::string() : simloop::object_kind(f.rows_are));
 }
-
-}  // namespace
 
 void bind_sim(py::module_& m) {
   // Every call holds the Sim's lock (PySim, SimLock): safe from any thread.
@@ -244,13 +244,14 @@ void bind_sim(py::module_& m) {
             return s;
           }));
 
-  py::class_<PyEpisodes>(m, "Episodes", "N episodes of a scenario, stepped a decision at a time (gym.py).")
+  py::class_<PyEpisodes> episodes(m, "Episodes", "N episodes of a scenario, stepped a decision at a time (gym.py).");
+  episodes
       .def(py::init([](const simloop::Model& scene, const simloop::Scenario& scenario,
-                       const simloop::ScenarioConfig& config, std::size_t count) {
-             return naming_failures("Episodes",
-                                    [&] { return std::make_unique<PyEpisodes>(scene, scenario, config, count); });
+                       const simloop::ScenarioConfig& config, std::size_t count, bool read_state) {
+             return naming_failures(
+                 "Episodes", [&] { return std::make_unique<PyEpisodes>(scene, scenario, config, count, read_state); });
            }),
-           "scene"_a, "scenario"_a, "config"_a, "count"_a)
+           "scene"_a, "scenario"_a, "config"_a, "count"_a, "read_state"_a = false)
       // Fixed at construction: read without the lock.
       .def_property_readonly("count", [](PyEpisodes& e) { return e.episodes.count(); })
       .def_property_readonly("nu", [](PyEpisodes& e) { return e.episodes.nu(); })
@@ -331,6 +332,7 @@ void bind_sim(py::module_& m) {
       .def("steps_taken", episodes_locked<std::size_t>(&simloop::Episodes::steps_taken), "i"_a)
       .def("time", episodes_locked<std::size_t>(&simloop::Episodes::time), "i"_a)
       .def("warnings", episodes_locked<std::size_t>(&simloop::Episodes::warnings), "i"_a);
+  bind_episode_state(episodes);
 }
 
 }  // namespace simloop_py

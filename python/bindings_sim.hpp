@@ -13,6 +13,7 @@
 #include "simloop/call_gate.hpp"
 #include "simloop/control.hpp"
 #include "simloop/episode.hpp"
+#include "simloop/fields.hpp"
 #include "simloop/model.hpp"
 #include "simloop/scenario.hpp"
 #include "simloop/sim.hpp"
@@ -67,8 +68,8 @@ struct StepProgress {
 // after each call (copied out: a returned array never changes later).
 struct PyEpisodes : Lockable {
   PyEpisodes(const simloop::Model& scene, const simloop::Scenario& scenario, const simloop::ScenarioConfig& config,
-             std::size_t count)
-      : episodes(scene, scenario, config, count),
+             std::size_t count, bool read_state = false)
+      : episodes(scene, scenario, config, count, read_state),
         observations(static_cast<std::size_t>(episodes.width()) * count, 0.0) {}
   simloop::Episodes episodes;
   std::vector<double> observations;
@@ -77,6 +78,16 @@ struct PyEpisodes : Lockable {
 struct EpisodesLock : CallLock {
   explicit EpisodesLock(PyEpisodes& e) : CallLock(e, "these episodes are") {}
 };
+
+// A numpy view of one of MuJoCo's arrays, kept alive by `owner` (a Sim,
+// Episodes or model_owner); read-only unless `writable` (bindings_sim.cc).
+py::array field_view(const simloop::FieldView& f, const py::object& owner, bool writable);
+// What keeps a model's arrays alive: a holder of the model itself.
+py::object model_owner(const simloop::Model& model);
+// (rows_count, kind of object a row is or '') of a field: what named indexing reads.
+py::tuple field_rows(const simloop::FieldView& f);
+// The episodes' views of their state (bindings_episode_state.cc).
+void bind_episode_state(py::class_<PyEpisodes>& episodes);
 
 }  // namespace simloop_py
 

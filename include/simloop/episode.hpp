@@ -15,9 +15,11 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <string_view>
 #include <vector>
 
 #include "simloop/control.hpp"
+#include "simloop/fields.hpp"
 #include "simloop/model.hpp"
 #include "simloop/recorder.hpp"
 #include "simloop/scenario.hpp"
@@ -32,7 +34,12 @@ class Episodes {
   // run_scenario; its seed and record_every play no part (reset takes the
   // seed; nothing is recorded). Names are resolved here (InvalidArgument
   // listing what the scene has). No episode has started: reset each first.
-  Episodes(const Model& scene, const Scenario& scenario, const ScenarioConfig& config, std::size_t count);
+  // read_state: something reads the episodes' whole state between steps
+  // (a hook's data_field): each observation then takes a whole forward pass
+  // (Stepper::observe), so every array is the observed state's, at the
+  // cost of one forward pass a decision; the observations' bits are the same.
+  Episodes(const Model& scene, const Scenario& scenario, const ScenarioConfig& config, std::size_t count,
+           bool read_state = false);
   ~Episodes();
   Episodes(const Episodes&) = delete;
   Episodes& operator=(const Episodes&) = delete;
@@ -54,6 +61,10 @@ class Episodes {
   // from its positions and velocities is current (what a Renderer draws);
   // the acceleration stage may be the last physics step's.
   [[nodiscard]] const mjData* data(std::size_t i) const;
+  // mjData's array `name` of episode i (fields.hpp's data_field), filled
+  // first if MuJoCo fills it only on request (fill_derived): with
+  // read_state, every array is the state of the episode's last observation.
+  [[nodiscard]] FieldView data_field(std::size_t i, std::string_view name);
 
   // Starts episode i afresh (t = 0, the model's initial state, ctrl 0) with
   // its disturbances drawn from `seed`, then its start (the scenario's

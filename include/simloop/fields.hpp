@@ -51,11 +51,17 @@ using DataNumbers = mjtNum* mjData::*;
 // mj_rnePostConstraint (cacc, cfrc_int, cfrc_ext), which no step calls:
 // read without it, they hold zeros or an older state's values.
 [[nodiscard]] bool filled_after_constraint(std::string_view name) noexcept;
-// mj_rnePostConstraint on `d`: cacc, cfrc_int and cfrc_ext for the state
-// d's derived quantities describe (after a step, the state it started
-// from, as Gymnasium's MujocoEnv reads them). Changes nothing a step reads.
-// Called where those arrays are read or recorded, not every step.
-void fill_after_constraint(const mjModel* m, mjData* d);
+// Whether it is one MuJoCo fills only on request, which no step does:
+// those above, and subtree_linvel, subtree_angmom (mj_subtreeVel).
+[[nodiscard]] bool filled_on_request(std::string_view name) noexcept;
+// Fills mjData's array `name` on `d` if MuJoCo fills it only on request
+// (mj_rnePostConstraint or mj_subtreeVel), for the state d's derived
+// quantities describe (after a step, the state it started from, as
+// Gymnasium's MujocoEnv reads them); else does nothing. Changes nothing a
+// step reads. The one place every read of such an array (a named read, a
+// recorded column, a hook's view) fills it, where it is read, not every
+// step. Calls MuJoCo unguarded: call it inside MuJoCo's error guard.
+void fill_derived(const mjModel* m, mjData* d, std::string_view name) noexcept;
 
 // The model parameters a trainer randomises, which a Sim lets a caller
 // write (in its own copy of the model): masses and inertias, friction,

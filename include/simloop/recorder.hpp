@@ -127,7 +127,7 @@ class Recorder final : public RowRecorder {
   std::vector<Column> columns_;
   std::vector<Source> before_, after_;
   std::vector<std::pair<DataNumbers, long long>> data_;  // kData's id: an mjData array and its first value
-  bool fill_after_constraint_ = false, fill_subtree_velocity_ = false;
+  std::vector<std::string> fills_;  // a recorded array per MuJoCo call that fills it (fill_derived)
   CtrlRange ctrl_range_;
   bool reads_acceleration_stage_ = false;  // an acceleration-stage sensor is recorded
   int energy_column_ = -1;

@@ -149,9 +149,9 @@ class Sim {
   [[nodiscard]] ArrayView array(std::string_view name);
   // Any of mjData's arrays (fields.hpp's data_field), read-only: valid
   // until the next step for the contacts' and constraints' (their rows
-  // change), for as long as the Sim lives for the others. cacc, cfrc_int
-  // and cfrc_ext are filled for this read (fill_after_constraint): take
-  // them again after stepping.
+  // change), for as long as the Sim lives for the others. cacc, cfrc_int,
+  // cfrc_ext, subtree_linvel and subtree_angmom are filled for this read
+  // (fill_derived): take them again after stepping.
   [[nodiscard]] FieldView data_field(std::string_view name);
   // Any of mjModel's arrays, read-only; writable() for those a trainer
   // randomises (model_field_writable): the first such call gives this Sim a

@@ -4,6 +4,7 @@ why an episode ended, and the pictures."""
 
 from __future__ import annotations
 
+import inspect
 from typing import Any, Callable, Dict, List, Mapping, NamedTuple, Optional, Sequence, Tuple, Union
 
 import numpy as np
@@ -11,25 +12,44 @@ from gymnasium import spaces
 
 from . import _core
 from ._checks import ModelLike, _check_int, _check_keys, _check_seed, _describe
+from .physics import Physics
 from .render import EpisodePictures
 from .scenario import RESET_KEYS, ScenarioLike, _scenario_and_scene, reset_toml, scenario_config
 
-Reward = Callable[[np.ndarray, np.ndarray, np.ndarray], Any]
-Terminate = Union[Callable[[np.ndarray], Any], Sequence[Tuple[str, str, float]]]
+# (reward(obs, action, next_obs) or reward(obs, action, next_obs, physics);
+# terminate(next_obs) or terminate(next_obs, physics): see _takes_physics)
+Reward = Callable[..., Any]
+Terminate = Union[Callable[..., Any], Sequence[Tuple[str, str, float]]]
 _COMPARISONS = {"<": np.less, "<=": np.less_equal, ">": np.greater, ">=": np.greater_equal}
 
 
 def batched(function: Callable[..., Any]) -> Callable[..., Any]:
     """Marks a reward or terminate function as taking a batch: arrays with a
     leading axis of episodes (obs and next_obs (n, width), actions (n, nu))
-    and returning n values. The vector env then calls it once a step rather
-    than once per env (the single env calls it with n = 1)."""
+    and returning n values; one that reads the physics gets a tuple of the n
+    envs' Physics last, in the rows' order. The vector env then calls it
+    once a step rather than once per env (the single env calls it with n = 1)."""
     setattr(function, "simloop_batched", True)  # noqa: B010 (mypy: a Callable has no such attribute)
     return function
 
 
 def _is_batched(function: object) -> bool:
     return bool(getattr(function, "simloop_batched", False))
+
+
+def _takes_physics(function: Callable[..., Any], plain: int) -> bool:
+    """Whether a hook asks for the env's physics: it has one required
+    positional parameter more than its plain ones (`plain`: reward's obs,
+    action, next_obs; terminate's next_obs). Looked at once, at
+    construction: a hook that does not ask costs the step nothing, and a
+    plain hook (or one with defaults, or *args) is called as before."""
+    try:
+        parameters = inspect.signature(function).parameters.values()
+    except (TypeError, ValueError):  # (a builtin without a signature: a plain hook)
+        return False
+    kinds = (inspect.Parameter.POSITIONAL_ONLY, inspect.Parameter.POSITIONAL_OR_KEYWORD)
+    required = [p for p in parameters if p.kind in kinds and p.default is inspect.Parameter.empty]
+    return len(required) == plain + 1
 
 
 # Episodes that end this way are terminated, not truncated (episode.hpp).
@@ -82,7 +102,12 @@ class _Setup:
         config = scenario_config(0, rng, timestep, steps, perturb, 1)
         self.scenario = scenario
         self.reward = reward
-        self.episodes = _core.Episodes(scene, scenario._core, config, count)
+        self.reward_reads = reward is not None and _takes_physics(reward, 3)
+        terminate_reads = callable(terminate) and _takes_physics(terminate, 1)
+        reads = self.reward_reads or terminate_reads
+        self.episodes = _core.Episodes(scene, scenario._core, config, count, reads)
+        # Each env's state by name, for the hooks that ask for it (simloop.physics).
+        self.physics = tuple(Physics(self.episodes, i) for i in range(count)) if reads else ()
         # (the env's fps: its decisions per simulated second, as MujocoEnv's)
         self.render_fps = 1.0 / (self.episodes.timestep * self.control_every)
         pictures = EpisodePictures(scene, render.mode, render.width, render.height, render.view)
@@ -92,8 +117,9 @@ class _Setup:
         low, high = self.episodes.ctrl_range
         self.action_space = spaces.Box(low, high, (self.nu,), np.float64)
         self.observation_space = spaces.Box(-_FINITE, _FINITE, (len(self.names),), np.float64)
-        self.terminate: Optional[Callable[[np.ndarray], Any]] = None
+        self.terminate: Optional[Callable[..., Any]] = None
         self.conditions: List[Tuple[int, Any, float]] = []
+        self.terminate_reads = terminate_reads
         if callable(terminate):
             self.terminate = terminate
         elif terminate is not None:
@@ -120,19 +146,28 @@ class _Setup:
             raise ValueError(f"terminate: {column} {op} {value!r}: the value must be finite")
         return self.names.index(column), _COMPARISONS[op], threshold
 
-    def terminations(self, after: np.ndarray) -> np.ndarray:
-        """Which of these next observations end their episode by the terminate hook."""
+    def _physics_of(self, envs: Optional[np.ndarray]) -> Tuple[Physics, ...]:
+        """The physics of the envs whose rows a batch holds (envs: their indices; None: every env)."""
+        return self.physics if envs is None else tuple(self.physics[i] for i in envs)
+
+    def terminations(self, after: np.ndarray, envs: Optional[np.ndarray] = None) -> np.ndarray:
+        """Which of these next observations end their episode by the terminate
+        hook; envs: the indices of the envs they are (None: every env)."""
         hit = np.zeros(len(after), dtype=bool)
         for index, op, value in self.conditions:
             hit |= op(after[:, index], value)
-        if self.terminate is not None:
-            if _is_batched(self.terminate):
-                flags = _batch_of("terminate", self.terminate(after), len(after))
+        terminate = self.terminate
+        if terminate is not None:
+            extra = (self._physics_of(envs),) if self.terminate_reads else ()
+            if _is_batched(terminate):
+                flags = _batch_of("terminate", terminate(after, *extra), len(after))
                 if flags.dtype != np.bool_:  # as a plain hook's: a bool, not a number that might mean one
                     raise TypeError(f"a batched terminate must return bools, got dtype {flags.dtype}")
                 hit |= flags
+            elif extra:
+                hit |= np.array([_flag_from(terminate(o, p)) for o, p in zip(after, extra[0])], dtype=bool)
             else:
-                hit |= np.array([_flag_from(self.terminate(o)) for o in after], dtype=bool)
+                hit |= np.array([_flag_from(terminate(o)) for o in after], dtype=bool)
         return hit
 
     def actions(self, action: object, shape: Tuple[int, ...]) -> np.ndarray:
@@ -150,21 +185,31 @@ class _Setup:
             raise ValueError(f"action must have shape {shape}, got {values.shape}")
         return values
 
-    def rewards(self, before: np.ndarray, actions: np.ndarray, after: np.ndarray) -> np.ndarray:
-        """The rewards of a batch of steps: before, after (n, width), actions (n, nu)."""
-        if self.reward is None:
+    def rewards(
+        self, before: np.ndarray, actions: np.ndarray, after: np.ndarray, envs: Optional[np.ndarray] = None
+    ) -> np.ndarray:
+        """The rewards of a batch of steps: before, after (n, width), actions
+        (n, nu); envs: the indices of the envs they are (None: every env)."""
+        reward = self.reward
+        if reward is None:
             return np.zeros(len(after))
-        if _is_batched(self.reward):  # (a copy: the function may return a view of its arguments)
-            return np.array(_batch_of("reward", self.reward(before, actions, after), len(after)), dtype=np.float64)
-        return np.array([_number_from(self.reward(b, a, o)) for b, a, o in zip(before, actions, after)])
+        extra = (self._physics_of(envs),) if self.reward_reads else ()
+        if _is_batched(reward):  # (a copy: the function may return a view of its arguments)
+            return np.array(_batch_of("reward", reward(before, actions, after, *extra), len(after)), dtype=np.float64)
+        if extra:
+            rows = zip(before, actions, after, extra[0])
+            return np.array([_number_from(reward(b, a, o, p)) for b, a, o, p in rows])
+        return np.array([_number_from(reward(b, a, o)) for b, a, o in zip(before, actions, after)])
 
     def reward_of_one(self, before: np.ndarray, action: np.ndarray, after: np.ndarray) -> float:
         """One step's reward (the single env's): before and after (1, width), action (nu,)."""
-        if self.reward is None:
+        reward = self.reward
+        if reward is None:
             return 0.0
-        if _is_batched(self.reward):
-            return float(_batch_of("reward", self.reward(before, action[None], after), 1)[0])
-        return _number_from(self.reward(before[0], action, after[0]))
+        extra = (self.physics,) if self.reward_reads else ()
+        if _is_batched(reward):
+            return float(_batch_of("reward", reward(before, action[None], after, *extra), 1)[0])
+        return _number_from(reward(before[0], action, after[0], *(p[0] for p in extra)))
 
     def info(self, i: int, ended_by: Optional[str] = None, warned: bool = False) -> Dict[str, Any]:
         """Episode i's info; `warned`: it ended on a warning, which the info names."""

@@ -25,7 +25,10 @@ Episodes, include/simloop/episode.hpp):
   scenario without a [record] table records every body on a free joint and
   every actuator, no joint angles: list the joints a policy needs.
 - reward: a scenario has none, so reward(obs, action, next_obs) -> float is
-  an argument (default: 0.0 every step).
+  an argument (default: 0.0 every step). A hook that takes one more
+  parameter, reward(obs, action, next_obs, physics) or
+  terminate(next_obs, physics), is handed the env's MuJoCo state by name,
+  read-only (simloop.physics: physics.named.data.site_xpos["tip"]).
 - truncated: the episode reached the scenario's length (its last step may
   take fewer than control_every physics steps), or max_episode_steps env
   steps if given. terminated: the simulation diverged (simloop_DIVERGED) or
@@ -115,8 +118,16 @@ class ScenarioEnv(gymnasium.Env):
     "termination") when its next observation meets it: a callable
     terminate(next_obs) -> bool (or a @batched one), or conditions on the
     observed columns, any of which ends it: [("tblock_x", ">", 0.35)] (ops
-    <, <=, >, >=). max_episode_steps: truncate after this many env.step
-    calls (None: the scenario's length only). rng, timestep, steps, perturb,
+    <, <=, >, >=). Either hook may also read the env's MuJoCo state: a
+    reward(obs, action, next_obs, physics) or terminate(next_obs, physics)
+    gets a simloop.physics.Physics (physics.named.data.site_xpos["tip"],
+    read-only, the state next_obs observes; a @batched one gets a tuple of
+    them, one per row). The extra required parameter is the opt-in, seen
+    once at construction: a hook without it is called as before and the
+    step does no more for it; with it, each decision takes a whole forward
+    pass, so every array is current (the observations' bits are the same).
+    max_episode_steps: truncate after this many env.step calls (None: the
+    scenario's length only). rng, timestep, steps, perturb,
     model: as for run_scenario (steps is the episode's length in physics
     steps). render_mode: None, "rgb_array" (render() gives the state as a
     (height, width, 3) uint8 picture) or "depth_array" ((height, width)

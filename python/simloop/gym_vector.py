@@ -239,9 +239,10 @@ class ScenarioVectorEnv(VectorEnv):
             if setup.terminates:
                 hooked = setup.terminations(obs)
         elif active.any():
-            rewards[active] = setup.rewards(before[active], values[active], obs[active])
+            envs = np.flatnonzero(active)
+            rewards[active] = setup.rewards(before[active], values[active], obs[active], envs)
             if setup.terminates:
-                hooked[active] = setup.terminations(obs[active])
+                hooked[active] = setup.terminations(obs[active], envs)
         steps, times = self._end(obs, terminated, truncated, hooked, active, infos, steps, times)
         self._any_ended = bool(self._ended.any())
         # Every env stepped or was reset: each has its step and time (as

@@ -23,13 +23,14 @@ write gives the Sim a model of its own (other Sims and runs keep theirs).
 The rest is read-only (MuJoCo derives it, or changing it would leave the
 model inconsistent). The contacts' and constraints' arrays (efc_*) hold
 this step's rows: take them again after stepping. cacc, cfrc_int and
-cfrc_ext, which no step computes, are filled (mj_rnePostConstraint) each
-time they are taken: take them again after stepping too.
+cfrc_ext (mj_rnePostConstraint), subtree_linvel and subtree_angmom
+(mj_subtreeVel), which no step computes, are filled each time they are
+taken: take them again after stepping too.
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
+from typing import TYPE_CHECKING, Any, Callable, Dict, List, Mapping, Optional, Protocol, Sequence, Tuple, Union
 
 from . import _core
 from ._checks import _describe, _did_you_mean
@@ -146,18 +147,40 @@ def _rows_by_name(model: _core.Model, rows_count: str, kind: str) -> Dict[str, U
     return {}
 
 
+class _Source(Protocol):
+    """What named reads: a Sim (_core.Sim), or an environment's episode (simloop.physics)."""
+
+    @property
+    def model(self) -> _core.Model: ...
+    def field_rows(self, owner: str, name: str) -> Tuple[str, str]: ...
+    def data_field(self, name: str) -> "NDArray[Any]": ...
+    def model_field(self, name: str, writable: bool) -> "NDArray[Any]": ...
+
+
 class _Owner:
     """sim.named.model or sim.named.data: its arrays as attributes."""
 
-    def __init__(self, sim: "_core.Sim", views: Mapping[str, "NDArray[Any]"], owner: str, names: Sequence[str]) -> None:
+    def __init__(
+        self,
+        sim: _Source,
+        views: Mapping[str, "NDArray[Any]"],
+        owner: str,
+        names: Sequence[str],
+        refuse: Optional[Callable[[str], Any]] = None,
+    ) -> None:
         self._sim = sim
         self._views = views
         self._owner = owner
         self._names = names
+        self._refuse = refuse  # a read-only state's (a hook's physics): raises for a write to the array named
         self._rows: Dict[str, Dict[str, Union[int, slice]]] = {}  # resolved once per array
 
     def __dir__(self) -> List[str]:
         return list(self._names)
+
+    def _refusal(self, name: str) -> Optional[Callable[[], Any]]:
+        refuse = self._refuse
+        return None if refuse is None else lambda: refuse(name)
 
     def __getattr__(self, name: str) -> NamedArray:
         if name.startswith("_") or name not in self._names:
@@ -170,18 +193,21 @@ class _Owner:
             self._rows[name] = _rows_by_name(sim.model, rows_count, kind)
         rows = self._rows[name]
         if self._owner == "data":
-            if name in _WRITABLE_DATA:
+            if name in _WRITABLE_DATA and name in self._views:
                 return NamedArray(name, self._views[name], rows, lambda: self._views[name])
-            return NamedArray(name, sim.data_field(name), rows)
-        writable = name in _core.WRITABLE_MODEL_FIELDS
-        return NamedArray(
-            name, sim.model_field(name, False), rows, (lambda: sim.model_field(name, True)) if writable else None
-        )
+            return NamedArray(name, sim.data_field(name), rows, self._refusal(name))
+        if self._refuse is None and name in _core.WRITABLE_MODEL_FIELDS:
+            return NamedArray(name, sim.model_field(name, False), rows, lambda: sim.model_field(name, True))
+        return NamedArray(name, sim.model_field(name, False), rows, self._refusal(name))
 
 
 class Named:
-    """sim.named: .model and .data, MuJoCo's arrays with rows by name."""
+    """sim.named: .model and .data, MuJoCo's arrays with rows by name. views:
+    the writable mjData arrays (a Sim's); refuse: for a read-only state, what
+    a write to an array raises (given its name)."""
 
-    def __init__(self, sim: "_core.Sim", views: Mapping[str, "NDArray[Any]"]) -> None:
-        self.model = _Owner(sim, views, "model", _core.MODEL_FIELD_NAMES)
-        self.data = _Owner(sim, views, "data", _core.DATA_FIELD_NAMES)
+    def __init__(
+        self, sim: _Source, views: Mapping[str, "NDArray[Any]"], refuse: Optional[Callable[[str], Any]] = None
+    ) -> None:
+        self.model = _Owner(sim, views, "model", _core.MODEL_FIELD_NAMES, refuse)
+        self.data = _Owner(sim, views, "data", _core.DATA_FIELD_NAMES, refuse)

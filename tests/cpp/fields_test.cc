@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -84,6 +85,29 @@ TEST(Fields, TheForcesMujocoFillsAfterTheConstraintsAreFilledWhenRead) {
   EXPECT_NEAR(static_cast<const double*>(cfrc_ext.data)[6 + 5], 0.5 * 9.81, 1e-3);
   const simloop::FieldView cacc = sim.data_field("cacc");  // (gravity's, as MuJoCo counts it)
   EXPECT_NEAR(static_cast<const double*>(cacc.data)[6 + 5], 9.81, 1e-3);
+}
+
+TEST(Fields, SubtreeVelocitiesAreFilledWhenRead) {
+  // mj_subtreeVel fills subtree_linvel and subtree_angmom; no step calls it.
+  // A named read gives MuJoCo's values, as a recorded column does
+  // (fill_derived), not the zeros or older values the step leaves.
+  simloop::Sim sim(simloop::pusher_scene());
+  sim.set_ctrl(1.0);
+  sim.step(300);  // the pusher has reached the box and pushes it
+  EXPECT_TRUE(simloop::filled_on_request("subtree_angmom"));
+  EXPECT_FALSE(simloop::filled_on_request("cvel"));
+  const mjModel* m = sim.model().get();
+  mjData* expected = mj_makeData(m);
+  mj_copyData(expected, m, sim.data());
+  mj_subtreeVel(m, expected);
+  for (const char* name : {"subtree_linvel", "subtree_angmom"}) {
+    const simloop::FieldView f = sim.data_field(name);
+    const auto* read = static_cast<const double*>(f.data);
+    const double* want = std::string(name) == "subtree_linvel" ? expected->subtree_linvel : expected->subtree_angmom;
+    for (int i = 0; i < 3 * m->nbody; ++i) EXPECT_EQ(read[i], want[i]) << name << "[" << i << "]";
+  }
+  EXPECT_GT(std::abs(expected->subtree_linvel[3 * 1]), 0.01);  // the box moves: not zeros that agree
+  mj_deleteData(expected);
 }
 
 TEST(Fields, AWritableParameterIsTheSimsOwnAndChangesItsRun) {
