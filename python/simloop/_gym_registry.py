@@ -1,6 +1,7 @@
 """simloop's Gymnasium environments, registered with Gymnasium once it is
 imported: simloop/Chapter-v0, simloop/PushT-v0, simloop/Scenario-v0
-(simloop/gym.py, loaded by gymnasium.make through the entry points).
+(simloop/gym.py, loaded by gymnasium.make through the entry points) and
+Gymnasium's v5 tasks as simloop/<Task>-v5 (simloop/gym_tasks.py).
 Importing gymnasium here would cost every `import simloop` about 0.15 s, and
 nothing happens when it is not installed.
 """
@@ -12,12 +13,28 @@ _GYMNASIUM_IDS = {
     "simloop/PushT-v0": ("simloop.gym:pusht_env", "simloop.gym:pusht_vector_env"),
     "simloop/Scenario-v0": ("simloop.gym:ScenarioEnv", "simloop.gym:ScenarioVectorEnv"),
 }
+# Gymnasium's MuJoCo v5 tasks over its own XML (simloop/gym_tasks.py), each with Gymnasium's max_episode_steps.
+_V5_TASKS = {
+    "HalfCheetah": "half_cheetah",
+    "Hopper": "hopper",
+    "Walker2d": "walker2d",
+    "Swimmer": "swimmer",
+    "InvertedPendulum": "inverted_pendulum",
+}
 
 
 def register_envs(gymnasium) -> None:  # type: ignore[no-untyped-def]
     for env_id, (entry_point, vector_entry_point) in _GYMNASIUM_IDS.items():
         if env_id not in gymnasium.registry:
             gymnasium.register(id=env_id, entry_point=entry_point, vector_entry_point=vector_entry_point)
+    for task, function in _V5_TASKS.items():
+        if f"simloop/{task}-v5" not in gymnasium.registry:
+            gymnasium.register(
+                id=f"simloop/{task}-v5",
+                entry_point=f"simloop.gym_tasks:{function}",
+                vector_entry_point=f"simloop.gym_tasks:{function}_vector",
+                max_episode_steps=1000,
+            )
 
 
 def register_when_gymnasium_loads() -> None:

@@ -19,6 +19,7 @@ from .scenario import RESET_KEYS, ScenarioLike, _scenario_and_scene, reset_toml,
 # (reward(obs, action, next_obs) or reward(obs, action, next_obs, physics);
 # terminate(next_obs) or terminate(next_obs, physics): see _takes_physics)
 Reward = Callable[..., Any]
+Observe = Callable[[np.ndarray], Any]
 Terminate = Union[Callable[..., Any], Sequence[Tuple[str, str, float]]]
 _COMPARISONS = {"<": np.less, "<=": np.less_equal, ">": np.greater, ">=": np.greater_equal}
 
@@ -91,6 +92,7 @@ class _Setup:
         perturb: bool,
         model: ModelLike,
         render: "Rendering",
+        observe: Optional[Observe] = None,
     ) -> None:
         scenario, scene = _scenario_and_scene(scenario, model)
         if reward is not None and not callable(reward):
@@ -116,7 +118,9 @@ class _Setup:
         self.names: Tuple[str, ...] = self.episodes.column_names[2:]
         low, high = self.episodes.ctrl_range
         self.action_space = spaces.Box(low, high, (self.nu,), np.float64)
-        self.observation_space = spaces.Box(-_FINITE, _FINITE, (len(self.names),), np.float64)
+        self.observe = observe
+        self.observation_names = self.names if observe is None else self._observe_names(observe)
+        self.observation_space = spaces.Box(-_FINITE, _FINITE, (len(self.observation_names),), np.float64)
         self.terminate: Optional[Callable[..., Any]] = None
         self.conditions: List[Tuple[int, Any, float]] = []
         self.terminate_reads = terminate_reads
@@ -125,6 +129,29 @@ class _Setup:
         elif terminate is not None:
             self.conditions = [self._condition(c) for c in _sequence_of("terminate", terminate)]
         self.terminates = self.terminate is not None or bool(self.conditions)  # (a hook or a condition)
+
+    def _observe_names(self, observe: Observe) -> Tuple[str, ...]:
+        """The names of what observe makes of a row, learnt by calling it once on a row of zeros: its `names`
+        attribute if it has one, else observation0, observation1, ..."""
+        if not callable(observe):
+            raise TypeError(
+                f"observe must be None or a callable observe(rows) -> observations, got {_describe(observe)}"
+            )
+        width = self.observed(np.zeros((1, len(self.names)))).shape[1]
+        names = tuple(getattr(observe, "names", None) or (f"observation{i}" for i in range(width)))
+        if len(names) != width:
+            raise ValueError(f"observe makes {width} values of a row but names {len(names)}")
+        return names
+
+    def observed(self, rows: np.ndarray) -> np.ndarray:
+        """What the env hands out for these recorded rows (n, width), a new array: the rows themselves, or
+        observe's (n, m) observations of them (one call for the batch)."""
+        if self.observe is None:
+            return rows.copy()
+        out = np.array(self.observe(rows), dtype=np.float64)  # (a copy: observe may return a view of the rows)
+        if out.ndim != 2 or out.shape[0] != len(rows):
+            raise ValueError(f"observe must return ({len(rows)}, m) values for {len(rows)} rows, got shape {out.shape}")
+        return out
 
     def _condition(self, condition: object) -> Tuple[int, Any, float]:
         """(column, op, value): the episode ends when the observation's column compares so."""

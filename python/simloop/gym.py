@@ -79,6 +79,7 @@ from . import _gym_registry
 from ._checks import ModelLike
 from ._gym_setup import (
     _TERMINAL_ENDS,
+    Observe,
     Rendering,
     Reward,
     Terminate,
@@ -135,7 +136,12 @@ class ScenarioEnv(gymnasium.Env):
     (height, width, 3) uint8 picture) or "depth_array" ((height, width)
     float32 metres), drawn offscreen by simloop.Renderer from `view` (a dict:
     camera, track, distance, azimuth, elevation; None: the scene's default
-    free camera); width and height in pixels.
+    free camera); width and height in pixels. observe: None (the
+    observation is the recorded row) or observe(rows) -> (n, m) array, called
+    once for a batch of rows (n, width): the observation made of the rows
+    (Gymnasium's tasks leave out x, clip velocities); reward and terminate
+    still see the rows. Its `names` attribute, if any, gives
+    observation_names.
     """
 
     metadata = {"render_modes": list(RENDER_MODES)}
@@ -147,6 +153,7 @@ class ScenarioEnv(gymnasium.Env):
         control_every: int = 1,
         reward: Optional[Reward] = None,
         terminate: Optional[Terminate] = None,
+        observe: Optional[Observe] = None,
         max_episode_steps: Optional[int] = None,
         rng: str = "mt19937_64",
         timestep: Optional[float] = None,
@@ -170,12 +177,13 @@ class ScenarioEnv(gymnasium.Env):
             perturb,
             model,
             Rendering(render_mode, width, height, view),
+            observe,
         )
         self.render_mode = render_mode
         self.metadata = {**type(self).metadata, "render_fps": self._setup.render_fps}
         self.action_space = self._setup.action_space
         self.observation_space = self._setup.observation_space
-        self.observation_names = self._setup.names
+        self.observation_names = self._setup.observation_names
         self.control_every = self._setup.control_every
         self.max_episode_steps = _check_max_episode_steps(max_episode_steps)
         self._action_shape = (self._setup.nu,)
@@ -198,7 +206,7 @@ class ScenarioEnv(gymnasium.Env):
         self._decisions, self._ended = 0, False
         info = self._setup.info(0)
         info["seed"] = np.uint64(episode_seed)
-        return self._obs[0].copy(), info
+        return self._setup.observed(self._obs)[0], info
 
     def step(self, action: object) -> Tuple[np.ndarray, float, bool, bool, Dict[str, Any]]:
         if self._ended:
@@ -220,7 +228,7 @@ class ScenarioEnv(gymnasium.Env):
         ended_by = _ended_by(warned, at_length, self._decisions, self.max_episode_steps, hooked)
         self._ended = ended_by is not None
         terminal = ended_by in _TERMINAL_ENDS
-        return obs[0].copy(), reward, terminal, self._ended and not terminal, setup.info(0, ended_by, warned)
+        return setup.observed(obs)[0], reward, terminal, self._ended and not terminal, setup.info(0, ended_by, warned)
 
     def render(self) -> Optional[np.ndarray]:
         """The episode's current state as a picture (render_mode "rgb_array"

@@ -14,6 +14,7 @@ from gymnasium.vector.utils import batch_space
 from ._checks import ModelLike, _check_int, _check_threads, _describe
 from ._gym_setup import (
     _TERMINAL_ENDS,
+    Observe,
     Rendering,
     Reward,
     Terminate,
@@ -54,7 +55,7 @@ class ScenarioVectorEnv(VectorEnv):
     ScenarioEnv.reset() without a seed does, and starts as the scenario's
     own [reset] says (Gymnasium's autoreset passes no options: randomisation
     every episode needs belongs in the scenario). Other arguments: as for
-    ScenarioEnv.
+    ScenarioEnv (observe is called once a step for the whole batch).
     """
 
     metadata = {"render_modes": list(RENDER_MODES), "autoreset_mode": AutoresetMode.NEXT_STEP}
@@ -67,6 +68,7 @@ class ScenarioVectorEnv(VectorEnv):
         control_every: int = 1,
         reward: Optional[Reward] = None,
         terminate: Optional[Terminate] = None,
+        observe: Optional[Observe] = None,
         max_episode_steps: Optional[int] = None,
         autoreset_mode: Union[AutoresetMode, str] = AutoresetMode.NEXT_STEP,
         threads: Optional[int] = None,
@@ -103,6 +105,7 @@ class ScenarioVectorEnv(VectorEnv):
             perturb,
             model,
             Rendering(render_mode, width, height, view),
+            observe,
         )
         self.render_mode = render_mode
         self.metadata["render_fps"] = self._setup.render_fps
@@ -110,11 +113,11 @@ class ScenarioVectorEnv(VectorEnv):
         self.single_observation_space = self._setup.observation_space
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
-        self.observation_names = self._setup.names
+        self.observation_names = self._setup.observation_names
         self.control_every = self._setup.control_every
         self.max_episode_steps = _check_max_episode_steps(max_episode_steps)
         self._rngs: List[Optional[np.random.Generator]] = [None] * self.num_envs
-        self._obs: Optional[np.ndarray] = None
+        self._obs: Optional[np.ndarray] = None  # the recorded rows (what reward and terminate see)
         self._decisions = np.zeros(self.num_envs, dtype=np.int64)
         self._ended = np.zeros(self.num_envs, dtype=bool)  # ended, not reset yet
         self._any_ended = False  # self._ended.any(), or True (then step() looks)
@@ -167,13 +170,19 @@ class ScenarioVectorEnv(VectorEnv):
                 raise ValueError("options['reset_mask'] resets no env: give at least one True")
             if self._obs is None and not mask.all():
                 raise ValueError("the first reset must reset every env (no reset_mask, or all True)")
-        obs = self._obs if self._obs is not None else np.zeros((self.num_envs, len(self.observation_names)))
+        obs = self._obs if self._obs is not None else np.zeros((self.num_envs, len(self._setup.names)))
         infos: Dict[str, Any] = {}
         for i in np.flatnonzero(mask):
             obs[i] = self._reset_one(int(i), seeds[i], infos, start)
         self._obs = obs
         self._any_ended = bool(self._ended.any())
-        return obs.copy(), infos
+        return self._setup.observed(obs), infos
+
+    @property
+    def observations(self) -> Optional[np.ndarray]:
+        """The envs' current observations (num_envs, n), a copy, as the last
+        reset or step returned them; None before the first reset."""
+        return None if self._obs is None else self._setup.observed(self._obs)
 
     def step(self, actions: object) -> Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, Dict[str, Any]]:
         if self._obs is None:
@@ -204,7 +213,7 @@ class ScenarioVectorEnv(VectorEnv):
             hooked = setup.terminations(obs) if setup.terminates else np.zeros(self.num_envs, dtype=bool)
             steps, times = self._end(obs, terminated, truncated, hooked, self._everyone, infos, steps, times)
         infos.update({"step": steps, "_step": self._everyone.copy(), "time": times, "_time": self._everyone.copy()})
-        return obs.copy(), rewards, terminated, truncated, infos
+        return setup.observed(obs), rewards, terminated, truncated, infos
 
     def _step_ended(self, values: np.ndarray) -> Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, Dict[str, Any]]:
         """step() when some env has ended: Disabled refuses it, NextStep
@@ -248,7 +257,7 @@ class ScenarioVectorEnv(VectorEnv):
         # Every env stepped or was reset: each has its step and time (as
         # _add_info would lay them out, env by env).
         infos.update({"step": steps, "_step": self._everyone.copy(), "time": times, "_time": self._everyone.copy()})
-        return obs.copy(), rewards, terminated, truncated, infos
+        return setup.observed(obs), rewards, terminated, truncated, infos
 
     def _end(
         self,
@@ -283,7 +292,7 @@ class ScenarioVectorEnv(VectorEnv):
             truncated[i] = not terminated[i]
             self._ended[i] = True
             if self.autoreset_mode == AutoresetMode.SAME_STEP:
-                self._add_info(infos, {"final_obs": obs[i].copy(), "final_info": info}, int(i))
+                self._add_info(infos, {"final_obs": setup.observed(obs[i : i + 1])[0], "final_info": info}, int(i))
                 obs[i] = self._reset_one(int(i), None, infos)
             else:
                 self._add_info(infos, info, int(i))

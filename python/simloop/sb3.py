@@ -110,7 +110,7 @@ class SimloopVecEnv(VecEnv):
                     break
             else:
                 groups.append([i])
-        first = self.envs._obs is None
+        first = self.envs.observations is None
         obs = np.empty(0)
         for number, group in enumerate(groups):
             mask = np.zeros(n, dtype=bool)

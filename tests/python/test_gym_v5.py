@@ -1,17 +1,18 @@
-"""Gymnasium's v5 tasks against simloop over the same XML (issue 35, "Gymnasium's v5 tasks"), as far as they go
-today: a ScenarioEnv over Gymnasium's own XML (read from the installed gymnasium package), its joints recorded,
-Gymnasium's frame_skip as control_every, and the task's reward and termination written over the observed columns,
-steps as Gymnasium's HalfCheetah-v5, Hopper-v5 and Walker2d-v5 do, bit for bit. (Registered simloop/*-v5 ids, their
-keyword arguments and Gymnasium's reset noise are not built yet.)"""
+"""Gymnasium's v5 tasks registered as simloop/<Task>-v5 (simloop/gym_tasks.py, issue 35 item 2): each a scenario over
+Gymnasium's own XML (read from the installed gymnasium package) with Gymnasium's keyword arguments, stepping as
+Gymnasium's own env does, bit for bit."""
 
-from pathlib import Path
+import inspect
+import os
 
 import numpy as np
 import pytest
 
 gymnasium = pytest.importorskip("gymnasium", reason="needs gymnasium (the gym extra)")
-simloop_gym = pytest.importorskip("simloop.gym", reason="needs gymnasium (the gym extra)")
+gym_tasks = pytest.importorskip("simloop.gym_tasks", reason="needs gymnasium (the gym extra)")
 import simloop  # noqa: E402
+
+IDS = [f"{task}-v5" for task in gym_tasks.TASKS]
 
 
 def gymnasium_env(env_id: str, **kwargs):
@@ -26,86 +27,130 @@ def gymnasium_env(env_id: str, **kwargs):
     return env
 
 
-class Columns:
-    """qpos and qvel of a task's joints (every joint: one coordinate each) from simloop's observed columns."""
-
-    def __init__(self, names, joints):
-        self.pos = [names.index(j + "_pos") for j in joints]
-        self.vel = [names.index(j + "_vel") for j in joints]
-
-    def gymnasium_obs(self, obs, clip_velocity):  # qpos[1:], then qvel (clipped to +-10 by Hopper's and Walker's)
-        velocity = np.clip(obs[self.vel], -10, 10) if clip_velocity else obs[self.vel]
-        return np.concatenate((obs[self.pos][1:], velocity))
-
-
-def locomotion(healthy):
-    """A task's reward, as v5's _get_rew computes it: (forward + healthy) - ctrl cost, with x_velocity = (x_after -
-    x_before) / dt; healthy(qpos, qvel) -> bool, or None (HalfCheetah: no healthy reward)."""
-
-    def make(columns, dt, ctrl_cost_weight):
-        def reward(obs, action, next_obs):
-            x_velocity = (next_obs[columns.pos[0]] - obs[columns.pos[0]]) / dt
-            forward = 1.0 * x_velocity
-            ctrl_cost = ctrl_cost_weight * np.sum(np.square(action))
-            if healthy is None:
-                return forward - ctrl_cost
-            return (forward + healthy(next_obs[columns.pos], next_obs[columns.vel]) * 1.0) - ctrl_cost
-
-        return reward
-
-    return make
-
-
-def hopper_healthy(qpos, qvel):
-    state = np.concatenate((qpos, qvel))[2:]
-    return (
-        bool(np.all(np.logical_and(-100.0 < state, state < 100.0))) and 0.7 < qpos[1] < np.inf and -0.2 < qpos[2] < 0.2
-    )
-
-
-def walker_healthy(qpos, qvel):
-    return 0.8 < qpos[1] < 2.0 and -1.0 < qpos[2] < 1.0
-
-
-TASKS = {  # env id: (XML, frame_skip, ctrl_cost_weight, healthy, qvel clipped in the observation)
-    "HalfCheetah-v5": ("half_cheetah.xml", 5, 0.1, None, False),
-    "Hopper-v5": ("hopper.xml", 4, 1e-3, hopper_healthy, True),
-    "Walker2d-v5": ("walker2d_v5.xml", 4, 1e-3, walker_healthy, True),
-}
-
-
-@pytest.mark.parametrize("env_id", list(TASKS))
-def test_a_task_steps_as_gymnasiums_bit_for_bit(env_id, tmp_path, monkeypatch):
+@pytest.fixture(autouse=True)
+def _in_tmp(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)  # MuJoCo's default handler writes Gymnasium's load warnings to MUJOCO_LOG.TXT here
-    # Both start at the XML's initial state (reset_noise_scale=0: Gymnasium's noise is 0 * uniform and 0 * normal)
-    # and take the same 1,000 seeded actions (float64, inside the ctrlrange), reset together when an episode ends.
-    # Gymnasium writes ctrl and calls mj_step frame_skip times; simloop takes the same steps, the first begun as the
-    # observation's first half (stepper.hpp), the same bits. The observation, reward and termination are computed
-    # from the same doubles with Gymnasium's arithmetic in Gymnasium's order: equal bit for bit, not within a tolerance.
-    xml, frame_skip, ctrl_cost_weight, healthy, clip_velocity = TASKS[env_id]
-    theirs = gymnasium_env(env_id, reset_noise_scale=0.0)
-    path = Path(gymnasium.__file__).parent / "envs" / "mujoco" / "assets" / xml
-    scenario = simloop.Scenario(path, steps=frame_skip * 1000, record={"joints": "all", "contacts": False})
-    model = theirs.unwrapped.model
-    joints = [model.joint(j).name for j in range(model.njnt)]
-    names = simloop_gym.ScenarioEnv(scenario).observation_names
-    columns = Columns(names, joints)
-    reward = locomotion(healthy)(columns, theirs.unwrapped.dt, ctrl_cost_weight)
-    terminate = None if healthy is None else lambda next_obs: not healthy(next_obs[columns.pos], next_obs[columns.vel])
-    ours = simloop_gym.ScenarioEnv(scenario, control_every=frame_skip, reward=reward, terminate=terminate)
-    actions = np.random.default_rng(35).uniform(-1.0, 1.0, size=(1000, model.nu))
+
+
+def step_both(theirs, ours, steps=1000, noisy=False):
+    """Both envs reset together (with seed k when an episode ends at step k) and take the same `steps` seeded
+    actions (float64, inside the ctrlrange); noisy: Gymnasium's noisy reset state is copied into simloop's env
+    (reset options qpos and qvel). Gymnasium writes ctrl and calls mj_step frame_skip times; simloop takes the same
+    steps, the first begun as the observation's first half (stepper.hpp), the same bits. The observation, reward and
+    termination are computed from the same doubles with Gymnasium's arithmetic in Gymnasium's order, batched:
+    equal bit for bit, not within a tolerance. Returns the episodes started."""
+    nu = theirs.unwrapped.model.nu
+    actions = np.random.default_rng(35).uniform(-1.0, 1.0, size=(steps, nu))
     episodes, ended = 0, True
     for k, action in enumerate(actions):
         if ended:
             their_obs, _ = theirs.reset(seed=k)
-            our_obs, _ = ours.reset(seed=k)
-            assert columns.gymnasium_obs(our_obs, clip_velocity).tolist() == their_obs.tolist()
+            data = theirs.unwrapped.data
+            options = {"qpos": data.qpos.tolist(), "qvel": data.qvel.tolist()} if noisy else None
+            our_obs, _ = ours.reset(seed=k, options=options)
+            assert our_obs.tolist() == their_obs.tolist()
             episodes += 1
         their_obs, their_reward, their_terminated, their_truncated, _ = theirs.step(action)
         our_obs, our_reward, our_terminated, our_truncated, _ = ours.step(action)
-        assert columns.gymnasium_obs(our_obs, clip_velocity).tolist() == their_obs.tolist(), k
+        assert our_obs.tolist() == their_obs.tolist(), k
         assert our_reward == their_reward, k
         assert (our_terminated, our_truncated) == (their_terminated, their_truncated), k
         ended = their_terminated or their_truncated
-    # HalfCheetah runs its one episode to Gymnasium's TimeLimit (simloop: the scenario's length); the others fall.
-    assert episodes == 1 and ended if healthy is None else episodes > 1
+    return episodes
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_a_task_steps_as_gymnasiums_bit_for_bit(env_id):
+    # Both start at the XML's initial state (reset_noise_scale=0: Gymnasium's noise is 0 * its draws).
+    theirs = gymnasium_env(env_id, reset_noise_scale=0.0)
+    ours = gymnasium.make("simloop/" + env_id, reset_noise_scale=0.0)
+    assert ours.observation_space.shape == theirs.observation_space.shape
+    assert ours.spec.max_episode_steps == theirs.spec.max_episode_steps == 1000
+    episodes = step_both(theirs, ours)
+    # HalfCheetah and Swimmer run their one episode to the TimeLimit; the others fall, or tip, and start again.
+    assert episodes == 1 if env_id in ("HalfCheetah-v5", "Swimmer-v5") else episodes > 1
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_from_gymnasiums_noisy_reset_state_a_task_steps_as_gymnasiums(env_id):
+    theirs = gymnasium_env(env_id)  # Gymnasium's own reset noise, its state copied into simloop's env
+    ours = gymnasium.make("simloop/" + env_id, reset_noise_scale=0.0)
+    step_both(theirs, ours, steps=300, noisy=True)
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_the_keyword_arguments_and_defaults_are_gymnasiums(env_id):
+    theirs = gymnasium_env(env_id)
+    signature = inspect.signature(type(theirs.unwrapped).__init__).parameters
+    ours = gym_tasks.TASKS[env_id[: -len("-v5")]].defaults
+    rendering = {"default_camera_config"}  # (simloop's pictures take render_mode, width, height)
+    assert set(ours) == {n for n in signature if n not in ("self", "kwargs")} - rendering
+    for name, value in ours.items():
+        assert value == signature[name].default, name
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_each_id_passes_gymnasiums_env_checker(env_id):
+    import warnings
+
+    from gymnasium.utils.env_checker import check_env
+
+    with warnings.catch_warnings():  # InvertedPendulum's ctrlrange is +-3, in Gymnasium's XML: a remark, not a fault
+        warnings.filterwarnings("ignore", message=".*we recommend using a symmetric and normalized space")
+        check_env(gymnasium.make("simloop/" + env_id, reset_noise_scale=0.0).unwrapped)
+
+
+def test_the_keyword_arguments_change_the_task():
+    # A weight changes the reward; a healthy range that nothing meets ends the first step; frame_skip is the
+    # physics steps per decision; an excluded position is observed when asked for.
+    def first_step(**kwargs):
+        env = gymnasium.make("simloop/Hopper-v5", reset_noise_scale=0.0, **kwargs)
+        env.reset(seed=0)
+        obs, reward, terminated, _, info = env.step(np.full(3, 0.5))
+        return obs, reward, terminated, info
+
+    obs, reward, terminated, info = first_step()
+    assert obs.shape == (11,) and not terminated and info["step"] == 4
+    assert first_step(ctrl_cost_weight=1.0)[1] == pytest.approx(reward - 0.75 + 0.75e-3)
+    assert first_step(healthy_z_range=(5.0, 6.0))[2]
+    assert not first_step(healthy_z_range=(5.0, 6.0), terminate_when_unhealthy=False)[2]
+    assert first_step(frame_skip=2)[3]["step"] == 2
+    assert first_step(exclude_current_positions_from_observation=False)[0].shape == (12,)
+
+
+def test_an_unknown_keyword_argument_is_a_type_error_naming_it():
+    with pytest.raises(TypeError, match=r"^simloop/Hopper-v5 got unexpected keyword arguments 'healthy_zrange' \("):
+        gymnasium.make("simloop/Hopper-v5", healthy_zrange=(0.5, 2.0))
+    with pytest.raises(TypeError, match="'threads'"):  # the vector env's, not the single env's
+        gymnasium.make("simloop/Hopper-v5", threads=2)
+
+
+def test_xml_file_is_resolved_as_gymnasium_resolves_it():
+    path = os.path.join(gym_tasks.assets_folder(), "hopper.xml")
+    env = gymnasium.make("simloop/Hopper-v5", xml_file=path, reset_noise_scale=0.0)
+    assert env.reset(seed=0)[0].shape == (11,)
+    with pytest.raises(OSError, match="nothere.xml"):  # (as Gymnasium: OSError)
+        gymnasium.make("simloop/Hopper-v5", xml_file="nothere.xml")
+
+
+@pytest.mark.parametrize("env_id", ["simloop/HalfCheetah-v5", "simloop/Hopper-v5"])
+def test_make_vec_steps_as_single_envs_on_simlooops_threads(env_id):
+    # gymnasium.make_vec takes the vector entry point (one ScenarioVectorEnv, 2 C++ threads): its batched
+    # observations, rewards and flags are those of single envs reset with seeds 7, 8 and autoreset as it does.
+    envs = gymnasium.make_vec(env_id, num_envs=2, reset_noise_scale=0.0, threads=2)
+    assert isinstance(envs, simloop.gym.ScenarioVectorEnv) and envs.max_episode_steps == 1000
+    singles = [gymnasium.make(env_id, reset_noise_scale=0.0) for _ in range(2)]
+    obs, _ = envs.reset(seed=7)
+    assert obs.tolist() == [env.reset(seed=7 + i)[0].tolist() for i, env in enumerate(singles)]
+    np.testing.assert_array_equal(envs.observations, obs)
+    actions = np.random.default_rng(1).uniform(-1.0, 1.0, size=(200, 2, envs.single_action_space.shape[0]))
+    ended = [False, False]
+    for k in range(200):
+        obs, rewards, terminated, truncated, _ = envs.step(actions[k])
+        for i, env in enumerate(singles):
+            if ended[i]:  # next-step autoreset: the env is reset, its action ignored
+                expected, reward, flags = env.reset()[0], 0.0, (False, False)
+            else:
+                expected, reward, *flags, _ = env.step(actions[k, i])
+            assert (obs[i].tolist(), rewards[i], terminated[i], truncated[i]) == (expected.tolist(), reward, *flags)
+            ended[i] = bool(terminated[i] or truncated[i])

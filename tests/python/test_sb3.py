@@ -19,7 +19,7 @@ from stable_baselines3.common.env_checker import check_env  # noqa: E402
 from stable_baselines3.common.vec_env import DummyVecEnv, VecEnv, VecMonitor  # noqa: E402
 
 # The task the PPO test trains on: switching it is this line.
-TRAIN_ID = "simloop/PushT-v0"
+TRAIN_ID = "simloop/HalfCheetah-v5"
 
 X = ScenarioEnv(PUSHT_SCENARIO).observation_names.index("tblock_x")
 
@@ -192,7 +192,8 @@ def test_make_vec_env_refuses_what_it_cannot_do():
 
 
 def test_ppo_trains_on_it_with_no_code_between():
-    venv = make_vec_env(TRAIN_ID, n_envs=4, seed=0, threads=2)
+    # Episodes of 100 decisions (Gymnasium's are 1,000), so that some end and are logged.
+    venv = make_vec_env(TRAIN_ID, n_envs=4, seed=0, threads=2, max_episode_steps=100, reset_noise_scale=0.0)
     model = PPO(
         "MlpPolicy", venv, n_steps=64, batch_size=64, n_epochs=1, policy_kwargs={"net_arch": [16]}, seed=0, device="cpu"
     )

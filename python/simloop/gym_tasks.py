@@ -1,0 +1,259 @@
+"""Gymnasium's MuJoCo v5 tasks as simloop scenarios (needs the `gym` extra).
+
+    >>> import gymnasium, simloop
+    >>> env = gymnasium.make("simloop/Hopper-v5", reset_noise_scale=0.0)
+    >>> envs = gymnasium.make_vec("simloop/HalfCheetah-v5", num_envs=8)   # simloop's C++ threads
+
+Each task is a ScenarioEnv (or ScenarioVectorEnv) over Gymnasium's own XML,
+read from the installed gymnasium package, with Gymnasium's defaults and
+keyword arguments for that task (frame_skip, reset_noise_scale, reward
+weights, healthy ranges, exclude_current_positions_from_observation, ...;
+xml_file as Gymnasium resolves it) and simloop's own render_mode, width,
+height, rng, and for the vector env threads, autoreset_mode and
+max_episode_steps. Another keyword is a TypeError naming it. The scenario
+records every joint; the observation, reward and termination are made
+from those rows in Gymnasium's arithmetic, in Gymnasium's order, batched:
+the vector env pays no Python per env. Reset noise has Gymnasium's shapes
+and scales, drawn from the episode's seeded generator, not np_random.
+Gymnasium's info keys (x_position, reward_forward, ...) are not given.
+"""
+
+from __future__ import annotations
+
+import os
+from typing import Any, Callable, Dict, List, Mapping, NamedTuple, Optional, Tuple
+
+import gymnasium
+import numpy as np
+
+from . import _core
+from ._gym_setup import batched
+from .gym import ScenarioEnv
+from .gym_vector import ScenarioVectorEnv
+from .scenario import Scenario
+
+__all__ = ["TASKS", "assets_folder", "make_task"]
+
+# simloop's own keyword arguments, beside the task's.
+_ENV_ARGUMENTS = ("render_mode", "width", "height", "rng")
+_VECTOR_ARGUMENTS = ("threads", "autoreset_mode", "max_episode_steps")
+# An episode ends by Gymnasium's TimeLimit (its max_episode_steps), not by the scenario's length.
+_ENDLESS = _core.MAX_STEPS
+
+
+def assets_folder() -> str:
+    """Where the installed gymnasium keeps its MuJoCo tasks' XML."""
+    return os.path.join(os.path.dirname(os.path.abspath(gymnasium.__file__)), "envs", "mujoco", "assets")
+
+
+def _xml_path(xml_file: object) -> str:
+    """xml_file as Gymnasium's MujocoEnv resolves it: a path starting with . or / as given, ~ expanded, else in
+    its assets."""
+    if not isinstance(xml_file, str):
+        raise TypeError(f"xml_file must be a str, got {type(xml_file).__name__}")
+    if xml_file.startswith((".", "/")):
+        return xml_file
+    if xml_file.startswith("~"):
+        return os.path.expanduser(xml_file)
+    return os.path.join(assets_folder(), xml_file)
+
+
+class Layout:
+    """Where qpos and qvel are in a recorded row (every joint recorded), and their names."""
+
+    def __init__(self, names: Tuple[str, ...], model: _core.Model) -> None:
+        qpos: List[int] = []
+        qvel: List[int] = []
+        for j, joint in enumerate(model.names("joint")):
+            info = model.object_info("joint", j)
+            for column, count, into in ((joint + "_pos", info["nq"], qpos), (joint + "_vel", info["nv"], qvel)):
+                into.extend(names.index(column if count == 1 else f"{column}{k}") for k in range(count))
+        self.qpos, self.qvel = np.array(qpos), np.array(qvel)
+        self.names = names
+
+    def observe(self, skip: int, clip: Optional[float] = None) -> Callable[[np.ndarray], np.ndarray]:
+        """Gymnasium's observation of the locomotion tasks: qpos without its first `skip` values, then qvel
+        (clipped to +-clip when given)."""
+        positions, velocities = self.qpos[skip:], self.qvel
+
+        def observe(rows: np.ndarray) -> np.ndarray:
+            v = rows[:, velocities]
+            return np.concatenate((rows[:, positions], v if clip is None else np.clip(v, -clip, clip)), axis=1)
+
+        setattr(observe, "names", tuple(self.names[i] for i in np.concatenate((positions, velocities))))  # noqa: B010
+        return observe
+
+
+def _ctrl_cost(weight: float, actions: np.ndarray) -> Any:
+    return weight * np.sum(np.square(actions), axis=1)
+
+
+def _forward(layout: Layout, p: Mapping[str, Any], dt: float) -> Callable[..., np.ndarray]:
+    """forward_reward_weight * x velocity ((x after - x before) / dt, x = qpos[0])."""
+    x = layout.qpos[0]
+    return lambda before, after: p["forward_reward_weight"] * ((after[:, x] - before[:, x]) / dt)
+
+
+def _planar(p: Mapping[str, Any], layout: Layout, dt: float, excluded: int) -> Tuple[Any, Any, Any]:
+    """HalfCheetah and Swimmer: forward - ctrl cost, never terminated; the first `excluded` qpos left out of the
+    observation (with exclude_current_positions_from_observation)."""
+    forward = _forward(layout, p, dt)
+    skip = excluded if p["exclude_current_positions_from_observation"] else 0
+    reward = batched(lambda before, actions, after: forward(before, after) - _ctrl_cost(p["ctrl_cost_weight"], actions))
+    return layout.observe(skip), reward, None
+
+
+def _hopping(p: Mapping[str, Any], layout: Layout, dt: float, healthy: Callable[..., np.ndarray]) -> Tuple[Any, ...]:
+    """Hopper and Walker2d: (forward + healthy reward) - ctrl cost; qvel clipped to +-10 in the observation."""
+    forward = _forward(layout, p, dt)
+
+    def reward(before: np.ndarray, actions: np.ndarray, after: np.ndarray) -> Any:
+        rewards = forward(before, after) + healthy(after) * p["healthy_reward"]
+        return rewards - _ctrl_cost(p["ctrl_cost_weight"], actions)
+
+    terminate = batched(lambda after: ~healthy(after)) if p["terminate_when_unhealthy"] else None
+    return layout.observe(1 if p["exclude_current_positions_from_observation"] else 0, 10.0), batched(reward), terminate
+
+
+def _between(low_high: Tuple[float, float], values: np.ndarray) -> np.ndarray:
+    low, high = low_high
+    return np.logical_and(low < values, values < high)
+
+
+def _hopper(p: Mapping[str, Any], layout: Layout, dt: float) -> Tuple[Any, ...]:
+    def healthy(rows: np.ndarray) -> Any:  # z, angle = qpos[1:3]; the state past x and z in range
+        state = np.concatenate((rows[:, layout.qpos], rows[:, layout.qvel]), axis=1)[:, 2:]
+        in_range = np.all(_between(p["healthy_state_range"], state), axis=1)
+        z, angle = rows[:, layout.qpos[1]], rows[:, layout.qpos[2]]
+        return in_range & _between(p["healthy_z_range"], z) & _between(p["healthy_angle_range"], angle)
+
+    return _hopping(p, layout, dt, healthy)
+
+
+def _walker(p: Mapping[str, Any], layout: Layout, dt: float) -> Tuple[Any, ...]:
+    def healthy(rows: np.ndarray) -> Any:
+        z, angle = rows[:, layout.qpos[1]], rows[:, layout.qpos[2]]
+        return _between(p["healthy_z_range"], z) & _between(p["healthy_angle_range"], angle)
+
+    return _hopping(p, layout, dt, healthy)
+
+
+def _inverted_pendulum(p: Mapping[str, Any], layout: Layout, dt: float) -> Tuple[Any, ...]:
+    """Reward 1 while upright; terminated when the observation is not finite or the pole's angle past 0.2 rad."""
+    observe = layout.observe(0)
+
+    def fallen(rows: np.ndarray) -> Any:
+        obs = observe(rows)
+        return ~np.isfinite(obs).all(axis=1) | (np.abs(obs[:, 1]) > 0.2)
+
+    reward = batched(lambda before, actions, after: (~fallen(after)).astype(np.float64))
+    return observe, reward, batched(fallen)
+
+
+class Task(NamedTuple):
+    """A Gymnasium v5 task: its keyword arguments with Gymnasium's defaults (xml_file and frame_skip among
+    them), how its reset noise is drawn for qpos and qvel, and what makes its observe, reward and terminate."""
+
+    defaults: Dict[str, Any]
+    noise: Tuple[str, str]  # "uniform" (in +-scale) or "normal" (scale times a standard normal draw)
+    parts: Callable[..., Tuple[Any, ...]]
+
+
+_LOCOMOTION = {"forward_reward_weight": 1.0}
+_EXCLUDE = {"exclude_current_positions_from_observation": True}
+_HEALTHY = {"healthy_reward": 1.0, "terminate_when_unhealthy": True}
+TASKS: Dict[str, Task] = {
+    "HalfCheetah": Task(
+        dict(xml_file="half_cheetah.xml", frame_skip=5, **_LOCOMOTION, ctrl_cost_weight=0.1, reset_noise_scale=0.1)
+        | _EXCLUDE,
+        ("uniform", "normal"),
+        lambda p, layout, dt: _planar(p, layout, dt, 1),
+    ),
+    "Hopper": Task(
+        dict(xml_file="hopper.xml", frame_skip=4, **_LOCOMOTION, ctrl_cost_weight=1e-3, **_HEALTHY)
+        | dict(healthy_state_range=(-100.0, 100.0), healthy_z_range=(0.7, float("inf")))
+        | dict(healthy_angle_range=(-0.2, 0.2), reset_noise_scale=5e-3)
+        | _EXCLUDE,
+        ("uniform", "uniform"),
+        _hopper,
+    ),
+    "Walker2d": Task(
+        dict(xml_file="walker2d_v5.xml", frame_skip=4, **_LOCOMOTION, ctrl_cost_weight=1e-3, **_HEALTHY)
+        | dict(healthy_z_range=(0.8, 2.0), healthy_angle_range=(-1.0, 1.0), reset_noise_scale=5e-3)
+        | _EXCLUDE,
+        ("uniform", "uniform"),
+        _walker,
+    ),
+    "Swimmer": Task(
+        dict(xml_file="swimmer.xml", frame_skip=4, **_LOCOMOTION, ctrl_cost_weight=1e-4, reset_noise_scale=0.1)
+        | _EXCLUDE,
+        ("uniform", "uniform"),
+        lambda p, layout, dt: _planar(p, layout, dt, 2),  # (Swimmer leaves out x and y)
+    ),
+    "InvertedPendulum": Task(
+        dict(xml_file="inverted_pendulum.xml", frame_skip=2, reset_noise_scale=0.01),
+        ("uniform", "uniform"),
+        _inverted_pendulum,
+    ),
+}
+
+
+def _reset(task: Task, scale: float) -> Optional[Dict[str, Any]]:
+    """The scenario's [reset]: noise of the task's shapes at this scale (none at 0)."""
+    if not scale:
+        return None
+    if "normal" in task.noise:
+        raise NotImplementedError("reset noise drawn from a normal distribution is not built yet: reset_noise_scale=0")
+    return {"qpos_noise": scale, "qvel_noise": scale}
+
+
+def make_task(name: str, num_envs: Optional[int] = None, **kwargs: Any) -> Any:
+    """Gymnasium's task `name` ("Hopper", a key of TASKS) as a ScenarioEnv, or a ScenarioVectorEnv of num_envs
+    episodes (max_episode_steps 1000 unless given, as Gymnasium registers it)."""
+    task = TASKS[name]
+    params = dict(task.defaults)
+    arguments: Dict[str, Any] = {}
+    allowed = _ENV_ARGUMENTS + (_VECTOR_ARGUMENTS if num_envs is not None else ())
+    unknown = [k for k in kwargs if k not in params and k not in allowed]
+    if unknown:
+        raise TypeError(
+            f"simloop/{name}-v5 got unexpected keyword arguments {', '.join(map(repr, unknown))} "
+            f"(it takes {', '.join(list(params) + list(allowed))})"
+        )
+    for key, value in kwargs.items():
+        (params if key in params else arguments)[key] = value
+    path = _xml_path(params["xml_file"])
+    model = _core.Model.from_file(path)
+    scenario = Scenario(
+        path,
+        steps=_ENDLESS,
+        record={"joints": "all", "contacts": False},
+        reset=_reset(task, float(params["reset_noise_scale"])),
+    )
+    frame_skip = params["frame_skip"]
+    probe = ScenarioEnv(scenario, model=model)  # (the recorded columns: no episode is started)
+    layout = Layout(probe.observation_names, model)
+    observe, reward, terminate = task.parts(params, layout, model.timestep * frame_skip)
+    common = {"control_every": frame_skip, "observe": observe, "reward": reward, "terminate": terminate, "model": model}
+    if num_envs is None:
+        return ScenarioEnv(scenario, **common, **arguments)
+    arguments.setdefault("max_episode_steps", 1000)
+    return ScenarioVectorEnv(scenario, num_envs, **common, **arguments)
+
+
+def _entry_points(name: str) -> Tuple[Callable[..., ScenarioEnv], Callable[..., ScenarioVectorEnv]]:
+    def single(**kwargs: Any) -> ScenarioEnv:
+        return make_task(name, None, **kwargs)  # type: ignore[no-any-return]
+
+    def vector(num_envs: int = 1, **kwargs: Any) -> ScenarioVectorEnv:
+        return make_task(name, num_envs, **kwargs)  # type: ignore[no-any-return]
+
+    single.__doc__ = vector.__doc__ = f"simloop/{name}-v5: Gymnasium's {name}-v5 over its own XML (make_task)."
+    return single, vector
+
+
+half_cheetah, half_cheetah_vector = _entry_points("HalfCheetah")
+hopper, hopper_vector = _entry_points("Hopper")
+walker2d, walker2d_vector = _entry_points("Walker2d")
+swimmer, swimmer_vector = _entry_points("Swimmer")
+inverted_pendulum, inverted_pendulum_vector = _entry_points("InvertedPendulum")
