@@ -87,7 +87,7 @@ void Recorder::add(Source::Kind kind, int id, int count, const std::vector<std::
   // (kNcon is read before the step: it is the count the step begins with.)
   const bool derived = kind == Source::kBodyPose || kind == Source::kBodyVelocity || kind == Source::kActuatorForce ||
                        kind == Source::kSensor || kind == Source::kTendon || kind == Source::kData ||
-                       kind == Source::kContacts;
+                       kind == Source::kContactForce || kind == Source::kContacts;
   (derived ? after_ : before_).push_back(source);
 }
 
@@ -155,6 +155,12 @@ Recorder::Recorder(const mjModel* m, const ResolvedScenario& scenario, const Sch
     });
     if (filled_on_request(v.array) && !same_fill) fills_.push_back(v.array);
     reads_acceleration_stage_ = reads_acceleration_stage_ || !derived_before_acceleration(v.array);
+  }
+  for (const ResolvedScenario::ContactPair& p : scenario.contact_pairs) {  // (from efc_force: a whole forward pass)
+    add(Source::kContactForce, static_cast<int>(contact_pairs_.size()), 3, numbered(p.name, "_contact_force", 3),
+        {"N"});
+    contact_pairs_.push_back(p);
+    reads_acceleration_stage_ = true;
   }
   if (scenario.contacts) add(Source::kContacts, 0, 1, {"contacts"}, {""}, true);
   if (scenario.ncon) add(Source::kNcon, 0, 1, {"ncon"}, {""}, true);
@@ -242,6 +248,9 @@ void Recorder::after_step(double* row, const mjModel* m, mjData* d) const noexce
         std::copy_n(d->*array + first, s.count, out);
         break;
       }
+      case Source::kContactForce:
+        contact_pairs_[static_cast<std::size_t>(s.id)].force(m, d, out);
+        break;
       case Source::kContacts:
         out[0] = d->ncon;
         break;

@@ -102,7 +102,30 @@ ResolvedScenario::DataValues data_values(const mjModel* m, const std::string& ar
   return v;
 }
 
+// record.contact_forces' side: a geom of that name, else a body's (all its geoms).
+void contact_side(const mjModel* m, const std::string& name, const std::string& context, mjtObj& type, int& id) {
+  type = mj_name2id(m, mjOBJ_GEOM, name.c_str()) >= 0 ? mjOBJ_GEOM : mjOBJ_BODY;
+  id = type == mjOBJ_GEOM ? mj_name2id(m, mjOBJ_GEOM, name.c_str()) : find(m, mjOBJ_BODY, name, context);
+}
+
 }  // namespace
+
+void ResolvedScenario::ContactPair::force(const mjModel* m, const mjData* d, double out[3]) const noexcept {
+  const auto is = [m](mjtObj type, int id, int geom) {
+    return geom >= 0 && geom < m->ngeom && (type == mjOBJ_GEOM ? geom == id : m->geom_bodyid[geom] == id);
+  };
+  std::fill_n(out, 3, 0.0);
+  for (int i = 0; i < d->ncon; ++i) {
+    const mjContact& c = d->contact[i];
+    const double sign = is(type_a, a, c.geom1) && is(type_b, b, c.geom2)   ? 1.0
+                        : is(type_b, b, c.geom1) && is(type_a, a, c.geom2) ? -1.0
+                                                                           : 0.0;
+    if (sign == 0.0) continue;
+    mjtNum f[6];
+    mj_contactForce(m, d, i, f);
+    for (int k = 0; k < 3; ++k) out[k] += sign * (c.frame[k] * f[0] + c.frame[3 + k] * f[1] + c.frame[6 + k] * f[2]);
+  }
+}
 
 ResolvedScenario resolve(const Scenario& scenario, const mjModel* m) {
   ResolvedScenario r;
@@ -150,6 +173,14 @@ ResolvedScenario resolve(const Scenario& scenario, const mjModel* m) {
     const auto& [array, object] = rec.data[i];
     r.data.push_back(data_values(m, array, object, "record.data[" + std::to_string(i) + "]"));
   }
+  for (std::size_t i = 0; i < rec.contact_forces.size(); ++i) {
+    const auto& [a, b] = rec.contact_forces[i];
+    ResolvedScenario::ContactPair& p = r.contact_pairs.emplace_back();
+    const std::string context = "record.contact_forces[" + std::to_string(i) + "]";
+    contact_side(m, a, context, p.type_a, p.a);
+    contact_side(m, b, context, p.type_b, p.b);
+    p.name = a + "_" + b;
+  }
   const auto every = [m](std::vector<int>& out, int first, int count, bool keep(const mjModel*, int)) {
     for (int i = first; i < count; ++i) {
       if (keep(m, i) && std::find(out.begin(), out.end(), i) == out.end()) out.push_back(i);
@@ -163,8 +194,8 @@ ResolvedScenario resolve(const Scenario& scenario, const mjModel* m) {
   if (rec.all_tendons) every(r.tendons, 0, detail::compat::as_int(m->ntendon), any);
   // Defaults when nothing is named: every body on a free joint, every actuator.
   if (rec.bodies.empty() && rec.joints.empty() && rec.actuators.empty() && rec.sensors.empty() && rec.tendons.empty() &&
-      rec.data.empty() && !rec.all_bodies && !rec.all_joints && !rec.all_actuators && !rec.all_sensors &&
-      !rec.all_tendons) {
+      rec.data.empty() && rec.contact_forces.empty() && !rec.all_bodies && !rec.all_joints && !rec.all_actuators &&
+      !rec.all_sensors && !rec.all_tendons) {
     for (int b = 1; b < m->nbody; ++b) {
       if (m->body_jntnum[b] >= 1 && m->jnt_type[m->body_jntadr[b]] == mjJNT_FREE) r.bodies.push_back(b);
     }

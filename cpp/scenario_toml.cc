@@ -181,7 +181,7 @@ Scenario Scenario::from_toml_string(std::string_view text, std::string_view sour
     const auto* table = node->as_table();
     if (table == nullptr) top.fail("record", "expected a [record] table");
     const TableReader r(*table, std::string(source), "record");
-    r.allow_only({"bodies", "joints", "actuators", "sensors", "tendons", "data", "contacts", "ncon"});
+    r.allow_only({"bodies", "joints", "actuators", "sensors", "tendons", "data", "contact_forces", "contacts", "ncon"});
     for (const auto& [key, names, all] : {std::tuple{"bodies", &s.record.bodies, &s.record.all_bodies},
                                           std::tuple{"joints", &s.record.joints, &s.record.all_joints},
                                           std::tuple{"actuators", &s.record.actuators, &s.record.all_actuators},
@@ -192,6 +192,7 @@ Scenario Scenario::from_toml_string(std::string_view text, std::string_view sour
       if (!*all) *names = r.strings(key, "or \"all\"");
     }
     s.record.data = r.name_pairs("data", "[array, object] pairs (\"cfrc_ext\", \"torso\")");
+    s.record.contact_forces = r.name_pairs("contact_forces", "[body or geom, body or geom] pairs");
     s.record.contacts = r.boolean("contacts").value_or(true);
     s.record.ncon = r.boolean("ncon").value_or(false);
   }

@@ -113,6 +113,7 @@ class Recorder final : public RowRecorder {
       kSensor,
       kTendon,
       kData,
+      kContactForce,
       kContacts,
       kNcon
     } kind;
@@ -126,7 +127,8 @@ class Recorder final : public RowRecorder {
            const std::string& body = "");
   std::vector<Column> columns_;
   std::vector<Source> before_, after_;
-  std::vector<std::pair<DataNumbers, long long>> data_;  // kData's id: an mjData array and its first value
+  std::vector<std::pair<DataNumbers, long long>> data_;       // kData's id: an mjData array and its first value
+  std::vector<ResolvedScenario::ContactPair> contact_pairs_;  // kContactForce's id: its pair
   std::vector<std::string> fills_;  // a recorded array per MuJoCo call that fills it (fill_derived)
   CtrlRange ctrl_range_;
   bool reads_acceleration_stage_ = false;  // an acceleration-stage sensor is recorded

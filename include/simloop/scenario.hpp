@@ -93,6 +93,9 @@ struct RecordSpec {
   // the row's state: [array, object] ("cfrc_ext", "torso"; "site_xpos",
   // "tip"; "sensordata", a sensor; "qfrc_actuator", a joint).
   std::vector<std::pair<std::string, std::string>> data;
+  // Contact forces between two bodies or geoms, by name: [a, b], the force
+  // b gets from a, summed over their contacts (mj_contactForce), world frame.
+  std::vector<std::pair<std::string, std::string>> contact_forces;
   bool contacts = true;  // `contacts`: the contacts of each row's state
   bool ncon = false;     // `ncon`: the contacts when its step began (the chapter's)
   // "all" in a scenario file instead of a list: every one the scene has, by
@@ -180,6 +183,17 @@ struct ResolvedScenario {
     int count = 0;
   };
   std::vector<DataValues> data;
+  // A RecordSpec::contact_forces pair: each side a geom, or a body (its geoms).
+  struct ContactPair {
+    mjtObj type_a = mjOBJ_GEOM, type_b = mjOBJ_GEOM;
+    int a = -1, b = -1;
+    std::string name;  // its columns' stem: "<a>_<b>"
+    // The force b gets from a over d's contacts between them, world frame
+    // (N): each contact's force acts on its geom2 (mj_contactForce, in the
+    // contact's frame). Calls MuJoCo unguarded: inside MuJoCo's error guard.
+    void force(const mjModel* m, const mjData* d, double out[3]) const noexcept;
+  };
+  std::vector<ContactPair> contact_pairs;
   bool contacts = true, ncon = false;
   // What the start draws against: the scene's qpos0 and its nv, and where
   // each joint's coordinates are (noise by joint name).

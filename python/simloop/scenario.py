@@ -198,7 +198,9 @@ class Scenario:
     start_fraction, duration, steps). record: a dict with bodies, joints,
     actuators, sensors, tendons (lists of names, or "all"), data ([array,
     object] pairs: any of mjData's arrays of numbers by object, as
-    [("cfrc_ext", "torso"), ("site_xpos", "tip")]), contacts (bool:
+    [("cfrc_ext", "torso"), ("site_xpos", "tip")]), contact_forces ([a, b]
+    pairs of bodies or geoms: the force b gets from a, world frame, as
+    [("pusher", "box")]), contacts (bool:
     the contacts of each row's state, default True) and ncon (bool: the
     chapter's count, as each step began) (None: every body on a free joint
     and every actuator). reset: how

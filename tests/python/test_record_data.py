@@ -122,3 +122,43 @@ def test_a_batched_reward_over_a_sites_position_is_the_plain_ones_on_any_threads
         returns[label] = total.tolist()
     assert returns["plain"] == returns["batched"] == returns["batched2"]
     assert any(r != 0.0 for r in returns["plain"])
+
+
+def test_contact_forces_between_two_named_bodies_or_geoms():
+    # [record] contact_forces: [a, b], the force b gets from a, summed over their contacts, world frame. Row k against
+    # a Sim that has taken k + 1 steps: its contacts' forces (each acting on geom2, its frame's rows normal then
+    # tangents) summed for the pair; and the box's cfrc_ext force is the pusher's on it plus the floor's.
+    steps = 300
+    pairs = [("pusher", "box"), ("floor", "box_geom")]  # bodies or geoms by name (the floor is a geom of the world)
+    scenario = simloop.Scenario(
+        steps=steps, controls={"push_motor": 1.0}, record={"data": [("cfrc_ext", "box")], "contact_forces": pairs}
+    )
+    result = simloop.run_scenario(scenario, seed=0)
+    assert [c for c in result.columns if "contact_force" in c] == [
+        f"{a}_{b}_contact_force{i}" for a, b in pairs for i in range(3)
+    ]
+    sim = simloop.Sim()
+    pressed = 0
+    for k in range(steps):
+        sim.step(1, ctrl=1.0)
+        for (a, b), geoms in zip(pairs, ({"pusher_geom", "box_geom"}, {"floor", "box_geom"})):
+            expected = np.zeros(3)
+            for c in sim.contacts:
+                if {c.geom1, c.geom2} == geoms:
+                    on_second = c.geom2 == ("box_geom" if b.startswith("box") else b)
+                    expected += (1.0 if on_second else -1.0) * (c.frame.T @ c.force[:3])
+            got = [result.column(f"{a}_{b}_contact_force{i}")[k] for i in range(3)]
+            np.testing.assert_allclose(got, expected, rtol=1e-12, atol=1e-12)
+        total = sum(np.array([result.column(f"{a}_{b}_contact_force{i}")[k] for i in range(3)]) for a, b in pairs)
+        np.testing.assert_allclose([result.column(f"box_cfrc_ext{i}")[k] for i in (3, 4, 5)], total, atol=1e-9)
+        pressed += result.column("pusher_box_contact_force0")[k] > 1.0  # the pusher pushes the box along +x
+    assert pressed > 50
+
+
+def test_contact_forces_in_a_scenario_file_and_a_wrong_name(tmp_path):
+    path = tmp_path / "pressed.toml"
+    path.write_text('steps = 5\n[record]\ncontact_forces = [["pusher", "box"]]\n')
+    result = simloop.run_scenario(simloop.Scenario.from_file(path), seed=0)
+    assert "pusher_box_contact_force2" in result.columns
+    with pytest.raises(ValueError, match=r"record.contact_forces\[0\]: no body named 'boxx' \(did you mean 'box'\?\)"):
+        simloop.run_scenario(simloop.Scenario(steps=5, record={"contact_forces": [("pusher", "boxx")]}), seed=0)
