@@ -133,9 +133,26 @@ Schedule build_schedule(const ResolvedScenario& scenario, const Scenario& spec, 
       if (w != 0.0) out[i] += drawn;  // drawn even so: a width changes no other coordinate's draw
     }
   };
-  start_at(s.start.qpos, reset.qpos, scenario.qpos0, reset.qpos_noise, true);
-  start_at(s.start.qvel, reset.qvel, std::vector<double>(static_cast<std::size_t>(scenario.nv), 0.0), reset.qvel_noise,
-           false);
+  std::vector<double> qpos0 = scenario.qpos0, qvel0(static_cast<std::size_t>(scenario.nv), 0.0);
+  if (!reset.keyframe.empty()) {  // noise about the keyframe's pose (names checked: check_reset)
+    const auto k = std::find(scenario.keyframes.begin(), scenario.keyframes.end(), reset.keyframe);
+    s.start.keyframe = static_cast<int>(k - scenario.keyframes.begin());
+    const auto key = static_cast<std::size_t>(s.start.keyframe);
+    std::copy_n(scenario.key_qpos.begin() + static_cast<std::ptrdiff_t>(key * qpos0.size()), qpos0.size(),
+                qpos0.begin());
+    std::copy_n(scenario.key_qvel.begin() + static_cast<std::ptrdiff_t>(key * qvel0.size()), qvel0.size(),
+                qvel0.begin());
+  }
+  start_at(s.start.qpos, reset.qpos, std::move(qpos0), reset.qpos_noise, true);
+  start_at(s.start.qvel, reset.qvel, std::move(qvel0), reset.qvel_noise, false);
+  for (const ResetSpec::Goal& g : reset.goals) {
+    Schedule::Start::MocapPos goal;
+    for (const auto& [name, mocap] : scenario.mocap_bodies) {
+      if (name == g.body) goal.mocap = mocap;
+    }
+    for (std::size_t i = 0; i < 3; ++i) goal.pos[i] = draws.uniform(g.low[i], g.high[i]);  // [x, x]: exactly x
+    s.start.goals.push_back(goal);
+  }
   return s;
 }
 

@@ -2,10 +2,13 @@
 // scenario's own (reset_over).
 #include <toml++/toml.h>
 
+#include <algorithm>
 #include <cmath>
+#include <optional>
 #include <string>
 #include <tuple>
 #include <utility>
+#include <vector>
 
 #include "simloop/errors.hpp"
 #include "simloop/number_format.hpp"
@@ -59,51 +62,89 @@ ResetSpec::Noise read_noise(const TableReader& t, const toml::table& table, cons
   return noise;
 }
 
+// [[reset.goal]]: a mocap body's position, fixed (pos) or drawn (uniform = [low, high], corners of a box).
+ResetSpec::Goal read_goal(const TableReader& g) {
+  g.allow_only({"body", "pos", "uniform"});
+  ResetSpec::Goal goal;
+  const std::optional<std::string> body = g.string("body");
+  if (!body) g.fail("body", "missing: name the mocap body to place");
+  goal.body = *body;
+  const auto pos = g.numbers("pos", 3);
+  if (pos.has_value() == g.has("uniform")) {
+    g.fail("", "give pos = [x, y, z] (fixed) or uniform = [[x, y, z], [x, y, z]] (drawn per run: low, high)");
+  }
+  if (pos) {
+    std::copy(pos->begin(), pos->end(), goal.low.begin());
+    goal.high = goal.low;
+    return goal;
+  }
+  const std::vector<double> corners = g.rows_of_numbers("uniform", 2, 3);
+  std::copy_n(corners.begin(), 3, goal.low.begin());
+  std::copy_n(corners.begin() + 3, 3, goal.high.begin());
+  for (std::size_t i = 0; i < 3; ++i) {
+    if (!(goal.low[i] <= goal.high[i]) || !std::isfinite(goal.high[i] - goal.low[i])) {
+      g.fail("uniform", "expected [low, high] corners with low <= high (each a range a double holds), got " +
+                            python_float_repr(goal.low[i]) + " to " + python_float_repr(goal.high[i]));
+    }
+  }
+  return goal;
+}
+
+// An array of tables ([[reset.param]], param = [] for none), each read by `read`.
+template <class Read>
+void each_table(const TableReader& t, const toml::table& table, std::string_view source, const std::string& key,
+                Read&& read) {
+  const toml::node* node = table.get(key);
+  if (node == nullptr) return;
+  const auto* array = node->as_array();
+  if (array == nullptr || (!array->empty() && !array->is_array_of_tables())) {
+    t.fail(key, "expected [[reset." + key + "]] tables (or " + key + " = [] for none)");
+  }
+  for (std::size_t i = 0; i < array->size(); ++i) {
+    read(TableReader(*array->get(i)->as_table(), std::string(source), "reset." + key + "[" + std::to_string(i) + "]"));
+  }
+}
+
 }  // namespace
 
 // [reset]: how each run starts. Sizes and names are checked against the
 // scene when the scenario is resolved (check_reset).
 ResetSpec read_reset(const TableReader& t, const toml::table& table, std::string_view source) {
-  t.allow_only(
-      {"qpos", "qvel", "qpos_noise", "qvel_noise", "qpos_noise_distribution", "qvel_noise_distribution", "param"});
+  t.allow_only({"qpos", "qvel", "qpos_noise", "qvel_noise", "qpos_noise_distribution", "qvel_noise_distribution",
+                "keyframe", "goal", "param"});
   ResetSpec r;
   r.qpos = t.number_list("qpos");
   r.qvel = t.number_list("qvel");
   r.qpos_noise = read_noise(t, table, "qpos_noise");
   r.qvel_noise = read_noise(t, table, "qvel_noise");
-  if (const toml::node* node = table.get("param")) {
-    const auto* array = node->as_array();
-    if (array == nullptr || (!array->empty() && !array->is_array_of_tables())) {
-      t.fail("param", "expected [[reset.param]] tables (or param = [] for none)");
+  r.keyframe = t.string("keyframe").value_or("");  // "": the scene's reset pose
+  each_table(t, table, source, "goal", [&](const TableReader& g) { r.goals.push_back(read_goal(g)); });
+  each_table(t, table, source, "param", [&](const TableReader& p) {
+    p.allow_only({"kind", "name", "value", "uniform"});
+    const std::optional<std::string> kind = p.string("kind");
+    if (!kind) p.fail("kind", "missing: friction, mass, damping or gravity");
+    ResetSpec::Param param;
+    try {
+      param.kind = scene_param_kind(*kind);
+    } catch (const InvalidArgument& e) {
+      p.fail("kind", e.what());
     }
-    for (std::size_t i = 0; i < array->size(); ++i) {
-      const TableReader p(*array->get(i)->as_table(), std::string(source), "reset.param[" + std::to_string(i) + "]");
-      p.allow_only({"kind", "name", "value", "uniform"});
-      const std::optional<std::string> kind = p.string("kind");
-      if (!kind) p.fail("kind", "missing: friction, mass, damping or gravity");
-      ResetSpec::Param param;
-      try {
-        param.kind = scene_param_kind(*kind);
-      } catch (const InvalidArgument& e) {
-        p.fail("kind", e.what());
-      }
-      param.name = p.string("name").value_or("");
-      const std::optional<double> value = p.number("value");
-      const std::optional<std::vector<double>> range = p.numbers("uniform", 2);
-      if (value.has_value() == range.has_value())
-        p.fail("", "give value (fixed) or uniform = [low, high] (drawn per run)");
-      if (range && !std::isfinite((*range)[1] - (*range)[0])) {
-        p.fail("uniform", "is too wide: high - low must be a number a double holds");
-      }
-      if (range && (*range)[0] > (*range)[1]) {
-        p.fail("uniform", "expected [low, high] with low <= high, got [" + python_float_repr((*range)[0]) + ", " +
-                              python_float_repr((*range)[1]) + "]");
-      }
-      param.low = value ? *value : (*range)[0];
-      param.high = value ? *value : (*range)[1];
-      r.params.push_back(param);
+    param.name = p.string("name").value_or("");
+    const std::optional<double> value = p.number("value");
+    const std::optional<std::vector<double>> range = p.numbers("uniform", 2);
+    if (value.has_value() == range.has_value())
+      p.fail("", "give value (fixed) or uniform = [low, high] (drawn per run)");
+    if (range && !std::isfinite((*range)[1] - (*range)[0])) {
+      p.fail("uniform", "is too wide: high - low must be a number a double holds");
     }
-  }
+    if (range && (*range)[0] > (*range)[1]) {
+      p.fail("uniform", "expected [low, high] with low <= high, got [" + python_float_repr((*range)[0]) + ", " +
+                            python_float_repr((*range)[1]) + "]");
+    }
+    param.low = value ? *value : (*range)[0];
+    param.high = value ? *value : (*range)[1];
+    r.params.push_back(param);
+  });
   return r;
 }
 
@@ -128,6 +169,8 @@ ResetSpec reset_over(const ResetSpec& own, std::string_view text, std::string_vi
     if (table->contains(std::string(key) + "_distribution")) to->distribution = from->distribution;
   }
   if (table->contains("param")) r.params = given.params;
+  if (table->contains("goal")) r.goals = given.goals;
+  if (table->contains("keyframe")) r.keyframe = given.keyframe;
   return r;
 }
 

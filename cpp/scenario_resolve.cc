@@ -211,6 +211,14 @@ ResolvedScenario resolve(const Scenario& scenario, const mjModel* m) {
     r.joint_coordinates.push_back(
         {joint_names[static_cast<std::size_t>(j)], m->jnt_qposadr[j], size.nq, m->jnt_dofadr[j], size.nv});
   }
+  r.keyframes = object_names(m, mjOBJ_KEY);
+  r.key_qpos.assign(m->key_qpos, m->key_qpos + static_cast<std::ptrdiff_t>(m->nkey) * m->nq);
+  r.key_qvel.assign(m->key_qvel, m->key_qvel + static_cast<std::ptrdiff_t>(m->nkey) * m->nv);
+  const std::vector<std::string> body_names = object_names(m, mjOBJ_BODY);
+  for (int b = 0; b < m->nbody; ++b) {
+    if (m->body_mocapid[b] >= 0)
+      r.mocap_bodies.emplace_back(body_names[static_cast<std::size_t>(b)], m->body_mocapid[b]);
+  }
   check_reset(r, scenario.reset, m);
   return r;
 }
@@ -249,6 +257,28 @@ void check_reset(const ResolvedScenario& scenario, const ResetSpec& reset, const
       if (!std::isfinite(2.0 * w) || w < 0.0) {
         throw InvalidArgument(std::string(key) + " must be finite numbers >= 0, got " + python_float_repr(w));
       }
+    }
+  }
+  if (!reset.keyframe.empty()) {
+    try {
+      (void)object_id(m, mjOBJ_KEY, reset.keyframe);
+    } catch (const InvalidArgument& e) {
+      throw InvalidArgument(std::string("reset.keyframe: ") + e.what());
+    }
+  }
+  for (std::size_t i = 0; i < reset.goals.size(); ++i) {
+    const std::string where = "reset.goal[" + std::to_string(i) + "].body: ";
+    int body = -1;
+    try {
+      body = object_id(m, mjOBJ_BODY, reset.goals[i].body);
+    } catch (const InvalidArgument& e) {
+      throw InvalidArgument(where + e.what());
+    }
+    if (m->body_mocapid[body] < 0) {
+      std::string mocap;
+      for (const auto& [name, id] : scenario.mocap_bodies) mocap += (mocap.empty() ? "" : ", ") + name;
+      throw InvalidArgument(where + "'" + reset.goals[i].body +
+                            "' is not a mocap body; the scene's mocap bodies: " + (mocap.empty() ? "none" : mocap));
     }
   }
   for (std::size_t i = 0; i < reset.params.size(); ++i) {

@@ -53,8 +53,9 @@ void Stepper::reset(const mjModel* m, mjData* d, const StartAt& at) {
       }
       return;
     }
-    if (at.keyframe >= 0) {
-      mj_resetDataKeyframe(m, d, at.keyframe);
+    const int keyframe = at.start && at.start->keyframe >= 0 ? at.start->keyframe : at.keyframe;
+    if (keyframe >= 0) {
+      mj_resetDataKeyframe(m, d, keyframe);
     } else if (!at.d_is_reset) {
       mj_resetData(m, d);
     }
@@ -64,6 +65,10 @@ void Stepper::reset(const mjModel* m, mjData* d, const StartAt& at) {
       mj_normalizeQuat(m, d->qpos);
     }
     if (at.start && !at.start->qvel.empty()) std::copy_n(at.start->qvel.data(), m->nv, d->qvel);
+    if (at.start) {
+      for (const Schedule::Start::MocapPos& g : at.start->goals)
+        std::copy_n(g.pos.data(), 3, d->mocap_pos + 3 * g.mocap);
+    }
     mj_forward(m, d);
   });
 }

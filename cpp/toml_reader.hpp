@@ -113,6 +113,24 @@ class TableReader {
     return out;
   }
 
+  // [[...], [...]]: `rows` arrays of `cols` numbers each, row after row (the key must be there).
+  [[nodiscard]] std::vector<double> rows_of_numbers(std::string_view key, std::size_t rows, std::size_t cols) const {
+    const toml::node* node = table_.get(key);
+    const auto* array = node ? node->as_array() : nullptr;
+    std::vector<double> out;
+    if (array != nullptr && array->size() == rows) {
+      for (const toml::node& row : *array) {
+        const auto* numbers = row.as_array();
+        if (numbers == nullptr || numbers->size() != cols) break;
+        for (const toml::node& item : *numbers) out.push_back(as_number(item, key));
+      }
+    }
+    if (out.size() != rows * cols) {
+      fail(key, "expected " + std::to_string(rows) + " arrays of " + std::to_string(cols) + " numbers");
+    }
+    return out;
+  }
+
   // An array of numbers of any length (empty when the key is absent).
   [[nodiscard]] std::vector<double> number_list(std::string_view key) const {
     const toml::node* node = table_.get(key);

@@ -108,7 +108,8 @@ struct RecordSpec {
 // random is drawn from the run's generator after the disturbances, in this
 // order: each param's value, then the noise on each qpos coordinate (0 to
 // nq - 1, one draw each when any of its widths is not zero), then on each
-// qvel coordinate the same way. Sizes and names are checked when resolved.
+// qvel coordinate the same way, then each goal's x, y, z. Sizes and names
+// are checked when resolved.
 struct ResetSpec {
   std::vector<double> qpos;  // the scene's nq values, or empty: its qpos0
   std::vector<double> qvel;  // nv values, or empty: at rest
@@ -134,6 +135,17 @@ struct ResetSpec {
     double low = 0.0, high = 0.0;
   };
   std::vector<Param> params;
+  // A keyframe of the scene by name: the start (qpos, qvel, act, ctrl,
+  // mocap_pos and mocap_quat, as mj_resetDataKeyframe sets them) that qpos,
+  // qvel, noise and goals then apply over. Empty: the scene's reset pose.
+  std::string keyframe;
+  // A goal: a mocap body's position for this run, each coordinate uniform in
+  // [low, high] (low == high: fixed), drawn after the noise, x then y then z.
+  struct Goal {
+    std::string body;
+    std::array<double, 3> low{}, high{};
+  };
+  std::vector<Goal> goals;
 };
 
 struct Scenario {
@@ -204,6 +216,11 @@ struct ResolvedScenario {
     int qpos_first = 0, qpos_count = 0, dof_first = 0, dof_count = 0;
   };
   std::vector<JointCoordinates> joint_coordinates;
+  // The scene's keyframes by name (a keyframe's qpos and qvel: what noise
+  // draws about), and its mocap bodies by name with their mocap index.
+  std::vector<std::string> keyframes;
+  std::vector<double> key_qpos, key_qvel;
+  std::vector<std::pair<std::string, int>> mocap_bodies;
 };
 
 // Resolves every name in `scenario` against `model`, and checks its reset
@@ -236,6 +253,12 @@ struct Schedule {
   struct Start {
     std::vector<double> qpos, qvel;
     std::vector<SceneParam> params;
+    int keyframe = -1;  // the keyframe reset to first, or -1: the scene's reset pose
+    struct MocapPos {
+      int mocap = -1;  // the mocap index (body_mocapid)
+      std::array<double, 3> pos{};
+    };
+    std::vector<MocapPos> goals;  // written into mocap_pos after the reset
   };
   Start start;
 };
@@ -248,7 +271,7 @@ struct Schedule {
 
 // One episode's reset options over the scenario's own start: `text` is a
 // scenario file's text holding a [reset] table; each key that table names
-// (qpos, qvel, qpos_noise, qvel_noise, their _distribution, param: the whole list, `param = []`
+// (qpos, qvel, qpos_noise, qvel_noise, their _distribution, keyframe, goal and param: the whole lists, `param = []`
 // for none) replaces own's, and the keys it leaves out keep own's. Throws
 // InvalidArgument naming `source` as from_toml_string does.
 [[nodiscard]] ResetSpec reset_over(const ResetSpec& own, std::string_view text, std::string_view source);

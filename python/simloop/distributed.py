@@ -37,6 +37,7 @@ from . import _core, input_files
 from ._checks import MAX_CHUNK_RUNS, _check_int, _check_threads
 from ._chunk_inputs import InputMismatch as InputMismatch  # public here, as VersionMismatch is
 from ._chunk_inputs import SceneParam, _scenario, _scene, _with_params, scenario_source, scene_inputs, scene_source
+from .policy import _check_policy_travels, _decider
 from .tables import BatchTable, _table, param_column
 
 # One run of a batch: its row index in the whole batch, seed, timestep (None:
@@ -125,6 +126,9 @@ def run_chunk(job: Dict[str, Any], runs: Sequence[Run], inputs: Optional[Inputs]
                 for i in members
             ]
             own = _rows_of(inputs, members) or {}
+            decide, every = (None, 1)
+            if job.get("policy") is not None:  # the chunk's own copy, unpickled here
+                decide, every = _decider(job["policy"], job["control_every"], model, scenario, scenario_configs[0])
             out = _core.run_scenario_batch(
                 model,
                 scenario,
@@ -132,6 +136,8 @@ def run_chunk(job: Dict[str, Any], runs: Sequence[Run], inputs: Optional[Inputs]
                 job["threads"],
                 controls=own.get("controls"),
                 initial_state=own.get("initial_state"),
+                decide=decide,
+                control_every=every,
                 keep_rows=False,
             )
         for i, result in zip(members, out):
@@ -356,9 +362,15 @@ def run_scenario_batch_on(
     chunk_size: Optional[int],
     progress: Optional[Callable[[int, int], object]],
     inputs: Optional[Inputs] = None,
+    policy: object = None,
+    control_every: int = 1,
 ) -> BatchTable["_core.ScenarioResult"]:
-    """simloop.run_scenario_batch(..., executor=...); inputs: its controls and initial_state, shapes checked."""
+    """simloop.run_scenario_batch(..., executor=...); inputs: its controls and initial_state, shapes checked;
+    policy: sent with every chunk (checked here to pickle as the executor will pickle it)."""
     job = scenario_job(scenario, rng=rng, steps=steps, perturb=perturb, threads=_threads(threads))
+    if policy is not None:
+        _check_policy_travels(policy, executor, dask=_is_dask_client(executor))
+        job.update(policy=policy, control_every=control_every)
     runs = [(i, s, t, ()) for i, (s, t) in enumerate(itertools.product(seeds, timesteps))]
     return run_table(job, runs, executor, chunk_size=_chunk_size(chunk_size), progress=progress, inputs=inputs)
 

@@ -39,7 +39,10 @@ Episodes, include/simloop/episode.hpp):
   qpos_noise, qvel_noise (a width, a list of one per coordinate, or
   {joint: width}; drawn from the episode's seed after its disturbances, a
   uniform noise's half-width, or with qpos_noise_distribution /
-  qvel_noise_distribution "normal" its standard deviation) and params (scene parameters for
+  qvel_noise_distribution "normal" its standard deviation), keyframe (a
+  keyframe of the scene by name, the start the other keys apply over),
+  goals ([{"body": a mocap body, "pos": [x, y, z] or "uniform": [[low
+  x, y, z], [high x, y, z]]}]: its position, drawn per episode) and params (scene parameters for
   this episode: [{"kind": "friction" | "mass" | "damping" | "gravity",
   "name": ..., "value": v or "uniform": [low, high]}]): over the
   scenario's [reset] table, for this episode: each key given replaces the

@@ -5,7 +5,10 @@ run_scenario_batch's policy=, run(policy=...)).
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any, Callable, Mapping, Tuple
+import concurrent.futures
+import importlib
+import pickle
+from typing import TYPE_CHECKING, Any, Callable, Mapping, Tuple, Union
 
 from . import _core
 from ._checks import _check_int, _describe, _did_you_mean, _show
@@ -86,14 +89,19 @@ def _ctrl(value: object, nu: int, step: int) -> "np.ndarray":
 
 
 def _decider(
-    policy: object, control_every: object, scene: _core.Model, scenario: Scenario, config: "_core.ScenarioConfig"
+    policy: object,
+    control_every: object,
+    scene: _core.Model,
+    scenario: Union[Scenario, _core.Scenario],
+    config: "_core.ScenarioConfig",
 ) -> Tuple[Callable[[int, np.ndarray], np.ndarray], int]:
     """The C++ loop's decide(step, row) around the user's policy(obs), and K."""
     if not callable(policy):
         raise TypeError(f"policy must be None or a callable policy(observation) -> ctrl, got {_describe(policy)}")
     every = _check_int("control_every", control_every)  # its range: the C++ loop's
     # The run's columns (and its names checked) before the first step.
-    names = _core.scenario_columns(scene, scenario._core, config)[2:]
+    core = scenario if isinstance(scenario, _core.Scenario) else scenario._core  # a chunk's on a worker: the core's
+    names = _core.scenario_columns(scene, core, config)[2:]
     index = {name: i for i, name in enumerate(names)}
     nu = scene.nu
 
@@ -118,3 +126,21 @@ def _check_no_control_every(control_every: object) -> None:
             f"control_every={_show(control_every)} needs a policy (policy=f): without one the run "
             "follows the scenario's controls"
         )
+
+
+def _check_policy_travels(policy: object, executor: object, dask: bool) -> None:
+    """A policy pickles as the executor will carry it (Dask: cloudpickle; a thread pool: not at all), or one
+    line naming it."""
+    if not callable(policy):
+        raise TypeError(f"policy must be None or a callable policy(observation) -> ctrl, got {type(policy).__name__}")
+    if isinstance(executor, concurrent.futures.ThreadPoolExecutor):
+        return
+    pickler: Any = importlib.import_module("cloudpickle") if dask else pickle
+    try:
+        pickler.dumps(policy)
+    except Exception as error:
+        why = " ".join(f"{type(error).__name__}: {error}".split())
+        raise TypeError(
+            f"policy {getattr(policy, '__qualname__', type(policy).__name__)!r} cannot go to the executor: it does "
+            f"not pickle ({why}); define it at a module's top level, or run the batch locally"
+        ) from None

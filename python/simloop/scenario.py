@@ -138,6 +138,8 @@ RESET_KEYS = (
     "qvel_noise",
     "qpos_noise_distribution",
     "qvel_noise_distribution",
+    "keyframe",
+    "goals",
     "params",
 )
 
@@ -166,17 +168,21 @@ def reset_toml(reset: Mapping[str, Any]) -> str:
         raise TypeError(f"reset must be a dict, got {_describe(reset)}")
     _check_keys("reset", reset, RESET_KEYS)
     own = {k: _noise_value(k, v) if k in ("qpos_noise", "qvel_noise") else v for k, v in reset.items()}
-    text = _toml_table("[reset]", {k: v for k, v in own.items() if k != "params"})
-    params = reset.get("params") or ()
-    if isinstance(reset.get("params"), (list, tuple)) and not params:
-        text += "param = []\n"  # none: reset options that name params replace the scenario's
-    if isinstance(params, Mapping) or not isinstance(params, Iterable):
-        raise TypeError(f"reset params must be a list of dicts, got {_describe(params)}")
-    for param in params:
-        if not isinstance(param, Mapping):
-            raise TypeError(f"each reset param must be a dict (kind, name, value or uniform), got {_describe(param)}")
-        text += "\n" + _toml_table("[[reset.param]]", param)
+    text = _toml_table("[reset]", {k: v for k, v in own.items() if k not in ("params", "goals")})
+    for key, table in (("params", "param"), ("goals", "goal")):
+        entries = reset.get(key) or ()
+        if isinstance(reset.get(key), (list, tuple)) and not entries:
+            text += f"{table} = []\n"  # none: reset options that name them replace the scenario's
+        if isinstance(entries, Mapping) or not isinstance(entries, Iterable):
+            raise TypeError(f"reset {key} must be a list of dicts, got {_describe(entries)}")
+        for entry in entries:
+            if not isinstance(entry, Mapping):
+                raise TypeError(f"each reset {key[:-1]} must be a dict ({_ENTRY_KEYS[key]}), got {_describe(entry)}")
+            text += "\n" + _toml_table(f"[[reset.{table}]]", entry)
     return text
+
+
+_ENTRY_KEYS = {"params": "kind, name, value or uniform", "goals": "body, pos or uniform"}
 
 
 class Scenario:
@@ -208,7 +214,10 @@ class Scenario:
     qpos_noise, qvel_noise (noise drawn from the run's seed: a width, a list
     of widths, one per coordinate, or {joint: width}; a uniform noise's
     half-width unless qpos_noise_distribution / qvel_noise_distribution is
-    "normal", then its standard deviation) and params (a list of dicts: kind "friction", "mass", "damping" or
+    "normal", then its standard deviation), keyframe (a keyframe of the
+    scene by name: the start the other keys apply over), goals (a list of
+    dicts: body, a mocap body, and pos = [x, y, z] or uniform = [[x, y, z],
+    [x, y, z]], its position drawn per run) and params (a list of dicts: kind "friction", "mass", "damping" or
     "gravity", name, and value or uniform = [low, high]).
     """
 

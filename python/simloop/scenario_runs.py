@@ -138,6 +138,12 @@ def run_scenario(
     )
 
 
+_POLICY_ALONE = (
+    "policy with controls, initial_state or metrics_only is not supported: give the "
+    "policy alone (its runs keep their trajectories and start from the reset pose)"
+)
+
+
 def run_scenario_batch(
     scenario: ScenarioLike,
     seeds: Iterable[int] = (0,),
@@ -188,7 +194,9 @@ def run_scenario_batch(
     for run_batch(): chunks on workers, metrics only, no results back (the
     scenario travels as its TOML text; model must be None; controls and
     initial_state go with the chunks, each chunk its runs' rows of a
-    per-run array; a policy is refused).
+    per-run array; a policy goes with each chunk, pickled (cloudpickle for
+    Dask, pickle for a process pool: one that is not is refused, naming it),
+    its table's bits the local batch's).
 
     policy, control_every: as for run_scenario(); one policy for every run,
     called with the GIL held from whichever worker reaches a decision (the
@@ -205,8 +213,6 @@ def run_scenario_batch(
             raise ValueError("audit_energy is not sent to an executor: its batches keep metrics only")
         if model is not None:
             raise TypeError("model must be None with executor= (the scenario's scene is compiled on each worker)")
-        if policy is not None:
-            raise ValueError("policy is not sent to an executor: run such batches locally")
     scenario, scene = _scenario_and_scene(scenario, model)  # with executor=, compiled here too: see below
     seed_list = [_check_seed("seeds[%d]" % i, s) for i, s in enumerate(_sequence("seeds", seeds))]
     timestep_list = [
@@ -223,6 +229,10 @@ def run_scenario_batch(
         # here, once per timestep, before any work goes out.
         for t in dict.fromkeys(timestep_list):
             _core.check_scenario(scene, scenario._core, _core.ScenarioConfig(0, rng, t, step_count, perturb, every))
+        if policy is None:
+            _check_no_control_every(control_every)
+        elif controls is not None or initial_state is not None:
+            raise ValueError(_POLICY_ALONE)
         own, start = _batch_inputs(controls, initial_state)
         _core.check_batch_inputs(len(seed_list) * len(timestep_list), own, start)  # their values: on the workers
         return run_scenario_batch_on(
@@ -237,6 +247,8 @@ def run_scenario_batch(
             chunk_size=chunk_size,
             progress=_check_progress(progress),
             inputs={"controls": own, "initial_state": start},
+            policy=policy,
+            control_every=control_every,
         )
     configs = [
         _core.ScenarioConfig(s, rng, t, step_count, perturb, every, audit) for s in seed_list for t in timestep_list
@@ -246,10 +258,7 @@ def run_scenario_batch(
 
     if policy is not None:
         if controls is not None or initial_state is not None or metrics_only:
-            raise ValueError(
-                "policy with controls, initial_state or metrics_only is not supported: give the "
-                "policy alone (its runs keep their trajectories and start from the reset pose)"
-            )
+            raise ValueError(_POLICY_ALONE)
         if not configs:
             return _table([], keep_results=True)
         decide, decide_every = _decider(policy, control_every, scene, scenario, configs[0])

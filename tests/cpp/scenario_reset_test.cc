@@ -150,7 +150,7 @@ TEST(ScenarioReset, BadResetsNameTheKey) {
   const auto file_error = [](const std::string& reset) { return error_of([&] { (void)pusht(reset); }); };
   EXPECT_EQ(file_error("qpos_nosie = 1\n"),
             "pusht-reset: reset.qpos_nosie: unknown key (did you mean 'qpos_noise'?); known keys: qpos, qvel, "
-            "qpos_noise, qvel_noise, qpos_noise_distribution, qvel_noise_distribution, param");
+            "qpos_noise, qvel_noise, qpos_noise_distribution, qvel_noise_distribution, keyframe, goal, param");
   EXPECT_EQ(file_error("qvel_noise = -1\n"),
             "pusht-reset: reset.qvel_noise: must not be negative (a uniform noise's half-width or a normal noise's "
             "standard deviation), got -1.0");

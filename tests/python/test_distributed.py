@@ -10,6 +10,7 @@ import math
 import multiprocessing
 import os
 import signal
+import threading
 from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
 
 import numpy as np
@@ -147,8 +148,8 @@ def test_shared_controls_and_states_go_to_an_executor_and_bad_shapes_are_refused
         with pytest.raises(ValueError, match=r"^initial_state must be shaped \(runs, state_size\) or \(state_size,\)"):
             simloop.run_scenario_batch(PUSHT, executor=pool, **dict(kwargs, initial_state=states[None, None]))
         assert started == []
-        with pytest.raises(ValueError, match="^policy is not sent to an executor"):
-            simloop.run_scenario_batch(PUSHT, executor=pool, policy=lambda step, row: [0.0, 0.0])
+        with pytest.raises(ValueError, match="^policy with controls, initial_state or metrics_only is not supported"):
+            simloop.run_scenario_batch(PUSHT, executor=pool, policy=lambda obs: [0.0, 0.0], **kwargs)
 
 
 def test_a_worker_killed_mid_batch_loses_nothing(client):
@@ -249,3 +250,55 @@ def test_what_cannot_travel_is_refused_in_one_line():
         distributed.VersionMismatch, match=r"has simloop .* the client simloop 0.0.1 .*install the same"
     ):
         distributed.run_chunk(job, [(0, 0, None, ())])
+
+
+# A policy goes to an executor with each chunk: the table's bits are the local batch's; one that does not pickle
+# as the executor carries it is refused in one line naming it.
+POLICY_BATCH = dict(seeds=range(5), timesteps=[None, 0.004], steps=120, control_every=10)
+
+
+def towards(goal_x: float):
+    """A closure (Dask carries it by value, with cloudpickle): push the block's x towards goal_x."""
+
+    def policy(obs):
+        return [float(np.clip(4.0 * (goal_x - obs["tblock_x"]), -1.0, 1.0)), 0.2]
+
+    return policy
+
+
+def test_a_policy_goes_to_a_cluster_in_chunks_with_the_local_bits(client):
+    local = simloop.run_scenario_batch(PUSHT, policy=towards(0.35), threads=2, **POLICY_BATCH)
+    table = simloop.run_scenario_batch(PUSHT, policy=towards(0.35), executor=client, chunk_size=3, **POLICY_BATCH)
+    assert table == local and not table.has_results  # chunks of 3, 3, 3 and 1 runs
+    assert np.array_equal(table["tblock_final_pos_x"], [r.column("tblock_x")[-1] for r in local.results])
+    other = simloop.run_scenario_batch(PUSHT, policy=towards(0.1), executor=client, chunk_size=4, **POLICY_BATCH)
+    assert not np.array_equal(other["pusher_final_pos_x"], table["pusher_final_pos_x"])  # the policy decided
+
+
+def test_a_thread_pool_takes_any_policy_and_a_process_pool_a_picklable_one():
+    local = simloop.run_scenario_batch(PUSHT, policy=towards(0.35), **POLICY_BATCH)
+    with ThreadPoolExecutor(2) as pool:  # no pickling: a closure is fine
+        assert (
+            simloop.run_scenario_batch(PUSHT, policy=towards(0.35), executor=pool, chunk_size=4, **POLICY_BATCH)
+            == local
+        )
+    with ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn")) as pool:  # refused before any start
+        with pytest.raises(TypeError) as caught:
+            simloop.run_scenario_batch(PUSHT, policy=towards(0.35), executor=pool, **POLICY_BATCH)
+    message = str(caught.value)
+    assert message.startswith("policy 'towards.<locals>.policy' cannot go to the executor: it does not pickle (")
+    assert "\n" not in message
+
+
+def test_a_policy_dask_cannot_carry_is_refused_naming_it(client):
+    lock = threading.Lock()
+
+    def locked(obs):
+        with lock:
+            return [0.5, 0.0]
+
+    with pytest.raises(TypeError) as caught:
+        simloop.run_scenario_batch(PUSHT, policy=locked, executor=client, **POLICY_BATCH)
+    message = str(caught.value)
+    assert message.startswith("policy 'test_a_policy_dask_cannot_carry_is_refused_naming_it.<locals>.locked' cannot")
+    assert "lock" in message and "\n" not in message
