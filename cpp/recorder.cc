@@ -207,8 +207,8 @@ void Recorder::before_step(double* row, std::int64_t step, const mjModel* m, con
 
 void Recorder::after_step(double* row, const mjModel* m, mjData* d) const noexcept {
   // (Inside MuJoCo's error guard, as every call of the loop's.)
-  if (fill_after_constraint_) mj_rnePostConstraint(m, d);
-  if (fill_subtree_velocity_) mj_subtreeVel(m, d);
+  if (fill_after_constraint_ && !data_at_step_) mj_rnePostConstraint(m, d);
+  if (fill_subtree_velocity_ && !data_at_step_) mj_subtreeVel(m, d);
   for (const Source& s : after_) {
     double* out = row + s.column;
     switch (s.kind) {
@@ -237,6 +237,7 @@ void Recorder::after_step(double* row, const mjModel* m, mjData* d) const noexce
         out[1] = d->ten_velocity[s.id];
         break;
       case Source::kData: {
+        if (data_at_step_) break;  // (read_data's)
         const auto& [array, first] = data_[static_cast<std::size_t>(s.id)];
         std::copy_n(d->*array + first, s.count, out);
         break;
@@ -247,6 +248,15 @@ void Recorder::after_step(double* row, const mjModel* m, mjData* d) const noexce
       default:
         break;
     }
+  }
+}
+
+void Recorder::read_data(double* row, const mjModel* m, mjData* d, bool stepped) const noexcept {
+  if (stepped && fill_after_constraint_) mj_rnePostConstraint(m, d);
+  for (const Source& s : after_) {
+    if (s.kind != Source::kData) continue;
+    const auto& [array, first] = data_[static_cast<std::size_t>(s.id)];
+    std::copy_n(d->*array + first, s.count, row + s.column);
   }
 }
 

@@ -73,6 +73,7 @@ class _Setup:
         model: ModelLike,
         render: "Rendering",
         observe: Optional[Observe] = None,
+        data_at_step: bool = False,
     ) -> None:
         scenario, scene = _scenario_and_scene(scenario, model)
         if reward is not None and not callable(reward):
@@ -85,6 +86,8 @@ class _Setup:
         self.scenario = scenario
         self.reward = reward
         self.episodes = _core.Episodes(scene, scenario._core, config, count)
+        if data_at_step:
+            self.episodes.read_data_at_step(True)
         # (the env's fps: its decisions per simulated second, as MujocoEnv's)
         self.render_fps = 1.0 / (self.episodes.timestep * self.control_every)
         pictures = EpisodePictures(scene, render.mode, render.width, render.height, render.view)
