@@ -119,18 +119,23 @@ Schedule build_schedule(const ResolvedScenario& scenario, const Scenario& spec, 
   for (const ResetSpec::Param& p : reset.params) {
     s.start.params.push_back({p.kind, p.name, draws.uniform(p.low, p.high)});  // [low, low]: exactly low
   }
-  if (!reset.qpos.empty() || reset.qpos_noise > 0.0) {
-    s.start.qpos = reset.qpos.empty() ? scenario.qpos0 : reset.qpos;
-    if (reset.qpos_noise > 0.0) {
-      for (double& q : s.start.qpos) q += draws.uniform(-reset.qpos_noise, reset.qpos_noise);
+  const auto start_at = [&](std::vector<double>& out, const std::vector<double>& given, std::vector<double> base,
+                            const ResetSpec::Noise& noise, bool of_qpos) {
+    const std::vector<double> widths = noise_widths(scenario, noise, of_qpos);
+    const bool noisy = std::any_of(widths.begin(), widths.end(), [](double w) { return w != 0.0; });
+    if (given.empty() && !noisy) return;
+    out = given.empty() ? std::move(base) : given;
+    if (!noisy) return;
+    const bool normal = noise.distribution == ResetSpec::Noise::Distribution::kNormal;
+    for (std::size_t i = 0; i < out.size(); ++i) {
+      const double w = widths[i];
+      const double drawn = normal ? w * standard_normal(draws) : draws.uniform(-w, w);
+      if (w != 0.0) out[i] += drawn;  // drawn even so: a width changes no other coordinate's draw
     }
-  }
-  if (!reset.qvel.empty() || reset.qvel_noise > 0.0) {
-    s.start.qvel = reset.qvel.empty() ? std::vector<double>(static_cast<std::size_t>(scenario.nv), 0.0) : reset.qvel;
-    if (reset.qvel_noise > 0.0) {
-      for (double& v : s.start.qvel) v += draws.uniform(-reset.qvel_noise, reset.qvel_noise);
-    }
-  }
+  };
+  start_at(s.start.qpos, reset.qpos, scenario.qpos0, reset.qpos_noise, true);
+  start_at(s.start.qvel, reset.qvel, std::vector<double>(static_cast<std::size_t>(scenario.nv), 0.0), reset.qvel_noise,
+           false);
   return s;
 }
 

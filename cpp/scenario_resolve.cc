@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -173,6 +174,12 @@ ResolvedScenario resolve(const Scenario& scenario, const mjModel* m) {
   r.ncon = rec.ncon;
   r.qpos0.assign(m->qpos0, m->qpos0 + m->nq);
   r.nv = detail::compat::as_int(m->nv);
+  const std::vector<std::string> joint_names = object_names(m, mjOBJ_JOINT);
+  for (int j = 0; j < m->njnt; ++j) {
+    const JointSize size = joint_size(m->jnt_type[j]);
+    r.joint_coordinates.push_back(
+        {joint_names[static_cast<std::size_t>(j)], m->jnt_qposadr[j], size.nq, m->jnt_dofadr[j], size.nv});
+  }
   check_reset(r, scenario.reset, m);
   return r;
 }
@@ -192,10 +199,25 @@ void check_reset(const ResolvedScenario& scenario, const ResetSpec& reset, const
   };
   check_values("reset.qpos", reset.qpos, scenario.qpos0.size(), "nq");
   check_values("reset.qvel", reset.qvel, static_cast<std::size_t>(scenario.nv), "nv");
-  for (const auto& [key, noise] :
-       {std::pair{"reset.qpos_noise", reset.qpos_noise}, std::pair{"reset.qvel_noise", reset.qvel_noise}}) {
-    if (!std::isfinite(noise) || noise < 0.0) {
-      throw InvalidArgument(std::string(key) + " must be a finite number >= 0, got " + python_float_repr(noise));
+  for (const auto& [key, noise, of_qpos] : {std::tuple{"reset.qpos_noise", &reset.qpos_noise, true},
+                                            std::tuple{"reset.qvel_noise", &reset.qvel_noise, false}}) {
+    const std::size_t size = of_qpos ? scenario.qpos0.size() : static_cast<std::size_t>(scenario.nv);
+    if (!noise->each.empty() && noise->each.size() != size) {
+      throw InvalidArgument(std::string(key) + " must hold the scene's " + (of_qpos ? "nq" : "nv") + " = " +
+                            std::to_string(size) + " widths (one per coordinate), got " +
+                            std::to_string(noise->each.size()));
+    }
+    for (const auto& [joint, width] : noise->joints) {
+      try {
+        (void)object_id(m, mjOBJ_JOINT, joint);
+      } catch (const InvalidArgument& e) {
+        throw InvalidArgument(std::string(key) + ": " + e.what());
+      }
+    }
+    for (const double w : noise_widths(scenario, *noise, of_qpos)) {
+      if (!std::isfinite(2.0 * w) || w < 0.0) {
+        throw InvalidArgument(std::string(key) + " must be finite numbers >= 0, got " + python_float_repr(w));
+      }
     }
   }
   for (std::size_t i = 0; i < reset.params.size(); ++i) {
@@ -212,6 +234,21 @@ void check_reset(const ResolvedScenario& scenario, const ResetSpec& reset, const
       throw InvalidArgument(where + e.what());
     }
   }
+}
+
+std::vector<double> noise_widths(const ResolvedScenario& scenario, const ResetSpec::Noise& noise, bool of_qpos) {
+  const std::size_t size = of_qpos ? scenario.qpos0.size() : static_cast<std::size_t>(scenario.nv);
+  if (!noise.each.empty()) return noise.each;
+  std::vector<double> widths(size, noise.joints.empty() ? noise.scale : 0.0);
+  for (const auto& [joint, width] : noise.joints) {
+    for (const ResolvedScenario::JointCoordinates& c : scenario.joint_coordinates) {
+      if (c.name != joint) continue;
+      const int first = of_qpos ? c.qpos_first : c.dof_first, count = of_qpos ? c.qpos_count : c.dof_count;
+      std::fill_n(widths.begin() + first, count, width);
+      break;
+    }
+  }
+  return widths;
 }
 
 }  // namespace simloop

@@ -1,6 +1,7 @@
 #include "simloop/shove.hpp"
 
 #include <array>
+#include <cmath>
 #include <random>
 
 #include "run_detail.hpp"
@@ -199,6 +200,15 @@ class Mt19937Draws final : public Draws {
 };
 
 }  // namespace
+
+double standard_normal(Draws& draws) {
+  for (;;) {
+    const double u = draws.uniform(-1.0, 1.0);
+    const double v = draws.uniform(-1.0, 1.0);
+    const double s = u * u + v * v;
+    if (s > 0.0 && s < 1.0) return u * std::sqrt(-2.0 * std::log(s) / s);
+  }
+}
 
 std::unique_ptr<Draws> make_draws(std::uint64_t seed, ShoveRng rng) {
   if (rng == ShoveRng::kNumpy) return std::make_unique<NumpyDraws>(seed);

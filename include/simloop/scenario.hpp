@@ -103,13 +103,27 @@ struct RecordSpec {
 // How a run starts, beyond the scene's reset pose: a scenario file's
 // [reset] table, or one episode's reset options (Episodes::reset). What is
 // random is drawn from the run's generator after the disturbances, in this
-// order: each param's value, then the noise on each qpos coordinate, then on
-// each qvel coordinate. Sizes and names are checked when resolved.
+// order: each param's value, then the noise on each qpos coordinate (0 to
+// nq - 1, one draw each when any of its widths is not zero), then on each
+// qvel coordinate the same way. Sizes and names are checked when resolved.
 struct ResetSpec {
   std::vector<double> qpos;  // the scene's nq values, or empty: its qpos0
   std::vector<double> qvel;  // nv values, or empty: at rest
-  double qpos_noise = 0.0;   // each qpos coordinate plus uniform(-noise, +noise) (quaternions renormalised when set)
-  double qvel_noise = 0.0;   // the same for qvel
+  // Noise on qpos or qvel: a width for every coordinate (`scale`), or one
+  // per coordinate (`each`, nq or nv values), or per joint by name (its
+  // coordinates; the others none). uniform: plus uniform(-w, +w); normal:
+  // plus w * standard_normal(draws) (draw order: standard_normal, shove.hpp).
+  // A coordinate of width 0 is drawn for but left exact. Quaternions are
+  // renormalised when qpos is set.
+  struct Noise {
+    enum class Distribution { kUniform, kNormal };
+    double scale = 0.0;
+    std::vector<double> each;
+    std::vector<std::pair<std::string, double>> joints;
+    Distribution distribution = Distribution::kUniform;
+  };
+  Noise qpos_noise;
+  Noise qvel_noise;
   // A scene parameter (scene_params.hpp) for this run only, uniform in [low, high].
   struct Param {
     SceneParam::Kind kind = SceneParam::Kind::kFriction;
@@ -167,9 +181,15 @@ struct ResolvedScenario {
   };
   std::vector<DataValues> data;
   bool contacts = true, ncon = false;
-  // What the start draws against: the scene's qpos0 and its nv.
+  // What the start draws against: the scene's qpos0 and its nv, and where
+  // each joint's coordinates are (noise by joint name).
   std::vector<double> qpos0;
   int nv = 0;
+  struct JointCoordinates {
+    std::string name;
+    int qpos_first = 0, qpos_count = 0, dof_first = 0, dof_count = 0;
+  };
+  std::vector<JointCoordinates> joint_coordinates;
 };
 
 // Resolves every name in `scenario` against `model`, and checks its reset
@@ -214,15 +234,20 @@ struct Schedule {
 
 // One episode's reset options over the scenario's own start: `text` is a
 // scenario file's text holding a [reset] table; each key that table names
-// (qpos, qvel, qpos_noise, qvel_noise, param: the whole list, `param = []`
+// (qpos, qvel, qpos_noise, qvel_noise, their _distribution, param: the whole list, `param = []`
 // for none) replaces own's, and the keys it leaves out keep own's. Throws
 // InvalidArgument naming `source` as from_toml_string does.
 [[nodiscard]] ResetSpec reset_over(const ResetSpec& own, std::string_view text, std::string_view source);
 
 // Checks a ResetSpec against the resolved scene: qpos of nq values, qvel of
-// nv, every value finite, noise finite and >= 0, each param's low <= high
-// and its name and values valid for the scene (InvalidArgument naming the
-// key: "reset.qpos must hold the scene's nq = 7 values, got 3").
+// nv, every value finite, noise widths finite and >= 0 (nq or nv of them,
+// joints the scene has), each param's low <= high and its name and values
+// valid for the scene (InvalidArgument naming the key: "reset.qpos must hold
+// the scene's nq = 7 values, got 3").
 void check_reset(const ResolvedScenario& scenario, const ResetSpec& reset, const mjModel* m);
+
+// A noise's width on each qpos (of_qpos) or qvel coordinate of the scene.
+[[nodiscard]] std::vector<double> noise_widths(const ResolvedScenario& scenario, const ResetSpec::Noise& noise,
+                                               bool of_qpos);
 
 }  // namespace simloop

@@ -41,6 +41,14 @@ class Draws {
   [[nodiscard]] virtual double sign() = 0;                            // -1 or +1
 };
 
+// A standard normal value from `draws`, the same on every standard library
+// (std::normal_distribution is not): Marsaglia's polar method over the
+// generator's uniform draws, u = uniform(-1, 1), v = uniform(-1, 1), drawn
+// again (both) until 0 < s = u * u + v * v < 1; then u * sqrt(-2 log(s) / s).
+// v's twin value is not kept: each call starts from fresh draws. (Only log
+// is the C library's, which IEEE 754 does not pin to the bit.)
+[[nodiscard]] double standard_normal(Draws& draws);
+
 // The generator `rng` seeded with `seed`, drawing as described at draw_shove.
 [[nodiscard]] std::unique_ptr<Draws> make_draws(std::uint64_t seed, ShoveRng rng = ShoveRng::kMt19937_64);
 

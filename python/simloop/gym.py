@@ -33,8 +33,10 @@ Episodes, include/simloop/episode.hpp):
   (mjWARN_BADQPOS, BADQVEL, BADQACC); the episode stops at that physics step
   and info["warnings"] names them.
 - reset(seed, options): options qpos, qvel (the scene's nq / nv values),
-  qpos_noise, qvel_noise (half-widths of uniform noise, drawn from the
-  episode's seed after its disturbances) and params (scene parameters for
+  qpos_noise, qvel_noise (a width, a list of one per coordinate, or
+  {joint: width}; drawn from the episode's seed after its disturbances, a
+  uniform noise's half-width, or with qpos_noise_distribution /
+  qvel_noise_distribution "normal" its standard deviation) and params (scene parameters for
   this episode: [{"kind": "friction" | "mass" | "damping" | "gravity",
   "name": ..., "value": v or "uniform": [low, high]}]): over the
   scenario's [reset] table, for this episode: each key given replaces the

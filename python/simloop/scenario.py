@@ -109,6 +109,8 @@ def _toml_value(name: str, value: object, depth: int = 0) -> str:
         if not math.isfinite(value):
             raise ValueError(f"{name} must be finite, got {value!r}")
         return repr(float(value))
+    if isinstance(value, _Inline):
+        return str(value)
     if isinstance(value, (str, bytes, os.PathLike)):
         return _toml_string(name, os.fsdecode(value))
     if isinstance(value, Sequence) and depth < _MAX_NESTING:
@@ -129,17 +131,42 @@ def _toml_table(header: str, items: Mapping[str, object]) -> str:
     return "\n".join(lines) + "\n"
 
 
-RESET_KEYS = ("qpos", "qvel", "qpos_noise", "qvel_noise", "params")
+RESET_KEYS = (
+    "qpos",
+    "qvel",
+    "qpos_noise",
+    "qvel_noise",
+    "qpos_noise_distribution",
+    "qvel_noise_distribution",
+    "params",
+)
+
+
+class _Inline(str):
+    """TOML text written as it is (an inline table)."""
+
+
+def _noise_value(key: str, value: object) -> object:
+    """A noise by joint name ({joint: width}) as a TOML inline table; a width or a list of them as it is."""
+    if not isinstance(value, Mapping):
+        return value
+    for joint in value:
+        if not isinstance(joint, str):
+            raise TypeError(f"{key} keys must be joint names, got {_describe(joint)}")
+    return _Inline("{" + ", ".join(f"{_toml_string(key, j)} = {_toml_value(key, w)}" for j, w in value.items()) + "}")
 
 
 def reset_toml(reset: Mapping[str, Any]) -> str:
-    """A [reset] table from {qpos, qvel, qpos_noise, qvel_noise, params}:
-    params is a list of dicts with the file's keys (kind, name, value or
-    uniform = [low, high])."""
+    """A [reset] table from {qpos, qvel, qpos_noise, qvel_noise,
+    qpos_noise_distribution, qvel_noise_distribution, params}: a noise is a
+    width, a list of widths (one per coordinate) or {joint: width}; params is
+    a list of dicts with the file's keys (kind, name, value or uniform = [low,
+    high])."""
     if not isinstance(reset, Mapping):
         raise TypeError(f"reset must be a dict, got {_describe(reset)}")
     _check_keys("reset", reset, RESET_KEYS)
-    text = _toml_table("[reset]", {k: v for k, v in reset.items() if k != "params"})
+    own = {k: _noise_value(k, v) if k in ("qpos_noise", "qvel_noise") else v for k, v in reset.items()}
+    text = _toml_table("[reset]", {k: v for k, v in own.items() if k != "params"})
     params = reset.get("params") or ()
     if isinstance(reset.get("params"), (list, tuple)) and not params:
         text += "param = []\n"  # none: reset options that name params replace the scenario's
@@ -176,8 +203,10 @@ class Scenario:
     chapter's count, as each step began) (None: every body on a free joint
     and every actuator). reset: how
     each run starts, a dict with qpos, qvel (the scene's nq / nv values),
-    qpos_noise, qvel_noise (half-widths of uniform noise drawn from the run's
-    seed) and params (a list of dicts: kind "friction", "mass", "damping" or
+    qpos_noise, qvel_noise (noise drawn from the run's seed: a width, a list
+    of widths, one per coordinate, or {joint: width}; a uniform noise's
+    half-width unless qpos_noise_distribution / qvel_noise_distribution is
+    "normal", then its standard deviation) and params (a list of dicts: kind "friction", "mass", "damping" or
     "gravity", name, and value or uniform = [low, high]).
     """
 

@@ -150,9 +150,10 @@ TEST(ScenarioReset, BadResetsNameTheKey) {
   const auto file_error = [](const std::string& reset) { return error_of([&] { (void)pusht(reset); }); };
   EXPECT_EQ(file_error("qpos_nosie = 1\n"),
             "pusht-reset: reset.qpos_nosie: unknown key (did you mean 'qpos_noise'?); known keys: qpos, qvel, "
-            "qpos_noise, qvel_noise, param");
+            "qpos_noise, qvel_noise, qpos_noise_distribution, qvel_noise_distribution, param");
   EXPECT_EQ(file_error("qvel_noise = -1\n"),
-            "pusht-reset: reset.qvel_noise: must not be negative (the half-width of a uniform noise), got -1.0");
+            "pusht-reset: reset.qvel_noise: must not be negative (a uniform noise's half-width or a normal noise's "
+            "standard deviation), got -1.0");
   // A noise or range so wide that its draw would overflow to inf (and the state to nan).
   EXPECT_EQ(file_error("qpos_noise = 1e308\n"),
             "pusht-reset: reset.qpos_noise: is too large: [-x, x] must be a range a double holds, got 1e+308");
@@ -187,21 +188,22 @@ TEST(ScenarioReset, OptionsOverTheScenariosResetReplaceOnlyTheKeysTheyName) {
       "[reset]\nqpos = [1, 2]\nqpos_noise = 0.1\n[[reset.param]]\nkind = 'gravity'\nvalue = 5.0\n", "own");
   const simloop::ResetSpec noise = simloop::reset_over(own.reset, "[reset]\nqvel_noise = 0.5\n", "options");
   EXPECT_EQ(noise.qpos, own.reset.qpos);
-  EXPECT_EQ(noise.qpos_noise, 0.1);
-  EXPECT_EQ(noise.qvel_noise, 0.5);
+  EXPECT_EQ(noise.qpos_noise.scale, 0.1);
+  EXPECT_EQ(noise.qvel_noise.scale, 0.5);
   ASSERT_EQ(noise.params.size(), 1U);
   EXPECT_EQ(noise.params[0].low, 5.0);
   const simloop::ResetSpec none = simloop::reset_over(own.reset, "[reset]\nparam = []\nqpos_noise = 0.0\n", "options");
   EXPECT_TRUE(none.params.empty());
-  EXPECT_EQ(none.qpos_noise, 0.0);
+  EXPECT_EQ(none.qpos_noise.scale, 0.0);
   EXPECT_EQ(none.qpos, own.reset.qpos);
   const simloop::ResetSpec mass =
       simloop::reset_over(own.reset, "[[reset.param]]\nkind = 'mass'\nname = 'box'\nvalue = 2.0\n", "options");
   ASSERT_EQ(mass.params.size(), 1U);
   EXPECT_EQ(mass.params[0].name, "box");
-  EXPECT_EQ(mass.qpos_noise, 0.1);
+  EXPECT_EQ(mass.qpos_noise.scale, 0.1);
   EXPECT_EQ(error_of([&] { (void)simloop::reset_over(own.reset, "[reset]\nqpos_noise = -1\n", "options"); }),
-            "options: reset.qpos_noise: must not be negative (the half-width of a uniform noise), got -1.0");
+            "options: reset.qpos_noise: must not be negative (a uniform noise's half-width or a normal noise's "
+            "standard deviation), got -1.0");
 }
 
 }  // namespace
