@@ -318,12 +318,12 @@ TASKS: Dict[str, Task] = {
 
 
 def _reset(task: Task, scale: float) -> Optional[Dict[str, Any]]:
-    """The scenario's [reset]: noise of the task's shapes at this scale (none at 0)."""
+    """The scenario's [reset]: noise of the task's shapes at this scale (none at 0): uniform in +-scale, or scale
+    times a standard normal draw, per coordinate, qpos then qvel, from the episode's generator."""
     if not scale:
         return None
-    if "normal" in task.noise:
-        raise NotImplementedError("reset noise drawn from a normal distribution is not built yet: reset_noise_scale=0")
-    return {"qpos_noise": scale, "qvel_noise": scale}
+    qpos, qvel = task.noise
+    return {"qpos_noise": scale, "qvel_noise": scale, "qpos_noise_distribution": qpos, "qvel_noise_distribution": qvel}
 
 
 def make_task(name: str, num_envs: Optional[int] = None, **kwargs: Any) -> Any:

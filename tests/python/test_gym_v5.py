@@ -179,3 +179,21 @@ def test_ants_contact_forces_are_observed_as_gymnasiums_and_not_zero():
         assert our_obs[27:].tolist() == their_obs[27:].tolist()
         touching += np.count_nonzero(our_obs[27:]) > 0
     assert touching > 10  # its legs on the floor
+
+
+@pytest.mark.parametrize(("env_id", "qvel_normal"), [("HalfCheetah-v5", True), ("Hopper-v5", False)])
+def test_reset_noise_has_gymnasiums_shapes_and_scales(env_id, qvel_normal):
+    # Over 300 seeded resets: qpos off the XML's by uniform draws in +-scale (standard deviation scale / sqrt(3));
+    # qvel likewise, or (HalfCheetah, Ant) by scale times a standard normal draw, which passes the scale at times.
+    scale = 0.1
+    quiet = gymnasium.make("simloop/" + env_id, reset_noise_scale=0.0).reset(seed=0)[0]
+    env = gymnasium.make("simloop/" + env_id, reset_noise_scale=scale)
+    nq = len(quiet) // 2  # the positions observed: planar robots have nq == nv, x left out
+    noise = np.array([env.reset(seed=s)[0] - quiet for s in range(300)])
+    positions, velocities = noise[:, :nq], noise[:, nq:]
+    assert np.abs(positions).max() <= scale and np.std(positions) == pytest.approx(scale / np.sqrt(3), rel=0.1)
+    if qvel_normal:
+        assert np.abs(velocities).max() > scale and np.std(velocities) == pytest.approx(scale, rel=0.1)
+    else:
+        assert np.abs(velocities).max() <= scale and np.std(velocities) == pytest.approx(scale / np.sqrt(3), rel=0.1)
+    assert not np.array_equal(env.reset(seed=1)[0], env.reset(seed=2)[0])  # each seed its own draws
