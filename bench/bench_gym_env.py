@@ -26,10 +26,19 @@ it) per episode step, medians, and the median of the per-round CPU ratios.
 Targets (issue 18), for the vectorised reward: <= 1.15 x MujocoEnv at one
 physics step per action, <= 1.05 x at ten.
 
+--v5 HalfCheetah,Hopper,...: Gymnasium's v5 tasks instead, simloop's
+registered simloop/<Task>-v5 against Gymnasium's own <Task>-v5, each as
+gymnasium.make and gymnasium.make_vec make it (1 env; --envs envs:
+simloop's vector entry point on one C++ thread against Gymnasium's
+SyncVectorEnv), reset_noise_scale=0, an ended episode reset; target
+(issue 35) <= 1.0 x at --envs envs. The load average is printed.
+
     .venv-pypi/bin/python bench/bench_gym_env.py [--rounds 21] [--calls 2000] [--every 1,10] [--envs 8]
+    .venv-pypi/bin/python bench/bench_gym_env.py --v5 HalfCheetah,Hopper,Walker2d,Ant,Humanoid [--envs 8]
 """
 
 import argparse
+import os
 import statistics
 import time
 from pathlib import Path
@@ -101,12 +110,26 @@ class MujocoEnvs:
             env.close()
 
 
-def compare(label, ours, theirs, actions, rounds, per_call, target):
+class Restarting:
+    """A single env whose ended episodes start again (the v5 tasks end: they fall)."""
+
+    def __init__(self, env) -> None:
+        self.env = env
+
+    def reset(self, seed):
+        self.env.reset(seed=seed)
+
+    def step(self, action):
+        if any(self.env.step(action)[2:4]):
+            self.env.reset()
+
+
+def compare(label, ours, theirs, actions, rounds, per_call, target, them="MujocoEnv"):
     """Times ours and theirs over the same actions, alternating which goes first."""
     timed(ours, actions, 0), timed(theirs, actions, 0)  # warm up
-    times = {"simloop": [], "MujocoEnv": []}
+    times = {"simloop": [], them: []}
     for r in range(rounds):
-        pair = (("simloop", ours), ("MujocoEnv", theirs))
+        pair = (("simloop", ours), (them, theirs))
         for name, env in pair if r % 2 else pair[::-1]:
             times[name].append(timed(env, actions, r))
     steps = len(actions) * per_call
@@ -115,11 +138,35 @@ def compare(label, ours, theirs, actions, rounds, per_call, target):
         cpu = statistics.median(x[1] for x in t) / steps * 1e6
         wall = statistics.median(x[0] for x in t) / steps * 1e6
         print(f"      {name:9s}: {cpu:7.2f} us CPU, {wall:7.2f} us wall per episode step")
-    ratio = statistics.median(a[1] / b[1] for a, b in zip(times["simloop"], times["MujocoEnv"]))
+    ratio = statistics.median(a[1] / b[1] for a, b in zip(times["simloop"], times[them]))
     print(
-        f"      simloop / MujocoEnv: {ratio:.3f} x the CPU time (median of per-round ratios"
+        f"      simloop / {them}: {ratio:.3f} x the CPU time (median of per-round ratios"
         f"{'; target <= ' + str(target) if target else ''})"
     )
+
+
+def v5_tasks(tasks, args) -> None:
+    """simloop/<Task>-v5 against Gymnasium's <Task>-v5: 1 env, then args.envs envs."""
+    import gymnasium
+
+    print(f"{simloop.MUJOCO_VERSION}, simloop {simloop.__version__}, gymnasium {gymnasium.__version__}; load average")
+    print(
+        f"  {' '.join(f'{x:.2f}' for x in os.getloadavg())}; {args.calls} env.step calls a round, {args.rounds} rounds"
+    )
+    rng = np.random.default_rng(0)
+    for task in tasks:
+        print(f"  {task}-v5:")
+        ours = Restarting(gymnasium.make(f"simloop/{task}-v5", reset_noise_scale=0.0))
+        theirs = Restarting(gymnasium.make(f"{task}-v5", reset_noise_scale=0.0))
+        actions = rng.uniform(-0.4, 0.4, size=(args.calls, ours.env.action_space.shape[0]))
+        compare("1 env (gymnasium.make)", ours, theirs, actions, args.rounds, 1, None, f"Gymnasium's {task}")
+        ours = gymnasium.make_vec(f"simloop/{task}-v5", num_envs=args.envs, threads=1, reset_noise_scale=0.0)
+        theirs = gymnasium.make_vec(f"{task}-v5", num_envs=args.envs, vectorization_mode="sync", reset_noise_scale=0.0)
+        batch = rng.uniform(-0.4, 0.4, size=(max(args.calls // args.envs, 1),) + ours.action_space.shape)
+        label = f"{args.envs} envs (make_vec: simloop's on 1 C++ thread, Gymnasium's SyncVectorEnv)"
+        compare(label, ours, theirs, batch, args.rounds, args.envs, 1.0, f"Gymnasium's {task}")
+        ours.close(), theirs.close()
+    print(f"  load average after: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
 
 
 def main() -> int:
@@ -128,7 +175,11 @@ def main() -> int:
     parser.add_argument("--calls", type=int, default=2000)
     parser.add_argument("--every", default="1,10")
     parser.add_argument("--envs", type=int, default=8)
+    parser.add_argument("--v5", default="", help="Gymnasium's v5 tasks instead, comma-separated")
     args = parser.parse_args()
+    if args.v5:
+        v5_tasks(args.v5.split(","), args)
+        return 0
     print(
         f"{simloop.MUJOCO_VERSION}, simloop {simloop.__version__}; PushT, {args.calls} env.step calls a "
         f"round, {args.rounds} rounds; CPU time per episode step (wall beside it), medians"

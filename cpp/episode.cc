@@ -74,6 +74,13 @@ struct Episodes::Impl {
     recorder->after_step(observation, m, d);
   }
 
+  // The data columns as the reset or the last step left d (read_data_at_step).
+  void read_data(Episode& e, double* observation, bool stepped) const {
+    const mjModel* m = e.model.get();
+    mjData* d = e.data.get();
+    detail::guarded_steps(m, e.step, e.step, [&] { recorder->read_data(observation, m, d, stepped); });
+  }
+
   [[nodiscard]] bool terminated(const Episode& e) const noexcept { return e.core.health().broken(); }
 };
 
@@ -141,6 +148,7 @@ void Episodes::reset(std::size_t i, std::uint64_t seed, double* observation, con
   e.inputs.emplace(e.schedule, false);  // ctrl is the actions'
   e.step = 0;
   e.core.reset(e.model.get(), e.data.get(), {-1, &e.schedule.start});  // as run_loop starts
+  if (s.recorder->data_at_step()) s.read_data(e, observation, false);
   s.observe(e, observation);
 }
 
@@ -209,12 +217,15 @@ void Episodes::step(const double* actions, std::size_t action_count, std::int64_
     std::copy(actions + i * static_cast<std::size_t>(nu), actions + (i + 1) * static_cast<std::size_t>(nu), d->ctrl);
     // The first step is the rest of the one the observation began.
     e.core.run(m, d, e.step, e.step + steps[i], EpisodeInputs(*e.inputs), &ctl, true);
+    if (s.recorder->data_at_step()) s.read_data(e, observations + i * static_cast<std::size_t>(width), true);
     s.observe(e, observations + i * static_cast<std::size_t>(width));
     terminated[i] = s.terminated(e);
     truncated[i] = !terminated[i] && e.step >= e.schedule.steps;
   };
   detail::run_jobs(count, threads, steps, control, job, s.workers.get());
 }
+
+void Episodes::read_data_at_step(bool on) noexcept { impl_->recorder->read_data_at_step(on); }
 
 std::int64_t Episodes::steps_taken(std::size_t i) const {
   check_index(i, impl_->episodes.size());

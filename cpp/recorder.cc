@@ -215,7 +215,9 @@ void Recorder::before_step(double* row, std::int64_t step, const mjModel* m, con
 
 void Recorder::after_step(double* row, const mjModel* m, mjData* d) const noexcept {
   // (Inside MuJoCo's error guard, as every call of the loop's.)
-  for (const std::string& array : fills_) fill_derived(m, d, array);
+  if (!data_at_step_) {
+    for (const std::string& array : fills_) fill_derived(m, d, array);
+  }
   for (const Source& s : after_) {
     double* out = row + s.column;
     switch (s.kind) {
@@ -244,6 +246,7 @@ void Recorder::after_step(double* row, const mjModel* m, mjData* d) const noexce
         out[1] = d->ten_velocity[s.id];
         break;
       case Source::kData: {
+        if (data_at_step_) break;  // (read_data's)
         const auto& [array, first] = data_[static_cast<std::size_t>(s.id)];
         std::copy_n(d->*array + first, s.count, out);
         break;
@@ -257,6 +260,17 @@ void Recorder::after_step(double* row, const mjModel* m, mjData* d) const noexce
       default:
         break;
     }
+  }
+}
+
+void Recorder::read_data(double* row, const mjModel* m, mjData* d, bool stepped) const noexcept {
+  for (const std::string& array : fills_) {  // (what a step does not fill, as Gymnasium's MujocoEnv fills it)
+    if (stepped && filled_after_constraint(array)) fill_derived(m, d, array);
+  }
+  for (const Source& s : after_) {
+    if (s.kind != Source::kData) continue;
+    const auto& [array, first] = data_[static_cast<std::size_t>(s.id)];
+    std::copy_n(d->*array + first, s.count, row + s.column);
   }
 }
 

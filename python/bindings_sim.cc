@@ -255,6 +255,7 @@ void bind_sim(py::module_& m) {
       // Fixed at construction: read without the lock.
       .def_property_readonly("count", [](PyEpisodes& e) { return e.episodes.count(); })
       .def_property_readonly("nu", [](PyEpisodes& e) { return e.episodes.nu(); })
+      .def("read_data_at_step", episodes_locked<bool>(&simloop::Episodes::read_data_at_step), "on"_a)
       .def_property_readonly("steps", [](PyEpisodes& e) { return e.episodes.steps(); })
       .def_property_readonly("timestep", [](PyEpisodes& e) { return e.episodes.model().timestep(); })
       .def_property_readonly("column_names",

@@ -95,6 +95,11 @@ class Episodes {
             std::size_t active_count, double* observations, std::uint8_t* terminated, std::uint8_t* truncated,
             int threads = 1, RunControl* control = nullptr);
 
+  // Observations read [record] data where Gymnasium's MujocoEnv reads
+  // mjData, as the last physics step (or the reset) left it
+  // (Recorder::read_data_at_step), not for the observed state.
+  void read_data_at_step(bool on) noexcept;
+
   // Episode i's physics steps taken since its reset, its sim time, and the
   // warnings it raised (MuJoCo's and simloop_DIVERGED).
   [[nodiscard]] std::int64_t steps_taken(std::size_t i) const;

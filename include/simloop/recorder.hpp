@@ -99,6 +99,18 @@ class Recorder final : public RowRecorder {
   [[nodiscard]] bool reads_acceleration_stage() const noexcept override { return reads_acceleration_stage_; }
   // The first of the energy audit's columns, or -1 without them.
   [[nodiscard]] int energy_column() const noexcept { return energy_column_; }
+  // With `on`, the data columns ([record] data) are not read for the row's
+  // state but by read_data, where Gymnasium's MujocoEnv reads mjData: as
+  // the last physics step left it (derived for the state entering that
+  // step), cacc, cfrc_int and cfrc_ext by mj_rnePostConstraint after it;
+  // after a reset, as its mj_forward left them (those three as the reset
+  // did: zero). after_step then leaves those columns alone. (Episodes use
+  // it; a run's rows keep the row's state.)
+  void read_data_at_step(bool on) noexcept { data_at_step_ = on; }
+  [[nodiscard]] bool data_at_step() const noexcept { return data_at_step_; }
+  // The data columns of `row` from d as it is; `stepped`: d was left by a
+  // physics step (not a reset). Inside MuJoCo's error guard.
+  void read_data(double* row, const mjModel* m, mjData* d, bool stepped) const noexcept;
 
  private:
   struct Source {
@@ -132,6 +144,7 @@ class Recorder final : public RowRecorder {
   std::vector<std::string> fills_;  // a recorded array per MuJoCo call that fills it (fill_derived)
   CtrlRange ctrl_range_;
   bool reads_acceleration_stage_ = false;  // an acceleration-stage sensor is recorded
+  bool data_at_step_ = false;
   int energy_column_ = -1;
 };
 

@@ -19,6 +19,8 @@ _V5_TASKS = {
     "Hopper": "hopper",
     "Walker2d": "walker2d",
     "Swimmer": "swimmer",
+    "Ant": "ant",
+    "Humanoid": "humanoid",
     "InvertedPendulum": "inverted_pendulum",
 }
 

@@ -93,6 +93,7 @@ class _Setup:
         model: ModelLike,
         render: "Rendering",
         observe: Optional[Observe] = None,
+        data_at_step: bool = False,
     ) -> None:
         scenario, scene = _scenario_and_scene(scenario, model)
         if reward is not None and not callable(reward):
@@ -108,6 +109,8 @@ class _Setup:
         terminate_reads = callable(terminate) and _takes_physics(terminate, 1)
         reads = self.reward_reads or terminate_reads
         self.episodes = _core.Episodes(scene, scenario._core, config, count, reads)
+        if data_at_step:
+            self.episodes.read_data_at_step(True)
         # Each env's state by name, for the hooks that ask for it (simloop.physics).
         self.physics = tuple(Physics(self.episodes, i) for i in range(count)) if reads else ()
         # (the env's fps: its decisions per simulated second, as MujocoEnv's)

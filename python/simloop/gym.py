@@ -144,7 +144,10 @@ class ScenarioEnv(gymnasium.Env):
     once for a batch of rows (n, width): the observation made of the rows
     (Gymnasium's tasks leave out x, clip velocities); reward and terminate
     still see the rows. Its `names` attribute, if any, gives
-    observation_names.
+    observation_names. data_at_step: the [record] data columns are read
+    where Gymnasium's MujocoEnv reads mjData, as the last physics step (or
+    the reset) left it, cfrc_ext after mj_rnePostConstraint
+    (Recorder::read_data_at_step), not for the observed state.
     """
 
     metadata = {"render_modes": list(RENDER_MODES)}
@@ -157,6 +160,7 @@ class ScenarioEnv(gymnasium.Env):
         reward: Optional[Reward] = None,
         terminate: Optional[Terminate] = None,
         observe: Optional[Observe] = None,
+        data_at_step: bool = False,
         max_episode_steps: Optional[int] = None,
         rng: str = "mt19937_64",
         timestep: Optional[float] = None,
@@ -181,6 +185,7 @@ class ScenarioEnv(gymnasium.Env):
             model,
             Rendering(render_mode, width, height, view),
             observe,
+            data_at_step,
         )
         self.render_mode = render_mode
         self.metadata = {**type(self).metadata, "render_fps": self._setup.render_fps}

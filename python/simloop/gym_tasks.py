@@ -31,6 +31,7 @@ from ._gym_setup import batched
 from .gym import ScenarioEnv
 from .gym_vector import ScenarioVectorEnv
 from .scenario import Scenario
+from .sim import Sim
 
 __all__ = ["TASKS", "assets_folder", "make_task"]
 
@@ -59,9 +60,10 @@ def _xml_path(xml_file: object) -> str:
 
 
 class Layout:
-    """Where qpos and qvel are in a recorded row (every joint recorded), and their names."""
+    """Where qpos and qvel are in a recorded row (every joint recorded), and their names; data: each recorded
+    mjData array's columns (its entries' in their order), which the recorder lays out after the joints'."""
 
-    def __init__(self, names: Tuple[str, ...], model: _core.Model) -> None:
+    def __init__(self, names: Tuple[str, ...], model: _core.Model, data: List[Tuple[str, str, int]]) -> None:
         qpos: List[int] = []
         qvel: List[int] = []
         for j, joint in enumerate(model.names("joint")):
@@ -70,6 +72,13 @@ class Layout:
                 into.extend(names.index(column if count == 1 else f"{column}{k}") for k in range(count))
         self.qpos, self.qvel = np.array(qpos), np.array(qvel)
         self.names = names
+        columns: Dict[str, List[int]] = {}
+        start = len(qpos) + len(qvel)
+        for array, _, count in data:
+            columns.setdefault(array, []).extend(range(start, start + count))
+            start += count
+        assert start == len(names), (start, len(names))  # (every column placed)
+        self.data = {array: np.array(c) for array, c in columns.items()}
 
     def observe(self, skip: int, clip: Optional[float] = None) -> Callable[[np.ndarray], np.ndarray]:
         """Gymnasium's observation of the locomotion tasks: qpos without its first `skip` values, then qvel
@@ -150,6 +159,94 @@ def _inverted_pendulum(p: Mapping[str, Any], layout: Layout, dt: float) -> Tuple
     return observe, reward, batched(fallen)
 
 
+def _ant(p: Mapping[str, Any], layout: Layout, dt: float) -> Tuple[Any, ...]:
+    """Ant: (forward + healthy) - (ctrl + contact cost), from the main body's xpos and every body's cfrc_ext as
+    the last step left them (data_at_step); cfrc_ext clipped to contact_force_range in the cost and the
+    observation (bodies after the world)."""
+    xy, forces = layout.data["xpos"][:2], layout.data["cfrc_ext"]
+    skip = 2 if p["exclude_current_positions_from_observation"] else 0
+    low, high = p["contact_force_range"]
+    state = np.concatenate((layout.qpos, layout.qvel))
+    z = layout.qpos[2]
+
+    def healthy(rows: np.ndarray) -> Any:
+        return (
+            np.isfinite(rows[:, state]).all(axis=1)
+            & (p["healthy_z_range"][0] <= rows[:, z])
+            & (rows[:, z] <= p["healthy_z_range"][1])
+        )
+
+    def reward(before: np.ndarray, actions: np.ndarray, after: np.ndarray) -> Any:
+        x_velocity = ((after[:, xy] - before[:, xy]) / dt)[:, 0]
+        rewards = x_velocity * p["forward_reward_weight"] + healthy(after) * p["healthy_reward"]
+        contact_cost = p["contact_cost_weight"] * np.sum(np.square(np.clip(after[:, forces], low, high)), axis=1)
+        return rewards - (_ctrl_cost(p["ctrl_cost_weight"], actions) + contact_cost)
+
+    positions, velocities = layout.qpos[skip:], layout.qvel
+    observed = np.concatenate((positions, velocities, forces[6:] if p["include_cfrc_ext_in_observation"] else []))
+    clipped = len(positions) + len(velocities)  # (the contact forces after it)
+
+    def observe(rows: np.ndarray) -> np.ndarray:
+        out = rows[:, observed.astype(int)]
+        out[:, clipped:] = np.clip(out[:, clipped:], low, high)
+        return out
+
+    setattr(observe, "names", tuple(layout.names[i] for i in observed.astype(int)))  # noqa: B010
+    terminate = batched(lambda after: ~healthy(after)) if p["terminate_when_unhealthy"] else None
+    return observe, batched(reward), terminate
+
+
+def _ant_data(p: Mapping[str, Any], model: _core.Model) -> List[Tuple[str, str, int]]:
+    return [("xpos", str(p["main_body"]), 3)] + [("cfrc_ext", str(b), 6) for b in range(model.nbody)]
+
+
+def _humanoid(p: Mapping[str, Any], layout: Layout, dt: float) -> Tuple[Any, ...]:
+    """Humanoid: (forward + healthy) - (ctrl + contact cost), forward from the mass centre (body masses times
+    xipos, as the last step left them); the observation adds cinert, cvel, qfrc_actuator past the root and
+    cfrc_ext, each of the bodies after the world."""
+    mass = p["_body_mass"]
+    xipos, cfrc = layout.data["xipos"], layout.data["cfrc_ext"]
+    z = layout.qpos[2]
+
+    def mass_center(rows: np.ndarray) -> Any:
+        centres = np.einsum("b,nbj->nj", mass, rows[:, xipos].reshape(len(rows), -1, 3))
+        return (centres / mass.sum())[:, 0:2]
+
+    def healthy(rows: np.ndarray) -> Any:
+        low, high = p["healthy_z_range"]
+        return (low < rows[:, z]) & (rows[:, z] < high)
+
+    def reward(before: np.ndarray, actions: np.ndarray, after: np.ndarray) -> Any:
+        x_velocity = ((mass_center(after) - mass_center(before)) / dt)[:, 0]
+        rewards = p["forward_reward_weight"] * x_velocity + healthy(after) * p["healthy_reward"]
+        contact_cost = np.clip(
+            p["contact_cost_weight"] * np.sum(np.square(after[:, cfrc]), axis=1), *p["contact_cost_range"]
+        )
+        return rewards - (_ctrl_cost(p["ctrl_cost_weight"], actions) + contact_cost)
+
+    parts = [layout.qpos[2 if p["exclude_current_positions_from_observation"] else 0 :], layout.qvel]
+    for array, width in (("cinert", 10), ("cvel", 6), ("qfrc_actuator", 0), ("cfrc_ext", 6)):
+        if p[f"include_{array}_in_observation"]:
+            parts.append(layout.data[array][width:])  # (after the world body; qfrc_actuator: the joints past the root)
+    observed = np.concatenate(parts)
+    observe = lambda rows: rows[:, observed]  # noqa: E731
+    setattr(observe, "names", tuple(layout.names[i] for i in observed))  # noqa: B010
+    terminate = batched(lambda after: ~healthy(after)) if p["terminate_when_unhealthy"] else None
+    return observe, batched(reward), terminate
+
+
+def _humanoid_data(p: Mapping[str, Any], model: _core.Model) -> List[Tuple[str, str, int]]:
+    bodies = [str(b) for b in range(model.nbody)]
+    joints = [(str(j), model.object_info("joint", j)["nv"]) for j in range(1, model.njnt)]
+    return (
+        [("xipos", b, 3) for b in bodies]
+        + [("cinert", b, 10) for b in bodies]
+        + [("cvel", b, 6) for b in bodies]
+        + [("qfrc_actuator", j, nv) for j, nv in joints]
+        + [("cfrc_ext", b, 6) for b in bodies]
+    )
+
+
 class Task(NamedTuple):
     """A Gymnasium v5 task: its keyword arguments with Gymnasium's defaults (xml_file and frame_skip among
     them), how its reset noise is drawn for qpos and qvel, and what makes its observe, reward and terminate."""
@@ -157,6 +254,8 @@ class Task(NamedTuple):
     defaults: Dict[str, Any]
     noise: Tuple[str, str]  # "uniform" (in +-scale) or "normal" (scale times a standard normal draw)
     parts: Callable[..., Tuple[Any, ...]]
+    # The mjData arrays it records ([array, object, count]), read as the last step left them (data_at_step).
+    data: Callable[[Mapping[str, Any], _core.Model], List[Tuple[str, str, int]]] = lambda p, model: []
 
 
 _LOCOMOTION = {"forward_reward_weight": 1.0}
@@ -190,6 +289,26 @@ TASKS: Dict[str, Task] = {
         ("uniform", "uniform"),
         lambda p, layout, dt: _planar(p, layout, dt, 2),  # (Swimmer leaves out x and y)
     ),
+    "Ant": Task(
+        dict(xml_file="ant.xml", frame_skip=5, forward_reward_weight=1, ctrl_cost_weight=0.5)
+        | dict(contact_cost_weight=5e-4, healthy_reward=1.0, main_body=1, terminate_when_unhealthy=True)
+        | dict(healthy_z_range=(0.2, 1.0), contact_force_range=(-1.0, 1.0), reset_noise_scale=0.1)
+        | _EXCLUDE
+        | dict(include_cfrc_ext_in_observation=True),
+        ("uniform", "normal"),
+        _ant,
+        _ant_data,
+    ),
+    "Humanoid": Task(
+        dict(xml_file="humanoid.xml", frame_skip=5, forward_reward_weight=1.25, ctrl_cost_weight=0.1)
+        | dict(contact_cost_weight=5e-7, contact_cost_range=(-np.inf, 10.0), healthy_reward=5.0)
+        | dict(terminate_when_unhealthy=True, healthy_z_range=(1.0, 2.0), reset_noise_scale=1e-2)
+        | _EXCLUDE
+        | {f"include_{a}_in_observation": True for a in ("cinert", "cvel", "qfrc_actuator", "cfrc_ext")},
+        ("uniform", "uniform"),
+        _humanoid,
+        _humanoid_data,
+    ),
     "InvertedPendulum": Task(
         dict(xml_file="inverted_pendulum.xml", frame_skip=2, reset_noise_scale=0.01),
         ("uniform", "uniform"),
@@ -199,12 +318,12 @@ TASKS: Dict[str, Task] = {
 
 
 def _reset(task: Task, scale: float) -> Optional[Dict[str, Any]]:
-    """The scenario's [reset]: noise of the task's shapes at this scale (none at 0)."""
+    """The scenario's [reset]: noise of the task's shapes at this scale (none at 0): uniform in +-scale, or scale
+    times a standard normal draw, per coordinate, qpos then qvel, from the episode's generator."""
     if not scale:
         return None
-    if "normal" in task.noise:
-        raise NotImplementedError("reset noise drawn from a normal distribution is not built yet: reset_noise_scale=0")
-    return {"qpos_noise": scale, "qvel_noise": scale}
+    qpos, qvel = task.noise
+    return {"qpos_noise": scale, "qvel_noise": scale, "qpos_noise_distribution": qpos, "qvel_noise_distribution": qvel}
 
 
 def make_task(name: str, num_envs: Optional[int] = None, **kwargs: Any) -> Any:
@@ -224,17 +343,20 @@ def make_task(name: str, num_envs: Optional[int] = None, **kwargs: Any) -> Any:
         (params if key in params else arguments)[key] = value
     path = _xml_path(params["xml_file"])
     model = _core.Model.from_file(path)
+    data = task.data(params, model)
     scenario = Scenario(
         path,
         steps=_ENDLESS,
-        record={"joints": "all", "contacts": False},
+        record={"joints": "all", "contacts": False, "data": [(array, name) for array, name, _ in data]},
         reset=_reset(task, float(params["reset_noise_scale"])),
     )
     frame_skip = params["frame_skip"]
     probe = ScenarioEnv(scenario, model=model)  # (the recorded columns: no episode is started)
-    layout = Layout(probe.observation_names, model)
+    layout = Layout(probe.observation_names, model, data)
+    params["_body_mass"] = np.array(Sim(model).named.model.body_mass)  # (Humanoid's mass centre)
     observe, reward, terminate = task.parts(params, layout, model.timestep * frame_skip)
     common = {"control_every": frame_skip, "observe": observe, "reward": reward, "terminate": terminate, "model": model}
+    common["data_at_step"] = bool(data)
     if num_envs is None:
         return ScenarioEnv(scenario, **common, **arguments)
     arguments.setdefault("max_episode_steps", 1000)
@@ -256,4 +378,6 @@ half_cheetah, half_cheetah_vector = _entry_points("HalfCheetah")
 hopper, hopper_vector = _entry_points("Hopper")
 walker2d, walker2d_vector = _entry_points("Walker2d")
 swimmer, swimmer_vector = _entry_points("Swimmer")
+ant, ant_vector = _entry_points("Ant")
+humanoid, humanoid_vector = _entry_points("Humanoid")
 inverted_pendulum, inverted_pendulum_vector = _entry_points("InvertedPendulum")

@@ -69,6 +69,7 @@ class ScenarioVectorEnv(VectorEnv):
         reward: Optional[Reward] = None,
         terminate: Optional[Terminate] = None,
         observe: Optional[Observe] = None,
+        data_at_step: bool = False,
         max_episode_steps: Optional[int] = None,
         autoreset_mode: Union[AutoresetMode, str] = AutoresetMode.NEXT_STEP,
         threads: Optional[int] = None,
@@ -106,6 +107,7 @@ class ScenarioVectorEnv(VectorEnv):
             model,
             Rendering(render_mode, width, height, view),
             observe,
+            data_at_step,
         )
         self.render_mode = render_mode
         self.metadata["render_fps"] = self._setup.render_fps

@@ -4,13 +4,16 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "simloop/chapter_scene.hpp"
+#include "simloop/episode.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/model.hpp"
 #include "simloop/scenario.hpp"
@@ -201,4 +204,45 @@ TEST(ScenarioRun, ATendonsLengthAndRateAreRecordedForTheRowsState) {
                                           simloop::Scenario::from_toml_string("[record]\ntendons = [\"summ\"]\n"), {});
             }),
             "record.tendons: no tendon named 'summ' (did you mean 'sum'?); the scene's tendons: sum");
+}
+
+namespace {
+
+int column_of(const std::vector<simloop::Column>& columns, const std::string& name) {
+  const auto at =
+      std::find_if(columns.begin(), columns.end(), [&](const simloop::Column& c) { return c.name == name; });
+  return at == columns.end() ? -1 : static_cast<int>(at - columns.begin());
+}
+
+bool equal_bits(const double* a, const double* b, std::size_t n) { return std::memcmp(a, b, n * sizeof(double)) == 0; }
+
+}  // namespace
+
+TEST(Recorder, ReadDataAtStepReadsMjDataAsTheLastStepOfAnEpisodeLeftIt) {
+  // Gymnasium's moment: the reset's mj_forward (cfrc_ext 0), else the last mj_step, then mj_rnePostConstraint.
+  const simloop::Scenario scenario = simloop::Scenario::from_toml_string(
+      "scene = \"pusht.xml\"\n[record]\ndata = [[\"cfrc_ext\", \"tblock\"], [\"xpos\", \"tblock\"]]", "",
+      SIMLOOP_TEST_SCENES);
+  simloop::Episodes episodes(simloop::load_scene(scenario), scenario, simloop::ScenarioConfig{}, 1);
+  episodes.read_data_at_step(true);
+  const int force = column_of(episodes.columns(), "tblock_cfrc_ext0"),
+            x = column_of(episodes.columns(), "tblock_xpos0");
+  const mjModel* m = episodes.model().get();
+  const int b = mj_name2id(m, mjOBJ_BODY, "tblock");
+  simloop::Data by_hand(episodes.model());
+  mj_forward(m, by_hand.get());
+  std::vector<double> row(static_cast<std::size_t>(episodes.width())), action{0.8, 0.3};
+  episodes.reset(0, 0, row.data());
+  EXPECT_EQ(std::count(row.data() + force, row.data() + force + 6, 0.0), 6);
+  EXPECT_TRUE(equal_bits(row.data() + x, by_hand.get()->xpos + 3 * b, 3));
+  std::uint8_t terminated = 0, truncated = 0;
+  for (int k = 0; k < 40; ++k) {
+    episodes.step(action.data(), 2, 5, nullptr, 0, row.data(), &terminated, &truncated);
+    std::copy(action.begin(), action.end(), by_hand.get()->ctrl);
+    for (int i = 0; i < 5; ++i) mj_step(m, by_hand.get());
+    mj_rnePostConstraint(m, by_hand.get());
+    EXPECT_TRUE(equal_bits(row.data() + force, by_hand.get()->cfrc_ext + 6 * b, 6)) << k;
+    EXPECT_TRUE(equal_bits(row.data() + x, by_hand.get()->xpos + 3 * b, 3)) << k;
+  }
+  EXPECT_NE(row[static_cast<std::size_t>(force) + 5], 0.0);  // the floor carries the block
 }

@@ -35,17 +35,24 @@ def _in_tmp(tmp_path, monkeypatch):
 def step_both(theirs, ours, steps=1000, noisy=False):
     """Both envs reset together (with seed k when an episode ends at step k) and take the same `steps` seeded
     actions (float64, inside the ctrlrange); noisy: Gymnasium's noisy reset state is copied into simloop's env
-    (reset options qpos and qvel). Gymnasium writes ctrl and calls mj_step frame_skip times; simloop takes the same
-    steps, the first begun as the observation's first half (stepper.hpp), the same bits. The observation, reward and
-    termination are computed from the same doubles with Gymnasium's arithmetic in Gymnasium's order, batched:
-    equal bit for bit, not within a tolerance. Returns the episodes started."""
+    (reset options qpos and qvel; a free joint's quaternion normalised first in Gymnasium's env too, as simloop
+    normalises a given qpos and Gymnasium's set_state does not). Gymnasium writes ctrl and calls mj_step frame_skip
+    times; simloop takes the same steps (the first begun as the observation's first half, stepper.hpp), the same
+    bits. The observation, reward and termination are computed from the same doubles with Gymnasium's arithmetic
+    in Gymnasium's order, batched: equal bit for bit, not within a tolerance. Returns the episodes started."""
     nu = theirs.unwrapped.model.nu
     actions = np.random.default_rng(35).uniform(-1.0, 1.0, size=(steps, nu))
     episodes, ended = 0, True
     for k, action in enumerate(actions):
         if ended:
             their_obs, _ = theirs.reset(seed=k)
-            data = theirs.unwrapped.data
+            model, data = theirs.unwrapped.model, theirs.unwrapped.data
+            if noisy and model.jnt_type[0] == 0:  # mjJNT_FREE
+                import mujoco
+
+                mujoco.mju_normalize4(data.qpos[3:7])
+                mujoco.mj_forward(model, data)
+                their_obs = theirs.unwrapped._get_obs()
             options = {"qpos": data.qpos.tolist(), "qvel": data.qvel.tolist()} if noisy else None
             our_obs, _ = ours.reset(seed=k, options=options)
             assert our_obs.tolist() == their_obs.tolist()
@@ -154,3 +161,39 @@ def test_make_vec_steps_as_single_envs_on_simlooops_threads(env_id):
                 expected, reward, *flags, _ = env.step(actions[k, i])
             assert (obs[i].tolist(), rewards[i], terminated[i], truncated[i]) == (expected.tolist(), reward, *flags)
             ended[i] = bool(terminated[i] or truncated[i])
+
+
+def test_ants_contact_forces_are_observed_as_gymnasiums_and_not_zero():
+    # Ant's observation ends with cfrc_ext of its 13 bodies (clipped to +-1), read where Gymnasium's MujocoEnv reads
+    # them: after the decision's last mj_step, filled by mj_rnePostConstraint (no MuJoCo step computes them).
+    theirs = gymnasium_env("Ant-v5", reset_noise_scale=0.0)
+    ours = gymnasium.make("simloop/Ant-v5", reset_noise_scale=0.0)
+    assert ours.unwrapped.observation_names[27] == "torso_cfrc_ext0"
+    actions = np.random.default_rng(3).uniform(-1.0, 1.0, size=(50, 8))
+    theirs.reset(seed=0)
+    ours.reset(seed=0)
+    touching = 0
+    for action in actions:
+        their_obs = theirs.step(action)[0]
+        our_obs = ours.step(action)[0]
+        assert our_obs[27:].tolist() == their_obs[27:].tolist()
+        touching += np.count_nonzero(our_obs[27:]) > 0
+    assert touching > 10  # its legs on the floor
+
+
+@pytest.mark.parametrize(("env_id", "qvel_normal"), [("HalfCheetah-v5", True), ("Hopper-v5", False)])
+def test_reset_noise_has_gymnasiums_shapes_and_scales(env_id, qvel_normal):
+    # Over 300 seeded resets: qpos off the XML's by uniform draws in +-scale (standard deviation scale / sqrt(3));
+    # qvel likewise, or (HalfCheetah, Ant) by scale times a standard normal draw, which passes the scale at times.
+    scale = 0.1
+    quiet = gymnasium.make("simloop/" + env_id, reset_noise_scale=0.0).reset(seed=0)[0]
+    env = gymnasium.make("simloop/" + env_id, reset_noise_scale=scale)
+    nq = len(quiet) // 2  # the positions observed: planar robots have nq == nv, x left out
+    noise = np.array([env.reset(seed=s)[0] - quiet for s in range(300)])
+    positions, velocities = noise[:, :nq], noise[:, nq:]
+    assert np.abs(positions).max() <= scale and np.std(positions) == pytest.approx(scale / np.sqrt(3), rel=0.1)
+    if qvel_normal:
+        assert np.abs(velocities).max() > scale and np.std(velocities) == pytest.approx(scale, rel=0.1)
+    else:
+        assert np.abs(velocities).max() <= scale and np.std(velocities) == pytest.approx(scale / np.sqrt(3), rel=0.1)
+    assert not np.array_equal(env.reset(seed=1)[0], env.reset(seed=2)[0])  # each seed its own draws

@@ -193,7 +193,7 @@ def test_make_vec_env_refuses_what_it_cannot_do():
 
 def test_ppo_trains_on_it_with_no_code_between():
     # Episodes of 100 decisions (Gymnasium's are 1,000), so that some end and are logged.
-    venv = make_vec_env(TRAIN_ID, n_envs=4, seed=0, threads=2, max_episode_steps=100, reset_noise_scale=0.0)
+    venv = make_vec_env(TRAIN_ID, n_envs=4, seed=0, threads=2, max_episode_steps=100)
     model = PPO(
         "MlpPolicy", venv, n_steps=64, batch_size=64, n_epochs=1, policy_kwargs={"net_arch": [16]}, seed=0, device="cpu"
     )
