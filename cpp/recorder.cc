@@ -264,8 +264,10 @@ void Recorder::after_step(double* row, const mjModel* m, mjData* d) const noexce
 }
 
 void Recorder::read_data(double* row, const mjModel* m, mjData* d, bool stepped) const noexcept {
-  for (const std::string& array : fills_) {  // (what a step does not fill, as Gymnasium's MujocoEnv fills it)
-    if (stepped && filled_after_constraint(array)) fill_derived(m, d, array);
+  if (stepped) {  // (what a step does not fill, as Gymnasium's MujocoEnv fills it)
+    for (const std::string& array : fills_) {
+      if (filled_after_constraint(array)) fill_derived(m, d, array);
+    }
   }
   for (const Source& s : after_) {
     if (s.kind != Source::kData) continue;

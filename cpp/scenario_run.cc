@@ -172,39 +172,38 @@ void detail::for_each_scenario_run(const Model& scene, const Scenario& scenario,
   // once per distinct configuration but its seed; each run is drawn and
   // prepared again by the worker that runs it and dropped with it, so the
   // batch holds no more runs than it has workers.
-  struct Shape {
-    double timestep;
-    bool audit_energy, perturb;
+  std::list<std::pair<std::pair<double, bool>, Model>> models;  // stable addresses for model_of
+  struct Shape {                                                // what a run prepared on a model shows
+    const Model* model;
+    bool perturb;
     std::optional<std::int64_t> steps;
     std::int64_t schedule_steps;
     int width;
   };
-  std::list<std::pair<Shape, Model>> models;  // stable addresses for model_of
+  std::vector<Shape> shapes;
   std::vector<const Model*> model_of;
   std::vector<std::int64_t> steps;
   std::vector<KeptRows> kept;
   for (std::size_t i = 0; i < configs.size(); ++i) {
     const ScenarioConfig& config = configs[i];
     detail::check_run(i, [&] {
-      const double timestep = run_timestep(scene, scenario, config);
-      auto it = std::find_if(models.begin(), models.end(), [&](const auto& m) {
-        const Shape& s = m.first;
-        return s.timestep == timestep && s.audit_energy == config.audit_energy && s.perturb == config.perturb &&
-               s.steps == config.steps;
+      const std::pair<double, bool> key{run_timestep(scene, scenario, config), config.audit_energy};
+      auto it = std::find_if(models.begin(), models.end(), [&](const auto& m) { return m.first == key; });
+      if (it == models.end()) it = models.emplace(models.end(), key, scene.for_run(key.first, key.second));
+      const Model* model = &it->second;
+      auto shape = std::find_if(shapes.begin(), shapes.end(), [&](const Shape& s) {
+        return s.model == model && s.perturb == config.perturb && s.steps == config.steps;
       });
-      if (it == models.end()) {
-        Model model = scene.for_run(timestep, config.audit_energy);
-        const PreparedRun run = prepare(model, scenario, config);
-        const Shape shape{timestep,     config.audit_energy, config.perturb,
-                          config.steps, run.schedule.steps,  run.recorder->width()};
-        it = models.emplace(models.end(), shape, std::move(model));
+      if (shape == shapes.end()) {
+        const PreparedRun run = prepare(*model, scenario, config);
+        shape = shapes.insert(shapes.end(),
+                              {model, config.perturb, config.steps, run.schedule.steps, run.recorder->width()});
       }
-      const Shape& shape = it->first;
-      model_of.push_back(&it->second);
-      steps.push_back(shape.schedule_steps);
-      detail::check_schedule_run(shape.schedule_steps, config.record_every);
-      check_inputs(it->second.get(), inputs_of(i), shape.schedule_steps);
-      if (sinks[i] == nullptr) kept.push_back({shape.schedule_steps, config.record_every, shape.width});
+      model_of.push_back(model);
+      steps.push_back(shape->schedule_steps);
+      detail::check_schedule_run(shape->schedule_steps, config.record_every);
+      check_inputs(model->get(), inputs_of(i), shape->schedule_steps);
+      if (sinks[i] == nullptr) kept.push_back({shape->schedule_steps, config.record_every, shape->width});
     });
   }
   if (!kept.empty()) check_kept_rows(kept);
