@@ -32,6 +32,8 @@ from ._command import (  # noqa: F401 (the command's)
     _Report,
     _ReportLost,
     _stopped_by,
+    _unraisable,
+    raise_swallowed_signal,
 )
 from .batch_command import batch_command
 from .progress import progress_bar
@@ -123,13 +125,15 @@ def main(argv: Optional[List[str]] = None) -> int:
     if sys.stdout is None:  # started with stdout closed
         return _fail(EXIT_RUN_FAILED, "standard output is closed; nothing was run (the report would be lost)")
     previous: Dict[int, Any] = {}
-    stdout = sys.stdout
+    stdout, unraisablehook = sys.stdout, sys.unraisablehook
     try:
         if threading.current_thread() is threading.main_thread():
             previous = _catch_terminating_signals()
+            sys.unraisablehook = _unraisable(unraisablehook)
         sys.stdout = _Report(stdout)
         code = _main(argv)
         if code == 0:  # (a failure has said its one line: a report lost as well adds none, _finish_stdout)
+            raise_swallowed_signal()
             sys.stdout.flush()
     except KeyboardInterrupt as e:
         name, code = _stopped_by(e)
@@ -139,7 +143,7 @@ def main(argv: Optional[List[str]] = None) -> int:
         done = "the outputs were written" if _outputs_written else "nothing was written"
         code = _fail(EXIT_RUN_FAILED, f"cannot write the report to standard output ({e}); {done}", signal_first=False)
     finally:
-        sys.stdout = stdout
+        sys.stdout, sys.unraisablehook = stdout, unraisablehook
         for signum, handler in previous.items():
             # The command itself (not a call from Python): a signal while the
             # interpreter shuts down ends it at once, as sim_loop does, saying

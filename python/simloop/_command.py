@@ -51,6 +51,28 @@ def _on_signal(signum: int, frame: Optional[FrameType]) -> NoReturn:
     raise _interruption(signum)
 
 
+def raise_swallowed_signal() -> None:
+    """Raises a terminating signal's interruption again when its handler ran
+    but the exception went nowhere: raised inside code whose exceptions
+    Python only reports (importlib's module-lock callback, a __del__), it
+    would be lost and the work go on. Called between pieces of work and as
+    the command ends."""
+    if _raised:
+        raise _interruption(_raised.pop(0))
+
+
+def _unraisable(previous: Any) -> Any:
+    """sys.unraisablehook while the command runs: an interruption that Python
+    could only report is not printed (raise_swallowed_signal raises it again);
+    everything else goes to `previous`."""
+
+    def hook(unraisable: Any) -> None:
+        if not (isinstance(unraisable.exc_value, KeyboardInterrupt) and _raised):
+            previous(unraisable)
+
+    return hook
+
+
 def _stopped_by(e: KeyboardInterrupt) -> "tuple[str, int]":
     """The signal's name and the exit code for a stop."""
     signum = e.signum if isinstance(e, _Terminated) else int(signal.SIGINT)

@@ -13,7 +13,15 @@ import time
 from typing import TYPE_CHECKING, Any, Dict, List
 
 from . import _core
-from ._command import EXIT_RUN_FAILED, EXIT_USAGE, _fail, _peak_memory_mib, _ReportLost, _stopped_by
+from ._command import (
+    EXIT_RUN_FAILED,
+    EXIT_USAGE,
+    _fail,
+    _peak_memory_mib,
+    _ReportLost,
+    _stopped_by,
+    raise_swallowed_signal,
+)
 from .scenario import Scenario
 
 if TYPE_CHECKING:
@@ -206,6 +214,7 @@ def _run_batch(batch: "ParquetBatch", client: Any, earlier: int, started: float)
         bar = tqdm(total=total, initial=earlier, unit="run", file=sys.stderr, dynamic_ncols=True)
 
     def progress(done: int, _total: int) -> None:
+        raise_swallowed_signal()  # a Ctrl-C that Python only reported stops the batch here
         if bar is not None:
             bar.update(done - bar.n)
 

@@ -173,3 +173,68 @@ def test_a_signal_inside_rerun_ends_the_run_with_one_line(tmp_path, where, sig):
     assert proc.returncode == 128 + sig, (where, proc.returncode, proc.stderr)
     assert proc.stderr == f"sim-loop: interrupted ({sig.name}); the earlier outputs were left as they were\n", where
     assert not (tmp_path / "out").exists() or not list((tmp_path / "out").iterdir()), where
+
+
+# A command whose work raises Ctrl-C inside code whose exceptions Python only
+# reports (a __del__, or importlib's module-lock callback, where CI once lost a
+# batch's Ctrl-C): `then` says what the work does after that.
+SWALLOWED = """
+import signal, sys
+import simloop.__main__ as command
+from simloop import batch_command
+
+class Swallows:
+    def __del__(self):
+        signal.raise_signal(signal.{name})
+
+def work(argv):
+    Swallows()
+    {then}
+
+command._main = work
+sys.exit(command.main([]))
+"""
+
+
+@pytest.mark.parametrize("name", ["SIGINT", "SIGTERM"])
+def test_a_signal_python_only_reported_still_stops_the_command(name):
+    done = subprocess.run(
+        [sys.executable, "-c", SWALLOWED.format(name=name, then="return 0")],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        preexec_fn=_defaults,
+    )
+    assert done.returncode == 128 + signal.Signals[name], done.stderr
+    assert done.stderr == f"sim-loop: interrupted ({name}); the earlier outputs were left as they were\n"
+
+
+def test_a_signal_python_only_reported_stops_a_batch_at_its_next_chunk(tmp_path):
+    then = "return batch_command._run_batch(Batch(), None, 0, 0.0)"
+    script = SWALLOWED.replace("command._main = work", BATCH + "command._main = work")
+    done = subprocess.run(
+        [sys.executable, "-c", script.format(name="SIGINT", then=then)],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        preexec_fn=_defaults,
+        cwd=tmp_path,
+    )
+    assert done.returncode == 130, done.stderr
+    kept = "b.parquet not written; 1 of 3 runs kept in b.parts/ (add --resume to finish)"
+    assert done.stderr == f"sim-loop: interrupted (SIGINT); {kept}\n"
+
+
+# A batch of three runs in one-run chunks, the signal already taken: its first chunk is its last.
+BATCH = """
+class Batch:
+    out, parts, runs = "b.parquet", "b.parts", [0, 1, 2]
+    kept = 0
+    def run(self, executor, progress):
+        for self.kept in (1, 2, 3):
+            progress(self.kept, 3)
+        return 3
+    def kept_runs(self):
+        return self.kept
+
+"""
