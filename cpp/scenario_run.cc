@@ -36,14 +36,22 @@ struct PreparedRun {
   std::optional<Recorder> recorder;
 };
 
-PreparedRun prepare(const Model& model, const Scenario& scenario, const ScenarioConfig& config) {
+PreparedRun prepare(const Model& model, const Scenario& scenario, const ScenarioConfig& config,
+                    bool with_recorder = true) {
   const Scenario effective = detail::configured_scenario(scenario, config);
   PreparedRun run;
   run.resolved = resolve(effective, model.get());
   const std::unique_ptr<Draws> draws = make_draws(config.seed, config.rng);
   run.schedule = build_schedule(run.resolved, effective, model.timestep(), *draws);
-  run.recorder.emplace(model.get(), run.resolved, run.schedule, config.audit_energy);
+  if (with_recorder) run.recorder.emplace(model.get(), run.resolved, run.schedule, config.audit_energy);
   return run;
+}
+
+// The bodies a run's schedule pushes, in order: with the run's shape, what its recorder's columns depend on.
+std::vector<int> pushed_bodies(const Schedule& schedule) {
+  std::vector<int> out;
+  for (const Schedule::Force& f : schedule.forces) out.push_back(f.body);
+  return out;
 }
 
 RunRecord labelled(RunRecord result, const mjModel* m, const Scenario& scenario, const ScenarioConfig& config) {
@@ -173,14 +181,20 @@ void detail::for_each_scenario_run(const Model& scene, const Scenario& scenario,
   // prepared again by the worker that runs it and dropped with it, so the
   // batch holds no more runs than it has workers.
   std::list<std::pair<std::pair<double, bool>, Model>> models;  // stable addresses for model_of
-  struct Shape {                                                // what a run prepared on a model shows
+  // What a run prepared on a model shows, and its recorder: made once per
+  // batch, it only reads while runs record, so every worker shares it (a
+  // recorder was a third of a short metrics-only run's cost beyond its steps).
+  struct Shape {
     const Model* model;
     bool perturb;
     std::optional<std::int64_t> steps;
     std::int64_t schedule_steps;
     int width;
+    std::vector<int> pushed;
+    std::optional<Recorder> recorder;
   };
-  std::vector<Shape> shapes;
+  std::list<Shape> shapes;  // stable addresses for shape_of
+  std::vector<const Shape*> shape_of;
   std::vector<const Model*> model_of;
   std::vector<std::int64_t> steps;
   std::vector<KeptRows> kept;
@@ -195,10 +209,12 @@ void detail::for_each_scenario_run(const Model& scene, const Scenario& scenario,
         return s.model == model && s.perturb == config.perturb && s.steps == config.steps;
       });
       if (shape == shapes.end()) {
-        const PreparedRun run = prepare(*model, scenario, config);
-        shape = shapes.insert(shapes.end(),
-                              {model, config.perturb, config.steps, run.schedule.steps, run.recorder->width()});
+        PreparedRun run = prepare(*model, scenario, config);
+        shape = shapes.insert(shapes.end(), {model, config.perturb, config.steps, run.schedule.steps,
+                                             run.recorder->width(), pushed_bodies(run.schedule), std::nullopt});
+        shape->recorder.emplace(std::move(*run.recorder));
       }
+      shape_of.push_back(&*shape);
       model_of.push_back(model);
       steps.push_back(shape->schedule_steps);
       detail::check_schedule_run(shape->schedule_steps, config.record_every);
@@ -209,14 +225,19 @@ void detail::for_each_scenario_run(const Model& scene, const Scenario& scenario,
   if (!kept.empty()) check_kept_rows(kept);
 
   detail::run_jobs(scene, configs.size(), threads, steps, control, [&](std::size_t i, Data& data, RunControl& ctl) {
-    const PreparedRun run = prepare(*model_of[i], scenario, configs[i]);
+    const Shape& shape = *shape_of[i];
+    PreparedRun run = prepare(*model_of[i], scenario, configs[i], false);
+    if (pushed_bodies(run.schedule) != shape.pushed) {  // (not the shape's columns: its own recorder)
+      run.recorder.emplace(model_of[i]->get(), run.resolved, run.schedule, configs[i].audit_energy);
+    }
+    const Recorder& recorder = run.recorder ? *run.recorder : *shape.recorder;
     // A run with scene parameters of its own ([reset] params) runs on its own
     // copy, made here rather than up front: one at a time per worker.
     const Model with_params = with_scene_params(*model_of[i], run.schedule.start.params);
     const mjModel* m = with_params.get();
     done(i, labelled(detail::run_schedule_counted_elsewhere(
-                         m, data.get(), *run.recorder, run.schedule, configs[i].record_every, sinks[i], &ctl,
-                         inputs_of(i), watching.empty() ? std::vector<StepObserver*>{} : watching[i]),
+                         m, data.get(), recorder, run.schedule, configs[i].record_every, sinks[i], &ctl, inputs_of(i),
+                         watching.empty() ? std::vector<StepObserver*>{} : watching[i]),
                      m, scenario, configs[i]));
   });
 }
