@@ -282,8 +282,9 @@ class _Setup:
             return
         made = self.task_info.step(before, actions, after)
         self._step_keys = tuple(made)
+        everyone = bool(stepped.all())
         for key, values in made.items():
-            if key not in infos and stepped.all():  # (every step of a vector env without an ended episode)
+            if everyone and key not in infos:  # (every step of a vector env without an ended episode)
                 infos[key], infos["_" + key] = values, stepped.copy()
                 continue
             into = infos.setdefault(key, np.zeros_like(values))
