@@ -93,7 +93,8 @@ def _velocity(columns: Any, dt: float) -> Callable[[Rows, Rows], np.ndarray]:
 
 def _shared(terms: Callable[[Rows, np.ndarray, Rows], Tuple[Any, ...]]) -> Callable[..., Tuple[Any, ...]]:
     """A step's reward terms, made once for its reward and its info keys: the env asks for both with the same
-    before and after rows (the same objects), so the last result is kept with them and given again."""
+    before and after rows (the same objects), so the last result is kept with them and given again. A step's rows
+    are new arrays, so the next step never meets it (a batch of some envs' rows is a new array too: made anew)."""
     last: List[Any] = [None, None, ()]
 
     def shared(before: Rows, actions: np.ndarray, after: Rows) -> Tuple[Any, ...]:
