@@ -31,7 +31,10 @@ registered simloop/<Task>-v5 against Gymnasium's own <Task>-v5, each as
 gymnasium.make and gymnasium.make_vec make it (1 env; --envs envs:
 simloop's vector entry point on one C++ thread against Gymnasium's
 SyncVectorEnv), reset_noise_scale=0, an ended episode reset; target
-(issue 35) <= 1.0 x at --envs envs. The load average is printed.
+(issue 35) <= 1.0 x at --envs envs. Where EnvPool is installed, the --envs
+envs also against EnvPool's same task (make_gymnasium, one thread, its own
+bundled MuJoCo and its own C++ reward: reported, no target). The load
+average is printed.
 
     .venv-pypi/bin/python bench/bench_gym_env.py [--rounds 21] [--calls 2000] [--every 1,10] [--envs 8]
     .venv-pypi/bin/python bench/bench_gym_env.py --v5 HalfCheetah,Hopper,Walker2d,Ant,Humanoid [--envs 8]
@@ -124,6 +127,30 @@ class Restarting:
             self.env.reset()
 
 
+class EnvPoolEnvs:
+    """EnvPool's <task>-v5, n envs on one thread, stepped as a vector env (it resets ended envs itself)."""
+
+    def __init__(self, pool) -> None:
+        self.pool = pool
+
+    def reset(self, seed):
+        self.pool.reset()
+
+    def step(self, actions):
+        self.pool.step(actions)
+
+
+def envpool_envs(task, n):
+    """EnvPool's task where it is installed and has it, else None (said in a line)."""
+    try:
+        import envpool
+
+        return EnvPoolEnvs(envpool.make_gymnasium(f"{task}-v5", num_envs=n, batch_size=n, num_threads=1, seed=0))
+    except (ImportError, ValueError, KeyError) as e:  # (not installed; no such task in this EnvPool)
+        print(f"    (EnvPool's {task}-v5 left out: {type(e).__name__}: {e})")
+        return None
+
+
 def compare(label, ours, theirs, actions, rounds, per_call, target, them="MujocoEnv"):
     """Times ours and theirs over the same actions, alternating which goes first."""
     timed(ours, actions, 0), timed(theirs, actions, 0)  # warm up
@@ -165,6 +192,10 @@ def v5_tasks(tasks, args) -> None:
         batch = rng.uniform(-0.4, 0.4, size=(max(args.calls // args.envs, 1),) + ours.action_space.shape)
         label = f"{args.envs} envs (make_vec: simloop's on 1 C++ thread, Gymnasium's SyncVectorEnv)"
         compare(label, ours, theirs, batch, args.rounds, args.envs, 1.0, f"Gymnasium's {task}")
+        pool = envpool_envs(task, args.envs)
+        if pool is not None:
+            label = f"{args.envs} envs against EnvPool's {task}-v5 (1 thread; its own MuJoCo and C++ task: no target)"
+            compare(label, ours, pool, batch, args.rounds, args.envs, None, "EnvPool")
         ours.close(), theirs.close()
     print(f"  load average after: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
 

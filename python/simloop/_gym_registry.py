@@ -21,7 +21,9 @@ _V5_TASKS = {
     "Swimmer": "swimmer",
     "Ant": "ant",
     "Humanoid": "humanoid",
+    "HumanoidStandup": "humanoid_standup",
     "InvertedPendulum": "inverted_pendulum",
+    "InvertedDoublePendulum": "inverted_double_pendulum",
 }
 
 

@@ -64,6 +64,14 @@ _TERMINAL_ENDS = ("warning", "termination")
 _FINITE = float(np.finfo(np.float32).max)
 
 
+class TaskInfo(NamedTuple):
+    """A task's own info keys (gym_tasks: Gymnasium's), made for a batch of rows at once: step(before, actions,
+    after) and reset(rows) return {key: n values (or n rows of values)}; an env's info holds its row's."""
+
+    step: Callable[[np.ndarray, np.ndarray, np.ndarray], Dict[str, np.ndarray]]
+    reset: Callable[[np.ndarray], Dict[str, np.ndarray]]
+
+
 class Rendering(NamedTuple):
     """An env's render arguments: render_mode (None, "rgb_array" or
     "depth_array"), the pictures' width and height, and the view (a dict of
@@ -132,6 +140,8 @@ class _Setup:
         elif terminate is not None:
             self.conditions = [self._condition(c) for c in _sequence_of("terminate", terminate)]
         self.terminates = self.terminate is not None or bool(self.conditions)  # (a hook or a condition)
+        self.task_info: Optional[TaskInfo] = None  # (set by gym_tasks after construction)
+        self._step_keys: Tuple[str, ...] = ()  # (the task's keys in the last step's infos)
 
     def _observe_names(self, observe: Observe) -> Tuple[str, ...]:
         """The names of what observe makes of a row, learnt by calling it once on a row of zeros: its `names`
@@ -248,6 +258,48 @@ class _Setup:
             out["warnings"] = [w.name for w in self.episodes.warnings(i) if w.name in _TERMINATING]
         if ended_by is not None:
             out["ended_by"] = ended_by
+        return out
+
+    def reset_info(self, i: int, row: np.ndarray) -> Dict[str, Any]:
+        """Episode i's info at reset, with the task's keys for its first row (1, width)."""
+        out = self.info(i)
+        if self.task_info is not None:
+            out.update({key: values[0] for key, values in self.task_info.reset(row).items()})
+        return out
+
+    def step_info(self, info: Dict[str, Any], before: np.ndarray, action: np.ndarray, after: np.ndarray) -> Any:
+        """The single env's step info, with the task's keys for its step (before, after (1, width), action (nu,))."""
+        if self.task_info is not None:
+            info.update({key: values[0] for key, values in self.task_info.step(before, action[None], after).items()})
+        return info
+
+    def add_step_infos(
+        self, infos: Dict[str, Any], before: np.ndarray, actions: np.ndarray, after: np.ndarray, stepped: np.ndarray
+    ) -> None:
+        """The task's step keys in a vector env's infos, for the envs that stepped (mask `stepped`), in Gymnasium's
+        layout (zero where masked out), kept beside what a reset already put there; one call for the batch."""
+        if self.task_info is None or not stepped.any():
+            return
+        made = self.task_info.step(before, actions, after)
+        self._step_keys = tuple(made)
+        everyone = bool(stepped.all())
+        for key, values in made.items():
+            if everyone and key not in infos:  # (every step of a vector env without an ended episode)
+                infos[key], infos["_" + key] = values, stepped.copy()
+                continue
+            into = infos.setdefault(key, np.zeros_like(values))
+            into[stepped] = values[stepped]
+            infos["_" + key] = infos.get("_" + key, np.zeros(len(stepped), dtype=bool)) | stepped
+
+    def take_step_info(self, infos: Dict[str, Any], i: int) -> Dict[str, Any]:
+        """Env i's task step keys out of a vector env's infos (its final_info's, as it starts again at once)."""
+        out: Dict[str, Any] = {}
+        for key in self._step_keys:
+            mask = infos["_" + key]
+            if mask[i]:
+                value = infos[key][i]
+                out[key] = value.copy() if isinstance(value, np.ndarray) else value
+                infos[key][i], mask[i] = 0, False
         return out
 
 

@@ -212,7 +212,7 @@ class ScenarioEnv(gymnasium.Env):
             self._np_random, self._np_random_seed = previous
             raise
         self._decisions, self._ended = 0, False
-        info = self._setup.info(0)
+        info = self._setup.reset_info(0, self._obs)
         info["seed"] = np.uint64(episode_seed)
         return self._setup.observed(self._obs)[0], info
 
@@ -236,7 +236,8 @@ class ScenarioEnv(gymnasium.Env):
         ended_by = _ended_by(warned, at_length, self._decisions, self.max_episode_steps, hooked)
         self._ended = ended_by is not None
         terminal = ended_by in _TERMINAL_ENDS
-        return setup.observed(obs)[0], reward, terminal, self._ended and not terminal, setup.info(0, ended_by, warned)
+        info = setup.step_info(setup.info(0, ended_by, warned), before, action, obs)
+        return setup.observed(obs)[0], reward, terminal, self._ended and not terminal, info
 
     def render(self) -> Optional[np.ndarray]:
         """The episode's current state as a picture (render_mode "rgb_array"

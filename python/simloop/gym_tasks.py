@@ -9,25 +9,30 @@ read from the installed gymnasium package, with Gymnasium's defaults and
 keyword arguments for that task (frame_skip, reset_noise_scale, reward
 weights, healthy ranges, exclude_current_positions_from_observation, ...;
 xml_file as Gymnasium resolves it) and simloop's own render_mode, width,
-height, rng, and for the vector env threads, autoreset_mode and
+height, view, rng, and for the vector env threads, autoreset_mode and
 max_episode_steps. Another keyword is a TypeError naming it. The scenario
 records every joint; the observation, reward and termination are made
 from those rows in Gymnasium's arithmetic, in Gymnasium's order, batched:
-the vector env pays no Python per env. Reset noise has Gymnasium's shapes
-and scales, drawn from the episode's seeded generator, not np_random.
-Gymnasium's info keys (x_position, reward_forward, ...) are not given.
+the vector env pays no Python per env (the arithmetic, task by task, is in
+_gym_task_families). Reset noise has Gymnasium's shapes and scales, drawn
+from the episode's seeded generator, not np_random. Gymnasium's info keys
+(x_position, reward_forward, ...) are in info at step and reset, made from
+the same rows (a vector env's in Gymnasium's vector layout, with "_key"
+masks). The default view is Gymnasium's default_camera_config, as its
+render_mode "rgb_array" camera takes it (_view).
 """
 
 from __future__ import annotations
 
 import os
-from typing import Any, Callable, Dict, List, Mapping, NamedTuple, Optional, Tuple
+from typing import Any, Callable, Dict, Mapping, NamedTuple, Optional, Tuple, Union
 
 import gymnasium
 import numpy as np
 
 from . import _core
-from ._gym_setup import batched
+from . import _gym_task_families as families
+from ._gym_task_families import Layout
 from .gym import ScenarioEnv
 from .gym_vector import ScenarioVectorEnv
 from .scenario import Scenario
@@ -36,7 +41,7 @@ from .sim import Sim
 __all__ = ["TASKS", "assets_folder", "make_task"]
 
 # simloop's own keyword arguments, beside the task's.
-_ENV_ARGUMENTS = ("render_mode", "width", "height", "rng")
+_ENV_ARGUMENTS = ("render_mode", "width", "height", "view", "rng")
 _VECTOR_ARGUMENTS = ("threads", "autoreset_mode", "max_episode_steps")
 # An episode ends by Gymnasium's TimeLimit (its max_episode_steps), not by the scenario's length.
 _ENDLESS = _core.MAX_STEPS
@@ -59,214 +64,36 @@ def _xml_path(xml_file: object) -> str:
     return os.path.join(assets_folder(), xml_file)
 
 
-class Layout:
-    """Where qpos and qvel are in a recorded row (every joint recorded), and their names; data: each recorded
-    mjData array's columns (its entries' in their order), which the recorder lays out after the joints'."""
-
-    def __init__(self, names: Tuple[str, ...], model: _core.Model, data: List[Tuple[str, str, int]]) -> None:
-        qpos: List[int] = []
-        qvel: List[int] = []
-        for j, joint in enumerate(model.names("joint")):
-            info = model.object_info("joint", j)
-            for column, count, into in ((joint + "_pos", info["nq"], qpos), (joint + "_vel", info["nv"], qvel)):
-                into.extend(names.index(column if count == 1 else f"{column}{k}") for k in range(count))
-        self.qpos, self.qvel = np.array(qpos), np.array(qvel)
-        self.names = names
-        columns: Dict[str, List[int]] = {}
-        start = len(qpos) + len(qvel)
-        for array, _, count in data:
-            columns.setdefault(array, []).extend(range(start, start + count))
-            start += count
-        assert start == len(names), (start, len(names))  # (every column placed)
-        self.data = {array: np.array(c) for array, c in columns.items()}
-
-    def observe(self, skip: int, clip: Optional[float] = None) -> Callable[[np.ndarray], np.ndarray]:
-        """Gymnasium's observation of the locomotion tasks: qpos without its first `skip` values, then qvel
-        (clipped to +-clip when given)."""
-        positions, velocities = self.qpos[skip:], self.qvel
-
-        def observe(rows: np.ndarray) -> np.ndarray:
-            v = rows[:, velocities]
-            return np.concatenate((rows[:, positions], v if clip is None else np.clip(v, -clip, clip)), axis=1)
-
-        setattr(observe, "names", tuple(self.names[i] for i in np.concatenate((positions, velocities))))  # noqa: B010
-        return observe
-
-
-def _ctrl_cost(weight: float, actions: np.ndarray) -> Any:
-    return weight * np.sum(np.square(actions), axis=1)
-
-
-def _forward(layout: Layout, p: Mapping[str, Any], dt: float) -> Callable[..., np.ndarray]:
-    """forward_reward_weight * x velocity ((x after - x before) / dt, x = qpos[0])."""
-    x = layout.qpos[0]
-    return lambda before, after: p["forward_reward_weight"] * ((after[:, x] - before[:, x]) / dt)
-
-
-def _planar(p: Mapping[str, Any], layout: Layout, dt: float, excluded: int) -> Tuple[Any, Any, Any]:
-    """HalfCheetah and Swimmer: forward - ctrl cost, never terminated; the first `excluded` qpos left out of the
-    observation (with exclude_current_positions_from_observation)."""
-    forward = _forward(layout, p, dt)
-    skip = excluded if p["exclude_current_positions_from_observation"] else 0
-    reward = batched(lambda before, actions, after: forward(before, after) - _ctrl_cost(p["ctrl_cost_weight"], actions))
-    return layout.observe(skip), reward, None
-
-
-def _hopping(p: Mapping[str, Any], layout: Layout, dt: float, healthy: Callable[..., np.ndarray]) -> Tuple[Any, ...]:
-    """Hopper and Walker2d: (forward + healthy reward) - ctrl cost; qvel clipped to +-10 in the observation."""
-    forward = _forward(layout, p, dt)
-
-    def reward(before: np.ndarray, actions: np.ndarray, after: np.ndarray) -> Any:
-        rewards = forward(before, after) + healthy(after) * p["healthy_reward"]
-        return rewards - _ctrl_cost(p["ctrl_cost_weight"], actions)
-
-    terminate = batched(lambda after: ~healthy(after)) if p["terminate_when_unhealthy"] else None
-    return layout.observe(1 if p["exclude_current_positions_from_observation"] else 0, 10.0), batched(reward), terminate
-
-
-def _between(low_high: Tuple[float, float], values: np.ndarray) -> np.ndarray:
-    low, high = low_high
-    return np.logical_and(low < values, values < high)
-
-
-def _hopper(p: Mapping[str, Any], layout: Layout, dt: float) -> Tuple[Any, ...]:
-    def healthy(rows: np.ndarray) -> Any:  # z, angle = qpos[1:3]; the state past x and z in range
-        state = np.concatenate((rows[:, layout.qpos], rows[:, layout.qvel]), axis=1)[:, 2:]
-        in_range = np.all(_between(p["healthy_state_range"], state), axis=1)
-        z, angle = rows[:, layout.qpos[1]], rows[:, layout.qpos[2]]
-        return in_range & _between(p["healthy_z_range"], z) & _between(p["healthy_angle_range"], angle)
-
-    return _hopping(p, layout, dt, healthy)
-
-
-def _walker(p: Mapping[str, Any], layout: Layout, dt: float) -> Tuple[Any, ...]:
-    def healthy(rows: np.ndarray) -> Any:
-        z, angle = rows[:, layout.qpos[1]], rows[:, layout.qpos[2]]
-        return _between(p["healthy_z_range"], z) & _between(p["healthy_angle_range"], angle)
-
-    return _hopping(p, layout, dt, healthy)
-
-
-def _inverted_pendulum(p: Mapping[str, Any], layout: Layout, dt: float) -> Tuple[Any, ...]:
-    """Reward 1 while upright; terminated when the observation is not finite or the pole's angle past 0.2 rad."""
-    observe = layout.observe(0)
-
-    def fallen(rows: np.ndarray) -> Any:
-        obs = observe(rows)
-        return ~np.isfinite(obs).all(axis=1) | (np.abs(obs[:, 1]) > 0.2)
-
-    reward = batched(lambda before, actions, after: (~fallen(after)).astype(np.float64))
-    return observe, reward, batched(fallen)
-
-
-def _ant(p: Mapping[str, Any], layout: Layout, dt: float) -> Tuple[Any, ...]:
-    """Ant: (forward + healthy) - (ctrl + contact cost), from the main body's xpos and every body's cfrc_ext as
-    the last step left them (data_at_step); cfrc_ext clipped to contact_force_range in the cost and the
-    observation (bodies after the world)."""
-    xy, forces = layout.data["xpos"][:2], layout.data["cfrc_ext"]
-    skip = 2 if p["exclude_current_positions_from_observation"] else 0
-    low, high = p["contact_force_range"]
-    state = np.concatenate((layout.qpos, layout.qvel))
-    z = layout.qpos[2]
-
-    def healthy(rows: np.ndarray) -> Any:
-        return (
-            np.isfinite(rows[:, state]).all(axis=1)
-            & (p["healthy_z_range"][0] <= rows[:, z])
-            & (rows[:, z] <= p["healthy_z_range"][1])
-        )
-
-    def reward(before: np.ndarray, actions: np.ndarray, after: np.ndarray) -> Any:
-        x_velocity = ((after[:, xy] - before[:, xy]) / dt)[:, 0]
-        rewards = x_velocity * p["forward_reward_weight"] + healthy(after) * p["healthy_reward"]
-        contact_cost = p["contact_cost_weight"] * np.sum(np.square(np.clip(after[:, forces], low, high)), axis=1)
-        return rewards - (_ctrl_cost(p["ctrl_cost_weight"], actions) + contact_cost)
-
-    positions, velocities = layout.qpos[skip:], layout.qvel
-    observed = np.concatenate((positions, velocities, forces[6:] if p["include_cfrc_ext_in_observation"] else []))
-    clipped = len(positions) + len(velocities)  # (the contact forces after it)
-
-    def observe(rows: np.ndarray) -> np.ndarray:
-        out = rows[:, observed.astype(int)]
-        out[:, clipped:] = np.clip(out[:, clipped:], low, high)
-        return out
-
-    setattr(observe, "names", tuple(layout.names[i] for i in observed.astype(int)))  # noqa: B010
-    terminate = batched(lambda after: ~healthy(after)) if p["terminate_when_unhealthy"] else None
-    return observe, batched(reward), terminate
-
-
-def _ant_data(p: Mapping[str, Any], model: _core.Model) -> List[Tuple[str, str, int]]:
-    return [("xpos", str(p["main_body"]), 3)] + [("cfrc_ext", str(b), 6) for b in range(model.nbody)]
-
-
-def _humanoid(p: Mapping[str, Any], layout: Layout, dt: float) -> Tuple[Any, ...]:
-    """Humanoid: (forward + healthy) - (ctrl + contact cost), forward from the mass centre (body masses times
-    xipos, as the last step left them); the observation adds cinert, cvel, qfrc_actuator past the root and
-    cfrc_ext, each of the bodies after the world."""
-    mass = p["_body_mass"]
-    xipos, cfrc = layout.data["xipos"], layout.data["cfrc_ext"]
-    z = layout.qpos[2]
-
-    def mass_center(rows: np.ndarray) -> Any:
-        centres = np.einsum("b,nbj->nj", mass, rows[:, xipos].reshape(len(rows), -1, 3))
-        return (centres / mass.sum())[:, 0:2]
-
-    def healthy(rows: np.ndarray) -> Any:
-        low, high = p["healthy_z_range"]
-        return (low < rows[:, z]) & (rows[:, z] < high)
-
-    def reward(before: np.ndarray, actions: np.ndarray, after: np.ndarray) -> Any:
-        x_velocity = ((mass_center(after) - mass_center(before)) / dt)[:, 0]
-        rewards = p["forward_reward_weight"] * x_velocity + healthy(after) * p["healthy_reward"]
-        contact_cost = np.clip(
-            p["contact_cost_weight"] * np.sum(np.square(after[:, cfrc]), axis=1), *p["contact_cost_range"]
-        )
-        return rewards - (_ctrl_cost(p["ctrl_cost_weight"], actions) + contact_cost)
-
-    parts = [layout.qpos[2 if p["exclude_current_positions_from_observation"] else 0 :], layout.qvel]
-    for array, width in (("cinert", 10), ("cvel", 6), ("qfrc_actuator", 0), ("cfrc_ext", 6)):
-        if p[f"include_{array}_in_observation"]:
-            parts.append(layout.data[array][width:])  # (after the world body; qfrc_actuator: the joints past the root)
-    observed = np.concatenate(parts)
-    observe = lambda rows: rows[:, observed]  # noqa: E731
-    setattr(observe, "names", tuple(layout.names[i] for i in observed))  # noqa: B010
-    terminate = batched(lambda after: ~healthy(after)) if p["terminate_when_unhealthy"] else None
-    return observe, batched(reward), terminate
-
-
-def _humanoid_data(p: Mapping[str, Any], model: _core.Model) -> List[Tuple[str, str, int]]:
-    bodies = [str(b) for b in range(model.nbody)]
-    joints = [(str(j), model.object_info("joint", j)["nv"]) for j in range(1, model.njnt)]
-    return (
-        [("xipos", b, 3) for b in bodies]
-        + [("cinert", b, 10) for b in bodies]
-        + [("cvel", b, 6) for b in bodies]
-        + [("qfrc_actuator", j, nv) for j, nv in joints]
-        + [("cfrc_ext", b, 6) for b in bodies]
-    )
-
-
 class Task(NamedTuple):
     """A Gymnasium v5 task: its keyword arguments with Gymnasium's defaults (xml_file and frame_skip among
-    them), how its reset noise is drawn for qpos and qvel, and what makes its observe, reward and terminate."""
+    them), how its reset noise is drawn for qpos and qvel, and what makes its observe, reward, terminate and
+    info keys (parts(params, layout, dt))."""
 
     defaults: Dict[str, Any]
     noise: Tuple[str, str]  # "uniform" (in +-scale) or "normal" (scale times a standard normal draw)
     parts: Callable[..., Tuple[Any, ...]]
+    camera: Mapping[str, Any]  # Gymnasium's default_camera_config (gym_tasks makes it the env's view)
     # The mjData arrays it records ([array, object, count]), read as the last step left them (data_at_step).
-    data: Callable[[Mapping[str, Any], _core.Model], List[Tuple[str, str, int]]] = lambda p, model: []
+    data: Callable[[Mapping[str, Any], _core.Model], families.Data] = lambda p, model: []
+
+
+def _camera(distance: float, lookat: Optional[Tuple[float, ...]] = None, elevation: Optional[float] = None) -> Any:
+    """Gymnasium's DEFAULT_CAMERA_CONFIG of a task, but trackbodyid (its rgb_array camera is a free one)."""
+    camera = {"distance": distance, "lookat": lookat, "elevation": elevation}
+    return {k: v for k, v in camera.items() if v is not None}
 
 
 _LOCOMOTION = {"forward_reward_weight": 1.0}
 _EXCLUDE = {"exclude_current_positions_from_observation": True}
 _HEALTHY = {"healthy_reward": 1.0, "terminate_when_unhealthy": True}
+_HUMANOID_OBSERVES = {f"include_{a}_in_observation": True for a in ("cinert", "cvel", "qfrc_actuator", "cfrc_ext")}
 TASKS: Dict[str, Task] = {
     "HalfCheetah": Task(
         dict(xml_file="half_cheetah.xml", frame_skip=5, **_LOCOMOTION, ctrl_cost_weight=0.1, reset_noise_scale=0.1)
         | _EXCLUDE,
         ("uniform", "normal"),
-        lambda p, layout, dt: _planar(p, layout, dt, 1),
+        lambda p, layout, dt: families.planar(p, layout, dt, 1),
+        _camera(4.0),
     ),
     "Hopper": Task(
         dict(xml_file="hopper.xml", frame_skip=4, **_LOCOMOTION, ctrl_cost_weight=1e-3, **_HEALTHY)
@@ -274,20 +101,23 @@ TASKS: Dict[str, Task] = {
         | dict(healthy_angle_range=(-0.2, 0.2), reset_noise_scale=5e-3)
         | _EXCLUDE,
         ("uniform", "uniform"),
-        _hopper,
+        families.hopper,
+        _camera(3.0, (0.0, 0.0, 1.15), -20.0),
     ),
     "Walker2d": Task(
         dict(xml_file="walker2d_v5.xml", frame_skip=4, **_LOCOMOTION, ctrl_cost_weight=1e-3, **_HEALTHY)
         | dict(healthy_z_range=(0.8, 2.0), healthy_angle_range=(-1.0, 1.0), reset_noise_scale=5e-3)
         | _EXCLUDE,
         ("uniform", "uniform"),
-        _walker,
+        families.walker,
+        _camera(4.0, (0.0, 0.0, 1.15), -20.0),
     ),
     "Swimmer": Task(
         dict(xml_file="swimmer.xml", frame_skip=4, **_LOCOMOTION, ctrl_cost_weight=1e-4, reset_noise_scale=0.1)
         | _EXCLUDE,
         ("uniform", "uniform"),
-        lambda p, layout, dt: _planar(p, layout, dt, 2),  # (Swimmer leaves out x and y)
+        lambda p, layout, dt: families.planar(p, layout, dt, 2),  # (Swimmer leaves out x and y)
+        {},  # (None: Gymnasium's free camera is at the scene's extent, a distance simloop's view cannot say)
     ),
     "Ant": Task(
         dict(xml_file="ant.xml", frame_skip=5, forward_reward_weight=1, ctrl_cost_weight=0.5)
@@ -296,23 +126,43 @@ TASKS: Dict[str, Task] = {
         | _EXCLUDE
         | dict(include_cfrc_ext_in_observation=True),
         ("uniform", "normal"),
-        _ant,
-        _ant_data,
+        families.ant,
+        _camera(4.0),
+        families.ant_data,
     ),
     "Humanoid": Task(
         dict(xml_file="humanoid.xml", frame_skip=5, forward_reward_weight=1.25, ctrl_cost_weight=0.1)
         | dict(contact_cost_weight=5e-7, contact_cost_range=(-np.inf, 10.0), healthy_reward=5.0)
         | dict(terminate_when_unhealthy=True, healthy_z_range=(1.0, 2.0), reset_noise_scale=1e-2)
         | _EXCLUDE
-        | {f"include_{a}_in_observation": True for a in ("cinert", "cvel", "qfrc_actuator", "cfrc_ext")},
+        | _HUMANOID_OBSERVES,
         ("uniform", "uniform"),
-        _humanoid,
-        _humanoid_data,
+        families.humanoid,
+        _camera(4.0, (0.0, 0.0, 2.0), -20.0),
+        families.humanoid_data,
+    ),
+    "HumanoidStandup": Task(
+        dict(xml_file="humanoidstandup.xml", frame_skip=5, uph_cost_weight=1, ctrl_cost_weight=0.1)
+        | dict(impact_cost_weight=0.5e-6, impact_cost_range=(-np.inf, 10.0), reset_noise_scale=1e-2)
+        | _EXCLUDE
+        | _HUMANOID_OBSERVES,
+        ("uniform", "uniform"),
+        families.humanoid_standup,
+        _camera(4.0, (0.0, 0.0, 0.8925), -20.0),
+        lambda p, model: families.humanoid_data(p, model, standup=True),
     ),
     "InvertedPendulum": Task(
         dict(xml_file="inverted_pendulum.xml", frame_skip=2, reset_noise_scale=0.01),
         ("uniform", "uniform"),
-        _inverted_pendulum,
+        families.inverted_pendulum,
+        _camera(2.04),
+    ),
+    "InvertedDoublePendulum": Task(
+        dict(xml_file="inverted_double_pendulum.xml", frame_skip=5, healthy_reward=10.0, reset_noise_scale=0.1),
+        ("uniform", "normal"),
+        families.inverted_double_pendulum,
+        {},  # (Gymnasium's default_camera_config is None, as Swimmer's)
+        lambda p, model: [("site_xpos", "0", 3), ("qfrc_constraint", "0", 1)],  # (the tip; the cart's slider)
     ),
 }
 
@@ -353,14 +203,32 @@ def make_task(name: str, num_envs: Optional[int] = None, **kwargs: Any) -> Any:
     frame_skip = params["frame_skip"]
     probe = ScenarioEnv(scenario, model=model)  # (the recorded columns: no episode is started)
     layout = Layout(probe.observation_names, model, data)
-    params["_body_mass"] = np.array(Sim(model).named.model.body_mass)  # (Humanoid's mass centre)
-    observe, reward, terminate = task.parts(params, layout, model.timestep * frame_skip)
+    sim = Sim(model)  # (the model's facts Gymnasium's tasks read: its initial state, masses, geoms)
+    params.update(_qpos0=np.array(sim.named.model.qpos0), _body_mass=np.array(sim.named.model.body_mass))
+    params["_timestep"] = model.timestep
+    observe, reward, terminate, info = task.parts(params, layout, model.timestep * frame_skip)
     common = {"control_every": frame_skip, "observe": observe, "reward": reward, "terminate": terminate, "model": model}
     common["data_at_step"] = bool(data)
+    arguments.setdefault("view", _view(task.camera, sim))
+    env: Union[ScenarioEnv, ScenarioVectorEnv]
     if num_envs is None:
-        return ScenarioEnv(scenario, **common, **arguments)
-    arguments.setdefault("max_episode_steps", 1000)
-    return ScenarioVectorEnv(scenario, num_envs, **common, **arguments)
+        env = ScenarioEnv(scenario, **common, **arguments)
+    else:
+        arguments.setdefault("max_episode_steps", 1000)
+        env = ScenarioVectorEnv(scenario, num_envs, **common, **arguments)
+    env._setup.task_info = info  # (Gymnasium's info keys, made from the rows as the reward is)
+    return env
+
+
+def _view(camera: Mapping[str, Any], sim: Sim) -> Dict[str, Any]:
+    """Gymnasium's default_camera_config as a view: its render_mode "rgb_array" camera is MuJoCo's free camera
+    (mjCAMERA_FREE, which ignores trackbodyid), at the config's distance and lookat, else at the median of the geoms'
+    positions (here the scene's initial state's; Gymnasium's at the first picture's), azimuth 90 and elevation -45
+    (a new MjvCamera's) unless the config says; with no distance (Swimmer's and InvertedDoublePendulum's config is
+    None: Gymnasium's is the scene's extent) simloop's default free camera's, 1.5 times the extent."""
+    lookat = camera.get("lookat", np.median(np.array(sim.named.data.geom_xpos), axis=0))
+    view = {"azimuth": 90.0, "elevation": camera.get("elevation", -45.0), "lookat": [float(x) for x in lookat]}
+    return view | ({"distance": camera["distance"]} if "distance" in camera else {})
 
 
 def _entry_points(name: str) -> Tuple[Callable[..., ScenarioEnv], Callable[..., ScenarioVectorEnv]]:
@@ -380,4 +248,6 @@ walker2d, walker2d_vector = _entry_points("Walker2d")
 swimmer, swimmer_vector = _entry_points("Swimmer")
 ant, ant_vector = _entry_points("Ant")
 humanoid, humanoid_vector = _entry_points("Humanoid")
+humanoid_standup, humanoid_standup_vector = _entry_points("HumanoidStandup")
 inverted_pendulum, inverted_pendulum_vector = _entry_points("InvertedPendulum")
+inverted_double_pendulum, inverted_double_pendulum_vector = _entry_points("InvertedDoublePendulum")

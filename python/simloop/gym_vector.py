@@ -136,7 +136,7 @@ class ScenarioVectorEnv(VectorEnv):
         obs = self._setup.episodes.reset(i, episode_seed, start)
         self._rngs[i] = rng
         self._decisions[i], self._ended[i] = 0, False
-        info = self._setup.info(i)
+        info = self._setup.reset_info(i, obs[None])
         info["seed"] = np.uint64(episode_seed)
         self._add_info(infos, info, i)
         return obs
@@ -211,6 +211,7 @@ class ScenarioVectorEnv(VectorEnv):
         self._decisions += 1
         rewards = setup.rewards(before, values, obs)
         infos: Dict[str, Any] = {}
+        setup.add_step_infos(infos, before, values, obs, self._everyone)
         if flagged or setup.terminates or self.max_episode_steps is not None:
             hooked = setup.terminations(obs) if setup.terminates else np.zeros(self.num_envs, dtype=bool)
             steps, times = self._end(obs, terminated, truncated, hooked, self._everyone, infos, steps, times)
@@ -254,6 +255,7 @@ class ScenarioVectorEnv(VectorEnv):
             rewards[active] = setup.rewards(before[active], values[active], obs[active], envs)
             if setup.terminates:
                 hooked[active] = setup.terminations(obs[active], envs)
+        setup.add_step_infos(infos, before, values, obs, active)
         steps, times = self._end(obs, terminated, truncated, hooked, active, infos, steps, times)
         self._any_ended = bool(self._ended.any())
         # Every env stepped or was reset: each has its step and time (as
@@ -294,6 +296,7 @@ class ScenarioVectorEnv(VectorEnv):
             truncated[i] = not terminated[i]
             self._ended[i] = True
             if self.autoreset_mode == AutoresetMode.SAME_STEP:
+                info.update(setup.take_step_info(infos, int(i)))  # (this step's task keys: the ended episode's)
                 self._add_info(infos, {"final_obs": setup.observed(obs[i : i + 1])[0], "final_info": info}, int(i))
                 obs[i] = self._reset_one(int(i), None, infos)
             else:

@@ -32,20 +32,29 @@ def _in_tmp(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)  # MuJoCo's default handler writes Gymnasium's load warnings to MUJOCO_LOG.TXT here
 
 
+def assert_same_info(ours, theirs, k):
+    """Gymnasium's info keys are in simloop's info, each the same value, bit for bit (simloop's own step, time and
+    seed beside them)."""
+    assert set(theirs) <= set(ours), (k, set(theirs) - set(ours))
+    for key, value in theirs.items():
+        assert np.asarray(ours[key]).tolist() == np.asarray(value).tolist(), (k, key)
+
+
 def step_both(theirs, ours, steps=1000, noisy=False):
     """Both envs reset together (with seed k when an episode ends at step k) and take the same `steps` seeded
     actions (float64, inside the ctrlrange); noisy: Gymnasium's noisy reset state is copied into simloop's env
     (reset options qpos and qvel; a free joint's quaternion normalised first in Gymnasium's env too, as simloop
     normalises a given qpos and Gymnasium's set_state does not). Gymnasium writes ctrl and calls mj_step frame_skip
     times; simloop takes the same steps (the first begun as the observation's first half, stepper.hpp), the same
-    bits. The observation, reward and termination are computed from the same doubles with Gymnasium's arithmetic
-    in Gymnasium's order, batched: equal bit for bit, not within a tolerance. Returns the episodes started."""
+    bits. The observation, reward, termination and Gymnasium's info keys are computed from the same doubles with
+    Gymnasium's arithmetic in Gymnasium's order, batched: equal bit for bit, not within a tolerance. Returns the
+    episodes started."""
     nu = theirs.unwrapped.model.nu
     actions = np.random.default_rng(35).uniform(-1.0, 1.0, size=(steps, nu))
     episodes, ended = 0, True
     for k, action in enumerate(actions):
         if ended:
-            their_obs, _ = theirs.reset(seed=k)
+            their_obs, their_info = theirs.reset(seed=k)
             model, data = theirs.unwrapped.model, theirs.unwrapped.data
             if noisy and model.jnt_type[0] == 0:  # mjJNT_FREE
                 import mujoco
@@ -54,14 +63,16 @@ def step_both(theirs, ours, steps=1000, noisy=False):
                 mujoco.mj_forward(model, data)
                 their_obs = theirs.unwrapped._get_obs()
             options = {"qpos": data.qpos.tolist(), "qvel": data.qvel.tolist()} if noisy else None
-            our_obs, _ = ours.reset(seed=k, options=options)
+            our_obs, our_info = ours.reset(seed=k, options=options)
             assert our_obs.tolist() == their_obs.tolist()
+            assert_same_info(our_info, their_info, k)
             episodes += 1
-        their_obs, their_reward, their_terminated, their_truncated, _ = theirs.step(action)
-        our_obs, our_reward, our_terminated, our_truncated, _ = ours.step(action)
+        their_obs, their_reward, their_terminated, their_truncated, their_info = theirs.step(action)
+        our_obs, our_reward, our_terminated, our_truncated, our_info = ours.step(action)
         assert our_obs.tolist() == their_obs.tolist(), k
         assert our_reward == their_reward, k
         assert (our_terminated, our_truncated) == (their_terminated, their_truncated), k
+        assert_same_info(our_info, their_info, k)
         ended = their_terminated or their_truncated
     return episodes
 
@@ -74,8 +85,9 @@ def test_a_task_steps_as_gymnasiums_bit_for_bit(env_id):
     assert ours.observation_space.shape == theirs.observation_space.shape
     assert ours.spec.max_episode_steps == theirs.spec.max_episode_steps == 1000
     episodes = step_both(theirs, ours)
-    # HalfCheetah and Swimmer run their one episode to the TimeLimit; the others fall, or tip, and start again.
-    assert episodes == 1 if env_id in ("HalfCheetah-v5", "Swimmer-v5") else episodes > 1
+    # HalfCheetah, Swimmer and HumanoidStandup run their one episode to the TimeLimit (nothing ends them); the
+    # others fall, or tip, and start again.
+    assert episodes == 1 if env_id in ("HalfCheetah-v5", "Swimmer-v5", "HumanoidStandup-v5") else episodes > 1
 
 
 @pytest.mark.parametrize("env_id", IDS)
@@ -197,3 +209,78 @@ def test_reset_noise_has_gymnasiums_shapes_and_scales(env_id, qvel_normal):
     else:
         assert np.abs(velocities).max() <= scale and np.std(velocities) == pytest.approx(scale / np.sqrt(3), rel=0.1)
     assert not np.array_equal(env.reset(seed=1)[0], env.reset(seed=2)[0])  # each seed its own draws
+
+
+def assert_same_infos(ours, theirs, k):
+    """Gymnasium's vector infos (an array per key and its "_key" mask; final_info a dict of them) are in simloop's,
+    the same values and masks, bit for bit."""
+    assert set(theirs) <= set(ours), (k, set(theirs) - set(ours))
+    for key, value in theirs.items():
+        if isinstance(value, dict):
+            assert_same_infos(ours[key], value, k)
+        elif key == "final_obs":
+            assert [np.asarray(o).tolist() for o in ours[key]] == [np.asarray(o).tolist() for o in value], k
+        else:
+            assert ours[key].dtype == value.dtype and ours[key].tolist() == value.tolist(), (k, key)
+
+
+@pytest.mark.parametrize(
+    ("env_id", "mode"),
+    [("Hopper-v5", "NextStep"), ("Hopper-v5", "SameStep"), ("Ant-v5", "NextStep"), ("Humanoid-v5", "NextStep")],
+)
+def test_make_vec_infos_are_gymnasiums_sync_vector_envs(env_id, mode):
+    # Gymnasium's info keys in its vector layout, with the autoresets of a falling robot: the reset envs' keys are
+    # those of their reset (NextStep), or the ended episode's are in final_info (SameStep); Humanoid's tendon
+    # lengths are rows of an array. Made from the batch's arrays, the same as SyncVectorEnv over Gymnasium's envs.
+    gymnasium_env(env_id)  # (skips where Gymnasium's own env does not make)
+    from gymnasium.vector import AutoresetMode
+
+    kwargs = {"num_envs": 2, "reset_noise_scale": 0.0}
+    theirs = gymnasium.make_vec(
+        env_id, vectorization_mode="sync", vector_kwargs={"autoreset_mode": AutoresetMode(mode)}, **kwargs
+    )
+    ours = gymnasium.make_vec("simloop/" + env_id, autoreset_mode=mode, threads=2, **kwargs)
+    their_obs, their_infos = theirs.reset(seed=7)
+    our_obs, our_infos = ours.reset(seed=7)
+    assert our_obs.tolist() == their_obs.tolist()
+    assert_same_infos(our_infos, their_infos, -1)
+    actions = np.random.default_rng(5).uniform(-1.0, 1.0, size=(150,) + ours.action_space.shape)
+    resets = 0
+    for k, action in enumerate(actions):
+        their_obs, their_rewards, their_terminated, their_truncated, their_infos = theirs.step(action)
+        our_obs, our_rewards, our_terminated, our_truncated, our_infos = ours.step(action)
+        assert our_obs.tolist() == their_obs.tolist(), k
+        assert (our_rewards.tolist(), our_terminated.tolist()) == (their_rewards.tolist(), their_terminated.tolist())
+        assert our_truncated.tolist() == their_truncated.tolist(), k
+        assert_same_infos(our_infos, their_infos, k)
+        resets += int(their_terminated.sum())
+    assert resets >= 2  # (both envs fell at least once: the autoreset's infos were compared)
+
+
+@pytest.mark.parametrize("env_id", ["Hopper-v5", "HalfCheetah-v5", "Ant-v5", "InvertedPendulum-v5"])
+def test_the_default_view_is_gymnasiums_default_camera(env_id, monkeypatch):
+    # Gymnasium's render_mode "rgb_array" picture is taken by a free camera set from its default_camera_config
+    # (distance, lookat, elevation; trackbodyid does nothing to a free camera), else at the median of the geoms:
+    # simloop's default view is that camera, so the pictures at the reset state are the same but for shading (the
+    # two renderers' shadow maps and multisampling), and further from each other than from another view.
+    theirs = gymnasium_env(env_id, render_mode="rgb_array", width=160, height=120, reset_noise_scale=0.0)
+    monkeypatch.setenv("MUJOCO_GL", "egl")  # (Gymnasium's first choice, glfw, needs a screen)
+    theirs.reset(seed=0)
+    try:
+        their_picture = theirs.render()
+    except Exception as e:
+        pytest.skip(f"Gymnasium cannot render here: {type(e).__name__}: {e}")
+    try:
+        ours = gymnasium.make(
+            "simloop/" + env_id, render_mode="rgb_array", width=160, height=120, reset_noise_scale=0.0
+        )
+    except RuntimeError as e:
+        pytest.skip(f"simloop cannot render here: {e}")
+    ours.reset(seed=0)
+    near = np.abs(ours.render().astype(int) - their_picture).mean()  # (levels of 255, a pixel's colour)
+    elsewhere = gymnasium.make(
+        "simloop/" + env_id, render_mode="rgb_array", width=160, height=120, view={"distance": 9}
+    )
+    elsewhere.reset(seed=0)
+    far = np.abs(elsewhere.render().astype(int) - their_picture).mean()  # (another view: it can fail)
+    assert near < 2.0 and far > 4 * near, (near, far)
