@@ -33,6 +33,12 @@ before and after.
 
     .venv-pypi/bin/python bench/bench_envpool.py [--envs 1,64] [--threads 1,2] [--rounds 15] [--calls 200] [--load 0]
 
+--instructions counts instructions per env step instead, under valgrind's
+callgrind (apt-get install valgrind), one thread, for each N in --envs:
+what load does not move, where a CPU-time ratio cannot be trusted.
+
+    .venv-pypi/bin/python bench/bench_envpool.py --instructions [--envs 1,64] [--calls 2000]
+
 Needs the PyPI build (mujoco.batch comes with mujoco 3.17+); EnvPool where
 `pip install envpool` works (skipped, with a line saying so, where not).
 """
@@ -44,6 +50,8 @@ import os
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import argparse
+import importlib.util
+import re
 import statistics
 import subprocess
 import sys
@@ -153,14 +161,58 @@ def compare(n: int, threads: int, rounds: int, calls: int) -> None:
         print(f"    simloop / {other}: {cpu:.3f} x the CPU per step; {speed:.3f} x the steps per second (wall)")
 
 
+MAKERS = {"simloop": simloop_env, "EnvPool": envpool_env, "Batch": batch_env}
+
+
+def instructions(name: str, n: int, calls: int) -> int:
+    """The instructions (every thread's) of a process making `calls` step calls of `name`'s N envs, one thread."""
+    command = ["valgrind", "--tool=callgrind", "--callgrind-out-file=/dev/null", sys.executable, __file__]
+    done = subprocess.run([*command, "--child", name, str(n), str(calls)], capture_output=True, text=True)
+    if done.returncode != 0:
+        sys.exit(f"bench_envpool: {name} under callgrind failed: {done.stderr.strip()[-2000:]}")
+    pid = done.stderr.split("==")[1]  # valgrind's first line, ==PID==, is the process it started
+    counts = dict(re.findall(r"==(\d+)== I\s+refs:\s+([\d,]+)", done.stderr))
+    return int(counts[pid].replace(",", ""))
+
+
+def count_instructions(n: int, calls: int) -> None:
+    """Instructions per env step: each stack's process with 2 x calls step calls less the one with calls, over
+    calls x N (what building the env and importing cost drops out), on one thread; the ratios simloop / the others.
+    Unlike CPU time, these do not move with the machine's load."""
+    per_step = {}
+    for name, make in MAKERS.items():
+        if make is envpool_env and importlib.util.find_spec("envpool") is None:
+            print(f"  ({name} left out: not installed here)")
+            continue
+        per_step[name] = (instructions(name, n, 2 * calls) - instructions(name, n, calls)) / (calls * n)
+    print(f"  {n} envs, 1 thread, instructions per env step (callgrind, {calls} and {2 * calls} calls):")
+    for name, count in per_step.items():
+        ratio = "" if name == "simloop" else f"   simloop / {name}: {per_step['simloop'] / count:.3f}"
+        print(f"    {name:8s} {count:10,.0f}{ratio}")
+
+
+def child(name: str, n: int, calls: int) -> None:
+    step = MAKERS[name](n, 1)
+    for a in np.random.default_rng(0).uniform(-1.0, 1.0, (calls, n, 6)):
+        step(a)
+
+
 def main() -> int:
+    if len(sys.argv) > 1 and sys.argv[1] == "--child":
+        child(sys.argv[2], int(sys.argv[3]), int(sys.argv[4]))
+        return 0
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--envs", default="1,64")
     parser.add_argument("--threads", default="1,2")
     parser.add_argument("--rounds", type=int, default=15)
     parser.add_argument("--calls", type=int, default=200)
     parser.add_argument("--load", type=int, default=0, help="busy processes to start beside the benchmark")
+    parser.add_argument("--instructions", action="store_true", help="count instructions instead (callgrind)")
     args = parser.parse_args()
+    if args.instructions:
+        for n in (int(x) for x in args.envs.split(",")):
+            count_instructions(n, max(1, args.calls // n))
+        return 0
     print(
         f"bench_envpool: HalfCheetah, frame_skip {FRAME_SKIP}, MuJoCo {mujoco.__version__}, simloop "
         f"{simloop.__version__}, {args.rounds} rounds of {args.calls} calls, {args.load} busy processes; "
