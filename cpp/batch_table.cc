@@ -5,7 +5,7 @@
 #include <mutex>
 
 #include "run_detail.hpp"
-#include "simloop/scene_params.hpp"
+#include "simloop/scenario.hpp"
 #include "warning_counter.hpp"
 
 namespace simloop {
@@ -25,10 +25,7 @@ std::vector<TableColumn> layout_of(const RunRecord& r) {
     out.push_back({prefix + "start_step", true});
     out.push_back({prefix + "steps", true});
   }
-  for (const SceneParam& p : r.schedule.start.params) {
-    const std::string kind = scene_param_kind_name(p.kind);
-    out.push_back({p.name.empty() ? kind : kind + "_" + p.name, false});  // tables.py's param_column
-  }
+  for (auto& column : drawn_columns(r.schedule.start)) out.push_back({std::move(column.first), false});
   return out;
 }
 
@@ -42,7 +39,7 @@ std::vector<double> values_of(const RunRecord& r) {
     out.insert(out.end(), f.wrench.begin(), f.wrench.end());
     out.insert(out.end(), {static_cast<double>(f.start), static_cast<double>(f.end - f.start)});
   }
-  for (const SceneParam& p : r.schedule.start.params) out.push_back(p.value);
+  for (const auto& column : drawn_columns(r.schedule.start)) out.push_back(column.second);
   return out;
 }
 

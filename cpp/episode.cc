@@ -61,6 +61,18 @@ struct Episodes::Impl {
   std::optional<Recorder> recorder;
   std::int64_t length = 0;  // an episode's physics steps
   std::vector<Episode> episodes;
+  bool observe_acceleration = false;
+  // Each episode's start being made (stage_reset), apart from the episode
+  // until commit_reset swaps it in: made at the first stage, kept.
+  std::vector<std::unique_ptr<Episode>> staged;
+  std::vector<bool> stage_ready;  // staged[i] holds a start not yet committed
+
+  // Episode e started afresh from `seed` (reset's first part: its state, not its observation).
+  void start(Episode& e, std::uint64_t seed, const ResetSpec* reset) const;
+  // The start's first observation (reset's second part).
+  void first_observation(Episode& e, double* observation) const;
+  // Episode i's staged start, or InvalidArgument.
+  [[nodiscard]] Episode& staged_episode(std::size_t i) const;
   std::unique_ptr<detail::WorkerPool> workers = std::make_unique<detail::WorkerPool>();  // kept from step to step
 
   // The row for the state entering the episode's next step: the inputs
@@ -92,6 +104,9 @@ Episodes::Episodes(const Model& scene, const Scenario& scenario, const ScenarioC
                                         {},
                                         std::nullopt,
                                         0,
+                                        {},
+                                        false,
+                                        {},
                                         {}})) {
   Impl& s = *impl_;
   s.resolved = resolve(s.scenario, s.model.get());
@@ -101,9 +116,12 @@ Episodes::Episodes(const Model& scene, const Scenario& scenario, const ScenarioC
   detail::check_schedule_run(schedule.steps, 1);
   s.recorder.emplace(s.model.get(), s.resolved, schedule);
   s.length = schedule.steps;
+  s.observe_acceleration = read_state || s.recorder->reads_acceleration_stage();
+  s.staged.resize(count);
+  s.stage_ready.assign(count, false);
   s.episodes.reserve(count);
   for (std::size_t i = 0; i < count; ++i) {
-    s.episodes.emplace_back(s.model, read_state || s.recorder->reads_acceleration_stage());
+    s.episodes.emplace_back(s.model, s.observe_acceleration);
     if (i == 0) check_episodes_memory(count, detail::compat::data_bytes(s.episodes.front().data.get()));
   }
 }
@@ -126,30 +144,97 @@ void check_index(std::size_t i, std::size_t count) {
     throw InvalidArgument("episode " + std::to_string(i) + " does not exist: there are " + std::to_string(count));
   }
 }
+
+// mjData's array `name` of e, filled first if MuJoCo fills it only on request.
+FieldView field_of(Episode& e, std::string_view name) {
+  FieldView field = simloop::data_field(e.model.get(), e.data.get(), name);
+  if (filled_on_request(name)) {
+    detail::mujoco_call([&] { fill_derived(e.model.get(), e.data.get(), name); });
+  }
+  return field;
+}
 }  // namespace
+
+void Episodes::Impl::start(Episode& e, std::uint64_t seed, const ResetSpec* reset) const {
+  Scenario scenario_for_reset;
+  const Scenario* spec = &scenario;
+  if (reset != nullptr) {  // this episode's start instead of the scenario's
+    check_reset(resolved, *reset, model.get());
+    scenario_for_reset = scenario;
+    scenario_for_reset.reset = *reset;
+    spec = &scenario_for_reset;
+  }
+  const std::unique_ptr<Draws> draws = make_draws(seed, config.rng);
+  Schedule schedule = build_schedule(resolved, *spec, model.timestep(), *draws);
+  Model with_params = with_scene_params(model, schedule.start.params);
+  e.schedule = std::move(schedule);
+  e.model = std::move(with_params);
+  e.inputs.emplace(e.schedule, false);  // ctrl is the actions'
+  e.step = 0;
+  e.core.reset(e.model.get(), e.data.get(), {-1, &e.schedule.start});  // as run_loop starts
+}
+
+void Episodes::Impl::first_observation(Episode& e, double* observation) const {
+  if (recorder->data_at_step()) read_data(e, observation, false);
+  observe(e, observation);
+}
 
 void Episodes::reset(std::size_t i, std::uint64_t seed, double* observation, const ResetSpec* reset) {
   Impl& s = *impl_;
   check_index(i, s.episodes.size());
   Episode& e = s.episodes[i];
-  Scenario scenario_for_reset;
-  const Scenario* spec = &s.scenario;
-  if (reset != nullptr) {  // this episode's start instead of the scenario's
-    check_reset(s.resolved, *reset, s.model.get());
-    scenario_for_reset = s.scenario;
-    scenario_for_reset.reset = *reset;
-    spec = &scenario_for_reset;
+  s.start(e, seed, reset);
+  s.first_observation(e, observation);
+}
+
+void Episodes::stage_reset(std::size_t i, std::uint64_t seed, const ResetSpec* reset) {
+  Impl& s = *impl_;
+  check_index(i, s.episodes.size());
+  std::unique_ptr<Episode>& staged = s.staged[i];
+  if (!staged) {
+    const std::size_t made = static_cast<std::size_t>(std::count_if(
+        s.staged.begin(), s.staged.end(), [](const std::unique_ptr<Episode>& e) { return e != nullptr; }));
+    check_episodes_memory(s.episodes.size() + made + 1, detail::compat::data_bytes(s.episodes.front().data.get()));
+    staged = std::make_unique<Episode>(s.model, s.observe_acceleration);
   }
-  const std::unique_ptr<Draws> draws = make_draws(seed, s.config.rng);
-  Schedule schedule = build_schedule(s.resolved, *spec, s.model.timestep(), *draws);
-  Model model = with_scene_params(s.model, schedule.start.params);
-  e.schedule = std::move(schedule);
-  e.model = std::move(model);
-  e.inputs.emplace(e.schedule, false);  // ctrl is the actions'
-  e.step = 0;
-  e.core.reset(e.model.get(), e.data.get(), {-1, &e.schedule.start});  // as run_loop starts
-  if (s.recorder->data_at_step()) s.read_data(e, observation, false);
-  s.observe(e, observation);
+  s.stage_ready[i] = false;
+  s.start(*staged, seed, reset);
+  s.stage_ready[i] = true;
+}
+
+Episode& Episodes::Impl::staged_episode(std::size_t i) const {
+  if (i >= staged.size() || !staged[i] || !stage_ready[i]) {
+    throw InvalidArgument("episode " + std::to_string(i) + " has no start staged: stage_reset it first");
+  }
+  return *staged[i];
+}
+
+FieldView Episodes::staged_field(std::size_t i, std::string_view name) {
+  return field_of(impl_->staged_episode(i), name);
+}
+
+const Model& Episodes::staged_model(std::size_t i) const { return impl_->staged_episode(i).model; }
+
+void Episodes::commit_reset(std::size_t i, double* observation) {
+  Impl& s = *impl_;
+  Episode& e = s.staged_episode(i);
+  mjData* d = e.data.get();
+  const mjModel* m = e.model.get();
+  // What the caller wrote, made consistent: quaternions unit as a given
+  // qpos's are, then everything MuJoCo derives from the start. The warning
+  // counters stay as the reset left them (the first step derives it again).
+  detail::guarded_steps(m, 0, 0, [&] {
+    mj_normalizeQuat(m, d->qpos);
+    detail::derive_uncounted(m, d);
+  });
+  s.first_observation(e, observation);
+  std::swap(s.episodes[i], e);  // the episode as it was is the next stage's
+  s.stage_ready[i] = false;
+}
+
+const Schedule::Start& Episodes::start(std::size_t i) const {
+  check_index(i, impl_->episodes.size());
+  return impl_->episodes[i].schedule.start;
 }
 
 const Model& Episodes::model(std::size_t i) const {
@@ -164,12 +249,7 @@ const mjData* Episodes::data(std::size_t i) const {
 
 FieldView Episodes::data_field(std::size_t i, std::string_view name) {
   check_index(i, impl_->episodes.size());
-  Episode& e = impl_->episodes[i];
-  FieldView field = simloop::data_field(e.model.get(), e.data.get(), name);
-  if (filled_on_request(name)) {
-    detail::mujoco_call([&] { fill_derived(e.model.get(), e.data.get(), name); });
-  }
-  return field;
+  return field_of(impl_->episodes[i], name);
 }
 
 void Episodes::step(const double* actions, std::size_t action_count, std::int64_t every, const std::uint8_t* active,

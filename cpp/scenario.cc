@@ -147,6 +147,7 @@ Schedule build_schedule(const ResolvedScenario& scenario, const Scenario& spec, 
   start_at(s.start.qvel, reset.qvel, std::move(qvel0), reset.qvel_noise, false);
   for (const ResetSpec::Goal& g : reset.goals) {
     Schedule::Start::MocapPos goal;
+    goal.body = g.body;
     for (const auto& [name, mocap] : scenario.mocap_bodies) {
       if (name == g.body) goal.mocap = mocap;
     }
@@ -154,6 +155,18 @@ Schedule build_schedule(const ResolvedScenario& scenario, const Scenario& spec, 
     s.start.goals.push_back(goal);
   }
   return s;
+}
+
+std::vector<std::pair<std::string, double>> drawn_columns(const Schedule::Start& start) {
+  std::vector<std::pair<std::string, double>> out;
+  for (const SceneParam& p : start.params) {
+    const std::string kind = scene_param_kind_name(p.kind);
+    out.emplace_back(p.name.empty() ? kind : kind + "_" + p.name, p.value);  // tables.py's param_column
+  }
+  for (const Schedule::Start::MocapPos& g : start.goals) {
+    for (std::size_t i = 0; i < 3; ++i) out.emplace_back("goal_" + g.body + "_" + "xyz"[i], g.pos[i]);
+  }
+  return out;
 }
 
 }  // namespace simloop

@@ -35,7 +35,6 @@ using namespace pybind11::literals;
 
 using Doubles = py::array_t<double, py::array::c_style | py::array::forcecast>;
 using Part3 = std::optional<std::array<double, 3>>;  // a force or torque, or None
-constexpr std::size_t kRowLabels = 2;                // a recorder row's step and time, ahead of what it observes
 
 // fn(sim, args...) -- a Sim method or a function of a Sim -- as a Python
 // method that holds the Sim's lock. Args: the Python arguments' types.

@@ -86,6 +86,8 @@ py::array field_view(const simloop::FieldView& f, const py::object& owner, bool 
 py::object model_owner(const simloop::Model& model);
 // (rows_count, kind of object a row is or '') of a field: what named indexing reads.
 py::tuple field_rows(const simloop::FieldView& f);
+// A recorder row's step and time, ahead of what it observes.
+constexpr std::size_t kRowLabels = 2;
 // The episodes' views of their state (bindings_episode_state.cc).
 void bind_episode_state(py::class_<PyEpisodes>& episodes);
 

@@ -18,7 +18,8 @@ namespace simloop {
 // A column a run's row holds beyond the ones every row has: for each
 // recorded body (by name) <body>_final_pos_x/y/z and <body>_final_speed,
 // then for each disturbance disturbance<i>_fx..tz, _start_step and _steps,
-// then each scene parameter drawn at reset (param_column's name).
+// then what the start drew (scenario.hpp's drawn_columns: each scene
+// parameter by tables.py's param_column name, each goal's goal_<body>_x/y/z).
 struct TableColumn {
   std::string name;
   bool integer = false;  // a count of steps (held exactly as a double)

@@ -76,6 +76,23 @@ class Episodes {
   // (check_reset) and leaves the episode as it was.
   void reset(std::size_t i, std::uint64_t seed, double* observation, const ResetSpec* reset = nullptr);
 
+  // reset in two calls, around a caller's hook that shapes the start (an
+  // env's on_reset): stage_reset does reset's work up to the start's state
+  // (checks, draws, scene parameters, keyframe, noise, goals) on a second
+  // Data kept for episode i, leaving the episode itself as it was;
+  // staged_field gives that start's mjData arrays to write (qpos, qvel, ...)
+  // and staged_model its model; commit_reset makes the start consistent
+  // (quaternions unit, mj_forward), writes its first observation and swaps
+  // it in as episode i. A stage never committed (the hook failed) changes
+  // nothing; the next stage_reset replaces it. Without a stage, staged_*
+  // and commit_reset throw InvalidArgument.
+  void stage_reset(std::size_t i, std::uint64_t seed, const ResetSpec* reset = nullptr);
+  [[nodiscard]] FieldView staged_field(std::size_t i, std::string_view name);
+  [[nodiscard]] const Model& staged_model(std::size_t i) const;
+  void commit_reset(std::size_t i, double* observation);
+  // What episode i's start drew (its scene parameters, goals, keyframe).
+  [[nodiscard]] const Schedule::Start& start(std::size_t i) const;
+
   // For each episode i with active[i] (all when `active` is null): writes
   // actions[i*nu .. i*nu+nu) into its ctrl and takes `every` physics steps
   // (fewer if the episode reaches its length, or ends on divergence first),

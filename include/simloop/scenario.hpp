@@ -255,7 +255,8 @@ struct Schedule {
     std::vector<SceneParam> params;
     int keyframe = -1;  // the keyframe reset to first, or -1: the scene's reset pose
     struct MocapPos {
-      int mocap = -1;  // the mocap index (body_mocapid)
+      int mocap = -1;    // the mocap index (body_mocapid)
+      std::string body;  // its body's name, for the columns that show it (drawn_columns)
       std::array<double, 3> pos{};
     };
     std::vector<MocapPos> goals;  // written into mocap_pos after the reset
@@ -268,6 +269,12 @@ struct Schedule {
 // at `timestep`.
 [[nodiscard]] Schedule build_schedule(const ResolvedScenario& scenario, const Scenario& spec, double timestep,
                                       Draws& draws);
+
+// What a start drew, as columns (a batch table's, an env's info): each
+// scene parameter's value under tables.py's param_column name (friction,
+// friction_<geom>, mass_<body>, ...), then each goal's goal_<body>_x, _y, _z.
+// Empty for a start that draws none, so such runs' tables keep their columns.
+[[nodiscard]] std::vector<std::pair<std::string, double>> drawn_columns(const Schedule::Start& start);
 
 // One episode's reset options over the scenario's own start: `text` is a
 // scenario file's text holding a [reset] table; each key that table names

@@ -12,7 +12,7 @@ from gymnasium import spaces
 
 from . import _core
 from ._checks import ModelLike, _check_int, _check_keys, _check_seed, _describe
-from .physics import Physics
+from .physics import Physics, StartPhysics
 from .render import EpisodePictures
 from .scenario import RESET_KEYS, ScenarioLike, _scenario_and_scene, reset_toml, scenario_config
 
@@ -21,6 +21,7 @@ from .scenario import RESET_KEYS, ScenarioLike, _scenario_and_scene, reset_toml,
 Reward = Callable[..., Any]
 Observe = Callable[[np.ndarray], Any]
 Terminate = Union[Callable[..., Any], Sequence[Tuple[str, str, float]]]
+OnReset = Callable[[np.random.Generator, StartPhysics], Any]
 _COMPARISONS = {"<": np.less, "<=": np.less_equal, ">": np.greater, ">=": np.greater_equal}
 
 
@@ -102,12 +103,16 @@ class _Setup:
         render: "Rendering",
         observe: Optional[Observe] = None,
         data_at_step: bool = False,
+        on_reset: Optional[OnReset] = None,
     ) -> None:
         scenario, scene = _scenario_and_scene(scenario, model)
         if reward is not None and not callable(reward):
             raise TypeError(
                 f"reward must be None or a callable reward(obs, action, next_obs) -> float, got {_describe(reward)}"
             )
+        if on_reset is not None and not callable(on_reset):
+            raise TypeError(f"on_reset must be None or a callable on_reset(rng, physics), got {_describe(on_reset)}")
+        self.on_reset = on_reset
         # (checked here, at construction: the C++ episodes check it only as they step)
         self.control_every = _check_int("control_every", control_every, 1, _core.MAX_STEPS)
         config = scenario_config(0, rng, timestep, steps, perturb, 1)
@@ -251,6 +256,35 @@ class _Setup:
             return float(_batch_of("reward", reward(before, action[None], after, *extra), 1)[0])
         return _number_from(reward(before[0], action, after[0], *(p[0] for p in extra)))
 
+    def reset_envs(
+        self, envs: Sequence[int], seeds: Sequence[int], start: Optional[str], done: Callable[[int, np.ndarray], None]
+    ) -> None:
+        """Starts env envs[k] from episode seed seeds[k] (start: the reset options' [reset] table, or None), calling
+        done(k, its first observation) as each is in place. With an on_reset hook every start is staged and shaped
+        by the hook before any is put in place (Episodes.stage_reset, then commit_reset: the hook runs between
+        the two calls, with no lock of the episodes held), so a hook that raises leaves every env as it was."""
+        episodes, hook = self.episodes, self.on_reset
+        if hook is None:
+            for k, (i, seed) in enumerate(zip(envs, seeds)):
+                done(k, episodes.reset(i, seed, start))
+            return
+        for i, seed in zip(envs, seeds):
+            episodes.stage_reset(i, seed, start)
+            hook(start_rng(seed), StartPhysics(episodes, i))
+        for k, i in enumerate(envs):
+            done(k, episodes.commit_reset(i))
+
+    def start_info(self, i: int, seed: int, row: np.ndarray) -> Dict[str, Any]:
+        """Episode i's info at its reset: step, time, its seed (a numpy uint64), what its start drew (its
+        keyframe's name; each scene parameter and each goal coordinate by its batch-table column:
+        friction_<geom>, mass_<body>, goal_<body>_x, ...) and a task's own keys for its first row (1, width)."""
+        info = self.info(i)
+        info["seed"] = np.uint64(seed)
+        info.update(self.episodes.drawn(i))
+        if self.task_info is not None:
+            info.update({key: values[0] for key, values in self.task_info.reset(row).items()})
+        return info
+
     def info(self, i: int, ended_by: Optional[str] = None, warned: bool = False) -> Dict[str, Any]:
         """Episode i's info; `warned`: it ended on a warning, which the info names."""
         out: Dict[str, Any] = {"step": self.episodes.steps_taken(i), "time": self.episodes.time(i)}
@@ -258,13 +292,6 @@ class _Setup:
             out["warnings"] = [w.name for w in self.episodes.warnings(i) if w.name in _TERMINATING]
         if ended_by is not None:
             out["ended_by"] = ended_by
-        return out
-
-    def reset_info(self, i: int, row: np.ndarray) -> Dict[str, Any]:
-        """Episode i's info at reset, with the task's keys for its first row (1, width)."""
-        out = self.info(i)
-        if self.task_info is not None:
-            out.update({key: values[0] for key, values in self.task_info.reset(row).items()})
         return out
 
     def step_info(self, info: Dict[str, Any], before: np.ndarray, action: np.ndarray, after: np.ndarray) -> Any:
@@ -368,6 +395,12 @@ def _start(options: Dict[str, Any]) -> Optional[str]:
     leaves out stay the scenario's (the C++ reset_over)."""
     reset = {k: v for k, v in options.items() if k in RESET_KEYS}
     return reset_toml(reset) if reset else None
+
+
+def start_rng(seed: int) -> np.random.Generator:
+    """An on_reset hook's generator for the episode of this seed: numpy's PCG64 over the first child of
+    SeedSequence(seed), a stream apart from the one the scenario's "numpy" generator draws from that seed."""
+    return np.random.Generator(np.random.PCG64(np.random.SeedSequence(seed).spawn(1)[0]))
 
 
 def _check_max_episode_steps(value: object) -> Optional[int]:

@@ -52,9 +52,20 @@ Episodes, include/simloop/episode.hpp):
   state offscreen (simloop.Renderer), width x height pixels, from `view`
   (camera, track, distance, azimuth, elevation); metadata["render_fps"] is
   the decisions per simulated second.
-- info: "step" (physics steps since reset) and "time" (s) always; "seed"
-  (the episode's, a numpy uint64) from reset; "ended_by" on the step that
-  ends an episode: "warning", "termination", "length" or "max_episode_steps".
+- on_reset(rng, physics): called at every reset (the vector env's
+  autoresets too) after the scenario's [reset] and the options are applied:
+  rng a numpy Generator seeded from the episode's seed (the same seed, the
+  same draws), physics the start by name (simloop.physics.StartPhysics:
+  qpos, qvel, act, ctrl, mocap_pos, mocap_quat writable, the rest
+  read-only). The start is then derived again (quaternions made unit,
+  mj_forward) and the first observation observes what the hook wrote. A
+  hook that raises leaves the env as it was, its generator too.
+- info: "step" (physics steps since reset) and "time" (s) always; from
+  reset "seed" (the episode's, a numpy uint64) and what its start drew:
+  "keyframe" (its name) if any, each scene parameter by its batch-table
+  column (friction_<geom>, mass_<body>, gravity, ...) and each goal's
+  goal_<body>_x, _y, _z; "ended_by" on the step that ends an episode:
+  "warning", "termination", "length" or "max_episode_steps".
 
 ScenarioVectorEnv steps N such episodes over one compiled model, one MuJoCo
 data each, on C++ threads with the GIL released. Its infos are Gymnasium's
@@ -73,7 +84,7 @@ from __future__ import annotations
 
 import copy
 import os
-from typing import Any, Dict, Optional, Tuple, cast
+from typing import Any, Dict, List, Optional, Tuple, cast
 
 import gymnasium
 import numpy as np
@@ -83,6 +94,7 @@ from ._checks import ModelLike
 from ._gym_setup import (
     _TERMINAL_ENDS,
     Observe,
+    OnReset,
     Rendering,
     Reward,
     Terminate,
@@ -132,8 +144,10 @@ class ScenarioEnv(gymnasium.Env):
     once at construction: a hook without it is called as before and the
     step does no more for it; with it, each decision takes a whole forward
     pass, so every array is current (the observations' bits are the same).
-    max_episode_steps: truncate after this many env.step calls (None: the
-    scenario's length only). rng, timestep, steps, perturb,
+    on_reset: on_reset(rng, physics), run at every reset once the
+    scenario's [reset] and the options are applied, to shape the start
+    (see the module's documentation). max_episode_steps: truncate after
+    this many env.step calls (None: the scenario's length only). rng, timestep, steps, perturb,
     model: as for run_scenario (steps is the episode's length in physics
     steps). render_mode: None, "rgb_array" (render() gives the state as a
     (height, width, 3) uint8 picture) or "depth_array" ((height, width)
@@ -161,6 +175,7 @@ class ScenarioEnv(gymnasium.Env):
         terminate: Optional[Terminate] = None,
         observe: Optional[Observe] = None,
         data_at_step: bool = False,
+        on_reset: Optional[OnReset] = None,
         max_episode_steps: Optional[int] = None,
         rng: str = "mt19937_64",
         timestep: Optional[float] = None,
@@ -186,6 +201,7 @@ class ScenarioEnv(gymnasium.Env):
             Rendering(render_mode, width, height, view),
             observe,
             data_at_step,
+            on_reset,
         )
         self.render_mode = render_mode
         self.metadata = {**type(self).metadata, "render_fps": self._setup.render_fps}
@@ -206,15 +222,15 @@ class ScenarioEnv(gymnasium.Env):
         previous = copy.deepcopy(self._np_random), self._np_random_seed
         super().reset(seed=seed)
         episode_seed = _episode_seed(self.np_random, seed)
+        rows: List[np.ndarray] = []
         try:
-            self._obs = self._setup.episodes.reset(0, episode_seed, start)[None]
-        except BaseException:  # a start the scene refuses: the env is as it was, its generator too
+            self._setup.reset_envs((0,), (episode_seed,), start, lambda k, row: rows.append(row))
+        except BaseException:  # a start the scene refuses, or on_reset raised: the env is as it was, its generator too
             self._np_random, self._np_random_seed = previous
             raise
+        self._obs = rows[0][None]
         self._decisions, self._ended = 0, False
-        info = self._setup.reset_info(0, self._obs)
-        info["seed"] = np.uint64(episode_seed)
-        return self._setup.observed(self._obs)[0], info
+        return self._setup.observed(self._obs)[0], self._setup.start_info(0, episode_seed, self._obs)
 
     def step(self, action: object) -> Tuple[np.ndarray, float, bool, bool, Dict[str, Any]]:
         if self._ended:

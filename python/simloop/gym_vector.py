@@ -15,6 +15,7 @@ from ._checks import ModelLike, _check_int, _check_threads, _describe
 from ._gym_setup import (
     _TERMINAL_ENDS,
     Observe,
+    OnReset,
     Rendering,
     Reward,
     Terminate,
@@ -54,8 +55,10 @@ class ScenarioVectorEnv(VectorEnv):
     autoreset draws the new episode's seed from that env's own np_random, as
     ScenarioEnv.reset() without a seed does, and starts as the scenario's
     own [reset] says (Gymnasium's autoreset passes no options: randomisation
-    every episode needs belongs in the scenario). Other arguments: as for
-    ScenarioEnv (observe is called once a step for the whole batch).
+    every episode needs belongs in the scenario, or in on_reset, which every
+    reset runs, autoresets too). Other arguments: as for ScenarioEnv
+    (observe is called once a step for the whole batch; on_reset once per
+    env reset, every env's start shaped before any is put in place).
     """
 
     metadata = {"render_modes": list(RENDER_MODES), "autoreset_mode": AutoresetMode.NEXT_STEP}
@@ -70,6 +73,7 @@ class ScenarioVectorEnv(VectorEnv):
         terminate: Optional[Terminate] = None,
         observe: Optional[Observe] = None,
         data_at_step: bool = False,
+        on_reset: Optional[OnReset] = None,
         max_episode_steps: Optional[int] = None,
         autoreset_mode: Union[AutoresetMode, str] = AutoresetMode.NEXT_STEP,
         threads: Optional[int] = None,
@@ -108,6 +112,7 @@ class ScenarioVectorEnv(VectorEnv):
             Rendering(render_mode, width, height, view),
             observe,
             data_at_step,
+            on_reset,
         )
         self.render_mode = render_mode
         self.metadata["render_fps"] = self._setup.render_fps
@@ -126,20 +131,35 @@ class ScenarioVectorEnv(VectorEnv):
         self._everyone = np.ones(self.num_envs, dtype=bool)
         self._action_shape = (self.num_envs, self._setup.nu)
 
-    def _reset_one(self, i: int, seed: Optional[int], infos: Dict[str, Any], start: Optional[str] = None) -> np.ndarray:
-        rng = self._rngs[i]
-        if seed is not None or rng is None:
-            rng, _ = seeding.np_random(seed)  # as gymnasium.Env.reset seeds np_random
-        else:
-            rng = copy.deepcopy(rng)  # kept only if the reset succeeds
-        episode_seed = _episode_seed(rng, seed)
-        obs = self._setup.episodes.reset(i, episode_seed, start)
-        self._rngs[i] = rng
-        self._decisions[i], self._ended[i] = 0, False
-        info = self._setup.reset_info(i, obs[None])
-        info["seed"] = np.uint64(episode_seed)
-        self._add_info(infos, info, i)
-        return obs
+    def _reset_envs(
+        self,
+        envs: Sequence[int],
+        seeds: Sequence[Optional[int]],
+        obs: np.ndarray,
+        infos: Dict[str, Any],
+        start: Optional[str] = None,
+    ) -> None:
+        """Resets these envs (seeds: each one's, or None: drawn from its np_random), their first observations
+        into obs; each env's np_random, count and info change as it is put in place (all together when on_reset
+        is given: Setup.reset_envs)."""
+        rngs: List[np.random.Generator] = []
+        for i, seed in zip(envs, seeds):
+            rng = self._rngs[i]
+            if seed is not None or rng is None:
+                rng, _ = seeding.np_random(seed)  # as gymnasium.Env.reset seeds np_random
+            else:
+                rng = copy.deepcopy(rng)  # kept only if the reset succeeds
+            rngs.append(rng)
+        episode_seeds = [_episode_seed(rng, seed) for rng, seed in zip(rngs, seeds)]
+
+        def done(k: int, row: np.ndarray) -> None:
+            i = envs[k]
+            obs[i] = row
+            self._rngs[i] = rngs[k]
+            self._decisions[i], self._ended[i] = 0, False
+            self._add_info(infos, self._setup.start_info(i, episode_seeds[k], row[None]), i)
+
+        self._setup.reset_envs(envs, episode_seeds, start, done)
 
     def reset(
         self, *, seed: Union[int, Sequence[Optional[int]], None] = None, options: Optional[Dict[str, Any]] = None
@@ -174,8 +194,8 @@ class ScenarioVectorEnv(VectorEnv):
                 raise ValueError("the first reset must reset every env (no reset_mask, or all True)")
         obs = self._obs if self._obs is not None else np.zeros((self.num_envs, len(self._setup.names)))
         infos: Dict[str, Any] = {}
-        for i in np.flatnonzero(mask):
-            obs[i] = self._reset_one(int(i), seeds[i], infos, start)
+        envs = [int(i) for i in np.flatnonzero(mask)]
+        self._reset_envs(envs, [seeds[i] for i in envs], obs, infos, start)
         self._obs = obs
         self._any_ended = bool(self._ended.any())
         return self._setup.observed(obs), infos
@@ -230,8 +250,9 @@ class ScenarioVectorEnv(VectorEnv):
             )
         assert self._obs is not None
         resetting = self._ended.copy() if self.autoreset_mode == AutoresetMode.NEXT_STEP else np.zeros_like(self._ended)
-        for i in np.flatnonzero(resetting):
-            self._obs[i] = self._reset_one(int(i), None, infos)
+        if resetting.any():
+            resets = [int(i) for i in np.flatnonzero(resetting)]
+            self._reset_envs(resets, [None] * len(resets), self._obs, infos)
         active = ~resetting
         mask = None if not resetting.any() else active.astype(np.uint8)
         setup = self._setup
@@ -298,10 +319,11 @@ class ScenarioVectorEnv(VectorEnv):
             if self.autoreset_mode == AutoresetMode.SAME_STEP:
                 info.update(setup.take_step_info(infos, int(i)))  # (this step's task keys: the ended episode's)
                 self._add_info(infos, {"final_obs": setup.observed(obs[i : i + 1])[0], "final_info": info}, int(i))
-                obs[i] = self._reset_one(int(i), None, infos)
             else:
                 self._add_info(infos, info, int(i))
-        if self.autoreset_mode == AutoresetMode.SAME_STEP:  # (reset since the step)
+        if self.autoreset_mode == AutoresetMode.SAME_STEP:  # each ended env reset at once
+            envs = [int(i) for i in np.flatnonzero(ending)]
+            self._reset_envs(envs, [None] * len(envs), obs, infos)
             steps, times = setup.episodes.progress()
             self._any_ended = bool(self._ended.any())
         return steps, times

@@ -1,5 +1,6 @@
 """Physics: an environment's MuJoCo state by name, read-only, for its reward
-and terminate hooks, as dm_control's physics.named reads it.
+and terminate hooks, as dm_control's physics.named reads it; StartPhysics:
+an episode's start for its on_reset hook, its state writable.
 
     def reward(obs, action, next_obs, physics):
         return -float(np.linalg.norm(physics.named.data.site_xpos["tip"] - goal))
@@ -15,6 +16,13 @@ subtree_linvel and subtree_angmom, which no step computes, are filled
 state afresh: take what you need inside the hook, not across steps (the
 contacts' and constraints' rows change). Writing raises ValueError: the
 state is the episode's, changed only by its actions and its reset.
+
+StartPhysics is the same over an episode's start while its on_reset hook
+runs (after the scenario's [reset] and the reset options, before the first
+observation): qpos, qvel, act, ctrl, mocap_pos and mocap_quat may be
+written (START_WRITABLE); everything else, the model too, is read-only.
+Derived arrays (xpos, ...) are the start's before the hook's writes: the
+start is derived again (mj_forward) once the hook returns.
 """
 
 from __future__ import annotations
@@ -29,26 +37,41 @@ if TYPE_CHECKING:
 
 
 class _EpisodeSource:
-    """What named reads, for episode i of an Episodes."""
+    """What named reads, for episode i of an Episodes (staged: the start its on_reset hook is shaping)."""
 
-    __slots__ = ("_episodes", "_i")
+    __slots__ = ("_episodes", "_i", "_staged")
 
-    def __init__(self, episodes: _core.Episodes, i: int) -> None:
+    def __init__(self, episodes: _core.Episodes, i: int, staged: bool = False) -> None:
         self._episodes = episodes
         self._i = i
+        self._staged = staged
 
     @property
     def model(self) -> _core.Model:
-        return self._episodes.model_of(self._i)
+        return self._episodes.model_of(self._i, self._staged)
 
     def field_rows(self, owner: str, name: str) -> Tuple[str, str]:
         return self._episodes.field_rows(owner, name)
 
     def data_field(self, name: str) -> "NDArray[Any]":
-        return self._episodes.data_field(self._i, name)
+        view = self._episodes.data_field(self._i, name, self._staged)
+        if self._staged:  # (a staged start's is writable: the arrays to write are START_WRITABLE's views)
+            view.flags.writeable = False
+        return view
 
     def model_field(self, name: str, writable: bool) -> "NDArray[Any]":
-        return self._episodes.model_field(self._i, name)
+        return self._episodes.model_field(self._i, name, self._staged)
+
+
+# The arrays an on_reset hook may write: the start's state and inputs.
+START_WRITABLE = ("qpos", "qvel", "act", "ctrl", "mocap_pos", "mocap_quat")
+
+
+def _refuse_at_start(name: str) -> NoReturn:
+    raise ValueError(
+        f"physics in an on_reset hook may write {', '.join(START_WRITABLE)}: {name} is read-only "
+        "(MuJoCo derives it from those, or it is the model's)"
+    )
 
 
 def _refuse(name: str) -> NoReturn:
@@ -66,3 +89,15 @@ class Physics:
 
     def __init__(self, episodes: _core.Episodes, i: int) -> None:
         self.named = Named(_EpisodeSource(episodes, i), {}, _refuse)
+
+
+class StartPhysics:
+    """Episode i's start by name, for its on_reset hook: START_WRITABLE's
+    arrays writable, the rest read-only (see the module's documentation).
+    Valid while the hook runs."""
+
+    __slots__ = ("named",)
+
+    def __init__(self, episodes: _core.Episodes, i: int) -> None:
+        views = {name: episodes.data_field(i, name, True) for name in START_WRITABLE}
+        self.named = Named(_EpisodeSource(episodes, i, True), views, _refuse_at_start)

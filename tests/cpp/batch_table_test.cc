@@ -115,3 +115,32 @@ TEST(BatchTable, AFinalSpeedIsFiniteWheneverTheVelocityIs) {
 }
 
 }  // namespace
+
+TEST(BatchTable, AGoalsDrawnPositionIsThreeColumnsAndOnlyWhereAScenarioHasGoals) {
+  const simloop::Model scene = simloop::Model::from_xml_string(
+      "<mujoco><worldbody><body name=\"target\" mocap=\"true\"><geom size=\"0.1\" contype=\"0\" "
+      "conaffinity=\"0\"/></body><body name=\"ball\" pos=\"0 0 1\"><freejoint/><geom size=\"0.1\"/></body>"
+      "</worldbody></mujoco>");
+  const std::string base = "steps = 5\n[record]\nbodies = [\"target\"]\n";
+  const simloop::Scenario goal = simloop::Scenario::from_toml_string(
+      base + "[[reset.goal]]\nbody = \"target\"\nuniform = [[0, 0, 0.5], [1, 2, 0.5]]\n", "goal.toml");
+  std::vector<simloop::ScenarioConfig> runs(2);
+  runs[1].seed = 1;
+  const simloop::ScenarioTable t = simloop::run_scenario_table(scene, goal, runs, 1);
+  ASSERT_EQ(t.layouts.size(), 1u);
+  const std::vector<std::string> columns = names(t.layouts[0]);
+  ASSERT_GE(columns.size(), 3u);
+  EXPECT_EQ(std::vector<std::string>(columns.end() - 3, columns.end()),
+            (std::vector<std::string>{"goal_target_x", "goal_target_y", "goal_target_z"}));
+  for (const simloop::TableRow& row : t.rows) {
+    const double* xyz = row.values.data() + row.values.size() - 3;
+    EXPECT_TRUE(xyz[0] >= 0 && xyz[0] < 1 && xyz[1] >= 0 && xyz[1] < 2 && xyz[2] == 0.5);
+    // The drawn position is where the run put the body (its recorded final position: a mocap body stays).
+    EXPECT_EQ(row.values[0], xyz[0]);
+    EXPECT_EQ(row.values[1], xyz[1]);
+  }
+  EXPECT_NE(t.rows[0].values[0], t.rows[1].values[0]);  // each seed its own draw
+  const simloop::ScenarioTable plain =
+      simloop::run_scenario_table(scene, simloop::Scenario::from_toml_string(base, "plain.toml"), runs, 1);
+  for (const std::string& name : names(plain.layouts.at(0))) EXPECT_EQ(name.rfind("goal_", 0), std::string::npos);
+}
