@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "simloop/errors.hpp"
+#include "simloop/scene_params.hpp"
 
 namespace simloop {
 namespace {
@@ -76,9 +77,24 @@ void fields(Io& io, typename Io::template Of<SweepResult> r) {
 }
 
 template <class Io>
+void fields(Io& io, typename Io::template Of<SceneParam> p) {
+  io(p.kind, p.name, p.value);
+}
+template <class Io>
+void fields(Io& io, typename Io::template Of<Schedule::Start::MocapPos> g) {
+  io(g.mocap, g.body, g.pos);
+}
+// What the start drew: a result that travels (an executor's, a pickle) keeps its table's columns.
+template <class Io>
+void fields(Io& io, typename Io::template Of<Schedule::Start> s) {
+  io(s.qpos, s.qvel, s.params, s.keyframe, s.goals);
+}
+
+template <class Io>
 void fields(Io& io, typename Io::template Of<RunRecord> r) {
   io(r.name, r.seed, r.rng, r.perturb, r.disturbed_bodies, r.columns, r.final_row, r.final_state, r.trajectory, r.rows,
-     r.schedule.steps, r.schedule.control_changes, r.schedule.forces, r.warnings, r.timestep, r.sim_time, r.energy);
+     r.schedule.steps, r.schedule.control_changes, r.schedule.forces, r.schedule.start, r.warnings, r.timestep,
+     r.sim_time, r.energy);
 }
 template <class Io>
 void fields(Io& io, typename Io::template Of<RunResult> r) {
@@ -141,6 +157,16 @@ class Writer {
   std::string bytes_;
 };
 
+// The largest byte a bool or an enum of the fields may hold.
+template <class T>
+constexpr std::uint8_t largest() {
+  static_assert(std::is_same_v<T, bool> || std::is_same_v<T, ShoveRng> || std::is_same_v<T, SceneParam::Kind>,
+                "give the new enum's largest value here");
+  if constexpr (std::is_same_v<T, ShoveRng>) return static_cast<std::uint8_t>(ShoveRng::kNumpy);
+  if constexpr (std::is_same_v<T, SceneParam::Kind>) return static_cast<std::uint8_t>(SceneParam::Kind::kGravity);
+  return 1;
+}
+
 class Reader {
  public:
   template <class T>
@@ -170,8 +196,7 @@ class Reader {
     if constexpr (std::is_same_v<T, bool> || std::is_enum_v<T>) {
       std::uint8_t byte = 0;
       field(byte);
-      static_assert(!std::is_enum_v<T> || std::is_same_v<T, ShoveRng>, "check the new enum's range here");
-      if (byte > (std::is_same_v<T, bool> ? 1 : static_cast<std::uint8_t>(ShoveRng::kNumpy))) fail();
+      if (byte > largest<T>()) fail();
       value = static_cast<T>(byte);
     } else if constexpr (std::is_arithmetic_v<T>) {
       std::memcpy(&value, take(sizeof value), sizeof value);

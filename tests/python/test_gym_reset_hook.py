@@ -3,6 +3,8 @@ reset_mask resets too) after the scenario's [reset] and the reset options, with 
 episode's seed and the start writable by name (qpos, qvel, act, ctrl, mocap_pos, mocap_quat); the first observation
 observes what it wrote; a hook that raises leaves the env as it was. And what each start drew, in the info."""
 
+import pickle
+
 import numpy as np
 import pytest
 import simloop
@@ -248,6 +250,10 @@ def test_batch_tables_carry_the_drawn_goals_and_only_where_there_are_goals(scena
     assert table["goal_target_x"][0] != table["goal_target_x"][1]
     assert simloop.run_scenario_batch(with_goal, seeds=[0, 1], metrics_only=True) == simloop.table(table.results)
     assert simloop.table(table.results).columns.keys() == table.columns.keys()
+    # A result that travels (pickled, as an executor's are) keeps what its start drew.
+    travelled = [pickle.loads(pickle.dumps(run)) for run in table.results]
+    assert [run.params for run in travelled] == [run.params for run in table.results]
+    assert simloop.table(travelled) == simloop.table(table.results)
     plain = simloop.run_scenario_batch(scenario, seeds=[0], metrics_only=True)
     assert not any(n.startswith("goal_") for n in plain.column_names)
 
