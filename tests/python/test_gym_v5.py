@@ -145,6 +145,8 @@ def test_an_unknown_keyword_argument_is_a_type_error_naming_it():
         gymnasium.make("simloop/Hopper-v5", healthy_zrange=(0.5, 2.0))
     with pytest.raises(TypeError, match="'threads'"):  # the vector env's, not the single env's
         gymnasium.make("simloop/Hopper-v5", threads=2)
+    with pytest.raises(TypeError, match="'reset_noise_scale'"):  # (Reacher's start is its hook's, as Gymnasium's)
+        gymnasium.make("simloop/Reacher-v5", reset_noise_scale=0.1)
 
 
 def test_xml_file_is_resolved_as_gymnasium_resolves_it():
