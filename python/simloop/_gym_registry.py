@@ -24,7 +24,15 @@ _V5_TASKS = {
     "HumanoidStandup": "humanoid_standup",
     "InvertedPendulum": "inverted_pendulum",
     "InvertedDoublePendulum": "inverted_double_pendulum",
+    "Reacher": "reacher",
+    "Pusher": "pusher",
 }
+_EPISODE_STEPS = {"Reacher": 50, "Pusher": 100}  # (Gymnasium's max_episode_steps where not 1000)
+
+
+def episode_steps(task: str) -> int:
+    """Gymnasium's max_episode_steps for its v5 task."""
+    return _EPISODE_STEPS.get(task, 1000)
 
 
 def register_envs(gymnasium) -> None:  # type: ignore[no-untyped-def]
@@ -37,7 +45,7 @@ def register_envs(gymnasium) -> None:  # type: ignore[no-untyped-def]
                 id=f"simloop/{task}-v5",
                 entry_point=f"simloop.gym_tasks:{function}",
                 vector_entry_point=f"simloop.gym_tasks:{function}_vector",
-                max_episode_steps=1000,
+                max_episode_steps=episode_steps(task),
             )
 
 

@@ -9,14 +9,17 @@ read from the installed gymnasium package, with Gymnasium's defaults and
 keyword arguments for that task (frame_skip, reset_noise_scale, reward
 weights, healthy ranges, exclude_current_positions_from_observation, ...;
 xml_file as Gymnasium resolves it) and simloop's own render_mode, width,
-height, view, rng, and for the vector env threads, autoreset_mode and
-max_episode_steps. Another keyword is a TypeError naming it. The scenario
+height, view, rng, on_reset, and for the vector env threads, autoreset_mode
+and max_episode_steps. Another keyword is a TypeError naming it. The scenario
 records every joint; the observation, reward and termination are made
 from those rows in Gymnasium's arithmetic, in Gymnasium's order, batched:
 the vector env pays no Python per env (the arithmetic, task by task, is in
-_gym_task_families). Reset noise has Gymnasium's shapes and scales, drawn
-from the episode's seeded generator, not np_random. Gymnasium's info keys
-(x_position, reward_forward, ...) are in info at step and reset, made from
+_gym_task_families; Reacher's and Pusher's in _gym_goal_tasks). Reset noise
+has Gymnasium's shapes and scales, drawn from the episode's seeded
+generator, not np_random; Reacher's and Pusher's goals are drawn so by
+their task's on_reset hook (on_reset=None: the XML's or the options'
+start). Gymnasium's info keys (x_position, reward_forward, ...) are in
+info at step and reset, made from
 the same rows (a vector env's in Gymnasium's vector layout, with "_key"
 masks). The default view is Gymnasium's default_camera_config, as its
 render_mode "rgb_array" camera takes it (_view).
@@ -31,7 +34,9 @@ import gymnasium
 import numpy as np
 
 from . import _core
+from . import _gym_goal_tasks as goals
 from . import _gym_task_families as families
+from ._gym_registry import episode_steps
 from ._gym_task_families import Layout
 from .gym import ScenarioEnv
 from .gym_vector import ScenarioVectorEnv
@@ -41,7 +46,7 @@ from .sim import Sim
 __all__ = ["TASKS", "assets_folder", "make_task"]
 
 # simloop's own keyword arguments, beside the task's.
-_ENV_ARGUMENTS = ("render_mode", "width", "height", "view", "rng")
+_ENV_ARGUMENTS = ("render_mode", "width", "height", "view", "rng", "on_reset")
 _VECTOR_ARGUMENTS = ("threads", "autoreset_mode", "max_episode_steps")
 # An episode ends by Gymnasium's TimeLimit (its max_episode_steps), not by the scenario's length.
 _ENDLESS = _core.MAX_STEPS
@@ -75,6 +80,8 @@ class Task(NamedTuple):
     camera: Mapping[str, Any]  # Gymnasium's default_camera_config (gym_tasks makes it the env's view)
     # The mjData arrays it records ([array, object, count]), read as the last step left them (data_at_step).
     data: Callable[[Mapping[str, Any], _core.Model], families.Data] = lambda p, model: []
+    # Its on_reset hook, where Gymnasium's reset_model draws more than noise (Reacher's and Pusher's goals).
+    start: Optional[Callable[[Mapping[str, Any]], goals.Hook]] = None
 
 
 def _camera(distance: float, lookat: Optional[Tuple[float, ...]] = None, elevation: Optional[float] = None) -> Any:
@@ -164,6 +171,23 @@ TASKS: Dict[str, Task] = {
         {},  # (Gymnasium's default_camera_config is None, as Swimmer's)
         lambda p, model: [("site_xpos", "0", 3), ("qfrc_constraint", "0", 1)],  # (the tip; the cart's slider)
     ),
+    "Reacher": Task(
+        dict(xml_file="reacher.xml", frame_skip=2, reward_dist_weight=1, reward_control_weight=1),
+        ("uniform", "uniform"),  # (unused: no reset_noise_scale; the start is drawn by the hook)
+        goals.reacher,
+        {},  # (Gymnasium's config is trackbodyid 0 only: its free camera at the scene's extent, as Swimmer's)
+        goals.reacher_data,
+        goals.reacher_reset,
+    ),
+    "Pusher": Task(
+        dict(xml_file="pusher_v5.xml", frame_skip=5, reward_near_weight=0.5, reward_dist_weight=1)
+        | dict(reward_control_weight=0.1),
+        ("uniform", "uniform"),  # (unused, as Reacher's)
+        goals.pusher,
+        _camera(4.0),
+        goals.pusher_data,
+        goals.pusher_reset,
+    ),
 }
 
 
@@ -178,7 +202,7 @@ def _reset(task: Task, scale: float) -> Optional[Dict[str, Any]]:
 
 def make_task(name: str, num_envs: Optional[int] = None, **kwargs: Any) -> Any:
     """Gymnasium's task `name` ("Hopper", a key of TASKS) as a ScenarioEnv, or a ScenarioVectorEnv of num_envs
-    episodes (max_episode_steps 1000 unless given, as Gymnasium registers it)."""
+    episodes (max_episode_steps as Gymnasium registers the task unless given: 1000, Reacher's 50, Pusher's 100)."""
     task = TASKS[name]
     params = dict(task.defaults)
     arguments: Dict[str, Any] = {}
@@ -198,23 +222,26 @@ def make_task(name: str, num_envs: Optional[int] = None, **kwargs: Any) -> Any:
         path,
         steps=_ENDLESS,
         record={"joints": "all", "contacts": False, "data": [(array, name) for array, name, _ in data]},
-        reset=_reset(task, float(params["reset_noise_scale"])),
+        reset=_reset(task, float(params.get("reset_noise_scale", 0.0))),
     )
     frame_skip = params["frame_skip"]
     probe = ScenarioEnv(scenario, model=model)  # (the recorded columns: no episode is started)
     layout = Layout(probe.observation_names, model, data)
     sim = Sim(model)  # (the model's facts Gymnasium's tasks read: its initial state, masses, geoms)
     params.update(_qpos0=np.array(sim.named.model.qpos0), _body_mass=np.array(sim.named.model.body_mass))
+    params["_nv"] = len(sim.named.data.qvel)
     params["_timestep"] = model.timestep
     observe, reward, terminate, info = task.parts(params, layout, model.timestep * frame_skip)
     common = {"control_every": frame_skip, "observe": observe, "reward": reward, "terminate": terminate, "model": model}
     common["data_at_step"] = bool(data)
     arguments.setdefault("view", _view(task.camera, sim))
+    if task.start is not None:  # (on_reset=None or a hook of one's own replaces the goal draw)
+        arguments.setdefault("on_reset", task.start(params))
     env: Union[ScenarioEnv, ScenarioVectorEnv]
     if num_envs is None:
         env = ScenarioEnv(scenario, **common, **arguments)
     else:
-        arguments.setdefault("max_episode_steps", 1000)
+        arguments.setdefault("max_episode_steps", episode_steps(name))
         env = ScenarioVectorEnv(scenario, num_envs, **common, **arguments)
     env._setup.task_info = info  # (Gymnasium's info keys, made from the rows as the reward is)
     return env
@@ -251,3 +278,5 @@ humanoid, humanoid_vector = _entry_points("Humanoid")
 humanoid_standup, humanoid_standup_vector = _entry_points("HumanoidStandup")
 inverted_pendulum, inverted_pendulum_vector = _entry_points("InvertedPendulum")
 inverted_double_pendulum, inverted_double_pendulum_vector = _entry_points("InvertedDoublePendulum")
+reacher, reacher_vector = _entry_points("Reacher")
+pusher, pusher_vector = _entry_points("Pusher")

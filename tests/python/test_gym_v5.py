@@ -12,7 +12,9 @@ gymnasium = pytest.importorskip("gymnasium", reason="needs gymnasium (the gym ex
 gym_tasks = pytest.importorskip("simloop.gym_tasks", reason="needs gymnasium (the gym extra)")
 import simloop  # noqa: E402
 
-IDS = [f"{task}-v5" for task in gym_tasks.TASKS]
+# Reacher and Pusher draw their start and goal in an on_reset hook, with no reset_noise_scale: tested apart below.
+GOAL_IDS = ["Reacher-v5", "Pusher-v5"]
+IDS = [f"{task}-v5" for task in gym_tasks.TASKS if f"{task}-v5" not in GOAL_IDS]
 
 
 def gymnasium_env(env_id: str, **kwargs):
@@ -97,7 +99,7 @@ def test_from_gymnasiums_noisy_reset_state_a_task_steps_as_gymnasiums(env_id):
     step_both(theirs, ours, steps=300, noisy=True)
 
 
-@pytest.mark.parametrize("env_id", IDS)
+@pytest.mark.parametrize("env_id", IDS + GOAL_IDS)
 def test_the_keyword_arguments_and_defaults_are_gymnasiums(env_id):
     theirs = gymnasium_env(env_id)
     signature = inspect.signature(type(theirs.unwrapped).__init__).parameters
@@ -108,15 +110,16 @@ def test_the_keyword_arguments_and_defaults_are_gymnasiums(env_id):
         assert value == signature[name].default, name
 
 
-@pytest.mark.parametrize("env_id", IDS)
+@pytest.mark.parametrize("env_id", IDS + GOAL_IDS)
 def test_each_id_passes_gymnasiums_env_checker(env_id):
     import warnings
 
     from gymnasium.utils.env_checker import check_env
 
-    with warnings.catch_warnings():  # InvertedPendulum's ctrlrange is +-3, in Gymnasium's XML: a remark, not a fault
+    quiet = {} if env_id in GOAL_IDS else {"reset_noise_scale": 0.0}  # (the goal tasks: their hook's draws, seeded)
+    with warnings.catch_warnings():  # InvertedPendulum's and Pusher's ctrlrange are +-3 and +-2: a remark
         warnings.filterwarnings("ignore", message=".*we recommend using a symmetric and normalized space")
-        check_env(gymnasium.make("simloop/" + env_id, reset_noise_scale=0.0).unwrapped)
+        check_env(gymnasium.make("simloop/" + env_id, **quiet).unwrapped)
 
 
 def test_the_keyword_arguments_change_the_task():
@@ -142,6 +145,8 @@ def test_an_unknown_keyword_argument_is_a_type_error_naming_it():
         gymnasium.make("simloop/Hopper-v5", healthy_zrange=(0.5, 2.0))
     with pytest.raises(TypeError, match="'threads'"):  # the vector env's, not the single env's
         gymnasium.make("simloop/Hopper-v5", threads=2)
+    with pytest.raises(TypeError, match="'reset_noise_scale'"):  # (Reacher's start is its hook's, as Gymnasium's)
+        gymnasium.make("simloop/Reacher-v5", reset_noise_scale=0.1)
 
 
 def test_xml_file_is_resolved_as_gymnasium_resolves_it():
@@ -152,13 +157,23 @@ def test_xml_file_is_resolved_as_gymnasium_resolves_it():
         gymnasium.make("simloop/Hopper-v5", xml_file="nothere.xml")
 
 
-@pytest.mark.parametrize("env_id", ["simloop/HalfCheetah-v5", "simloop/Hopper-v5"])
-def test_make_vec_steps_as_single_envs_on_simlooops_threads(env_id):
+@pytest.mark.parametrize(
+    ("env_id", "steps"),
+    [
+        ("simloop/HalfCheetah-v5", 1000),
+        ("simloop/Hopper-v5", 1000),
+        ("simloop/Reacher-v5", 50),
+        ("simloop/Pusher-v5", 100),
+    ],
+)
+def test_make_vec_steps_as_single_envs_on_simlooops_threads(env_id, steps):
     # gymnasium.make_vec takes the vector entry point (one ScenarioVectorEnv, 2 C++ threads): its batched
-    # observations, rewards and flags are those of single envs reset with seeds 7, 8 and autoreset as it does.
-    envs = gymnasium.make_vec(env_id, num_envs=2, reset_noise_scale=0.0, threads=2)
-    assert isinstance(envs, simloop.gym.ScenarioVectorEnv) and envs.max_episode_steps == 1000
-    singles = [gymnasium.make(env_id, reset_noise_scale=0.0) for _ in range(2)]
+    # observations, rewards and flags are those of single envs reset with seeds 7, 8 and autoreset as it does
+    # (Reacher's and Pusher's truncated at 50 and 100 steps, each new start drawn by their hook).
+    quiet = {} if env_id[len("simloop/") :] in GOAL_IDS else {"reset_noise_scale": 0.0}
+    envs = gymnasium.make_vec(env_id, num_envs=2, threads=2, **quiet)
+    assert isinstance(envs, simloop.gym.ScenarioVectorEnv) and envs.max_episode_steps == steps
+    singles = [gymnasium.make(env_id, **quiet) for _ in range(2)]
     obs, _ = envs.reset(seed=7)
     assert obs.tolist() == [env.reset(seed=7 + i)[0].tolist() for i, env in enumerate(singles)]
     np.testing.assert_array_equal(envs.observations, obs)
@@ -284,3 +299,49 @@ def test_the_default_view_is_gymnasiums_default_camera(env_id, monkeypatch):
     elsewhere.reset(seed=0)
     far = np.abs(elsewhere.render().astype(int) - their_picture).mean()  # (another view: it can fail)
     assert near < 2.0 and far > 4 * near, (near, far)
+
+
+@pytest.mark.parametrize(("env_id", "episodes"), [("Reacher-v5", 20), ("Pusher-v5", 10)])
+def test_a_goal_task_steps_as_gymnasiums_bit_for_bit(env_id, episodes):
+    # Gymnasium's reset_model draws the start and the goal; on_reset=None leaves simloop's start to the options, given
+    # Gymnasium's qpos and qvel. Both compute the reward after the step (v5: do_simulation first), from xpos as the
+    # last mj_step left it; the norms are np.linalg.norm's BLAS dot (vecdot): bit for bit, no tolerance.
+    theirs = gymnasium_env(env_id)
+    ours = gymnasium.make("simloop/" + env_id, on_reset=None)
+    assert ours.observation_space.shape == theirs.observation_space.shape
+    assert ours.spec.max_episode_steps == theirs.spec.max_episode_steps  # (50 and 100: 1,000 steps, many episodes)
+    assert step_both(theirs, ours, noisy=True) == episodes
+
+
+def starts(env_id, seeds, **kwargs):
+    env = gymnasium.make("simloop/" + env_id, **kwargs)
+    return np.array([env.reset(seed=s)[0] for s in seeds])
+
+
+def test_reachers_hook_draws_its_goal_inside_gymnasiums_disc_per_seed():
+    # The target (qpos[-2:], observed at 4:6) drawn uniform in +-0.2 until its norm is under 0.2: over 300 seeds all
+    # inside the disc (a square's draws would leave it 21 % of the time), spread over it; the arm's angles off the
+    # XML's (0) by at most 0.1, its qvel (6:8) by 0.005. The same seed, the same start, in a vector env too.
+    obs = starts("Reacher-v5", range(300))
+    goals = obs[:, 4:6]
+    assert np.linalg.norm(goals, axis=1).max() < 0.2 and np.abs(goals).max() > 0.18
+    assert np.std(goals) > 0.08 and len(np.unique(goals[:, 0])) == 300
+    angles = np.arctan2(obs[:, 2:4], obs[:, 0:2])
+    assert np.abs(angles).max() <= 0.1 and np.abs(obs[:, 6:8]).max() <= 0.005
+    assert starts("Reacher-v5", [7, 7, 8]).tolist() == obs[[7, 7, 8]].tolist()
+    envs = gymnasium.make_vec("simloop/Reacher-v5", num_envs=2, threads=2)
+    assert envs.reset(seed=7)[0].tolist() == obs[[7, 8]].tolist()
+    assert starts("Reacher-v5", [7], on_reset=None)[0, 4:6].tolist() == [0.1, -0.1]  # (the XML's start: its refs)
+
+
+def test_pushers_hook_draws_its_object_away_from_the_goal_per_seed():
+    # The object (qpos[-4:-2]: y, x off its XML's place) drawn in [-0.3, 0) x [-0.2, 0.2) until farther than 0.17
+    # from the goal (at the XML's place): over 300 seeds all farther (a box's draws would be nearer 38 % of the time);
+    # observed are the xpos of tips_arm (14:17), object (17:20) and goal (20:23). The arm starts at the XML's qpos.
+    obs = starts("Pusher-v5", range(300))
+    offset = obs[:, 17:19] - obs[:, 20:22]
+    assert np.linalg.norm(offset, axis=1).min() > 0.17 and np.linalg.norm(offset, axis=1).min() < 0.18
+    assert -0.3 <= offset[:, 1].min() and offset[:, 1].max() < 0 and np.abs(offset[:, 0]).max() < 0.2
+    assert np.abs(obs[:, :7]).max() == 0 and 0 < np.abs(obs[:, 7:14]).max() <= 0.005
+    assert starts("Pusher-v5", [3, 3]).tolist() == obs[[3, 3]].tolist()
+    assert not np.array_equal(obs[3], obs[4])
