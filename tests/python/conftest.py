@@ -10,6 +10,15 @@ from pathlib import Path
 
 import pytest
 
+# triton (torch's compiler, which simloop.sb3 loads first thing) before any
+# test renders: loaded after Mesa's software driver has drawn, it crashes the
+# process in its own LLVM's initializers (after Gymnasium's renderer too;
+# docs/training.md). Where it is installed.
+try:
+    import triton  # noqa: F401
+except ImportError:
+    pass
+
 
 def _why_no_worker_processes() -> str:
     """'' if this machine lets Python's multiprocessing make the POSIX
