@@ -1,6 +1,5 @@
 #include "simloop/batch.hpp"
 
-#include <time.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -129,48 +128,24 @@ int detail::WorkerPool::start_round(int helpers, const std::function<void(int wo
   return seats;
 }
 
-void detail::WorkerPool::wait_round(const std::function<void()>& poll, bool withdraw) {
+void detail::WorkerPool::wait_round(const std::function<void()>& poll) {
   State& s = *state_;
   // The caller's own share is done, and with it every job: the seats no
   // thread has taken yet (it is still waking) close, and only the threads
   // at work are waited for.
   std::uint64_t ticket = s.ticket.load(std::memory_order_acquire);
-  while (
-      withdraw && (ticket & kSeats) != 0 &&
-      !s.ticket.compare_exchange_weak(ticket, ticket & ~kSeats, std::memory_order_acq_rel, std::memory_order_acquire)) {
+  while ((ticket & kSeats) != 0 && !s.ticket.compare_exchange_weak(ticket, ticket & ~kSeats, std::memory_order_acq_rel,
+                                                                   std::memory_order_acquire)) {
   }
-  if (withdraw && (ticket & kSeats) != 0) {
-    s.running.fetch_sub(static_cast<int>(ticket & kSeats), std::memory_order_acq_rel);
-  }
+  if ((ticket & kSeats) != 0) s.running.fetch_sub(static_cast<int>(ticket & kSeats), std::memory_order_acq_rel);
   const auto finished = [&] { return s.running.load(std::memory_order_acquire) == 0; };
-  // (A caller that handed out the whole round sleeps at once: watching, it
-  // would take a CPU from the workers.)
-  if (withdraw ? watch(finished) : finished()) return;
+  if (watch(finished)) return;
   std::unique_lock<std::mutex> lock(s.mutex);
   while (!s.done.wait_for(lock, std::chrono::milliseconds(5), finished)) {
     lock.unlock();
     poll();
     lock.lock();
   }
-}
-
-namespace {
-// A round this long in CPU time (every worker's) is long enough that the
-// calling thread only hands it out; below half of it, it takes part again.
-std::atomic<std::int64_t> g_long_round_ns{1'000'000};
-}  // namespace
-
-void detail::WorkerPool::set_long_round_for_testing(std::int64_t cpu_ns) noexcept { g_long_round_ns.store(cpu_ns); }
-
-void detail::WorkerPool::note_round(std::int64_t cpu_ns) noexcept {
-  const std::int64_t long_round = g_long_round_ns.load(std::memory_order_relaxed);
-  caller_waits_ = caller_waits_ ? 2 * cpu_ns >= long_round : cpu_ns >= long_round;
-}
-
-std::int64_t detail::thread_cpu_ns() noexcept {
-  timespec t{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-  return static_cast<std::int64_t>(t.tv_sec) * 1'000'000'000 + t.tv_nsec;
 }
 
 int batch_workers(int threads, std::size_t jobs) noexcept {
@@ -222,36 +197,17 @@ void detail::run_jobs(std::size_t jobs, int threads, const std::vector<std::int6
   // running share the work, which gives the same results.
   WorkerPool for_this_call;
   WorkerPool& pool = kept != nullptr ? *kept : for_this_call;
-  // The calling thread is the control's: while the workers finish, it keeps
+  if (workers > 1) pool.start_round(workers - 1, work);
+  work(0);  // the calling thread is worker 0
+  // Worker 0 is the control's thread: while the others finish, it keeps
   // polling, so a stop still takes effect promptly.
-  const auto poll = [&ctl] {
+  pool.wait_round([&ctl] {
     try {
       ctl.check();
     } catch (const Interrupted&) {
       // Every worker sees the stop at its next chunk; wait for them.
     }
-  };
-  // A kept pool's rounds are timed in CPU, each worker its own (a clock
-  // read at each end of its part, not per job), for caller_waits.
-  std::atomic<std::int64_t> round_cpu_ns{0};
-  const bool timed = kept != nullptr && workers > 1;
-  const std::function<void(int)> timed_work = [&](int worker) noexcept {
-    const std::int64_t began = timed ? thread_cpu_ns() : 0;
-    work(worker);
-    if (timed) round_cpu_ns.fetch_add(thread_cpu_ns() - began, std::memory_order_relaxed);
-  };
-  const std::function<void(int)> seated = [&](int seat) noexcept { timed_work(seat - 1); };  // seat k: worker k - 1
-  if (timed && pool.caller_waits()) {
-    // Every job to the pool's threads; the calling thread sleeps meanwhile
-    // (it does the work itself only if no thread can be had).
-    if (pool.start_round(workers, seated) == 0) timed_work(0);
-    pool.wait_round(poll, false);
-  } else {
-    if (workers > 1) pool.start_round(workers - 1, timed_work);
-    timed_work(0);  // the calling thread is worker 0
-    pool.wait_round(poll);
-  }
-  if (timed) pool.note_round(round_cpu_ns.load());
+  });
   ctl.abandon_batch(false);
   if (ctl.stop_requested()) throw Interrupted("interrupted");
   for (const std::exception_ptr& e : errors) {

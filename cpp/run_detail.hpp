@@ -122,9 +122,7 @@ void run_jobs(const Model& model, std::size_t jobs, int threads, const std::vect
 // The same for jobs that bring their own Data (Episodes): job(i, worker,
 // control), worker in [0, batch_workers(threads, jobs)); on the threads of
 // `kept` (worker_pool.hpp) when given, kept for the next call, else on
-// threads started for this call. On `kept`, once its rounds are long
-// (WorkerPool::caller_waits), every worker is one of its threads and the
-// calling thread only waits.
+// threads started for this call.
 class WorkerPool;
 void run_jobs(std::size_t jobs, int threads, const std::vector<std::int64_t>& steps, RunControl* control,
               const std::function<void(std::size_t job, int worker, RunControl& control)>& job,

@@ -12,12 +12,7 @@
 // millisecond, as long as a short round) then costs the round nothing but
 // the wake-up call (on such a machine about 0.4 ms of the calling thread's
 // time: after a pause, a round of 0.7 ms on two threads takes about 1.1 x
-// as long as on one). On a busy machine that makes the calling thread step
-// every job alone while the woken thread waits for a CPU; so once rounds
-// take a millisecond or more of CPU, the calling thread hands all the jobs
-// to the pool's threads and sleeps (EnvPool's shape): each worker is then a
-// thread that competes for the CPU on its own (measured: bench_envpool.py,
-// docs/performance.md). One round at a time (the owner's calls are
+// as long as on one). One round at a time (the owner's calls are
 // serialised). A process forked from one whose pool had threads has none of
 // them: the pool then leaves their bookkeeping behind, untouched, and
 // starts afresh.
@@ -47,18 +42,10 @@ class WorkerPool {
   // lacks), each w to at most one, and returns how many are offered: fewer
   // when no more threads can be had (a process limit). task must not throw.
   int start_round(int helpers, const std::function<void(int worker)>& task);
-  // Withdraws the offers no thread has taken yet (withdraw = true: for a
-  // caller whose own share of the work leaves none to the others), then
-  // returns once every task taken has returned, calling `poll` at least
-  // every 5 ms meanwhile.
-  void wait_round(const std::function<void()>& poll, bool withdraw = true);
-
-  // Whether the calling thread should only hand the next round out and
-  // wait (see run_jobs): the rounds have been long, in CPU time. note_round
-  // tells it a round's CPU time, every worker's together.
-  [[nodiscard]] bool caller_waits() const noexcept { return caller_waits_; }
-  void note_round(std::int64_t cpu_ns) noexcept;
-  static void set_long_round_for_testing(std::int64_t cpu_ns) noexcept;
+  // Withdraws the offers no thread has taken yet, then returns once every
+  // task taken has returned, calling `poll` at least every 5 ms meanwhile.
+  // For a caller whose own share of the work leaves none to the others.
+  void wait_round(const std::function<void()>& poll);
 
  private:
   struct State {
@@ -75,10 +62,6 @@ class WorkerPool {
   };
   static void serve(State& state, std::uint64_t seen_round);
   std::unique_ptr<State> state_ = std::make_unique<State>();
-  bool caller_waits_ = false;
 };
-
-// This thread's CPU time so far, in ns.
-std::int64_t thread_cpu_ns() noexcept;
 
 }  // namespace simloop::detail

@@ -14,7 +14,6 @@
 #include <vector>
 
 #include "chapter_detail.hpp"
-#include "run_detail.hpp"
 #include "simloop/chapter_scene.hpp"
 #include "simloop/errors.hpp"
 #include "simloop/output.hpp"
@@ -115,42 +114,4 @@ TEST(WorkerPool, EachSeatRunsAtMostOnceAndNoneAfterItsRound) {
     }
   }
   EXPECT_GT(taken, 0) << "the threads take seats too";
-}
-
-TEST(WorkerPool, LongRoundsGoWhollyToThePoolsThreadsAndEachJobRunsOnce) {
-  // Every round counts as long from the first: from the second call on, the
-  // calling thread runs no job; every job still runs once, as a worker in
-  // range, and a job's exception still comes back to the caller.
-  simloop::detail::WorkerPool::set_long_round_for_testing(0);
-  simloop::detail::WorkerPool pool;
-  const std::thread::id caller = std::this_thread::get_id();
-  constexpr std::size_t kJobs = 16;
-  for (int call = 0; call < 6; ++call) {
-    std::array<std::atomic<int>, kJobs> ran{};
-    std::atomic<int> by_caller{0}, out_of_range{0};
-    simloop::detail::run_jobs(
-        kJobs, 2, std::vector<std::int64_t>(kJobs, 1), nullptr,
-        [&](std::size_t i, int worker, simloop::RunControl&) {
-          std::this_thread::sleep_for(std::chrono::microseconds(200));
-          ran[i].fetch_add(1);
-          if (std::this_thread::get_id() == caller) by_caller.fetch_add(1);
-          if (worker < 0 || worker > 1) out_of_range.fetch_add(1);
-        },
-        &pool);
-    for (const auto& r : ran) EXPECT_EQ(r.load(), 1);
-    EXPECT_EQ(out_of_range.load(), 0);
-    if (call == 0) {
-      EXPECT_GT(by_caller.load(), 0) << "the first round, not yet known to be long, has the caller take part";
-    } else {
-      EXPECT_EQ(by_caller.load(), 0) << "call " << call;
-    }
-  }
-  EXPECT_THROW(simloop::detail::run_jobs(
-                   kJobs, 2, std::vector<std::int64_t>(kJobs, 1), nullptr,
-                   [](std::size_t i, int, simloop::RunControl&) {
-                     if (i == 5) throw simloop::InvalidArgument("job 5");
-                   },
-                   &pool),
-               simloop::InvalidArgument);
-  simloop::detail::WorkerPool::set_long_round_for_testing(1'000'000);
 }
