@@ -13,7 +13,8 @@ namespace simloop {
 namespace {
 
 // The columns of `r`'s row after the ones every row has (batch_table.hpp).
-std::vector<TableColumn> layout_of(const RunRecord& r) {
+// `drawn`: drawn_columns(r.schedule.start), made once for the layout and the values.
+std::vector<TableColumn> layout_of(const RunRecord& r, const std::vector<std::pair<std::string, double>>& drawn) {
   std::vector<TableColumn> out;
   for (const auto& body : recorded_bodies(r)) {  // (a map: by name)
     for (const char* axis : {"x", "y", "z"}) out.push_back({body.first + "_final_pos_" + axis, false});
@@ -25,11 +26,11 @@ std::vector<TableColumn> layout_of(const RunRecord& r) {
     out.push_back({prefix + "start_step", true});
     out.push_back({prefix + "steps", true});
   }
-  for (auto& column : drawn_columns(r.schedule.start)) out.push_back({std::move(column.first), false});
+  for (const auto& column : drawn) out.push_back({column.first, false});
   return out;
 }
 
-std::vector<double> values_of(const RunRecord& r) {
+std::vector<double> values_of(const RunRecord& r, const std::vector<std::pair<std::string, double>>& drawn) {
   std::vector<double> out;
   for (const auto& body : recorded_bodies(r)) {
     const double* v = r.final_row.data() + body.second;  // x y z, qw qx qy qz, vx vy vz
@@ -39,7 +40,7 @@ std::vector<double> values_of(const RunRecord& r) {
     out.insert(out.end(), f.wrench.begin(), f.wrench.end());
     out.insert(out.end(), {static_cast<double>(f.start), static_cast<double>(f.end - f.start)});
   }
-  for (const auto& column : drawn_columns(r.schedule.start)) out.push_back(column.second);
+  for (const auto& column : drawn) out.push_back(column.second);
   return out;
 }
 
@@ -62,13 +63,14 @@ class TableBuilder {
     row.steps = r.schedule.steps;
     row.perturb = r.perturb;
     row.sim_time = r.sim_time;
-    row.values = values_of(r);
+    const std::vector<std::pair<std::string, double>> drawn = drawn_columns(r.schedule.start);
+    row.values = values_of(r, drawn);
     row.warnings.assign(names_.size(), 0);
     for (const Warning& w : r.warnings) {
       const auto at = std::find(names_.begin(), names_.end(), w.name);
       if (at != names_.end()) row.warnings[static_cast<std::size_t>(at - names_.begin())] += w.count;
     }
-    std::vector<TableColumn> layout = layout_of(r);
+    std::vector<TableColumn> layout = layout_of(r, drawn);
     const std::lock_guard<std::mutex> hold(lock_);
     auto known = std::find_if(table_.layouts.begin(), table_.layouts.end(),
                               [&](const std::vector<TableColumn>& l) { return same_layout(l, layout); });
