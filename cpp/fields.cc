@@ -89,6 +89,8 @@ FieldView model_field(const mjModel* m, std::string_view name) {
   no_such("mjModel", name, model_field_names());
 }
 
+FieldView model_field_layout(std::string_view name) { return model_field(any_model(), name); }
+
 FieldView data_field(const mjModel* m, const mjData* d, std::string_view name) {
   FieldView found;
   if (detail::compat::each_data_array(m, d, [&](const RawArray& a) {

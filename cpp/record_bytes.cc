@@ -78,7 +78,7 @@ void fields(Io& io, typename Io::template Of<SweepResult> r) {
 
 template <class Io>
 void fields(Io& io, typename Io::template Of<SceneParam> p) {
-  io(p.kind, p.name, p.value);
+  io(p.kind, p.name, p.value, p.field, p.index);
 }
 template <class Io>
 void fields(Io& io, typename Io::template Of<Schedule::Start::MocapPos> g) {
@@ -163,7 +163,7 @@ constexpr std::uint8_t largest() {
   static_assert(std::is_same_v<T, bool> || std::is_same_v<T, ShoveRng> || std::is_same_v<T, SceneParam::Kind>,
                 "give the new enum's largest value here");
   if constexpr (std::is_same_v<T, ShoveRng>) return static_cast<std::uint8_t>(ShoveRng::kNumpy);
-  if constexpr (std::is_same_v<T, SceneParam::Kind>) return static_cast<std::uint8_t>(SceneParam::Kind::kGravity);
+  if constexpr (std::is_same_v<T, SceneParam::Kind>) return static_cast<std::uint8_t>(SceneParam::Kind::kModel);
   return 1;
 }
 

@@ -159,8 +159,13 @@ std::string metrics_json(const RunRecord& r) {
   if (!r.schedule.start.params.empty()) {
     Json::Array params;
     for (const SceneParam& p : r.schedule.start.params) {
-      params.push_back({Json::Object{
-          {"kind", {std::string(scene_param_kind_name(p.kind))}}, {"name", {p.name}}, {"value", {round6(p.value)}}}});
+      Json::Object param{
+          {"kind", {std::string(scene_param_kind_name(p.kind))}}, {"name", {p.name}}, {"value", {round6(p.value)}}};
+      if (p.kind == SceneParam::Kind::kModel) {
+        param["field"] = {p.field};
+        param["index"] = {std::int64_t{p.index}};
+      }
+      params.push_back({param});
     }
     m["params"] = {params};
   }
@@ -212,11 +217,14 @@ std::string summary_text(const RunRecord& r) {
     for (const SceneParam& p : r.schedule.start.params) {
       char value[32];
       std::snprintf(value, sizeof value, "%.4g", p.value);
+      const bool model = p.kind == SceneParam::Kind::kModel;
       const char* every = p.kind == SceneParam::Kind::kFriction  ? " of every geom"
                           : p.kind == SceneParam::Kind::kDamping ? " of every joint"
+                          : model                                ? " of every row"
                                                                  : "";
-      drawn += (drawn.empty() ? "" : ", ") + std::string(scene_param_kind_name(p.kind)) +
-               (p.name.empty() ? every : " of '" + p.name + "'") + " = " + value;
+      const std::string what =
+          model ? p.field + "[" + std::to_string(p.index) + "]" : std::string(scene_param_kind_name(p.kind));
+      drawn += (drawn.empty() ? "" : ", ") + what + (p.name.empty() ? every : " of '" + p.name + "'") + " = " + value;
     }
     out += "scene parameters drawn: " + drawn + "\n";
   }

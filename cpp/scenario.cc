@@ -14,6 +14,7 @@
 
 #include "model_detail.hpp"
 #include "simloop/errors.hpp"
+#include "simloop/fields.hpp"
 #include "simloop/number_format.hpp"
 #include "simloop/run.hpp"
 #include "text_input.hpp"
@@ -117,7 +118,11 @@ Schedule build_schedule(const ResolvedScenario& scenario, const Scenario& spec, 
   // changes no disturbance's draw.
   const ResetSpec& reset = spec.reset;
   for (const ResetSpec::Param& p : reset.params) {
-    s.start.params.push_back({p.kind, p.name, draws.uniform(p.low, p.high)});  // [low, low]: exactly low
+    double value = draws.uniform(p.low, p.high);  // [low, low]: exactly low
+    if (p.kind == SceneParam::Kind::kModel && model_field_layout(p.field).element == Element::kFloat32) {
+      value = static_cast<float>(value);
+    }
+    s.start.params.push_back({p.kind, p.name, value, p.field, p.index});
   }
   const auto start_at = [&](std::vector<double>& out, const std::vector<double>& given, std::vector<double> base,
                             const ResetSpec::Noise& noise, bool of_qpos) {
@@ -159,10 +164,7 @@ Schedule build_schedule(const ResolvedScenario& scenario, const Scenario& spec, 
 
 std::vector<std::pair<std::string, double>> drawn_columns(const Schedule::Start& start) {
   std::vector<std::pair<std::string, double>> out;
-  for (const SceneParam& p : start.params) {
-    const std::string kind = scene_param_kind_name(p.kind);
-    out.emplace_back(p.name.empty() ? kind : kind + "_" + p.name, p.value);  // tables.py's param_column
-  }
+  for (const SceneParam& p : start.params) out.emplace_back(scene_param_column(p), p.value);
   for (const Schedule::Start::MocapPos& g : start.goals) {
     for (std::size_t i = 0; i < 3; ++i) out.emplace_back("goal_" + g.body + "_" + "xyz"[i], g.pos[i]);
   }

@@ -120,9 +120,9 @@ ResetSpec read_reset(const TableReader& t, const toml::table& table, std::string
   r.keyframe = t.string("keyframe").value_or("");  // "": the scene's reset pose
   each_table(t, table, source, "goal", [&](const TableReader& g) { r.goals.push_back(read_goal(g)); });
   each_table(t, table, source, "param", [&](const TableReader& p) {
-    p.allow_only({"kind", "name", "value", "uniform"});
+    p.allow_only({"kind", "name", "value", "uniform", "field", "index"});
     const std::optional<std::string> kind = p.string("kind");
-    if (!kind) p.fail("kind", "missing: friction, mass, damping or gravity");
+    if (!kind) p.fail("kind", "missing: friction, mass, damping, gravity or model");
     ResetSpec::Param param;
     try {
       param.kind = scene_param_kind(*kind);
@@ -130,6 +130,16 @@ ResetSpec read_reset(const TableReader& t, const toml::table& table, std::string
       p.fail("kind", e.what());
     }
     param.name = p.string("name").value_or("");
+    // A model value: which array, which value of the row (its object is `name`).
+    const bool model = param.kind == SceneParam::Kind::kModel;
+    for (const char* key : {"field", "index"}) {
+      if (!model && p.has(key)) p.fail(key, "belongs to kind = \"model\" only");
+    }
+    param.field = p.string("field").value_or("");
+    if (model && param.field.empty()) p.fail("field", "missing: a model value names an mjModel array (geom_friction)");
+    const std::int64_t index = p.integer("index", 0).value_or(0);
+    if (index > 1000) p.fail("index", "must be a value's place in a row (0 to the array's columns - 1)");
+    param.index = static_cast<int>(index);
     const std::optional<double> value = p.number("value");
     const std::optional<std::vector<double>> range = p.numbers("uniform", 2);
     if (value.has_value() == range.has_value())

@@ -289,8 +289,8 @@ void check_reset(const ResolvedScenario& scenario, const ResetSpec& reset, const
                             python_float_repr(p.high) + "]");
     }
     try {
-      check_scene_param(m, {p.kind, p.name, p.low});
-      check_scene_param(m, {p.kind, p.name, p.high});
+      check_scene_param(m, {p.kind, p.name, p.low, p.field, p.index});
+      check_scene_param(m, {p.kind, p.name, p.high, p.field, p.index});
     } catch (const InvalidArgument& e) {
       throw InvalidArgument(where + e.what());
     }

@@ -1,5 +1,7 @@
 #include "simloop/scene_params.hpp"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -7,6 +9,7 @@
 #include "mujoco_compat.hpp"
 #include "mujoco_guard.hpp"
 #include "simloop/errors.hpp"
+#include "simloop/fields.hpp"
 #include "simloop/number_format.hpp"
 #include "simloop/object_names.hpp"
 #include "simloop/scenario.hpp"
@@ -15,8 +18,9 @@ namespace simloop {
 namespace {
 
 std::string describe(const SceneParam& p) {
-  return std::string(scene_param_kind_name(p.kind)) + (p.name.empty() ? "" : " of '" + p.name + "'") + " = " +
-         python_float_repr(p.value);
+  const std::string what = p.kind == SceneParam::Kind::kModel ? p.field + "[" + std::to_string(p.index) + "]"
+                                                              : std::string(scene_param_kind_name(p.kind));
+  return what + (p.name.empty() ? "" : " of '" + p.name + "'") + " = " + python_float_repr(p.value);
 }
 
 // The id of the object named `name`, or InvalidArgument saying what the
@@ -35,10 +39,69 @@ void check_value(const SceneParam& p) {
   }
 }
 
+// Model arrays whose negative values mean nothing physical.
+bool nonnegative_field(std::string_view field) {
+  static constexpr std::array<std::string_view, 11> kNonnegative{
+      "body_mass",    "body_inertia",     "geom_friction", "geom_margin",      "geom_rgba",     "dof_damping",
+      "dof_armature", "dof_frictionloss", "jnt_stiffness", "tendon_stiffness", "tendon_damping"};
+  return std::find(kNonnegative.begin(), kNonnegative.end(), field) != kNonnegative.end();
+}
+
+// Model arrays that mj_setConst derives constants from (the inverse
+// weights, dof_M0, the subtree masses).
+bool feeds_constants(std::string_view field) {
+  return field == "body_mass" || field == "body_inertia" || field == "dof_armature";
+}
+
+// A kModel param: checks it against `scene`, then (with `m`) writes it.
+bool apply_model_field(const mjModel* scene, mjModel* m, const SceneParam& p) {
+  if (p.field.empty()) throw InvalidArgument(describe(p) + ": a model value needs a field (an mjModel array's name)");
+  FieldView layout;
+  try {
+    layout = model_field(scene, p.field);
+  } catch (const InvalidArgument& e) {
+    throw InvalidArgument(describe(p) + ": " + e.what());  // with a did-you-mean
+  }
+  if (!model_field_writable(p.field)) {
+    std::string list;
+    for (const std::string& name : writable_model_field_names()) list += (list.empty() ? "" : ", ") + name;
+    throw InvalidArgument(describe(p) + ": mjModel's " + p.field + " is not one a run may vary; these are: " + list);
+  }
+  if (p.index < 0 || p.index >= layout.cols) {
+    throw InvalidArgument(describe(p) + ": index must be 0 to " + std::to_string(layout.cols - 1) + " (" + p.field +
+                          " holds " + std::to_string(layout.cols) + " value" + (layout.cols == 1 ? "" : "s") +
+                          " per row)");
+  }
+  if (!std::isfinite(p.value) || (nonnegative_field(p.field) && p.value < 0.0)) {
+    throw InvalidArgument(describe(p) + ": " + p.field + " must be a finite number" +
+                          (nonnegative_field(p.field) ? " >= 0" : ""));
+  }
+  // The rows: the named object's (a dof_ array's: its joint's degrees of
+  // freedom, as a damping's), or every row (every body but the world).
+  const bool of_dofs = layout.rows_count == "nv";
+  const int named = p.name.empty() ? -1 : find_named(scene, of_dofs ? mjOBJ_JOINT : layout.rows_are, p);
+  std::vector<long long> rows;
+  for (long long row = named < 0 && layout.rows_are == mjOBJ_BODY ? 1 : 0; row < layout.rows; ++row) {
+    if (named < 0 || (of_dofs ? scene->dof_jntid[row] == named : row == named)) rows.push_back(row);
+  }
+  if (m == nullptr) return false;
+  const FieldView target = model_field(m, p.field);
+  for (const long long row : rows) {
+    const long long at = row * target.cols + p.index;
+    if (target.element == Element::kFloat32) {
+      static_cast<float*>(target.data)[at] = static_cast<float>(p.value);
+    } else {
+      static_cast<mjtNum*>(target.data)[at] = p.value;
+    }
+  }
+  return feeds_constants(p.field);
+}
+
 // Applies `p` to `m` (with `m` null: only checks it against `scene`).
 // Returns true if the constants mj_setConst derives from the masses must be
 // recomputed.
 bool apply(const mjModel* scene, mjModel* m, const SceneParam& p) {
+  if (p.kind == SceneParam::Kind::kModel) return apply_model_field(scene, m, p);
   check_value(p);
   switch (p.kind) {
     case SceneParam::Kind::kFriction: {
@@ -92,12 +155,14 @@ bool apply(const mjModel* scene, mjModel* m, const SceneParam& p) {
       }
       return false;
     }
+    case SceneParam::Kind::kModel:
+      break;  // above
   }
   return false;
 }
 
 constexpr SceneParam::Kind kKinds[] = {SceneParam::Kind::kFriction, SceneParam::Kind::kMass, SceneParam::Kind::kDamping,
-                                       SceneParam::Kind::kGravity};
+                                       SceneParam::Kind::kGravity, SceneParam::Kind::kModel};
 
 }  // namespace
 
@@ -111,6 +176,8 @@ const char* scene_param_kind_name(SceneParam::Kind kind) noexcept {
       return "damping";
     case SceneParam::Kind::kGravity:
       return "gravity";
+    case SceneParam::Kind::kModel:
+      return "model";
   }
   return "?";
 }
@@ -124,10 +191,19 @@ SceneParam::Kind scene_param_kind(std::string_view name) {
   throw InvalidArgument("scene parameter kind must be one of " + list + ", got '" + std::string(name) + "'");
 }
 
+std::string scene_param_column(const SceneParam& p) {
+  if (p.kind != SceneParam::Kind::kModel) {
+    const std::string kind = scene_param_kind_name(p.kind);
+    return p.name.empty() ? kind : kind + "_" + p.name;
+  }
+  const bool one_per_row = model_field_layout(p.field).cols == 1;
+  return p.field + (p.name.empty() ? "" : "_" + p.name) + (one_per_row ? "" : "_" + std::to_string(p.index));
+}
+
 void check_scene_param(const mjModel* m, const SceneParam& param) { (void)apply(m, nullptr, param); }
 
 Model with_scene_params(const Model& model, const std::vector<SceneParam>& params) {
-  for (const SceneParam& p : params) check_value(p);
+  for (const SceneParam& p : params) check_scene_param(model.get(), p);
   if (params.empty()) return model;
   // A fresh copy of the model that nothing else holds yet: ours to edit
   // before it is shared (as Model::for_run edits its copy).

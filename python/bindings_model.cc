@@ -208,6 +208,13 @@ void bind_model(py::module_& m) {
         return simloop::with_scene_params(model, converted);
       },
       "model"_a, "params"_a, "A copy of model with (kind, name, value) scene parameters applied.");
+  m.def(
+      "scene_param_column",
+      [](const std::string& kind, const std::string& name, const std::string& field, int index) {
+        return simloop::scene_param_column({simloop::scene_param_kind(kind), name, 0.0, field, index});
+      },
+      "kind"_a, "name"_a, "field"_a = "", "index"_a = 0,
+      "The column a scene parameter's value is shown under: friction, mass_box, geom_friction_box_0, ...");
   m.def("moving_bodies", &simloop::moving_bodies, "scene"_a);
   m.attr("MODEL_FIELD_NAMES") = py::tuple(py::cast(simloop::model_field_names()));
   m.attr("DATA_FIELD_NAMES") = py::tuple(py::cast(simloop::data_field_names()));

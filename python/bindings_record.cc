@@ -132,12 +132,17 @@ void bind_record(py::module_& m) {
           [](const RunRecord& r) {
             py::list out;
             for (const simloop::SceneParam& p : r.schedule.start.params) {
-              out.append(
-                  py::dict("kind"_a = simloop::scene_param_kind_name(p.kind), "name"_a = p.name, "value"_a = p.value));
+              py::dict param("kind"_a = simloop::scene_param_kind_name(p.kind), "name"_a = p.name, "value"_a = p.value);
+              if (p.kind == simloop::SceneParam::Kind::kModel) {
+                param["field"] = p.field;
+                param["index"] = p.index;
+              }
+              out.append(param);
             }
             return out;
           },
-          "The scene parameters the run drew at its reset ([[reset.param]]), as applied.")
+          "The scene parameters the run drew at its reset ([[reset.param]]), as applied: kind, name, value (and a "
+          "model value's field and index).")
       .def_property_readonly(
           "bodies", [](const RunRecord& r) { return simloop::recorded_bodies(r); },
           "The recorded bodies: {name: the column of its _x}.")

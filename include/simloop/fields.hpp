@@ -35,6 +35,9 @@ struct FieldView {
 // typo's fix ("no mjModel array named 'geom_fricton' (did you mean
 // 'geom_friction'?)").
 [[nodiscard]] FieldView model_field(const mjModel* m, std::string_view name);
+// The same without a model: its element type, columns and what a row is
+// (data null, rows 0).
+[[nodiscard]] FieldView model_field_layout(std::string_view name);
 // mjData's array `name` of `d`: the contacts' and constraints' arrays with
 // the rows in use now (ncon, nefc), valid until the next step. Throws
 // InvalidArgument as model_field does, and for the contact structs

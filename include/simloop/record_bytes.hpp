@@ -25,7 +25,7 @@ namespace simloop {
 
 // Bump when any result's fields change. 4: the version moved into the
 // bytes, each struct written field by field (3 was Python's (3, fields)).
-inline constexpr std::uint32_t kRecordBytesVersion = 6;  // 6: the start a run drew
+inline constexpr std::uint32_t kRecordBytesVersion = 7;  // 7: a model value's field and index
 
 [[nodiscard]] std::string to_bytes(const RunRecord& record);
 [[nodiscard]] std::string to_bytes(const RunResult& result);  // the record's fields, then the chapter's report

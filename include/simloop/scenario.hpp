@@ -129,10 +129,13 @@ struct ResetSpec {
   Noise qpos_noise;
   Noise qvel_noise;
   // A scene parameter (scene_params.hpp) for this run only, uniform in [low, high].
+  // A float array's draw is rounded to float: the value shown is the one run.
   struct Param {
     SceneParam::Kind kind = SceneParam::Kind::kFriction;
     std::string name;
     double low = 0.0, high = 0.0;
+    std::string field;  // a model value's array and index (SceneParam::Kind::kModel)
+    int index = 0;
   };
   std::vector<Param> params;
   // A keyframe of the scene by name: the start (qpos, qvel, act, ctrl,

@@ -217,8 +217,9 @@ class Scenario:
     "normal", then its standard deviation), keyframe (a keyframe of the
     scene by name: the start the other keys apply over), goals (a list of
     dicts: body, a mocap body, and pos = [x, y, z] or uniform = [[x, y, z],
-    [x, y, z]], its position drawn per run) and params (a list of dicts: kind "friction", "mass", "damping" or
-    "gravity", name, and value or uniform = [low, high]).
+    [x, y, z]], its position drawn per run) and params (a list of dicts: kind "friction", "mass", "damping",
+    "gravity" or "model", name, and value or uniform = [low, high]; a "model" value also field, one of
+    _core.WRITABLE_MODEL_FIELDS, and index, its place in the row of the object `name`, or of every row).
     """
 
     def __init__(

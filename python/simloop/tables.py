@@ -271,8 +271,8 @@ def _run_row(r: Any) -> Dict[str, Any]:
 
 def param_column(kind: str, name: str) -> str:
     """A scene parameter's column: friction, friction_<geom>, mass_<body>, damping, damping_<joint>,
-    gravity. One rule for a batch's grid and a run's draws, so that a value has one column."""
-    return f"{kind}_{name}" if name else kind
+    gravity. The rule a run's draws are named by (C++ scene_param_column), so that a value has one column."""
+    return _core.scene_param_column(kind, name)
 
 
 def _scenario_columns(arrays: Dict[str, Any]) -> Dict[str, np.ndarray]:

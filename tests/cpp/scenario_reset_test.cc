@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstring>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "simloop/episode.hpp"
@@ -121,6 +122,39 @@ TEST(ScenarioReset, ParamsAreTheRunsOwnSceneCopy) {
   EXPECT_EQ(simloop::metrics_json(run(pusht(), 1)).find("\"params\""), std::string::npos);
 }
 
+TEST(ScenarioReset, AModelValueIsDrawnReportedAndRun) {
+  // Any writable mjModel value, by object and index: a geom's torsional
+  // friction, every geom's alpha (a float array: drawn, then rounded to float).
+  const Scenario s = pusht(
+      "[[reset.param]]\nkind = \"model\"\nfield = \"actuator_gear\"\nname = \"push_x\"\nuniform = [2.0, 4.0]\n"
+      "[[reset.param]]\nkind = \"model\"\nfield = \"geom_rgba\"\nindex = 3\nuniform = [0.2, 0.9]\n");
+  const simloop::RunRecord r = run(s, 4);
+  ASSERT_EQ(r.schedule.start.params.size(), 2u);
+  const simloop::SceneParam gear = r.schedule.start.params[0], alpha = r.schedule.start.params[1];
+  EXPECT_TRUE(gear.value >= 2.0 && gear.value < 4.0 && gear.field == "actuator_gear" && gear.index == 0);
+  EXPECT_EQ(alpha.value, static_cast<double>(static_cast<float>(alpha.value)));
+  EXPECT_TRUE(same_bits(r, run(pusht(), 4, simloop::with_scene_params(scene(), {gear, alpha}))));
+  EXPECT_FALSE(same_bits(r, run(pusht(), 4)));
+  const std::vector<std::pair<std::string, double>> columns = simloop::drawn_columns(r.schedule.start);
+  ASSERT_EQ(columns.size(), 2u);
+  EXPECT_EQ(columns[0], std::make_pair(std::string("actuator_gear_push_x_0"), gear.value));
+  EXPECT_EQ(columns[1].first, "geom_rgba_3");
+  const std::string metrics = simloop::metrics_json(r);
+  EXPECT_NE(metrics.find("\"kind\": \"model\",\n      \"name\": \"push_x\","), std::string::npos) << metrics;
+  EXPECT_NE(metrics.find("\"field\": \"actuator_gear\",\n      \"index\": 0"), std::string::npos) << metrics;
+  char value[32];
+  std::snprintf(value, sizeof value, "%.4g", gear.value);
+  EXPECT_NE(simloop::summary_text(r).find("scene parameters drawn: actuator_gear[0] of 'push_x' = " +
+                                          std::string(value) + ", geom_rgba[3] of every row = "),
+            std::string::npos)
+      << simloop::summary_text(r);
+  const auto run_error = [](const std::string& reset) { return error_of([&] { (void)run(pusht(reset), 0); }); };
+  EXPECT_EQ(
+      run_error("[[reset.param]]\nkind = \"model\"\nfield = \"geom_size\"\nname = \"t_bar\"\nvalue = 1\n")
+          .rfind("reset.param[0]: geom_size[0] of 't_bar' = 1.0: mjModel's geom_size is not one a run may vary", 0),
+      0u);
+}
+
 TEST(ScenarioReset, ABatchAndAnEpisodeStartAsARunDoes) {
   const Scenario s =
       pusht("qpos_noise = 0.02\n[[reset.param]]\nkind = \"mass\"\nname = \"tblock\"\nuniform = [0.2, 0.6]\n");
@@ -161,7 +195,13 @@ TEST(ScenarioReset, BadResetsNameTheKey) {
             "pusht-reset: reset.param[0].uniform: is too wide: high - low must be a number a double holds");
   EXPECT_EQ(file_error("[[reset.param]]\nkind = \"stiffness\"\nvalue = 1\n"),
             "pusht-reset: reset.param[0].kind: scene parameter kind must be one of 'friction', 'mass', 'damping', "
-            "'gravity', got 'stiffness'");
+            "'gravity', 'model', got 'stiffness'");
+  EXPECT_EQ(file_error("[[reset.param]]\nkind = \"model\"\nname = \"t_bar\"\nvalue = 1\n"),
+            "pusht-reset: reset.param[0].field: missing: a model value names an mjModel array (geom_friction)");
+  EXPECT_EQ(file_error("[[reset.param]]\nkind = \"mass\"\nname = \"tblock\"\nindex = 1\nvalue = 1\n"),
+            "pusht-reset: reset.param[0].index: belongs to kind = \"model\" only");
+  EXPECT_EQ(file_error("[[reset.param]]\nkind = \"model\"\nfield = \"geom_rgba\"\nindex = -1\nvalue = 1\n"),
+            "pusht-reset: reset.param[0].index: must be at least 0, got -1");
   EXPECT_EQ(file_error("[[reset.param]]\nkind = \"friction\"\nvalue = 1\nuniform = [0, 1]\n"),
             "pusht-reset: reset.param[0]: give value (fixed) or uniform = [low, high] (drawn per run)");
   const auto run_error = [](const std::string& reset) { return error_of([&] { (void)run(pusht(reset), 0); }); };

@@ -129,4 +129,68 @@ TEST(SceneParams, BadNamesAndValuesAreRefusedByName) {
   EXPECT_EQ(error_of(scene, {{Kind::kMass, "world", 1.0}}), "mass of 'world' = 1.0: the world body has no mass to set");
 }
 
+// A model value: any writable mjModel array's value, by object and index.
+TEST(SceneParams, AModelValueWritesOneValueOfARowOrOfEveryRow) {
+  const simloop::Model scene = simloop::pusher_scene();
+  const mjModel* s = scene.get();
+  const int box = mj_name2id(s, mjOBJ_BODY, "box");
+  const int box_geom = mj_name2id(s, mjOBJ_GEOM, "box_geom");
+  const simloop::Model wider = simloop::with_scene_params(scene, {{Kind::kModel, "box_geom", 0.3, "geom_friction", 2}});
+  for (int g = 0; g < s->ngeom; ++g) {
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_EQ(wider.get()->geom_friction[3 * g + k], g == box_geom && k == 2 ? 0.3 : s->geom_friction[3 * g + k]);
+    }
+  }
+  // Every row; a float array as float.
+  const simloop::Model faded = simloop::with_scene_params(scene, {{Kind::kModel, "", 0.25, "geom_rgba", 3}});
+  for (int g = 0; g < s->ngeom; ++g) EXPECT_EQ(faded.get()->geom_rgba[4 * g + 3], 0.25f);
+  // Every body but the world; a mass recomputes MuJoCo's constants as kMass does.
+  const simloop::Model heavy = simloop::with_scene_params(scene, {{Kind::kModel, "", 3.0, "body_mass", 0}});
+  EXPECT_EQ(heavy.get()->body_mass[0], 0.0);
+  EXPECT_EQ(heavy.get()->body_mass[box], 3.0);
+  EXPECT_DOUBLE_EQ(heavy.get()->body_subtreemass[0], 6.0);
+  EXPECT_LT(heavy.get()->body_invweight0[2 * box], s->body_invweight0[2 * box]);
+  // The scene's own value changes no bit; another changes the run.
+  const simloop::RunResult original = run_on(scene);
+  for (const simloop::SceneParam& same :
+       std::vector<simloop::SceneParam>{{Kind::kModel, "box_geom", 1.0, "geom_friction", 0},
+                                        {Kind::kModel, "box", 0.5, "body_mass", 0},
+                                        {Kind::kModel, "pusher_slide", 4.0, "dof_damping", 0}}) {
+    EXPECT_TRUE(same_bits(run_on(simloop::with_scene_params(scene, {same})), original)) << same.field;
+  }
+  const simloop::Model slow =
+      simloop::with_scene_params(scene, {{Kind::kModel, "push_motor", 2.0, "actuator_gear", 0}});
+  EXPECT_LT(run_on(slow).trajectory.at(600, simloop::ChapterColumns::kBoxX),
+            original.trajectory.at(600, simloop::ChapterColumns::kBoxX));
+}
+
+TEST(SceneParams, AModelValueIsNamedAndRefusedByItsField) {
+  const simloop::Model scene = simloop::pusher_scene();
+  EXPECT_EQ(simloop::scene_param_column({Kind::kModel, "box_geom", 0.0, "geom_friction", 1}),
+            "geom_friction_box_geom_1");
+  EXPECT_EQ(simloop::scene_param_column({Kind::kModel, "box", 0.0, "body_mass", 0}), "body_mass_box");
+  EXPECT_EQ(simloop::scene_param_column({Kind::kModel, "", 0.0, "geom_rgba", 3}), "geom_rgba_3");
+  EXPECT_EQ(simloop::scene_param_column({Kind::kMass, "box", 0.0}), "mass_box");
+  EXPECT_EQ(simloop::scene_param_column({Kind::kGravity, "", 0.0}), "gravity");
+  EXPECT_EQ(error_of(scene, {{Kind::kModel, "box_geom", 1.0, "geom_fricton", 0}}),
+            "geom_fricton[0] of 'box_geom' = 1.0: no mjModel array named 'geom_fricton' (did you mean "
+            "'geom_friction'?)");
+  EXPECT_EQ(
+      error_of(scene, {{Kind::kModel, "box", 1.0, "body_pos", 0}})
+          .rfind("body_pos[0] of 'box' = 1.0: mjModel's body_pos is not one a run may vary; these are: body_mass, ", 0),
+      0u);
+  EXPECT_EQ(error_of(scene, {{Kind::kModel, "box_geom", 1.0, "geom_friction", 3}}),
+            "geom_friction[3] of 'box_geom' = 1.0: index must be 0 to 2 (geom_friction holds 3 values per row)");
+  EXPECT_EQ(error_of(scene, {{Kind::kModel, "bx", 1.0, "body_mass", 0}})
+                .rfind("body_mass[0] of 'bx' = 1.0: no body named 'bx' (did you mean 'box'?)", 0),
+            0u);
+  EXPECT_EQ(error_of(scene, {{Kind::kModel, "box", -1.0, "body_mass", 0}}),
+            "body_mass[0] of 'box' = -1.0: body_mass must be a finite number >= 0");
+  EXPECT_EQ(error_of(scene, {{Kind::kModel, "push_motor", std::nan(""), "actuator_gear", 0}}),
+            "actuator_gear[0] of 'push_motor' = nan: actuator_gear must be a finite number");
+  EXPECT_EQ(error_of(scene, {{Kind::kModel, "box", 1.0, "", 0}}),
+            "[0] of 'box' = 1.0: a model value needs a field (an mjModel array's name)");
+  EXPECT_NO_THROW((void)simloop::with_scene_params(scene, {{Kind::kModel, "push_motor", -3.0, "actuator_gear", 0}}));
+}
+
 }  // namespace
