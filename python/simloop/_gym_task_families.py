@@ -42,12 +42,18 @@ class Layout:
         """Gymnasium's observation of the locomotion tasks: qpos without its first `skip` values, then qvel
         (clipped to +-clip when given)."""
         positions, velocities = self.qpos[skip:], self.qvel
+        index = np.concatenate((positions, velocities))
+        columns, first_velocity = _columns(index), len(positions)
 
         def observe(rows: Rows) -> np.ndarray:
-            v = rows[:, velocities]
-            return np.concatenate((rows[:, positions], v if clip is None else np.clip(v, -clip, clip)), axis=1)
+            out = rows[:, columns]  # (one gather, or a view of consecutive columns: the env copies what it hands out)
+            if clip is None:
+                return out
+            out = np.array(out)
+            np.clip(out[:, first_velocity:], -clip, clip, out=out[:, first_velocity:])
+            return out
 
-        return _named(observe, tuple(self.names[i] for i in np.concatenate((positions, velocities))))
+        return _named(observe, tuple(self.names[i] for i in index))
 
     def where(self, y: bool = False, z: Optional[Tuple[int, float]] = None) -> Callable[[Rows], Info]:
         """Gymnasium's info keys for where the robot is: x_position (qpos[0]); with y, y_position and
@@ -69,6 +75,26 @@ class Layout:
             return out
 
         return where
+
+
+def _columns(index: np.ndarray) -> Any:
+    """These columns as a slice where they are consecutive (a view: no gather), else the index array."""
+    if len(index) and (np.diff(index) == 1).all():
+        return slice(int(index[0]), int(index[-1]) + 1)
+    return index
+
+
+def _once(of_rows: Callable[[Rows], Any]) -> Callable[[Rows], Any]:
+    """A function of a step's rows, computed once for its reward, termination and info keys, which the env asks
+    with the same rows object (as _shared's terms)."""
+    last: List[Any] = [None, None]
+
+    def once(rows: Rows) -> Any:
+        if last[0] is not rows:
+            last[:] = [rows, of_rows(rows)]
+        return last[1]
+
+    return once
 
 
 def _named(observe: Callable[[Rows], np.ndarray], names: Tuple[str, ...]) -> Callable[[Rows], np.ndarray]:
@@ -167,6 +193,7 @@ def _between(low_high: Tuple[float, float], values: np.ndarray) -> np.ndarray:
 
 
 def hopper(p: Mapping[str, Any], layout: Layout, dt: float) -> Tuple[Any, ...]:
+    @_once
     def healthy(rows: Rows) -> Any:  # z, angle = qpos[1:3]; the state past x and z in range
         state = np.concatenate((rows[:, layout.qpos], rows[:, layout.qvel]), axis=1)[:, 2:]
         in_range = np.all(_between(p["healthy_state_range"], state), axis=1)
@@ -177,6 +204,7 @@ def hopper(p: Mapping[str, Any], layout: Layout, dt: float) -> Tuple[Any, ...]:
 
 
 def walker(p: Mapping[str, Any], layout: Layout, dt: float) -> Tuple[Any, ...]:
+    @_once
     def healthy(rows: Rows) -> Any:
         z, angle = rows[:, layout.qpos[1]], rows[:, layout.qpos[2]]
         return _between(p["healthy_z_range"], z) & _between(p["healthy_angle_range"], angle)
@@ -210,6 +238,7 @@ def ant(p: Mapping[str, Any], layout: Layout, dt: float) -> Tuple[Any, ...]:
     state = np.concatenate((layout.qpos, layout.qvel))
     z, where = layout.qpos[2], layout.where(y=True)
 
+    @_once
     def healthy(rows: Rows) -> Any:
         return (
             np.isfinite(rows[:, state]).all(axis=1)
@@ -266,6 +295,7 @@ def humanoid(p: Mapping[str, Any], layout: Layout, dt: float) -> Tuple[Any, ...]
         centres = np.einsum("b,nbj->nj", mass, rows[:, xipos].reshape(len(rows), -1, 3))
         return (centres / mass.sum())[:, 0:2]
 
+    @_once
     def healthy(rows: Rows) -> Any:
         low, high = p["healthy_z_range"]
         return (low < rows[:, z]) & (rows[:, z] < high)
@@ -329,6 +359,7 @@ def inverted_pendulum(p: Mapping[str, Any], layout: Layout, dt: float) -> Tuple[
     """Reward 1 while upright; terminated when the observation is not finite or the pole's angle past 0.2 rad."""
     observe = layout.observe(0)
 
+    @_once
     def fallen(rows: Rows) -> Any:
         obs = observe(rows)
         return ~np.isfinite(obs).all(axis=1) | (np.abs(obs[:, 1]) > 0.2)

@@ -82,7 +82,6 @@ through the vector class.
 
 from __future__ import annotations
 
-import copy
 import os
 from typing import Any, Dict, List, Optional, Tuple, cast
 
@@ -219,7 +218,9 @@ class ScenarioEnv(gymnasium.Env):
         self, *, seed: Optional[int] = None, options: Optional[Dict[str, Any]] = None
     ) -> Tuple[np.ndarray, Dict[str, Any]]:
         start = _start(_check_options(options, RESET_KEYS))
-        previous = copy.deepcopy(self._np_random), self._np_random_seed
+        # The generator as it was, restored if the reset fails (its state: a deepcopy would cost a reset's worth).
+        previous = self._np_random, self._np_random_seed
+        state = None if self._np_random is None else self._np_random.bit_generator.state
         super().reset(seed=seed)
         episode_seed = _episode_seed(self.np_random, seed)
         rows: List[np.ndarray] = []
@@ -227,6 +228,8 @@ class ScenarioEnv(gymnasium.Env):
             self._setup.reset_envs((0,), (episode_seed,), start, lambda k, row: rows.append(row))
         except BaseException:  # a start the scene refuses, or on_reset raised: the env is as it was, its generator too
             self._np_random, self._np_random_seed = previous
+            if state is not None:
+                previous[0].bit_generator.state = state
             raise
         self._obs = rows[0][None]
         self._decisions, self._ended = 0, False

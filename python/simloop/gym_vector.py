@@ -3,7 +3,6 @@ describes the episodes, and ScenarioEnv, the single environment)."""
 
 from __future__ import annotations
 
-import copy
 from typing import Any, Dict, List, Optional, Sequence, Tuple, Union, cast
 
 import numpy as np
@@ -143,12 +142,13 @@ class ScenarioVectorEnv(VectorEnv):
         into obs; each env's np_random, count and info change as it is put in place (all together when on_reset
         is given: Setup.reset_envs)."""
         rngs: List[np.random.Generator] = []
-        for i, seed in zip(envs, seeds):
+        states: Dict[int, Any] = {}  # an env's generator state before its seed is drawn: put back if it is not reset
+        for k, (i, seed) in enumerate(zip(envs, seeds)):
             rng = self._rngs[i]
             if seed is not None or rng is None:
                 rng, _ = seeding.np_random(seed)  # as gymnasium.Env.reset seeds np_random
             else:
-                rng = copy.deepcopy(rng)  # kept only if the reset succeeds
+                states[k] = rng.bit_generator.state  # (a deepcopy of the generator would cost a reset's worth)
             rngs.append(rng)
         episode_seeds = [_episode_seed(rng, seed) for rng, seed in zip(rngs, seeds)]
 
@@ -156,10 +156,16 @@ class ScenarioVectorEnv(VectorEnv):
             i = envs[k]
             obs[i] = row
             self._rngs[i] = rngs[k]
+            states.pop(k, None)
             self._decisions[i], self._ended[i] = 0, False
             self._add_info(infos, self._setup.start_info(i, episode_seeds[k], row[None]), i)
 
-        self._setup.reset_envs(envs, episode_seeds, start, done)
+        try:
+            self._setup.reset_envs(envs, episode_seeds, start, done)
+        except BaseException:
+            for k, state in states.items():  # the envs not reset keep their generators as they were
+                rngs[k].bit_generator.state = state
+            raise
 
     def reset(
         self, *, seed: Union[int, Sequence[Optional[int]], None] = None, options: Optional[Dict[str, Any]] = None
