@@ -38,6 +38,7 @@ average is printed.
 
     .venv-pypi/bin/python bench/bench_gym_env.py [--rounds 21] [--calls 2000] [--every 1,10] [--envs 8]
     .venv-pypi/bin/python bench/bench_gym_env.py --v5 HalfCheetah,Hopper,Walker2d,Ant,Humanoid [--envs 8]
+    (all eleven: add Swimmer,Reacher,Pusher,InvertedPendulum,InvertedDoublePendulum,HumanoidStandup)
 """
 
 import argparse
@@ -172,6 +173,16 @@ def compare(label, ours, theirs, actions, rounds, per_call, target, them="Mujoco
     )
 
 
+def noise_free(task):
+    """reset_noise_scale=0 where Gymnasium's task takes it (Reacher and Pusher draw their own start: they do not)."""
+    import inspect
+
+    import gymnasium
+
+    creator = gymnasium.envs.registration.load_env_creator(gymnasium.spec(f"{task}-v5").entry_point)
+    return {"reset_noise_scale": 0.0} if "reset_noise_scale" in inspect.signature(creator).parameters else {}
+
+
 def v5_tasks(tasks, args) -> None:
     """simloop/<Task>-v5 against Gymnasium's <Task>-v5: 1 env, then args.envs envs."""
     import gymnasium
@@ -183,12 +194,13 @@ def v5_tasks(tasks, args) -> None:
     rng = np.random.default_rng(0)
     for task in tasks:
         print(f"  {task}-v5:")
-        ours = Restarting(gymnasium.make(f"simloop/{task}-v5", reset_noise_scale=0.0))
-        theirs = Restarting(gymnasium.make(f"{task}-v5", reset_noise_scale=0.0))
+        kwargs = noise_free(task)
+        ours = Restarting(gymnasium.make(f"simloop/{task}-v5", **kwargs))
+        theirs = Restarting(gymnasium.make(f"{task}-v5", **kwargs))
         actions = rng.uniform(-0.4, 0.4, size=(args.calls, ours.env.action_space.shape[0]))
         compare("1 env (gymnasium.make)", ours, theirs, actions, args.rounds, 1, None, f"Gymnasium's {task}")
-        ours = gymnasium.make_vec(f"simloop/{task}-v5", num_envs=args.envs, threads=1, reset_noise_scale=0.0)
-        theirs = gymnasium.make_vec(f"{task}-v5", num_envs=args.envs, vectorization_mode="sync", reset_noise_scale=0.0)
+        ours = gymnasium.make_vec(f"simloop/{task}-v5", num_envs=args.envs, threads=1, **kwargs)
+        theirs = gymnasium.make_vec(f"{task}-v5", num_envs=args.envs, vectorization_mode="sync", **kwargs)
         batch = rng.uniform(-0.4, 0.4, size=(max(args.calls // args.envs, 1),) + ours.action_space.shape)
         label = f"{args.envs} envs (make_vec: simloop's on 1 C++ thread, Gymnasium's SyncVectorEnv)"
         compare(label, ours, theirs, batch, args.rounds, args.envs, 1.0, f"Gymnasium's {task}")
