@@ -42,6 +42,7 @@ average is printed.
 """
 
 import argparse
+import contextlib
 import os
 import statistics
 import time
@@ -173,6 +174,20 @@ def compare(label, ours, theirs, actions, rounds, per_call, target, them="Mujoco
     )
 
 
+@contextlib.contextmanager
+def quiet_mujoco():
+    """Gymnasium's XMLs use the deprecated settotalmass: while its envs compile them, mujoco's warnings are kept
+    from MuJoCo's default handler, which would append them to MUJOCO_LOG.TXT in the working folder."""
+    import mujoco
+
+    previous = mujoco.get_mju_user_warning()
+    mujoco.set_mju_user_warning(lambda message: None)
+    try:
+        yield
+    finally:
+        mujoco.set_mju_user_warning(previous)
+
+
 def noise_free(task):
     """reset_noise_scale=0 where Gymnasium's task takes it (Reacher and Pusher draw their own start: they do not)."""
     import inspect
@@ -196,11 +211,13 @@ def v5_tasks(tasks, args) -> None:
         print(f"  {task}-v5:")
         kwargs = noise_free(task)
         ours = Restarting(gymnasium.make(f"simloop/{task}-v5", **kwargs))
-        theirs = Restarting(gymnasium.make(f"{task}-v5", **kwargs))
+        with quiet_mujoco():
+            theirs = Restarting(gymnasium.make(f"{task}-v5", **kwargs))
         actions = rng.uniform(-0.4, 0.4, size=(args.calls, ours.env.action_space.shape[0]))
         compare("1 env (gymnasium.make)", ours, theirs, actions, args.rounds, 1, None, f"Gymnasium's {task}")
         ours = gymnasium.make_vec(f"simloop/{task}-v5", num_envs=args.envs, threads=1, **kwargs)
-        theirs = gymnasium.make_vec(f"{task}-v5", num_envs=args.envs, vectorization_mode="sync", **kwargs)
+        with quiet_mujoco():
+            theirs = gymnasium.make_vec(f"{task}-v5", num_envs=args.envs, vectorization_mode="sync", **kwargs)
         batch = rng.uniform(-0.4, 0.4, size=(max(args.calls // args.envs, 1),) + ours.action_space.shape)
         label = f"{args.envs} envs (make_vec: simloop's on 1 C++ thread, Gymnasium's SyncVectorEnv)"
         compare(label, ours, theirs, batch, args.rounds, args.envs, 1.0, f"Gymnasium's {task}")
