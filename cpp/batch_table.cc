@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <mutex>
 
 #include "run_detail.hpp"
@@ -12,11 +13,17 @@ namespace simloop {
 
 namespace {
 
+// What a row shows of a run, found once for its layout and its values:
+// the recorded bodies (by name) and drawn_columns(r.schedule.start).
+struct Shown {
+  std::map<std::string, std::size_t> bodies;
+  std::vector<std::pair<std::string, double>> drawn;
+};
+
 // The columns of `r`'s row after the ones every row has (batch_table.hpp).
-// `drawn`: drawn_columns(r.schedule.start), made once for the layout and the values.
-std::vector<TableColumn> layout_of(const RunRecord& r, const std::vector<std::pair<std::string, double>>& drawn) {
+std::vector<TableColumn> layout_of(const RunRecord& r, const Shown& shown) {
   std::vector<TableColumn> out;
-  for (const auto& body : recorded_bodies(r)) {  // (a map: by name)
+  for (const auto& body : shown.bodies) {
     for (const char* axis : {"x", "y", "z"}) out.push_back({body.first + "_final_pos_" + axis, false});
     out.push_back({body.first + "_final_speed", false});
   }
@@ -26,13 +33,13 @@ std::vector<TableColumn> layout_of(const RunRecord& r, const std::vector<std::pa
     out.push_back({prefix + "start_step", true});
     out.push_back({prefix + "steps", true});
   }
-  for (const auto& column : drawn) out.push_back({column.first, false});
+  for (const auto& column : shown.drawn) out.push_back({column.first, false});
   return out;
 }
 
-std::vector<double> values_of(const RunRecord& r, const std::vector<std::pair<std::string, double>>& drawn) {
+std::vector<double> values_of(const RunRecord& r, const Shown& shown) {
   std::vector<double> out;
-  for (const auto& body : recorded_bodies(r)) {
+  for (const auto& body : shown.bodies) {
     const double* v = r.final_row.data() + body.second;  // x y z, qw qx qy qz, vx vy vz
     out.insert(out.end(), {v[0], v[1], v[2], final_speed(v[7], v[8], v[9])});
   }
@@ -40,7 +47,7 @@ std::vector<double> values_of(const RunRecord& r, const std::vector<std::pair<st
     out.insert(out.end(), f.wrench.begin(), f.wrench.end());
     out.insert(out.end(), {static_cast<double>(f.start), static_cast<double>(f.end - f.start)});
   }
-  for (const auto& column : drawn) out.push_back(column.second);
+  for (const auto& column : shown.drawn) out.push_back(column.second);
   return out;
 }
 
@@ -63,14 +70,14 @@ class TableBuilder {
     row.steps = r.schedule.steps;
     row.perturb = r.perturb;
     row.sim_time = r.sim_time;
-    const std::vector<std::pair<std::string, double>> drawn = drawn_columns(r.schedule.start);
-    row.values = values_of(r, drawn);
+    const Shown shown{recorded_bodies(r), drawn_columns(r.schedule.start)};
+    row.values = values_of(r, shown);
     row.warnings.assign(names_.size(), 0);
     for (const Warning& w : r.warnings) {
       const auto at = std::find(names_.begin(), names_.end(), w.name);
       if (at != names_.end()) row.warnings[static_cast<std::size_t>(at - names_.begin())] += w.count;
     }
-    std::vector<TableColumn> layout = layout_of(r, drawn);
+    std::vector<TableColumn> layout = layout_of(r, shown);
     const std::lock_guard<std::mutex> hold(lock_);
     auto known = std::find_if(table_.layouts.begin(), table_.layouts.end(),
                               [&](const std::vector<TableColumn>& l) { return same_layout(l, layout); });
