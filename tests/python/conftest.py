@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import signal
 import subprocess
 import sys
 import textwrap
@@ -18,6 +19,34 @@ try:
     import triton  # noqa: F401
 except ImportError:
     pass
+
+
+# The signal tests stand for a user at a terminal, whose Ctrl-C reaches the
+# command. A launcher may have left SIGINT, SIGQUIT or SIGHUP ignored (a
+# script's background job, nohup), and a child inherits an ignored signal,
+# so the commands under test would rightly ignore it too: the suite puts the
+# defaults back for its children (and Python's KeyboardInterrupt for itself).
+for _number, _handler in (
+    (signal.SIGINT, signal.default_int_handler),
+    (signal.SIGQUIT, signal.SIG_DFL),
+    (signal.SIGHUP, signal.SIG_DFL),
+):
+    if signal.getsignal(_number) == signal.SIG_IGN:
+        signal.signal(_number, _handler)
+
+# A test that fails inside `with subprocess.Popen(...)` (an assertion, a
+# communicate timeout) would wait in Popen.__exit__ for a child that may run
+# for minutes: the child is killed first, so a failure stays a failure, not a hang.
+_popen_exit = subprocess.Popen.__exit__
+
+
+def _exit_killing_on_failure(self, exc_type, value, traceback):
+    if exc_type is not None and self.poll() is None:
+        self.kill()
+    return _popen_exit(self, exc_type, value, traceback)
+
+
+subprocess.Popen.__exit__ = _exit_killing_on_failure
 
 
 def _why_no_worker_processes() -> str:
