@@ -219,17 +219,17 @@ class ScenarioEnv(gymnasium.Env):
     ) -> Tuple[np.ndarray, Dict[str, Any]]:
         start = _start(_check_options(options, RESET_KEYS))
         # The generator as it was, restored if the reset fails (its state: a deepcopy would cost a reset's worth).
-        previous = self._np_random, self._np_random_seed
-        state = None if self._np_random is None else self._np_random.bit_generator.state
+        rng, rng_seed = self._np_random, self._np_random_seed
+        state = rng.bit_generator.state if rng is not None else {}
         super().reset(seed=seed)
         episode_seed = _episode_seed(self.np_random, seed)
         rows: List[np.ndarray] = []
         try:
             self._setup.reset_envs((0,), (episode_seed,), start, lambda k, row: rows.append(row))
         except BaseException:  # a start the scene refuses, or on_reset raised: the env is as it was, its generator too
-            self._np_random, self._np_random_seed = previous
-            if state is not None:
-                previous[0].bit_generator.state = state
+            self._np_random, self._np_random_seed = rng, rng_seed
+            if rng is not None:
+                rng.bit_generator.state = state
             raise
         self._obs = rows[0][None]
         self._decisions, self._ended = 0, False
