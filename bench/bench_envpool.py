@@ -62,6 +62,7 @@ import gymnasium
 import mujoco
 import numpy as np
 import simloop
+from bench_gym_env import quiet_mujoco  # (this folder: the script's own, first on sys.path)
 from simloop.gym import ScenarioVectorEnv, batched
 
 XML = Path(gymnasium.__file__).parent / "envs" / "mujoco" / "assets" / "half_cheetah.xml"
@@ -71,14 +72,9 @@ EPISODE = 1000  # env steps, HalfCheetah's max_episode_steps
 
 def mujoco_model() -> "mujoco.MjModel":
     """The XML through mujoco, its compiler's warnings kept from MuJoCo's default
-    handler (which would append them to MUJOCO_LOG.TXT in the working folder:
-    Gymnasium's XML uses the deprecated settotalmass)."""
-    previous = mujoco.get_mju_user_warning()
-    mujoco.set_mju_user_warning(lambda message: None)
-    try:
+    handler (bench_gym_env.quiet_mujoco: Gymnasium's XML uses the deprecated settotalmass)."""
+    with quiet_mujoco():
         return mujoco.MjModel.from_xml_path(str(XML))
-    finally:
-        mujoco.set_mju_user_warning(previous)
 
 
 def simloop_env(n: int, threads: int):
