@@ -203,10 +203,10 @@ std::string scene_param_column(const SceneParam& p) {
 void check_scene_param(const mjModel* m, const SceneParam& param) { (void)apply(m, nullptr, param); }
 
 Model with_scene_params(const Model& model, const std::vector<SceneParam>& params) {
-  for (const SceneParam& p : params) check_scene_param(model.get(), p);
   if (params.empty()) return model;
   // A fresh copy of the model that nothing else holds yet: ours to edit
-  // before it is shared (as Model::for_run edits its copy).
+  // before it is shared (as Model::for_run edits its copy). Each param is
+  // checked as it is written (apply), once: on a bad one the copy is dropped.
   Model copy = model.with_timestep(model.timestep());
   mjModel* m = const_cast<mjModel*>(copy.get());
   bool masses_changed = false;
