@@ -88,7 +88,7 @@ except ImportError as error:  # the 2.2.2 build's venv has no mujoco package
     sys.exit(f"bench_rollout: needs the mujoco package beside simloop (the PyPI build, .venv-pypi): {error}")
 
 import simloop
-from bench_batch_anchor import BatchSide, mujoco_batch
+from batch_side import BatchSide, mujoco_batch
 
 HERE = Path(__file__).resolve().parent
 DEFAULT_SCENE = HERE.parent / "tests" / "scenes" / "pusht.xml"
