@@ -208,6 +208,17 @@ int object_id(const mjModel* m, mjtObj type, const std::string& name) {
   throw InvalidArgument(unknown_name_message(m, type, name));
 }
 
+int object_id_or_index(const mjModel* m, mjtObj type, const std::string& name, ObjectFilter listed) {
+  const int id = mj_name2id(m, type, name.c_str());
+  if (id >= 0) return id;
+  const bool digits = !name.empty() && name.size() <= 9 &&
+                      std::all_of(name.begin(), name.end(), [](char c) { return c >= '0' && c <= '9'; });
+  if (!digits) throw InvalidArgument(unknown_name_message(m, type, name, listed));
+  const long index = std::stol(name);
+  if (index < object_count(m, type)) return static_cast<int>(index);
+  throw InvalidArgument(index_out_of_range_message(m, type, name, listed));
+}
+
 int checked_object_index(const mjModel* m, mjtObj type, long long index) {
   const int count = object_count(m, type);
   if (index >= 0 && index < count) return static_cast<int>(index);

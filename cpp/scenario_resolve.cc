@@ -24,22 +24,14 @@ namespace {
 constexpr ObjectFilter kMovingBodies{"bodies that can move", body_can_move};
 constexpr ObjectFilter kPushableBodies{"bodies a force can move", body_can_be_pushed};
 
-bool is_index(const std::string& name) {
-  return !name.empty() && name.size() <= 9 &&
-         std::all_of(name.begin(), name.end(), [](char c) { return c >= '0' && c <= '9'; });
-}
-
 // A name, or (if no object has that name) an index; `context` leads the
 // error, which lists the objects `listed` passes.
 int find(const mjModel* m, mjtObj type, const std::string& name, const std::string& context, ObjectFilter listed = {}) {
-  const int id = mj_name2id(m, type, name.c_str());
-  if (id >= 0) return id;
-  if (is_index(name)) {
-    const long index = std::stol(name);
-    if (index < object_count(m, type)) return static_cast<int>(index);
-    throw InvalidArgument(context + ": " + index_out_of_range_message(m, type, name, listed));
+  try {
+    return object_id_or_index(m, type, name, listed);
+  } catch (const InvalidArgument& e) {
+    throw InvalidArgument(context + ": " + e.what());
   }
-  throw InvalidArgument(context + ": " + unknown_name_message(m, type, name, listed));
 }
 
 // An actuator: digits are its index (a scenario's actuator = 0), anything

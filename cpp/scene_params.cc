@@ -23,12 +23,14 @@ std::string describe(const SceneParam& p) {
   return what + (p.name.empty() ? "" : " of '" + p.name + "'") + " = " + python_float_repr(p.value);
 }
 
-// The id of the object named `name`, or InvalidArgument saying what the
-// scene has (one wording for every lookup: object_names.hpp).
+// The object `p` names, by name or (an unnamed one) by index, as a
+// scenario names objects; or InvalidArgument saying what the scene has.
 int find_named(const mjModel* m, mjtObj type, const SceneParam& p) {
-  const int id = mj_name2id(m, type, p.name.c_str());
-  if (id >= 0) return id;
-  throw InvalidArgument(describe(p) + ": " + unknown_name_message(m, type, p.name));
+  try {
+    return object_id_or_index(m, type, p.name);
+  } catch (const InvalidArgument& e) {
+    throw InvalidArgument(describe(p) + ": " + e.what());
+  }
 }
 
 void check_value(const SceneParam& p) {

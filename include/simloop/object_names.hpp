@@ -65,6 +65,12 @@ struct ObjectFilter {
 [[nodiscard]] std::string index_out_of_range_message(const mjModel* m, mjtObj type, const std::string& index,
                                                      ObjectFilter listed = {});
 
+// How a scenario names an object: by its name, or, where no object has that
+// name and `name` is digits, by its index (an unnamed object: Gymnasium's
+// actuators, say). Throws InvalidArgument with unknown_name_message or
+// index_out_of_range_message, listing what `listed` passes.
+[[nodiscard]] int object_id_or_index(const mjModel* m, mjtObj type, const std::string& name, ObjectFilter listed = {});
+
 // The likely typo's fix among `candidates` ("" if none is close): case
 // aside, at most a third of the longer name's edits away (at least one).
 [[nodiscard]] std::string did_you_mean(std::string_view name, const std::vector<std::string>& candidates);

@@ -22,7 +22,10 @@ struct SceneParam {
     kModel,     // value `index` of the row of `name` in mjModel's array `field` (fields.hpp's writable ones)
   };
   Kind kind = Kind::kFriction;
-  std::string name;    // the geom, body or joint; "" for every geom / joint (not allowed for a mass)
+  // The geom, body or joint: its name, or the digits of its index where no
+  // object has that name (an unnamed one); "" for every geom / joint (not
+  // allowed for a mass).
+  std::string name;
   double value = 0.0;  // friction >= 0; mass > 0 (kg); damping >= 0 (N s/m or N m s/rad)
   // kModel only: the array ("geom_friction") and the value's place in a row
   // (0 to the array's columns - 1). Its name is the row's object (a geom of

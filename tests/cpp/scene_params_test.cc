@@ -194,3 +194,29 @@ TEST(SceneParams, AModelValueIsNamedAndRefusedByItsField) {
 }
 
 }  // namespace
+
+// An object is named as a scenario names it: by name, or (an unnamed one, as
+// Gymnasium's actuators are) by the digits of its index.
+TEST(SceneParams, AnObjectIsNamedByItsIndexWhereNoObjectHasThatName) {
+  const simloop::Model scene = simloop::pusher_scene();
+  const mjModel* s = scene.get();
+  const int free_joint = 0;  // the box's, unnamed
+  ASSERT_EQ(mj_id2name(s, mjOBJ_JOINT, free_joint), nullptr);
+  const simloop::Model damped = simloop::with_scene_params(scene, {{Kind::kModel, "0", 0.5, "dof_damping", 0}});
+  for (int v = 0; v < s->nv; ++v) {
+    EXPECT_EQ(damped.get()->dof_damping[v], s->dof_jntid[v] == free_joint ? 0.5 : s->dof_damping[v]) << v;
+  }
+  const int box_geom = mj_name2id(s, mjOBJ_GEOM, "box_geom");
+  const simloop::Model slippery = simloop::with_scene_params(scene, {{Kind::kFriction, std::to_string(box_geom), 0.1}});
+  for (int g = 0; g < s->ngeom; ++g) {
+    EXPECT_EQ(slippery.get()->geom_friction[3 * g], g == box_geom ? 0.1 : s->geom_friction[3 * g]);
+  }
+  EXPECT_EQ(simloop::with_scene_params(scene, {{Kind::kModel, "0", 2.0, "actuator_gear", 0}}).get()->actuator_gear[0],
+            2.0);
+  EXPECT_EQ(simloop::scene_param_column({Kind::kModel, "0", 0.0, "actuator_gear", 0}), "actuator_gear_0_0");
+  EXPECT_EQ(error_of(scene, {{Kind::kModel, "7", 1.0, "actuator_gear", 0}})
+                .rfind("actuator_gear[0] of '7' = 1.0: actuator index 7 is out of range", 0),
+            0u)
+      << error_of(scene, {{Kind::kModel, "7", 1.0, "actuator_gear", 0}});
+  EXPECT_EQ(error_of(scene, {{Kind::kMass, "0", 1.0}}), "mass of '0' = 1.0: the world body has no mass to set");
+}
