@@ -203,19 +203,20 @@ std::string index_out_of_range_message(const mjModel* m, mjtObj type, const std:
 
 int object_id(const mjModel* m, mjtObj type, const std::string& name) {
   (void)object_count(m, type);  // a type we look up
-  const int found = mj_name2id(m, type, name.c_str());
+  // (MuJoCo's lookup of "" finds the first unnamed object: no name names none.)
+  const int found = name.empty() ? -1 : mj_name2id(m, type, name.c_str());
   if (found >= 0) return found;
   throw InvalidArgument(unknown_name_message(m, type, name));
 }
 
 int object_id_or_index(const mjModel* m, mjtObj type, const std::string& name, ObjectFilter listed) {
-  const int id = mj_name2id(m, type, name.c_str());
+  const int id = name.empty() ? -1 : mj_name2id(m, type, name.c_str());  // (as object_id)
   if (id >= 0) return id;
-  const bool digits = !name.empty() && name.size() <= 9 &&
-                      std::all_of(name.begin(), name.end(), [](char c) { return c >= '0' && c <= '9'; });
+  const bool digits =
+      !name.empty() && std::all_of(name.begin(), name.end(), [](char c) { return c >= '0' && c <= '9'; });
   if (!digits) throw InvalidArgument(unknown_name_message(m, type, name, listed));
-  const long index = std::stol(name);
-  if (index < object_count(m, type)) return static_cast<int>(index);
+  // (More than 9 digits: past any count an int holds, so out of range.)
+  if (name.size() <= 9 && std::stol(name) < object_count(m, type)) return static_cast<int>(std::stol(name));
   throw InvalidArgument(index_out_of_range_message(m, type, name, listed));
 }
 

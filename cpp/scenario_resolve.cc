@@ -34,19 +34,6 @@ int find(const mjModel* m, mjtObj type, const std::string& name, const std::stri
   }
 }
 
-// An actuator: digits are its index (a scenario's actuator = 0), anything
-// else its name.
-int find_actuator(const mjModel* m, const std::string& name, const std::string& context) {
-  if (!name.empty() && std::all_of(name.begin(), name.end(), [](char c) { return c >= '0' && c <= '9'; })) {
-    const long index = name.size() > 9 ? -1 : std::stol(name);
-    if (index < 0 || index >= m->nu) {
-      throw InvalidArgument(context + ": " + index_out_of_range_message(m, mjOBJ_ACTUATOR, name));
-    }
-    return static_cast<int>(index);
-  }
-  return find(m, mjOBJ_ACTUATOR, name, context);
-}
-
 // mjData's arrays a run writes or steps (the state and the inputs), which
 // record.data refuses: joints, actuators and disturbances record them.
 bool state_or_input(std::string_view array) {
@@ -123,7 +110,7 @@ ResolvedScenario resolve(const Scenario& scenario, const mjModel* m) {
   ResolvedScenario r;
   for (std::size_t i = 0; i < scenario.controls.size(); ++i) {
     const ControlSpec& c = scenario.controls[i];
-    const int actuator = find_actuator(m, c.actuator, "control[" + std::to_string(i) + "]");
+    const int actuator = find(m, mjOBJ_ACTUATOR, c.actuator, "control[" + std::to_string(i) + "]");
     for (std::size_t k = 0; k < r.controls.size(); ++k) {
       // Two controls on one actuator: the later would silently win.
       if (r.controls[k].actuator == actuator) {
@@ -154,7 +141,7 @@ ResolvedScenario resolve(const Scenario& scenario, const mjModel* m) {
   for (const std::string& n : rec.joints) {
     r.joints.push_back(find(m, mjOBJ_JOINT, n, "record.joints"));
   }
-  for (const std::string& n : rec.actuators) r.actuators.push_back(find_actuator(m, n, "record.actuators"));
+  for (const std::string& n : rec.actuators) r.actuators.push_back(find(m, mjOBJ_ACTUATOR, n, "record.actuators"));
   for (const std::string& n : rec.sensors) {
     r.sensors.push_back(find(m, mjOBJ_SENSOR, n, "record.sensors"));
   }

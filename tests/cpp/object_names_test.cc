@@ -40,6 +40,32 @@ TEST(ObjectNames, AnUnknownNameListsTheNamesAndTheUnnamedByIndexInRuns) {
             "no body named 'zz'; the scene has no bodies that can fly");
 }
 
+// How a scenario names an object: a name first, else the digits of an index.
+TEST(ObjectNames, AnObjectIsItsNameElseTheDigitsOfItsIndex) {
+  const simloop::Model named_one = simloop::Model::from_xml_string(R"(<mujoco><worldbody>
+    <body name="1"><freejoint/><geom size="0.1"/></body>
+    <body><freejoint/><geom size="0.1"/></body>
+  </worldbody></mujoco>)");
+  const mjModel* m = named_one.get();
+  EXPECT_EQ(simloop::object_id_or_index(m, mjOBJ_BODY, "1"), 1);   // the body named '1' (it is body 1)
+  EXPECT_EQ(simloop::object_id_or_index(m, mjOBJ_BODY, "2"), 2);   // no body named '2': body 2
+  EXPECT_EQ(simloop::object_id_or_index(m, mjOBJ_BODY, "02"), 2);  // digits, as --body 02 reads
+  EXPECT_EQ(simloop::object_id_or_index(m, mjOBJ_BODY, "world"), 0);
+  const auto error = [&](const std::string& name) {
+    try {
+      (void)simloop::object_id_or_index(m, mjOBJ_BODY, name);
+    } catch (const simloop::InvalidArgument& e) {
+      return std::string(e.what());
+    }
+    return std::string("(no error)");
+  };
+  EXPECT_EQ(error("3").rfind("body index 3 is out of range: the scene has 3 bodies (0 to 2)", 0), 0u) << error("3");
+  EXPECT_EQ(error("99999999999999999999").rfind("body index 99999999999999999999 is out of range", 0), 0u)
+      << error("99999999999999999999");
+  EXPECT_EQ(error("-1").rfind("no body named '-1'", 0), 0u) << error("-1");
+  EXPECT_EQ(error("").rfind("no body named ''", 0), 0u) << error("");
+}
+
 TEST(ObjectNames, AnIndexOutOfRangeSaysHowManyTheSceneHas) {
   const mjModel* m = scene();
   EXPECT_EQ(
