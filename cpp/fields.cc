@@ -141,4 +141,11 @@ bool model_field_writable(std::string_view name) noexcept {
   return std::find(kWritable.begin(), kWritable.end(), name) != kWritable.end();
 }
 
+bool model_field_nonnegative(std::string_view name) noexcept {
+  static constexpr std::array<std::string_view, 11> kNonnegative{
+      "body_mass",    "body_inertia",     "geom_friction", "geom_margin",      "geom_rgba",     "dof_damping",
+      "dof_armature", "dof_frictionloss", "jnt_stiffness", "tendon_stiffness", "tendon_damping"};
+  return std::find(kNonnegative.begin(), kNonnegative.end(), name) != kNonnegative.end();
+}
+
 }  // namespace simloop

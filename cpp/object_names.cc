@@ -209,12 +209,14 @@ int object_id(const mjModel* m, mjtObj type, const std::string& name) {
   throw InvalidArgument(unknown_name_message(m, type, name));
 }
 
+bool is_index_text(std::string_view name) noexcept {
+  return !name.empty() && std::all_of(name.begin(), name.end(), [](char c) { return c >= '0' && c <= '9'; });
+}
+
 int object_id_or_index(const mjModel* m, mjtObj type, const std::string& name, ObjectFilter listed) {
   const int id = name.empty() ? -1 : mj_name2id(m, type, name.c_str());  // (as object_id)
   if (id >= 0) return id;
-  const bool digits =
-      !name.empty() && std::all_of(name.begin(), name.end(), [](char c) { return c >= '0' && c <= '9'; });
-  if (!digits) throw InvalidArgument(unknown_name_message(m, type, name, listed));
+  if (!is_index_text(name)) throw InvalidArgument(unknown_name_message(m, type, name, listed));
   // (More than 9 digits: past any count an int holds, so out of range.)
   if (name.size() <= 9 && std::stol(name) < object_count(m, type)) return static_cast<int>(std::stol(name));
   throw InvalidArgument(index_out_of_range_message(m, type, name, listed));

@@ -81,10 +81,22 @@ ResolvedScenario::DataValues data_values(const mjModel* m, const std::string& ar
   return v;
 }
 
-// record.contact_forces' side: a geom of that name, else a body's (all its geoms).
+// record.contact_forces' side: a geom of that name, else a body (all its
+// geoms); a name neither has is refused naming both kinds.
 void contact_side(const mjModel* m, const std::string& name, const std::string& context, mjtObj& type, int& id) {
-  type = mj_name2id(m, mjOBJ_GEOM, name.c_str()) >= 0 ? mjOBJ_GEOM : mjOBJ_BODY;
-  id = type == mjOBJ_GEOM ? mj_name2id(m, mjOBJ_GEOM, name.c_str()) : find(m, mjOBJ_BODY, name, context);
+  id = name.empty() ? -1 : mj_name2id(m, mjOBJ_GEOM, name.c_str());
+  type = id >= 0 ? mjOBJ_GEOM : mjOBJ_BODY;
+  if (id >= 0) return;
+  if (is_index_text(name) || mj_name2id(m, mjOBJ_BODY, name.c_str()) >= 0) {
+    id = find(m, mjOBJ_BODY, name, context);
+    return;
+  }
+  std::vector<std::string> names = object_names(m, mjOBJ_GEOM);
+  for (std::string& body : object_names(m, mjOBJ_BODY)) names.push_back(std::move(body));
+  const std::string hint = did_you_mean(name, names);
+  throw InvalidArgument(context + ": no geom or body named '" + name + "'" +
+                        (hint.empty() ? "" : " (did you mean '" + hint + "'?)") + "; " + object_listing(m, mjOBJ_GEOM) +
+                        "; " + object_listing(m, mjOBJ_BODY));
 }
 
 }  // namespace

@@ -41,14 +41,6 @@ void check_value(const SceneParam& p) {
   }
 }
 
-// Model arrays whose negative values mean nothing physical.
-bool nonnegative_field(std::string_view field) {
-  static constexpr std::array<std::string_view, 11> kNonnegative{
-      "body_mass",    "body_inertia",     "geom_friction", "geom_margin",      "geom_rgba",     "dof_damping",
-      "dof_armature", "dof_frictionloss", "jnt_stiffness", "tendon_stiffness", "tendon_damping"};
-  return std::find(kNonnegative.begin(), kNonnegative.end(), field) != kNonnegative.end();
-}
-
 // Model arrays that mj_setConst derives constants from (the inverse
 // weights, dof_M0, the subtree masses).
 bool feeds_constants(std::string_view field) {
@@ -74,9 +66,9 @@ bool apply_model_field(const mjModel* scene, mjModel* m, const SceneParam& p) {
                           " holds " + std::to_string(layout.cols) + " value" + (layout.cols == 1 ? "" : "s") +
                           " per row)");
   }
-  if (!std::isfinite(p.value) || (nonnegative_field(p.field) && p.value < 0.0)) {
+  if (!std::isfinite(p.value) || (model_field_nonnegative(p.field) && p.value < 0.0)) {
     throw InvalidArgument(describe(p) + ": " + p.field + " must be a finite number" +
-                          (nonnegative_field(p.field) ? " >= 0" : ""));
+                          (model_field_nonnegative(p.field) ? " >= 0" : ""));
   }
   // The rows: the named object's (a dof_ array's: its joint's degrees of
   // freedom, as a damping's), or every row (every body but the world).

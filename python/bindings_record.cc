@@ -12,6 +12,7 @@
 #include "bindings_common.hpp"
 #include "simloop/batch_table.hpp"
 #include "simloop/number_format.hpp"
+#include "simloop/object_names.hpp"
 #include "simloop/output.hpp"
 #include "simloop/run_record.hpp"
 #include "simloop/scene_params.hpp"
@@ -44,7 +45,15 @@ int column_index(const RunRecord& r, const py::handle& name) {
   for (size_t c = 0; c < r.columns.size(); ++c) {
     if (py::str(r.columns[c].name).equal(name)) return static_cast<int>(c);
   }
-  throw py::key_error("no trajectory column named " + show(name) + "; see result.column_names");
+  std::vector<std::string> names;
+  for (const simloop::Column& c : r.columns) names.push_back(c.name);
+  std::string hint;
+  try {
+    hint = simloop::did_you_mean(name.cast<std::string>(), names);
+  } catch (const py::cast_error&) {  // text UTF-8 cannot encode: like no column's name
+  }
+  throw py::key_error("no trajectory column named " + show(name) +
+                      (hint.empty() ? "" : " (did you mean '" + hint + "'?)") + "; see result.column_names");
 }
 
 }  // namespace

@@ -73,5 +73,10 @@ void fill_derived(const mjModel* m, mjData* d, std::string_view name) noexcept;
 [[nodiscard]] bool model_field_writable(std::string_view name) noexcept;
 // Those of model_field_names() that are writable, in its order.
 [[nodiscard]] std::vector<std::string> writable_model_field_names();
+// Writable arrays whose negative values mean nothing physical (masses,
+// inertias, frictions, margins, colours, dampings, armatures, friction
+// losses, stiffnesses): refused below 0 wherever they are written (a
+// scene parameter, a Sim's named model view).
+[[nodiscard]] bool model_field_nonnegative(std::string_view name) noexcept;
 
 }  // namespace simloop

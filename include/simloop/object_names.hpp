@@ -70,6 +70,8 @@ struct ObjectFilter {
 // actuators, say). Throws InvalidArgument with unknown_name_message or
 // index_out_of_range_message, listing what `listed` passes.
 [[nodiscard]] int object_id_or_index(const mjModel* m, mjtObj type, const std::string& name, ObjectFilter listed = {});
+// Whether `name` is an index's text (digits only), as object_id_or_index reads it.
+[[nodiscard]] bool is_index_text(std::string_view name) noexcept;
 
 // The likely typo's fix among `candidates` ("" if none is close): case
 // aside, at most a third of the longer name's edits away (at least one).

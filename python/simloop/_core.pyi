@@ -41,6 +41,7 @@ MODEL_FIELD_NAMES: Final[tuple[str, ...]]
 DATA_FIELD_NAMES: Final[tuple[str, ...]]
 OBJECT_KINDS: Final[tuple[str, ...]]
 WRITABLE_MODEL_FIELDS: Final[tuple[str, ...]]
+NONNEGATIVE_MODEL_FIELDS: Final[tuple[str, ...]]
 # What the bindings read as a float64 array (copied or converted).
 _ArrayLike = ArrayLike
 # A policy: decide(observations) -> controls, called at the control rate.

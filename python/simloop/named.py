@@ -117,6 +117,8 @@ class NamedArray:
         values = np.asarray(value, dtype=view.dtype)
         if values.dtype.kind == "f" and not np.isfinite(values).all():
             raise ValueError(f"{self.name}[{key!r}] must be finite, got {_describe(value)}")
+        if self.name in _core.NONNEGATIVE_MODEL_FIELDS and (values < 0).any():  # (the C++ rule's list)
+            raise ValueError(f"{self.name}[{key!r}] must be >= 0, got {_describe(value)}")
         view[index] = values
         self._view = view
 

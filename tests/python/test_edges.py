@@ -91,6 +91,7 @@ WRONG_TYPES = [
     (lambda r, s: r.column(3), TypeError, "name must be a str (a column name), got 3 (int)"),
     (lambda r, s: r.column(b"box_z"), TypeError, "name must be a str (a column name), got b'box_z' (bytes)"),
     (lambda r, s: r.column("\udcfe"), KeyError, "no trajectory column named '\\udcfe'"),
+    (lambda r, s: r.column("box_zz"), KeyError, "no trajectory column named 'box_zz' (did you mean 'box_z'?); see"),
     (lambda r, s: r.write(3.5), TypeError, "out must be a path (str, bytes or os.PathLike), got 3.5 (float)"),
     (lambda r, s: r.write(["out"]), TypeError, "out must be a path (str, bytes or os.PathLike), got ['out'] (list)"),
     (lambda r, s: r.write(""), ValueError, "out must name a directory, got ''"),

@@ -69,6 +69,18 @@ def test_what_cannot_be_written_or_found_says_so():
         sim.named.model.geom_size["floor"] = [1, 1, 1]
     with pytest.raises(ValueError, match=r"must be finite"):
         sim.named.model.body_mass["box"] = float("nan")
+    # Values with no physical meaning below 0, as a scene parameter refuses them (a negative mass
+    # turned the next steps' state to NaN); 0 is a value, and a gear may be negative.
+    with pytest.raises(ValueError, match=r"^body_mass\['box'\] must be >= 0, got -1.0 \(float\)$"):
+        sim.named.model.body_mass["box"] = -1.0
+    with pytest.raises(ValueError, match=r"must be >= 0"):
+        sim.named.model.geom_friction["floor"] = [1.0, -0.005, 0.0001]
+    assert set(simloop._core.NONNEGATIVE_MODEL_FIELDS) < set(simloop._core.WRITABLE_MODEL_FIELDS)
+    assert "body_mass" in simloop._core.NONNEGATIVE_MODEL_FIELDS
+    zero = simloop.Sim()
+    zero.named.model.dof_damping["pusher_slide"] = 0.0
+    zero.named.model.actuator_gear["push_motor"] = [-1.0, 0, 0, 0, 0, 0]
+    assert zero.named.model.actuator_gear["push_motor"][0] == -1.0
     with pytest.raises(KeyError, match=r"no row named 'boxx' \(did you mean 'box'\?\); its rows: world, box, pusher"):
         sim.named.data.xpos["boxx"]
     with pytest.raises(

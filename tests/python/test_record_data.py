@@ -160,5 +160,16 @@ def test_contact_forces_in_a_scenario_file_and_a_wrong_name(tmp_path):
     path.write_text('steps = 5\n[record]\ncontact_forces = [["pusher", "box"]]\n')
     result = simloop.run_scenario(simloop.Scenario.from_file(path), seed=0)
     assert "pusher_box_contact_force2" in result.columns
-    with pytest.raises(ValueError, match=r"record.contact_forces\[0\]: no body named 'boxx' \(did you mean 'box'\?\)"):
+    # A side is a geom or a body: a name neither has is refused naming both, with the likely one.
+    with pytest.raises(
+        ValueError,
+        match=r"^record.contact_forces\[0\]: no geom or body named 'boxx' \(did you mean 'box'\?\); "
+        r"the scene's geoms: floor, box_geom, pusher_geom; the scene's bodies: world, box, pusher$",
+    ):
         simloop.run_scenario(simloop.Scenario(steps=5, record={"contact_forces": [("pusher", "boxx")]}), seed=0)
+    with pytest.raises(ValueError, match=r"no geom or body named 'flor' \(did you mean 'floor'\?\)"):
+        simloop.run_scenario(simloop.Scenario(steps=5, record={"contact_forces": [("flor", "box")]}), seed=0)
+    with pytest.raises(ValueError, match=r"^record.contact_forces\[0\]: body index 7 is out of range"):
+        simloop.run_scenario(simloop.Scenario(steps=5, record={"contact_forces": [("7", "box")]}), seed=0)
+    result = simloop.run_scenario(simloop.Scenario(steps=5, record={"contact_forces": [("1", "floor")]}), seed=0)
+    assert "1_floor_contact_force0" in result.columns  # body 1 (the box), by index
