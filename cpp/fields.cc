@@ -141,6 +141,14 @@ bool model_field_writable(std::string_view name) noexcept {
   return std::find(kWritable.begin(), kWritable.end(), name) != kWritable.end();
 }
 
+std::vector<std::string> nonnegative_model_field_names() {
+  std::vector<std::string> names = writable_model_field_names();
+  names.erase(
+      std::remove_if(names.begin(), names.end(), [](const std::string& n) { return !model_field_nonnegative(n); }),
+      names.end());
+  return names;
+}
+
 bool model_field_nonnegative(std::string_view name) noexcept {
   static constexpr std::array<std::string_view, 11> kNonnegative{
       "body_mass",    "body_inertia",     "geom_friction", "geom_margin",      "geom_rgba",     "dof_damping",

@@ -220,11 +220,7 @@ void bind_model(py::module_& m) {
   m.attr("DATA_FIELD_NAMES") = py::tuple(py::cast(simloop::data_field_names()));
   m.attr("OBJECT_KINDS") = py::tuple(py::cast(simloop::object_kinds()));
   m.attr("WRITABLE_MODEL_FIELDS") = py::tuple(py::cast(simloop::writable_model_field_names()));
-  py::list nonnegative;
-  for (const std::string& name : simloop::writable_model_field_names()) {
-    if (simloop::model_field_nonnegative(name)) nonnegative.append(name);
-  }
-  m.attr("NONNEGATIVE_MODEL_FIELDS") = py::tuple(nonnegative);
+  m.attr("NONNEGATIVE_MODEL_FIELDS") = py::tuple(py::cast(simloop::nonnegative_model_field_names()));
 }
 
 }  // namespace simloop_py

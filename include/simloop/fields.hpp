@@ -78,5 +78,7 @@ void fill_derived(const mjModel* m, mjData* d, std::string_view name) noexcept;
 // losses, stiffnesses): refused below 0 wherever they are written (a
 // scene parameter, a Sim's named model view).
 [[nodiscard]] bool model_field_nonnegative(std::string_view name) noexcept;
+// Those of writable_model_field_names() that are, in its order.
+[[nodiscard]] std::vector<std::string> nonnegative_model_field_names();
 
 }  // namespace simloop
