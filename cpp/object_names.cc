@@ -201,10 +201,13 @@ std::string index_out_of_range_message(const mjModel* m, mjtObj type, const std:
          object_listing(m, type, listed);
 }
 
+int named_object_id(const mjModel* m, mjtObj type, const std::string& name) noexcept {
+  return name.empty() ? -1 : mj_name2id(m, type, name.c_str());
+}
+
 int object_id(const mjModel* m, mjtObj type, const std::string& name) {
   (void)object_count(m, type);  // a type we look up
-  // (MuJoCo's lookup of "" finds the first unnamed object: no name names none.)
-  const int found = name.empty() ? -1 : mj_name2id(m, type, name.c_str());
+  const int found = named_object_id(m, type, name);
   if (found >= 0) return found;
   throw InvalidArgument(unknown_name_message(m, type, name));
 }
@@ -214,7 +217,7 @@ bool is_index_text(std::string_view name) noexcept {
 }
 
 int object_id_or_index(const mjModel* m, mjtObj type, const std::string& name, ObjectFilter listed) {
-  const int id = name.empty() ? -1 : mj_name2id(m, type, name.c_str());  // (as object_id)
+  const int id = named_object_id(m, type, name);
   if (id >= 0) return id;
   if (!is_index_text(name)) throw InvalidArgument(unknown_name_message(m, type, name, listed));
   // (More than 9 digits: past any count an int holds, so out of range.)

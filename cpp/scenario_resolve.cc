@@ -84,10 +84,10 @@ ResolvedScenario::DataValues data_values(const mjModel* m, const std::string& ar
 // record.contact_forces' side: a geom of that name, else a body (all its
 // geoms); a name neither has is refused naming both kinds.
 void contact_side(const mjModel* m, const std::string& name, const std::string& context, mjtObj& type, int& id) {
-  id = name.empty() ? -1 : mj_name2id(m, mjOBJ_GEOM, name.c_str());
+  id = named_object_id(m, mjOBJ_GEOM, name);
   type = id >= 0 ? mjOBJ_GEOM : mjOBJ_BODY;
   if (id >= 0) return;
-  if (is_index_text(name) || mj_name2id(m, mjOBJ_BODY, name.c_str()) >= 0) {
+  if (is_index_text(name) || named_object_id(m, mjOBJ_BODY, name) >= 0) {
     id = find(m, mjOBJ_BODY, name, context);
     return;
   }

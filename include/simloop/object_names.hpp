@@ -15,6 +15,10 @@ namespace simloop {
 // "no body named 'torsoo' (did you mean 'torso'?); the scene's bodies: ...".
 // Types looked up: those object_kinds() names (InvalidArgument for others).
 [[nodiscard]] int object_id(const mjModel* m, mjtObj type, const std::string& name);
+// The same without the error: -1 if no object of `type` has that name. An
+// empty name names none (MuJoCo's own lookup of "" finds the first unnamed
+// object): the one place every lookup by name goes through.
+[[nodiscard]] int named_object_id(const mjModel* m, mjtObj type, const std::string& name) noexcept;
 
 // The object type a kind's word names ("body", "geom", "site", "camera",
 // "tendon", "keyframe", ...), mjOBJ_UNKNOWN for another word; the words, in
